@@ -1,0 +1,3 @@
+fn main() {
+    visfield::experiment::cli::main();
+}

@@ -1,0 +1,31 @@
+//! The `experiment` command line.
+
+use clap::{Parser, Subcommand};
+
+/// visfield experiments: reproduce and extend the presampled-visibility papers.
+#[derive(Parser, Debug)]
+#[command(name = "experiment", version, about, long_about = None)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Small tour on the embedded procedural scene (no files needed).
+    Quickstart {
+        /// Output folder.
+        #[arg(long, default_value = "results/quickstart")]
+        out: std::path::PathBuf,
+    },
+}
+
+pub fn main() {
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Quickstart { out } => {
+            eprintln!("quickstart: not yet implemented ({})", out.display());
+            std::process::exit(2);
+        }
+    }
+}

@@ -1,0 +1,3 @@
+//! The experiment harness: specs, planner, runner, metrics, outputs and the CLI.
+
+pub mod cli;

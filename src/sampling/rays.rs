@@ -1,0 +1,1 @@
+//! Seeded receiver ray sets: randomness is a pure function of (point index, sample index, seed).

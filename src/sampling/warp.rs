@@ -1,0 +1,1 @@
+//! Square ↔ disk ↔ hemisphere warps, each with its inverse and density.

@@ -1,0 +1,1 @@
+//! Watertight ray–triangle intersection (Woop, Benthin, Wald, JCGT 2013).
