@@ -8,3 +8,6 @@ pub trait Visibility: Sync {
     /// Whether the segment origin + t·dir, t in [tmin, tmax], is blocked. `dir` is unit.
     fn occluded(&self, origin: glam::Vec3, dir: glam::Vec3, tmin: f32, tmax: f32) -> bool;
 }
+
+pub mod camera;
+pub mod image;

@@ -1,0 +1,126 @@
+//! Baking a field: 2008 Algorithm 1.
+//!
+//! For each positional sample p = c + R·s on the bounding sphere (c, R), every used texel's
+//! direction in the map's inward frame is traced from p; the closest hit distance over 2R is
+//! stored, a miss (no hit within 2R) stores 1. Unused texels (rejection layout) store 1.
+
+use super::{frames_for, FieldError, FieldParams, Storage, VisibilityField};
+use crate::geometry::{Mesh, Sphere};
+use crate::sampling::{HemisphereLayout, SpherePoints};
+use crate::trace::Tracer;
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// What a bake cost.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BakeStats {
+    /// Rays traced (used texels × maps).
+    pub rays: u64,
+    /// Wall time of tracing and storing, seconds (BVH build excluded; see `bvh_seconds`).
+    pub seconds: f64,
+    /// Wall time of the BVH build, seconds.
+    pub bvh_seconds: f64,
+}
+
+impl BakeStats {
+    /// Millions of rays per second.
+    pub fn mrays_per_second(&self) -> f64 {
+        self.rays as f64 / self.seconds.max(1e-12) / 1e6
+    }
+}
+
+/// Options of a bake.
+pub struct BakeOptions<'a> {
+    /// Refuse fields whose storage passes this many bytes.
+    pub memory_limit: u64,
+    /// Advanced by one per finished map.
+    pub progress: Option<&'a indicatif::ProgressBar>,
+}
+
+impl Default for BakeOptions<'_> {
+    fn default() -> Self {
+        BakeOptions {
+            memory_limit: super::default_memory_limit(),
+            progress: None,
+        }
+    }
+}
+
+/// Bakes a field of `mesh` (model space), building the reference tracer over it.
+pub fn bake(
+    mesh: &Mesh,
+    params: FieldParams,
+    opts: &BakeOptions,
+) -> Result<(VisibilityField, BakeStats), FieldError> {
+    params.check_memory(opts.memory_limit)?;
+    let t = Instant::now();
+    let tris: Vec<_> = (0..mesh.triangles.len()).map(|i| mesh.triangle(i)).collect();
+    let tracer = Tracer::new(&tris);
+    let bvh_seconds = t.elapsed().as_secs_f64();
+    let bounds = crate::geometry::minimal_bounding_sphere(&mesh.positions);
+    let (field, mut stats) = bake_with(&tracer, bounds, params, opts)?;
+    stats.bvh_seconds = bvh_seconds;
+    Ok((field, stats))
+}
+
+/// Bakes a field of the geometry behind `tracer`, bounded by `bounds` (which must contain it).
+pub fn bake_with(
+    tracer: &Tracer,
+    bounds: Sphere,
+    params: FieldParams,
+    opts: &BakeOptions,
+) -> Result<(VisibilityField, BakeStats), FieldError> {
+    params.check_memory(opts.memory_limit)?;
+    if !(bounds.radius > 0.0 && bounds.radius.is_finite() && bounds.center.is_finite()) {
+        return Err(FieldError::Invalid(format!(
+            "bounding sphere radius {} (centre {}): the object must have extent",
+            bounds.radius, bounds.center
+        )));
+    }
+    let points = SpherePoints::new(params.sphere, params.count)?;
+    let layout = HemisphereLayout::new(params.layout, params.res);
+    let frames = frames_for(&points);
+    // Local directions of the used texels, shared by every map.
+    let texel_dirs: Vec<(usize, glam::Vec3)> = (0..layout.texel_count())
+        .filter_map(|t| layout.to_direction(t as u32).map(|d| (t, d)))
+        .collect();
+    let diameter = 2.0 * bounds.radius;
+    let mut storage = Storage::new(params.precision, params.count, params.texels());
+    let start = Instant::now();
+    storage
+        .map_slots()
+        .into_par_iter()
+        .enumerate()
+        .for_each_init(
+            || vec![1.0f32; params.texels()],
+            |row, (m, mut slot)| {
+                let origin = bounds.center + bounds.radius * points.point(m);
+                let frame = frames[m];
+                for &(t, local) in &texel_dirs {
+                    let dir = frame.to_world(local);
+                    row[t] = match tracer.closest_hit(origin, dir, 0.0, diameter) {
+                        Some(hit) => (hit.t / diameter).clamp(0.0, 1.0),
+                        None => 1.0,
+                    };
+                }
+                slot.store(row);
+                if let Some(pb) = opts.progress {
+                    pb.inc(1);
+                }
+            },
+        );
+    let stats = BakeStats {
+        rays: (texel_dirs.len() * params.count) as u64,
+        seconds: start.elapsed().as_secs_f64(),
+        bvh_seconds: 0.0,
+    };
+    let field = VisibilityField {
+        params,
+        bounds,
+        points,
+        layout,
+        frames,
+        storage,
+    };
+    Ok((field, stats))
+}
