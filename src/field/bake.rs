@@ -54,7 +54,9 @@ pub fn bake(
 ) -> Result<(VisibilityField, BakeStats), FieldError> {
     params.check_memory(opts.memory_limit)?;
     let t = Instant::now();
-    let tris: Vec<_> = (0..mesh.triangles.len()).map(|i| mesh.triangle(i)).collect();
+    let tris: Vec<_> = (0..mesh.triangles.len())
+        .map(|i| mesh.triangle(i))
+        .collect();
     let tracer = Tracer::new(&tris);
     let bvh_seconds = t.elapsed().as_secs_f64();
     let bounds = crate::geometry::minimal_bounding_sphere(&mesh.positions);

@@ -162,7 +162,9 @@ pub fn load(path: &Path, key: &CacheKey) -> Result<VisibilityField, CacheError> 
         reason,
     };
     if bytes.len() < 16 || &bytes[..8] != MAGIC {
-        return Err(corrupt("not a visfield cache file (bad magic or truncated)".into()));
+        return Err(corrupt(
+            "not a visfield cache file (bad magic or truncated)".into(),
+        ));
     }
     let version = u32::from_le_bytes(bytes[8..12].try_into().expect("4 bytes"));
     if version != FORMAT_VERSION {

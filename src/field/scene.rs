@@ -20,8 +20,8 @@ pub struct FieldInstance {
 
 impl FieldInstance {
     pub fn new(field: Arc<VisibilityField>, transform: Similarity) -> Self {
-        let world_center = transform.translation
-            + transform.scale * (transform.rotation * field.bounds.center);
+        let world_center =
+            transform.translation + transform.scale * (transform.rotation * field.bounds.center);
         let world_radius = field.bounds.radius * transform.scale;
         FieldInstance {
             field,
@@ -63,8 +63,7 @@ impl Visibility for FieldScene {
     fn occluded(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> bool {
         let mut order: Vec<(f32, usize)> = Vec::with_capacity(self.instances.len());
         for (i, inst) in self.instances.iter().enumerate() {
-            if let Some((t0, t1)) = ray_sphere(origin, dir, inst.world_center, inst.world_radius)
-            {
+            if let Some((t0, t1)) = ray_sphere(origin, dir, inst.world_center, inst.world_radius) {
                 if t1 >= tmin && t0 <= tmax {
                     order.push((t0.max(tmin), i));
                 }

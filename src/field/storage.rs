@@ -62,10 +62,11 @@ pub fn storage_bytes(precision: Precision, maps: usize, texels: usize) -> u64 {
 /// Encodes a normalised distance with `levels` = 2^bits − 1 (see the module docs).
 #[inline]
 pub fn encode_unorm(d: f32, levels: u32) -> u32 {
-    if !(d < 1.0) {
+    if d >= 1.0 || d.is_nan() {
         return levels; // miss (and NaN, which bake never produces)
     }
-    ((d.max(0.0) * levels as f32).round() as u32).min(levels - 1)
+    // In f64 so that the product is exact and rounding goes to the true nearest level.
+    ((d.max(0.0) as f64 * levels as f64).round() as u32).min(levels - 1)
 }
 
 /// Decodes [`encode_unorm`].
@@ -160,11 +161,7 @@ impl Storage {
             Storage::U8 { texels, data } => {
                 decode_unorm(data[map * texels + texel] as u32, u8::MAX as u32)
             }
-            Storage::Bit1 {
-                texels,
-                bits,
-                mean,
-            } => {
+            Storage::Bit1 { texels, bits, mean } => {
                 let w = map * words_per_map(*texels) + texel / 64;
                 if (bits[w] >> (texel % 64)) & 1 == 1 {
                     mean[map]
@@ -196,11 +193,17 @@ impl Storage {
         let bad = |v: f32| !(0.0..=1.0).contains(&v);
         match self {
             Storage::F32 { data, .. } => match data.iter().position(|&v| bad(v)) {
-                Some(i) => Err(format!("stored distance {} at index {i} is outside [0, 1]", data[i])),
+                Some(i) => Err(format!(
+                    "stored distance {} at index {i} is outside [0, 1]",
+                    data[i]
+                )),
                 None => Ok(()),
             },
             Storage::Bit1 { mean, .. } => match mean.iter().position(|&v| bad(v)) {
-                Some(i) => Err(format!("mean distance {} of map {i} is outside [0, 1]", mean[i])),
+                Some(i) => Err(format!(
+                    "mean distance {} of map {i} is outside [0, 1]",
+                    mean[i]
+                )),
                 None => Ok(()),
             },
             Storage::U16 { .. } | Storage::U8 { .. } => Ok(()),
@@ -262,7 +265,9 @@ mod tests {
             for i in 0..=100_000u32 {
                 let d = i as f32 / 100_000.0 * ((levels as f32 - 1.5) / levels as f32);
                 let e = (decode_unorm(encode_unorm(d, levels), levels) - d).abs();
-                assert!(e <= half * 1.0001, "d {d} levels {levels} error {e}");
+                // Half a step, plus the f32 rounding of the decoded value (half an ulp).
+                let ulp = f32::EPSILON * d.max(f32::MIN_POSITIVE);
+                assert!(e <= half + ulp, "d {d} levels {levels} error {e}");
             }
         }
     }
@@ -286,11 +291,22 @@ mod tests {
         let rows: Vec<Vec<f32>> = (0..3)
             .map(|m| {
                 (0..texels)
-                    .map(|t| if (t + m) % 3 == 0 { 1.0 } else { ((t * 7 + m) % 97) as f32 / 97.0 })
+                    .map(|t| {
+                        if (t + m) % 3 == 0 {
+                            1.0
+                        } else {
+                            ((t * 7 + m) % 97) as f32 / 97.0
+                        }
+                    })
                     .collect()
             })
             .collect();
-        for p in [Precision::F32, Precision::U16, Precision::U8, Precision::Bit1] {
+        for p in [
+            Precision::F32,
+            Precision::U16,
+            Precision::U8,
+            Precision::Bit1,
+        ] {
             let mut s = Storage::new(p, 3, texels);
             for (slot, row) in s.map_slots().iter_mut().zip(&rows) {
                 slot.store(row);
