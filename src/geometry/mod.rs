@@ -1,10 +1,24 @@
 //! Geometry: validated triangle meshes, procedural scenes, minimal bounding spheres and rigid
 //! instances.
+//!
+//! Conventions: right-handed coordinates, y up (procedural scenes; loaded models keep their file
+//! axes), lengths in model units. Triangles are wound counter-clockwise seen from the side their
+//! normal `(b − a) × (c − a)` points to; closed procedural meshes are oriented outward. Vertex
+//! normals are always area-weighted averages of face normals (see [`Mesh`]).
+//!
+//! - [`Mesh`]: validated indexed meshes, OBJ loading ([`Mesh::load_obj`]), area, volume,
+//!   closedness.
+//! - [`minimal_bounding_sphere`]: exact minimal enclosing spheres (Welzl).
+//! - [`Similarity`], [`Instance`], [`Scene`]: meshes placed in the world with caster / receiver
+//!   roles.
+//! - [`models`]: the registry of real meshes (`data/models.json`), found and sha256-checked.
+//! - [`procedural`]: corner, plane, cube with a hole, UV sphere, supershapes, the default scene.
 
 mod bounds;
 mod instance;
 mod mesh;
 pub mod models;
+mod obj;
 pub mod procedural;
 
 pub use bounds::{minimal_bounding_sphere, Sphere};

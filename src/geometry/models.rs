@@ -1,2 +1,459 @@
 //! Real meshes by name, found through `$VISFIELD_MODELS`, then `data/models/`, then
 //! `../shared/models/`, each checked against the sha256 in `data/models.json`.
+//!
+//! The registry (`data/models.json`, embedded at compile time) lists every mesh of the shared
+//! model collection with its file name, sha256, size, counts, licence and source. Mesh files are
+//! never committed. A model's name is its file stem (`bunny_npm`, `stanford-bunny_39k`,
+//! `Tree_3`, ...), except `igea_ply` for `igea.ply`, which is listed for completeness with
+//! `loadable: false` (a binary PLY of triangle strips; `igea` is the same surface as OBJ).
+//!
+//! Search order for a model file (first existing file wins; a file that exists but fails the
+//! sha256 check is an error, never silently skipped):
+//! 1. `$VISFIELD_MODELS/` (a folder), when the variable is set;
+//! 2. `data/models/` under the crate root, then under the current directory;
+//! 3. `../shared/models/` relative to the crate root, then to the current directory.
+//!
+//! Verified hashes are cached in memory per (path, size, mtime), so loading a model twice hashes
+//! its file once.
+
+use super::{GeometryError, Mesh};
+use sha2::Digest;
+use std::collections::HashMap;
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::sync::{Mutex, OnceLock};
+use std::time::SystemTime;
+
+/// The environment variable naming an extra model folder, searched first.
+pub const MODELS_ENV: &str = "VISFIELD_MODELS";
+
+/// One registry entry.
+#[derive(Clone, Debug, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModelEntry {
+    /// Registry name: the file stem (`igea_ply` for `igea.ply`).
+    pub name: String,
+    /// File name inside a model folder.
+    pub file: String,
+    /// Lower-case hex SHA-256 of the file.
+    pub sha256: String,
+    /// File size in bytes.
+    pub bytes: u64,
+    /// Number of `v` lines (PLY: vertex count).
+    pub vertices: usize,
+    /// Fan-triangulated face count in the file (before dropping zero-area triangles).
+    pub triangles: usize,
+    /// Licence and provenance notes.
+    pub licence: String,
+    /// Where the file came from (repository @ commit, path).
+    pub source: String,
+    /// Whether [`Mesh::load_obj`] can read it (OBJ files only).
+    pub loadable: bool,
+    /// Why it is not loadable, or other remarks.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub note: Option<String>,
+}
+
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RegistryFile {
+    #[allow(dead_code)]
+    comment: String,
+    models: Vec<ModelEntry>,
+}
+
+/// Errors from finding, verifying or loading a registered model.
+#[derive(Debug, thiserror::Error)]
+pub enum ModelError {
+    #[error("{origin}: invalid model registry: {message}")]
+    Registry { origin: String, message: String },
+    #[error("unknown model `{name}`; known models: {}", known.join(", "))]
+    Unknown { name: String, known: Vec<String> },
+    #[error(
+        "model `{name}` ({file}) not found; tried: {}. Fix: set {MODELS_ENV} to a folder holding \
+         {file}, or copy {file} into data/models/",
+        tried.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ")
+    )]
+    Missing {
+        name: String,
+        file: String,
+        tried: Vec<PathBuf>,
+    },
+    #[error(
+        "{}: sha256 mismatch for model `{name}`: expected {expected}, found {actual} (a wrong or \
+         corrupted copy; replace it with the file listed in data/models.json)",
+        path.display()
+    )]
+    Mismatch {
+        name: String,
+        path: PathBuf,
+        expected: String,
+        actual: String,
+    },
+    #[error("model `{name}` ({file}) is not loadable: {reason}")]
+    NotLoadable {
+        name: String,
+        file: String,
+        reason: String,
+    },
+    #[error("{}: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error(transparent)]
+    Geometry(#[from] GeometryError),
+}
+
+/// The list of known models.
+#[derive(Clone, Debug)]
+pub struct ModelRegistry {
+    pub entries: Vec<ModelEntry>,
+}
+
+impl ModelRegistry {
+    /// The registry compiled into the binary from `data/models.json`.
+    pub fn embedded() -> &'static ModelRegistry {
+        static REGISTRY: OnceLock<ModelRegistry> = OnceLock::new();
+        REGISTRY.get_or_init(|| {
+            ModelRegistry::from_json(
+                include_str!("../../data/models.json"),
+                "data/models.json (embedded)",
+            )
+            .expect("the embedded data/models.json is checked by the test suite")
+        })
+    }
+
+    /// Parses a registry; `origin` names the source in errors. Rejects unknown fields, duplicate
+    /// names and malformed hashes.
+    pub fn from_json(text: &str, origin: &str) -> Result<ModelRegistry, ModelError> {
+        let err = |message: String| ModelError::Registry {
+            origin: origin.to_string(),
+            message,
+        };
+        let file: RegistryFile = serde_json::from_str(text).map_err(|e| err(e.to_string()))?;
+        let mut seen = std::collections::HashSet::new();
+        for (i, e) in file.models.iter().enumerate() {
+            if !seen.insert(e.name.as_str()) {
+                return Err(err(format!(
+                    "models[{i}].name: duplicate name `{}`",
+                    e.name
+                )));
+            }
+            let hex = e.sha256.len() == 64
+                && e.sha256
+                    .bytes()
+                    .all(|b| b.is_ascii_digit() || (b'a'..=b'f').contains(&b));
+            if !hex {
+                return Err(err(format!(
+                    "models[{i}].sha256: `{}` is not 64 lower-case hex digits",
+                    e.sha256
+                )));
+            }
+        }
+        Ok(ModelRegistry {
+            entries: file.models,
+        })
+    }
+
+    /// The entry called `name`, or an error listing the known names.
+    pub fn get(&self, name: &str) -> Result<&ModelEntry, ModelError> {
+        self.entries
+            .iter()
+            .find(|e| e.name == name)
+            .ok_or_else(|| ModelError::Unknown {
+                name: name.to_string(),
+                known: self.entries.iter().map(|e| e.name.clone()).collect(),
+            })
+    }
+
+    /// Finds and verifies `name` in the default [`search_dirs`].
+    pub fn resolve(&self, name: &str) -> Result<PathBuf, ModelError> {
+        self.resolve_in(name, &search_dirs())
+    }
+
+    /// Finds `name` in the first of `dirs` that holds its file and checks the file's sha256.
+    pub fn resolve_in(&self, name: &str, dirs: &[PathBuf]) -> Result<PathBuf, ModelError> {
+        let entry = self.get(name)?;
+        let mut tried = Vec::with_capacity(dirs.len());
+        for dir in dirs {
+            let path = dir.join(&entry.file);
+            if path.is_file() {
+                let actual = sha256_file_cached(&path)?;
+                if actual != entry.sha256 {
+                    return Err(ModelError::Mismatch {
+                        name: entry.name.clone(),
+                        path,
+                        expected: entry.sha256.clone(),
+                        actual,
+                    });
+                }
+                return Ok(path);
+            }
+            tried.push(path);
+        }
+        Err(ModelError::Missing {
+            name: entry.name.clone(),
+            file: entry.file.clone(),
+            tried,
+        })
+    }
+
+    /// Resolves, verifies and loads `name` from the default [`search_dirs`].
+    pub fn load(&self, name: &str) -> Result<Mesh, ModelError> {
+        self.load_in(name, &search_dirs())
+    }
+
+    /// Resolves `name` in `dirs`, verifies it and loads it as a mesh.
+    pub fn load_in(&self, name: &str, dirs: &[PathBuf]) -> Result<Mesh, ModelError> {
+        let entry = self.get(name)?;
+        if !entry.loadable {
+            return Err(ModelError::NotLoadable {
+                name: entry.name.clone(),
+                file: entry.file.clone(),
+                reason: entry
+                    .note
+                    .clone()
+                    .unwrap_or_else(|| "not an OBJ file".to_string()),
+            });
+        }
+        let path = self.resolve_in(name, dirs)?;
+        Ok(Mesh::load_obj(&path)?)
+    }
+}
+
+/// Loads a registered model by name (embedded registry, default search folders).
+pub fn load_model(name: &str) -> Result<Mesh, ModelError> {
+    ModelRegistry::embedded().load(name)
+}
+
+/// The default model folders, in search order (see the module docs), without duplicates.
+pub fn search_dirs() -> Vec<PathBuf> {
+    let crate_root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let cwd = std::env::current_dir().ok();
+    let mut dirs = Vec::new();
+    if let Some(d) = std::env::var_os(MODELS_ENV).filter(|d| !d.is_empty()) {
+        dirs.push(PathBuf::from(d));
+    }
+    for rel in ["data/models", "../shared/models"] {
+        dirs.push(crate_root.join(rel));
+        if let Some(cwd) = &cwd {
+            dirs.push(cwd.join(rel));
+        }
+    }
+    let mut unique: Vec<PathBuf> = Vec::new();
+    for d in dirs {
+        let key = std::path::absolute(&d).unwrap_or_else(|_| d.clone());
+        if !unique
+            .iter()
+            .any(|u| std::path::absolute(u).unwrap_or_else(|_| u.clone()) == key)
+        {
+            unique.push(d);
+        }
+    }
+    unique
+}
+
+/// Streaming SHA-256 of a file, cached per (path, size, mtime).
+fn sha256_file_cached(path: &Path) -> Result<String, ModelError> {
+    type Key = (PathBuf, u64, Option<SystemTime>);
+    static CACHE: OnceLock<Mutex<HashMap<Key, String>>> = OnceLock::new();
+    let io = |source| ModelError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let meta = std::fs::metadata(path).map_err(io)?;
+    let key: Key = (
+        std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf()),
+        meta.len(),
+        meta.modified().ok(),
+    );
+    let cache = CACHE.get_or_init(Default::default);
+    if let Some(h) = cache.lock().unwrap_or_else(|p| p.into_inner()).get(&key) {
+        return Ok(h.clone());
+    }
+    let mut file = std::fs::File::open(path).map_err(io)?;
+    let mut hasher = sha2::Sha256::new();
+    let mut buf = vec![0u8; 1 << 16];
+    loop {
+        let n = file.read(&mut buf).map_err(io)?;
+        if n == 0 {
+            break;
+        }
+        hasher.update(&buf[..n]);
+    }
+    let hex: String = hasher
+        .finalize()
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect();
+    cache
+        .lock()
+        .unwrap_or_else(|p| p.into_inner())
+        .insert(key, hex.clone());
+    Ok(hex)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn shared_models() -> Option<PathBuf> {
+        let d = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/models");
+        if d.is_dir() {
+            Some(d)
+        } else {
+            println!("note: {} is absent; skipping", d.display());
+            None
+        }
+    }
+
+    #[test]
+    fn embedded_registry_parses_with_unique_names_and_matching_files() {
+        let r = ModelRegistry::embedded();
+        // Every mesh of shared/models/MANIFEST.md: 12 OBJ files and igea.ply.
+        assert_eq!(r.entries.len(), 13);
+        let mut names: Vec<_> = r.entries.iter().map(|e| e.name.as_str()).collect();
+        names.sort();
+        names.dedup();
+        assert_eq!(names.len(), 13);
+        for e in &r.entries {
+            assert_eq!(e.loadable, e.file.ends_with(".obj"), "{}", e.name);
+            if e.loadable {
+                assert_eq!(format!("{}.obj", e.name), e.file);
+            }
+        }
+        assert_eq!(r.get("bunny_npm").unwrap().triangles, 3674);
+        assert_eq!(r.get("stanford-bunny_39k").unwrap().triangles, 38889);
+    }
+
+    #[test]
+    fn registry_rejects_duplicates_and_unknown_fields() {
+        let one = r#"{"name":"a","file":"a.obj","sha256":"00000000000000000000000000000000000000000000000000000000000000ff","bytes":1,"vertices":3,"triangles":1,"licence":"x","source":"y","loadable":true}"#;
+        let dup = format!(r#"{{"comment":"","models":[{one},{one}]}}"#);
+        let e = ModelRegistry::from_json(&dup, "dup.json")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("dup.json") && e.contains("models[1].name"),
+            "{e}"
+        );
+        let extra = r#"{"comment":"","models":[{"name":"a","colour":1}]}"#;
+        let e = ModelRegistry::from_json(extra, "x.json")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("x.json") && e.contains("colour"), "{e}");
+    }
+
+    #[test]
+    fn unknown_name_lists_known_models() {
+        let e = ModelRegistry::embedded()
+            .resolve_in("teapot", &[])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("teapot") && e.contains("bunny_npm") && e.contains("dragon"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn missing_model_lists_every_path_tried_and_the_fix() {
+        let a = tempfile::tempdir().unwrap();
+        let b = tempfile::tempdir().unwrap();
+        let dirs = [a.path().to_path_buf(), b.path().to_path_buf()];
+        let e = ModelRegistry::embedded()
+            .resolve_in("cow", &dirs)
+            .unwrap_err();
+        let msg = e.to_string();
+        for d in &dirs {
+            assert!(
+                msg.contains(&d.join("cow.obj").display().to_string()),
+                "{msg}"
+            );
+        }
+        assert!(
+            msg.contains(MODELS_ENV) && msg.contains("data/models"),
+            "{msg}"
+        );
+    }
+
+    #[test]
+    fn bunny_npm_resolves_from_shared_and_loads_with_registry_counts() {
+        let Some(shared) = shared_models() else {
+            return;
+        };
+        let reg = ModelRegistry::embedded();
+        let empty = tempfile::tempdir().unwrap();
+        // An earlier folder without the file is skipped.
+        let dirs = [empty.path().to_path_buf(), shared.clone()];
+        let path = reg.resolve_in("bunny_npm", &dirs).unwrap();
+        assert_eq!(path, shared.join("bunny_npm.obj"));
+        let mesh = reg.load_in("bunny_npm", &dirs).unwrap();
+        let entry = reg.get("bunny_npm").unwrap();
+        assert_eq!(
+            mesh.triangle_count() + mesh.dropped_degenerate,
+            entry.triangles
+        );
+        assert_eq!(mesh.triangle_count(), 3674);
+        assert_eq!(mesh.vertex_count(), entry.vertices);
+        // MANIFEST: closed low-res bunny (0 boundary edges).
+        assert!(mesh.is_closed());
+        // The default search order also finds it (through ../shared/models).
+        assert!(reg.resolve("bunny_npm").is_ok());
+    }
+
+    #[test]
+    fn corrupted_copy_reports_expected_and_actual_hash() {
+        let Some(shared) = shared_models() else {
+            return;
+        };
+        let dir = tempfile::tempdir().unwrap();
+        let mut bytes = std::fs::read(shared.join("bunny_npm.obj")).unwrap();
+        bytes[100] ^= 1;
+        std::fs::write(dir.path().join("bunny_npm.obj"), &bytes).unwrap();
+        let reg = ModelRegistry::embedded();
+        // The corrupted copy comes first: it must be reported, not skipped.
+        let e = reg
+            .resolve_in("bunny_npm", &[dir.path().to_path_buf(), shared])
+            .unwrap_err();
+        let actual = crate::io::sha256_hex(&bytes);
+        match &e {
+            ModelError::Mismatch {
+                expected,
+                actual: a,
+                ..
+            } => {
+                assert_eq!(expected, &reg.get("bunny_npm").unwrap().sha256);
+                assert_eq!(a, &actual);
+            }
+            other => panic!("expected a mismatch, got {other}"),
+        }
+        let msg = e.to_string();
+        assert!(
+            msg.contains("bunny_npm.obj") && msg.contains(&actual),
+            "{msg}"
+        );
+    }
+
+    #[test]
+    fn hash_cache_returns_the_streamed_hash() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("f.bin");
+        // Larger than the 64 KiB read buffer, to cover several reads.
+        let bytes: Vec<u8> = (0..200_000u32).map(|i| (i * 7 % 251) as u8).collect();
+        std::fs::write(&p, &bytes).unwrap();
+        let first = sha256_file_cached(&p).unwrap();
+        assert_eq!(first, crate::io::sha256_hex(&bytes));
+        assert_eq!(sha256_file_cached(&p).unwrap(), first);
+    }
+
+    #[test]
+    fn igea_ply_is_listed_but_not_loadable() {
+        let e = ModelRegistry::embedded()
+            .load_in("igea_ply", &[])
+            .unwrap_err();
+        assert!(matches!(e, ModelError::NotLoadable { .. }), "{e}");
+    }
+}

@@ -1,0 +1,267 @@
+//! Wavefront OBJ loading (through `tobj`), with file and line in every error.
+
+use super::mesh::PartsError;
+use super::{GeometryError, Mesh};
+use glam::Vec3;
+use std::collections::HashMap;
+use std::io::{BufRead, BufReader, Read};
+use std::path::Path;
+
+impl Mesh {
+    /// Loads an OBJ file (all objects and groups merged, polygons fan-triangulated) and validates
+    /// it with [`Mesh::from_parts`].
+    ///
+    /// - Only positions and faces are read: materials, texture coordinates and the file's normals
+    ///   are ignored (normals are recomputed, area-weighted, see [`Mesh`]); `mtllib` files are
+    ///   never opened.
+    /// - Positions are welded across objects/groups by exact coordinate equality, so vertices
+    ///   shared between groups stay shared; vertices used by no face are not kept.
+    /// - The mesh is named by the file name.
+    ///
+    /// Errors name the file: an unreadable file (I/O error), a parse error with the line where
+    /// parsing stopped, a non-finite vertex with its line, an out-of-range face index, or no
+    /// non-degenerate triangle.
+    pub fn load_obj(path: &Path) -> Result<Mesh, GeometryError> {
+        let file = std::fs::File::open(path).map_err(|source| GeometryError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let display = path.display().to_string();
+        let mut reader = LineCountingReader::new(BufReader::with_capacity(1 << 16, file));
+        let options = tobj::LoadOptions {
+            triangulate: true,
+            single_index: false,
+            ignore_points: true,
+            ignore_lines: true,
+        };
+        let (models, _materials) =
+            tobj::load_obj_buf(&mut reader, &options, |_| Ok(Default::default())).map_err(|e| {
+                let line = reader.line_number();
+                GeometryError::invalid(
+                    &display,
+                    format!("OBJ parse error at or before line {line}: {e}"),
+                )
+            })?;
+        if reader.io_error {
+            return Err(GeometryError::invalid(&display, "read error"));
+        }
+
+        let mut positions: Vec<Vec3> = Vec::new();
+        let mut triangles: Vec<[u32; 3]> = Vec::new();
+        let mut weld: HashMap<[u32; 3], u32> = HashMap::new();
+        for model in &models {
+            let m = &model.mesh;
+            let local: Vec<u32> = m
+                .positions
+                .chunks_exact(3)
+                .map(|c| {
+                    let p = Vec3::new(c[0], c[1], c[2]);
+                    // +0.0 folds −0.0 into 0.0; NaNs stay distinct per bit pattern (and are
+                    // rejected below anyway).
+                    let key = [c[0] + 0.0, c[1] + 0.0, c[2] + 0.0].map(f32::to_bits);
+                    *weld.entry(key).or_insert_with(|| {
+                        positions.push(p);
+                        (positions.len() - 1) as u32
+                    })
+                })
+                .collect();
+            for (f, t) in m.indices.chunks_exact(3).enumerate() {
+                let map = |i: u32| {
+                    local.get(i as usize).copied().ok_or_else(|| {
+                        GeometryError::invalid(
+                            &display,
+                            format!(
+                                "object `{}` face {f}: vertex index out of range",
+                                model.name
+                            ),
+                        )
+                    })
+                };
+                triangles.push([map(t[0])?, map(t[1])?, map(t[2])?]);
+            }
+        }
+
+        let name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_else(|| display.clone());
+        Mesh::try_from_parts(&name, positions, triangles).map_err(|e| match e {
+            PartsError::NonFinite { position, .. } => {
+                let place = match first_non_finite_vertex_line(path) {
+                    Some((line, k)) => format!("line {line} (vertex {k}, 1-based as in OBJ)"),
+                    None => "a vertex line".to_string(),
+                };
+                GeometryError::invalid(
+                    &display,
+                    format!("non-finite vertex coordinate {position} at {place}"),
+                )
+            }
+            other => GeometryError::invalid(&display, other.to_string()),
+        })
+    }
+}
+
+/// Scans the `v ` lines for the first one with a non-finite coordinate, parsing the first three
+/// numbers as f32 like `tobj` does. Returns (line number, vertex number), both 1-based.
+fn first_non_finite_vertex_line(path: &Path) -> Option<(usize, usize)> {
+    let file = std::fs::File::open(path).ok()?;
+    let mut vertex = 0usize;
+    for (i, line) in BufReader::new(file).lines().enumerate() {
+        let line = line.ok()?;
+        let mut words = line.split_whitespace();
+        if words.next() != Some("v") {
+            continue;
+        }
+        vertex += 1;
+        let bad = words
+            .take(3)
+            .any(|w| w.parse::<f32>().map(|x| !x.is_finite()).unwrap_or(true));
+        if bad {
+            return Some((i + 1, vertex));
+        }
+    }
+    None
+}
+
+/// A `BufRead` that counts the newlines consumed, so that a parse error reported by `tobj` (which
+/// reads line by line) can name the line it stopped at.
+struct LineCountingReader<R> {
+    inner: R,
+    newlines: usize,
+    io_error: bool,
+}
+
+impl<R: BufRead> LineCountingReader<R> {
+    fn new(inner: R) -> Self {
+        LineCountingReader {
+            inner,
+            newlines: 0,
+            io_error: false,
+        }
+    }
+
+    /// 1-based number of the last line read (completely or partly).
+    fn line_number(&self) -> usize {
+        self.newlines.max(1)
+    }
+}
+
+impl<R: BufRead> Read for LineCountingReader<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf).inspect_err(|_| self.io_error = true)?;
+        self.newlines += buf[..n].iter().filter(|&&b| b == b'\n').count();
+        Ok(n)
+    }
+}
+
+impl<R: BufRead> BufRead for LineCountingReader<R> {
+    fn fill_buf(&mut self) -> std::io::Result<&[u8]> {
+        match self.inner.fill_buf() {
+            Ok(b) => Ok(b),
+            Err(e) => {
+                self.io_error = true;
+                Err(e)
+            }
+        }
+    }
+
+    fn consume(&mut self, amt: usize) {
+        if let Ok(b) = self.inner.fill_buf() {
+            self.newlines += b[..amt.min(b.len())]
+                .iter()
+                .filter(|&&c| c == b'\n')
+                .count();
+        }
+        self.inner.consume(amt);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn write(dir: &Path, name: &str, text: &str) -> std::path::PathBuf {
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        p
+    }
+
+    #[test]
+    fn merges_groups_welds_shared_vertices_and_triangulates_quads() {
+        let dir = tempfile::tempdir().unwrap();
+        // Two groups sharing the edge 2–3: a quad (2 triangles) and a triangle.
+        let p = write(
+            dir.path(),
+            "two.obj",
+            "# test\nmtllib missing.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0.5 2 0\n\
+             g a\nf 1 2 3 4\ng b\nf 4 3 5\n",
+        );
+        let m = Mesh::load_obj(&p).unwrap();
+        assert_eq!(m.name, "two.obj");
+        assert_eq!(m.triangle_count(), 3);
+        assert_eq!(m.vertex_count(), 5, "shared vertices must be welded");
+        // Area: unit square + triangle of base 1, height 1.
+        assert!((m.area() - 1.5).abs() < 1e-6);
+        for n in &m.normals {
+            assert!(n.distance(Vec3::Z) < 1e-6);
+        }
+    }
+
+    #[test]
+    fn missing_file_names_the_path() {
+        let e = Mesh::load_obj(Path::new("/nonexistent/dir/x.obj")).unwrap_err();
+        assert!(matches!(e, GeometryError::Io { .. }));
+        assert!(e.to_string().contains("/nonexistent/dir/x.obj"), "{e}");
+    }
+
+    #[test]
+    fn parse_error_names_file_and_line() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = write(
+            dir.path(),
+            "bad.obj",
+            "v 0 0 0\nv 1 0 0\nv 0 oops 1\nf 1 2 3\n",
+        );
+        let e = Mesh::load_obj(&p).unwrap_err().to_string();
+        assert!(e.contains("bad.obj") && e.contains("line 3"), "{e}");
+    }
+
+    #[test]
+    fn non_finite_vertex_names_its_line() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = write(
+            dir.path(),
+            "nan.obj",
+            "# header\nv 0 0 0\n\nv 1 0 0\nv 0 nan 1\nf 1 2 3\n",
+        );
+        let e = Mesh::load_obj(&p).unwrap_err().to_string();
+        assert!(
+            e.contains("nan.obj") && e.contains("line 5") && e.contains("vertex 3"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn out_of_range_face_index_is_an_error() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = write(
+            dir.path(),
+            "oob.obj",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n",
+        );
+        let e = Mesh::load_obj(&p).unwrap_err().to_string();
+        assert!(e.contains("oob.obj") && e.contains("out of bounds"), "{e}");
+    }
+
+    #[test]
+    fn degenerate_only_file_is_an_error() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = write(
+            dir.path(),
+            "flat.obj",
+            "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n",
+        );
+        let e = Mesh::load_obj(&p).unwrap_err().to_string();
+        assert!(e.contains("flat.obj") && e.contains("no triangles"), "{e}");
+    }
+}
