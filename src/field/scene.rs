@@ -20,14 +20,12 @@ pub struct FieldInstance {
 
 impl FieldInstance {
     pub fn new(field: Arc<VisibilityField>, transform: Similarity) -> Self {
-        let world_center =
-            transform.translation + transform.scale * (transform.rotation * field.bounds.center);
-        let world_radius = field.bounds.radius * transform.scale;
+        let world = transform.to_world_sphere(&field.bounds);
         FieldInstance {
             field,
             transform,
-            world_center,
-            world_radius,
+            world_center: world.center,
+            world_radius: world.radius,
         }
     }
 
@@ -41,12 +39,16 @@ impl FieldInstance {
         opts: &LookupOptions,
     ) -> Option<f32> {
         let tr = &self.transform;
-        let inv_s = 1.0 / tr.scale;
-        let inv_r = tr.rotation.inverse();
-        let o = inv_r * (origin - tr.translation) * inv_s;
-        let d = (inv_r * dir).normalize();
+        let o = tr.to_local_point(origin);
+        let d = tr.to_local_dir(dir).normalize();
         self.field
-            .hit_distance(o, d, tmin * inv_s, tmax * inv_s, opts)
+            .hit_distance(
+                o,
+                d,
+                tr.to_local_distance(tmin),
+                tr.to_local_distance(tmax),
+                opts,
+            )
             .map(|t| t * tr.scale)
     }
 }

@@ -130,7 +130,10 @@ mod tests {
         let e16 = (mean_cos(16) - 2.0 / 3.0).abs();
         let e64 = (mean_cos(64) - 2.0 / 3.0).abs();
         assert!(e16 < 1e-2, "k = 16: error {e16}");
-        assert!(e64 < e16 / 3.0, "k = 64: error {e64} does not shrink from {e16}");
+        assert!(
+            e64 < e16 / 3.0,
+            "k = 64: error {e64} does not shrink from {e16}"
+        );
     }
 
     #[test]
