@@ -5,15 +5,19 @@
 //! Sources (stratified sets, seeded sequences) live apart from mappings; each mapping has its
 //! forward map, inverse and density side by side.
 
+mod fibonacci;
 mod frame;
 mod layout;
+mod mesh;
 pub mod rays;
+mod rings;
 mod sphere;
+mod texel_measure;
 pub mod warp;
 
 pub use frame::Frame;
 pub use layout::{HemisphereLayout, LayoutKind};
-pub use sphere::{SphereKind, SpherePoints};
+pub use sphere::{Spacing, SphereKind, SpherePoints};
 
 /// Errors from building a sampling pattern with impossible parameters.
 #[derive(Debug, thiserror::Error)]

@@ -58,12 +58,13 @@ pub fn disk_to_hemisphere(p: Vec2) -> Vec3 {
 }
 
 /// Exact inverse of [`disk_to_hemisphere`]: drop z (directions below the horizon are first
-/// clamped onto it, keeping their azimuth).
+/// clamped onto it, keeping their azimuth; straight down, which has no azimuth, goes to the
+/// horizon point `(1, 0)`).
 #[inline]
 pub fn hemisphere_to_disk(d: Vec3) -> Vec2 {
     let p = Vec2::new(d.x, d.y);
     if d.z < 0.0 {
-        p.normalize_or_zero()
+        p.try_normalize().unwrap_or(Vec2::X)
     } else {
         p
     }
@@ -116,6 +117,48 @@ pub fn polar_hemisphere_pdf(d: Vec3) -> f32 {
     let sin_theta = (1.0 - d.z * d.z).max(0.0).sqrt();
     1.0 / (PI * PI * sin_theta)
 }
+
+/// Square → uniform sphere (Archimedes' hat-box: z uniform in [−1, 1], φ = 2π u.x).
+#[inline]
+pub fn square_to_uniform_sphere(u: Vec2) -> Vec3 {
+    let z = 1.0 - 2.0 * u.y;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let (s, c) = (2.0 * PI * u.x).sin_cos();
+    Vec3::new(r * c, r * s, z)
+}
+
+/// Exact inverse of [`square_to_uniform_sphere`] (φ wrapped into [0, 2π)).
+#[inline]
+pub fn uniform_sphere_to_square(d: Vec3) -> Vec2 {
+    let mut phi = d.y.atan2(d.x);
+    if phi < 0.0 {
+        phi += 2.0 * PI;
+    }
+    let x = phi / (2.0 * PI);
+    Vec2::new(if x >= 1.0 { 0.0 } else { x }, (1.0 - d.z) * 0.5)
+}
+
+/// Density of [`square_to_uniform_sphere`] per unit solid angle: 1 / 4π.
+pub const UNIFORM_SPHERE_PDF: f32 = 1.0 / (4.0 * PI);
+
+/// Square → uniform hemisphere `z >= 0` (z uniform in [0, 1], φ = 2π u.x).
+#[inline]
+pub fn square_to_uniform_hemisphere(u: Vec2) -> Vec3 {
+    let z = 1.0 - u.y;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let (s, c) = (2.0 * PI * u.x).sin_cos();
+    Vec3::new(r * c, r * s, z)
+}
+
+/// Exact inverse of [`square_to_uniform_hemisphere`] (z < 0 clamped to the horizon).
+#[inline]
+pub fn uniform_hemisphere_to_square(d: Vec3) -> Vec2 {
+    let u = uniform_sphere_to_square(d);
+    Vec2::new(u.x, (1.0 - d.z.max(0.0)).min(1.0))
+}
+
+/// Density of [`square_to_uniform_hemisphere`] per unit solid angle: 1 / 2π.
+pub const UNIFORM_HEMISPHERE_PDF: f32 = 1.0 / (2.0 * PI);
 
 #[cfg(test)]
 mod tests {
@@ -188,5 +231,50 @@ mod tests {
             .sum::<f64>()
             / (n * n) as f64;
         assert!((mean - 2.0 / 3.0).abs() < 1e-4, "mean cos = {mean}");
+    }
+
+    #[test]
+    fn below_horizon_directions_clamp_to_the_horizon() {
+        // Keeps the azimuth of (3, 4, −1): (0.6, 0.8); straight down has none and goes to (1, 0).
+        let p = hemisphere_to_disk(Vec3::new(3.0, 4.0, -1.0));
+        assert!((p - Vec2::new(0.6, 0.8)).length() < 1e-6, "{p}");
+        assert_eq!(hemisphere_to_disk(Vec3::NEG_Z), Vec2::X);
+        assert_eq!(hemisphere_to_disk(Vec3::Z), Vec2::ZERO);
+    }
+
+    #[test]
+    fn uniform_sphere_and_hemisphere_round_trip() {
+        for u in grid(128) {
+            let d = square_to_uniform_sphere(u);
+            assert!((d.length() - 1.0).abs() < 1e-5);
+            let u2 = uniform_sphere_to_square(d);
+            assert!(
+                (u - u2).abs().max_element() < 1e-5,
+                "u {u} -> d {d} -> u' {u2}"
+            );
+            let h = square_to_uniform_hemisphere(u);
+            assert!(h.z >= 0.0 && (h.length() - 1.0).abs() < 1e-5);
+            let u3 = uniform_hemisphere_to_square(h);
+            assert!(
+                (u - u3).abs().max_element() < 1e-5,
+                "u {u} -> h {h} -> u' {u3}"
+            );
+        }
+    }
+
+    #[test]
+    fn uniform_sphere_moments() {
+        // Under the uniform density E[z] = 0 and E[z²] = 1/3; hemisphere: E[z] = 1/2.
+        let n = 256;
+        let (mut m1, mut m2, mut h1) = (0.0f64, 0.0f64, 0.0f64);
+        for u in grid(n) {
+            let z = square_to_uniform_sphere(u).z as f64;
+            m1 += z;
+            m2 += z * z;
+            h1 += square_to_uniform_hemisphere(u).z as f64;
+        }
+        let k = (n * n) as f64;
+        assert!((m1 / k).abs() < 1e-5 && (m2 / k - 1.0 / 3.0).abs() < 1e-4);
+        assert!((h1 / k - 0.5).abs() < 1e-5);
     }
 }
