@@ -15,7 +15,8 @@
 //!   nearest to the origin, which matters only for distance-limited queries.
 
 use super::{Selection, VisibilityField};
-use glam::{DVec3, Vec3};
+use crate::sampling::{HemisphereLayout, LayoutKind};
+use glam::{DVec3, Vec2, Vec3};
 
 /// Near and far roots of a unit-direction ray against a sphere, or `None` if it misses.
 ///
@@ -100,7 +101,8 @@ impl VisibilityField {
                 continue;
             }
             let local = self.frames[m].to_local(dir);
-            for (t, tw) in bilinear_texels(&self.layout, local) {
+            let (texels, n) = bilinear_texels(&self.layout, local);
+            for &(t, tw) in &texels[..n] {
                 let d = self.storage.get(m, t as usize);
                 if d < 1.0 {
                     occ += w * tw;
@@ -159,7 +161,44 @@ impl VisibilityField {
     }
 }
 
-/// The (up to) four texels around a local direction and their bilinear weights.
-fn bilinear_texels(layout: &crate::sampling::HemisphereLayout, local: Vec3) -> Vec<(u32, f32)> {
-    vec![(layout.to_texel(local), 1.0)]
+/// The (up to) four texels around a local direction and their bilinear weights (summing to 1).
+/// Polar maps wrap in φ (columns); other edges clamp; unused texels (rejection rim) are skipped
+/// and the remaining weights renormalised.
+fn bilinear_texels(layout: &HemisphereLayout, local: Vec3) -> ([(u32, f32); 4], usize) {
+    let res = layout.res as i64;
+    let p = layout.to_texel_continuous(local) - Vec2::splat(0.5);
+    let (c0, r0) = (p.x.floor() as i64, p.y.floor() as i64);
+    let (fx, fy) = (p.x - c0 as f32, p.y - r0 as f32);
+    let wrap = layout.kind == LayoutKind::Polar;
+    let col = |c: i64| {
+        if wrap {
+            c.rem_euclid(res)
+        } else {
+            c.clamp(0, res - 1)
+        }
+    };
+    let row = |r: i64| r.clamp(0, res - 1);
+    let mut out = [(0u32, 0.0f32); 4];
+    let mut n = 0;
+    let mut total = 0.0;
+    for (dc, dr, w) in [
+        (0, 0, (1.0 - fx) * (1.0 - fy)),
+        (1, 0, fx * (1.0 - fy)),
+        (0, 1, (1.0 - fx) * fy),
+        (1, 1, fx * fy),
+    ] {
+        let t = (row(r0 + dr) * res + col(c0 + dc)) as u32;
+        if w > 0.0 && layout.is_used(t) {
+            out[n] = (t, w);
+            n += 1;
+            total += w;
+        }
+    }
+    if n == 0 {
+        return ([(layout.to_texel(local), 1.0), (0, 0.0), (0, 0.0), (0, 0.0)], 1);
+    }
+    for o in &mut out[..n] {
+        o.1 /= total;
+    }
+    (out, n)
 }

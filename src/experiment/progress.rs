@@ -1,0 +1,33 @@
+//! Progress bars (indicatif) for anything that runs over a second; silent when stderr is not a
+//! terminal, so CI logs stay short.
+
+use indicatif::{ProgressBar, ProgressStyle};
+use std::time::{Duration, Instant};
+
+/// A bar of `len` steps with a message.
+pub fn bar(len: u64, msg: &str) -> ProgressBar {
+    let pb = ProgressBar::new(len);
+    pb.set_style(
+        ProgressStyle::with_template(
+            "{spinner} {msg:<28} [{bar:30}] {pos}/{len} {per_sec} eta {eta}",
+        )
+        .expect("valid template")
+        .progress_chars("=> "),
+    );
+    pb.set_message(msg.to_string());
+    pb
+}
+
+/// Runs `f` under a spinner named `msg`, printing the elapsed time when done; returns its value
+/// and the wall time in seconds.
+pub fn stage<T>(msg: &str, f: impl FnOnce() -> T) -> (T, f64) {
+    let pb = ProgressBar::new_spinner();
+    pb.set_message(msg.to_string());
+    pb.enable_steady_tick(Duration::from_millis(120));
+    let t = Instant::now();
+    let v = f();
+    let s = t.elapsed().as_secs_f64();
+    pb.finish_and_clear();
+    eprintln!("  {msg:<40} {:>9.3} s", s);
+    (v, s)
+}
