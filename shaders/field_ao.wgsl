@@ -1,0 +1,89 @@
+// Vertex ambient occlusion by field lookup (Gaitatzes et al., WSCG 2008 / WSCG 2010): one
+// thread per receiver point loops over the point's k^2 stratified cosine rays (the host's ray
+// set: base directions in `tables[0 .. rays]`, the point's rotation in the receiver record) and
+// over the field instances, stopping at the first occluding instance. Writes the fraction of
+// free rays (1 = unoccluded), as f32 bits.
+//
+// `probe_main` answers single lookups (nearest map, texel, both selections) so that the host
+// can compare every stage with the CPU path.
+
+// Mirrors `AoParamsGpu` (src/gpu/field_ao.rs).
+struct Params {
+    // Points, rays per point, instances, threads per dispatch row.
+    counts: vec4<u32>,
+    // Selection (0 nearest, 1 interpolated), unused x3.
+    mode: vec4<u32>,
+    // Origin offset along the normal, tmax, intra-object bias (fraction of 2R), unused.
+    ray: vec4<f32>,
+}
+
+// Mirrors `ReceiverGpu`: position and cos of the point's ray rotation; normal and sin.
+struct Receiver {
+    p: vec4<f32>,
+    n: vec4<f32>,
+}
+
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var<storage, read> receivers: array<Receiver>;
+@group(0) @binding(2) var<storage, read> tables: array<vec4<f32>>;
+@group(0) @binding(3) var<storage, read> mesh: array<vec4<u32>>;
+@group(0) @binding(4) var<storage, read> instances: array<Instance>;
+@group(0) @binding(5) var<storage, read_write> out: array<u32>;
+
+@compute @workgroup_size(64)
+fn ao_main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x + gid.y * params.counts.w;
+    if i >= params.counts.x {
+        return;
+    }
+    let rays = params.counts.y;
+    if rays == 0u {
+        out[i] = bitcast<u32>(1.0);
+        return;
+    }
+    let rc = receivers[i];
+    let nrm = rc.n.xyz;
+    let cs = rc.p.w;
+    let sn = rc.n.w;
+    let frame = frame_from_normal(nrm);
+    let origin = rc.p.xyz + params.ray.x * nrm;
+    let tmax = params.ray.y;
+    var free = 0u;
+    for (var r = 0u; r < rays; r++) {
+        let b = tables[r].xyz;
+        let local = vec3<f32>(cs * b.x - sn * b.y, sn * b.x + cs * b.y, b.z);
+        let dir = frame_to_world(frame, local);
+        var blocked = false;
+        for (var k = 0u; k < params.counts.z; k++) {
+            if instance_occludes(instances[k], origin, dir, 0.0, tmax, params.mode.x, params.ray.z) {
+                blocked = true;
+                break;
+            }
+        }
+        if !blocked {
+            free += 1u;
+        }
+    }
+    out[i] = bitcast<u32>(f32(free) / f32(rays));
+}
+
+// Probe i: unit point u = receivers[i].p.xyz and model direction receivers[i].n.xyz on the
+// field of instance 0; writes (nearest map, texel, nearest sample bits, interpolated bits).
+@compute @workgroup_size(64)
+fn probe_main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x + gid.y * params.counts.w;
+    if i >= params.counts.x {
+        return;
+    }
+    let inst = instances[0];
+    let u = receivers[i].p.xyz;
+    let dir = receivers[i].n.xyz;
+    let pbase = inst.tables.x;
+    let m = nearest_point(u, inst.kind.x, inst.kind.z, pbase);
+    let local = frame_to_local(frame_from_normal(-sphere_point(pbase, m)), dir);
+    let t = layout_to_texel(inst.kind.w, inst.data.x, local);
+    out[4u * i] = m;
+    out[4u * i + 1u] = t;
+    out[4u * i + 2u] = bitcast<u32>(field_sample(inst, u, dir, SELECT_NEAREST));
+    out[4u * i + 3u] = bitcast<u32>(field_sample(inst, u, dir, SELECT_INTERPOLATED));
+}

@@ -1,0 +1,168 @@
+// Field lookup on the GPU: 2008 Algorithm 2 (inter-object) and the 2010 intra-object test, a
+// port of src/field/lookup.rs (`ray_sphere`, `entry_point_relative`, `sample`,
+// `sample_interpolated`, `hit_distance`) and src/field/scene.rs (`FieldInstance`), in f32.
+// Needs `load_distance(inst, map, texel)` from the field layout (storage windows or 3D texture)
+// and the sphere-point and layout functions.
+
+const SELECT_NEAREST: u32 = 0u;
+const SELECT_INTERPOLATED: u32 = 1u;
+
+// One placed field. Mirrors `FieldInstanceGpu` (src/gpu/field_data.rs).
+struct Instance {
+    // World -> model rotation as a unit quaternion (x, y, z, w).
+    rotation: vec4<f32>,
+    // World translation (xyz) and uniform scale (w): world = t + s R model.
+    translation: vec4<f32>,
+    // World-space bounding sphere (centre, radius).
+    world_sphere: vec4<f32>,
+    // Model-space bounding sphere (centre, radius).
+    model_sphere: vec4<f32>,
+    // Sphere kind, map count, ring parameter (Slater n or lat-long rows), layout kind.
+    kind: vec4<u32>,
+    // Resolution, precision, first data word (or first texture tile), first mean (tables index).
+    data: vec4<u32>,
+    // First point (tables index), first triangle (mesh index), walk step cap, tiles per row.
+    tables: vec4<u32>,
+    // Tiles per slice (texture layout), unused.
+    extra: vec4<u32>,
+}
+
+// glam's `Quat::mul_vec3a`: v (w^2 - b.b) + b 2(v.b) + (b x v) 2w.
+fn quat_rotate(q: vec4<f32>, v: vec3<f32>) -> vec3<f32> {
+    let b = q.xyz;
+    let w = q.w;
+    let b2 = dot(b, b);
+    return v * (w * w - b2) + b * (dot(v, b) * 2.0) + cross(b, v) * (w * 2.0);
+}
+
+// glam's `normalize`: v * (1 / |v|).
+fn normalize_exact(v: vec3<f32>) -> vec3<f32> {
+    return v * (1.0 / sqrt(dot(v, v)));
+}
+
+// Near and far roots of a unit-direction ray against a sphere (Haines et al., Ray Tracing
+// Gems ch. 7, in f32); z = 1 when it hits, 0 when it misses.
+fn ray_sphere(o: vec3<f32>, d: vec3<f32>, c: vec3<f32>, r: f32) -> vec3<f32> {
+    let f = o - c;
+    let b = -dot(f, d);
+    let l = f + b * d;
+    let ll = length(l);
+    let disc = (r - ll) * (r + ll);
+    if disc < 0.0 {
+        return vec3<f32>(0.0, 0.0, 0.0);
+    }
+    let fl = length(f);
+    let cc = (fl - r) * (fl + r);
+    let s = sqrt(disc);
+    let q = select(b - s, b + s, b >= 0.0);
+    var t0 = 0.0;
+    var t1 = 0.0;
+    if q != 0.0 {
+        t0 = cc / q;
+        t1 = q;
+    }
+    return vec3<f32>(min(t0, t1), max(t0, t1), 1.0);
+}
+
+// Normalised distance D stored for a ray crossing the sphere at unit `u` with model direction
+// `dir` pointing into the sphere.
+fn field_sample(inst: Instance, u: vec3<f32>, dir: vec3<f32>, selection: u32) -> f32 {
+    let kind = inst.kind.x;
+    let n = inst.kind.z;
+    let layout = inst.kind.w;
+    let res = inst.data.x;
+    let pbase = inst.tables.x;
+    let m = nearest_point(u, kind, n, pbase);
+    if selection == SELECT_NEAREST {
+        let local = frame_to_local(frame_from_normal(-sphere_point(pbase, m)), dir);
+        return load_distance(inst, m, layout_to_texel(layout, res, local));
+    }
+    // Interpolated: hits and misses blended as an occupancy (src/field/lookup.rs).
+    let s = surrounding(u, m, pbase, inst.tables.y, inst.tables.z);
+    var occ = 0.0;
+    var dist = 0.0;
+    for (var k = 0u; k < 3u; k++) {
+        let w = s.weights[k];
+        if w <= 0.0 {
+            continue;
+        }
+        let mk = s.maps[k];
+        let local = frame_to_local(frame_from_normal(-sphere_point(pbase, mk)), dir);
+        let fp = bilinear_footprint(layout, res, local);
+        for (var j = 0u; j < 4u; j++) {
+            let tw = fp.weights[j];
+            if tw <= 0.0 {
+                continue;
+            }
+            let dj = load_distance(inst, mk, fp.texels[j]);
+            if dj < 1.0 {
+                occ += w * tw;
+                dist += w * tw * dj;
+            }
+        }
+    }
+    if occ >= 0.5 {
+        return dist / occ;
+    }
+    return 1.0;
+}
+
+// Whether instance `inst` blocks the world segment origin + t dir, t in [tmin, tmax].
+fn instance_occludes(inst: Instance, origin: vec3<f32>, dir: vec3<f32>, tmin: f32, tmax: f32,
+                     selection: u32, intra_bias: f32) -> bool {
+    // World-space sphere test first (src/field/scene.rs).
+    let ws = ray_sphere(origin, dir, inst.world_sphere.xyz, inst.world_sphere.w);
+    if ws.z == 0.0 || !(ws.y >= tmin && ws.x <= tmax) {
+        return false;
+    }
+    let scale = inst.translation.w;
+    let o = quat_rotate(inst.rotation, (origin - inst.translation.xyz) / scale);
+    let d = normalize_exact(quat_rotate(inst.rotation, dir));
+    let lmin = tmin / scale;
+    let lmax = tmax / scale;
+    let c = inst.model_sphere.xyz;
+    let r = inst.model_sphere.w;
+    let rs = ray_sphere(o, d, c, r);
+    if rs.z == 0.0 {
+        return false;
+    }
+    let t0 = rs.x;
+    let t1 = rs.y;
+    let diameter = 2.0 * r;
+    if t1 < lmin {
+        return false;
+    }
+    if t0 >= 0.0 {
+        // Outside: inter-object lookup at the entry point.
+        if t0 > lmax {
+            return false;
+        }
+        let f = o - c;
+        let l = f - dot(f, d) * d;
+        let ll = length(l);
+        let disc = (r - ll) * (r + ll);
+        if disc < 0.0 {
+            return false;
+        }
+        let u = (l - sqrt(disc) * d) / r;
+        let dd = field_sample(inst, u, d, selection);
+        if dd >= 1.0 {
+            return false;
+        }
+        let t = t0 + diameter * dd;
+        return t >= lmin && t <= lmax;
+    }
+    // Inside: intra-object test from the exit point back towards the origin.
+    let p1 = (o - c) + t1 * d;
+    let len = sqrt(dot(p1, p1));
+    var u = vec3<f32>(0.0);
+    if len > 0.0 {
+        u = p1 * (1.0 / len);
+    }
+    let dd = field_sample(inst, u, -d, selection);
+    if dd >= 1.0 {
+        return false;
+    }
+    let t = t1 - diameter * dd;
+    return t > lmin + intra_bias * diameter && t <= lmax;
+}

@@ -1,0 +1,343 @@
+//! The headless wgpu device: adapter choice, limits, features, and the buffer helpers every
+//! kernel uses (upload, read-back, timestamp queries).
+
+use super::GpuError;
+use std::time::Duration;
+use wgpu::util::DeviceExt;
+
+/// Environment variable that forces an adapter: `lavapipe`, `hardware`, or a substring of the
+/// adapter name (case-insensitive). Unset or `auto`: hardware where there is one, else lavapipe.
+pub const ADAPTER_ENV: &str = "VISFIELD_ADAPTER";
+
+/// Which Vulkan adapter to use.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum AdapterPreference {
+    /// A hardware adapter (discrete, then integrated, then virtual) where there is one, else a
+    /// CPU adapter (lavapipe).
+    Auto,
+    /// A CPU adapter (Mesa lavapipe / llvmpipe); an error when there is none.
+    Lavapipe,
+    /// A non-CPU adapter; an error when there is none.
+    Hardware,
+    /// The first adapter whose name contains this (case-insensitive).
+    Name(String),
+}
+
+impl AdapterPreference {
+    /// Parses `auto`, `lavapipe` (also `llvmpipe`, `cpu`), `hardware` (also `gpu`), or any
+    /// other text as a name substring.
+    pub fn parse(s: &str) -> AdapterPreference {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "" | "auto" => AdapterPreference::Auto,
+            "lavapipe" | "llvmpipe" | "cpu" => AdapterPreference::Lavapipe,
+            "hardware" | "gpu" => AdapterPreference::Hardware,
+            _ => AdapterPreference::Name(s.trim().to_string()),
+        }
+    }
+
+    /// The preference named by [`ADAPTER_ENV`], or [`AdapterPreference::Auto`] when unset.
+    pub fn from_env() -> AdapterPreference {
+        std::env::var(ADAPTER_ENV)
+            .map(|s| AdapterPreference::parse(&s))
+            .unwrap_or(AdapterPreference::Auto)
+    }
+}
+
+/// Rank of a device type for [`AdapterPreference::Auto`] (lower is preferred).
+fn hardware_rank(t: wgpu::DeviceType) -> u32 {
+    match t {
+        wgpu::DeviceType::DiscreteGpu => 0,
+        wgpu::DeviceType::IntegratedGpu => 1,
+        wgpu::DeviceType::VirtualGpu => 2,
+        wgpu::DeviceType::Other => 3,
+        wgpu::DeviceType::Cpu => 4,
+    }
+}
+
+fn is_cpu(info: &wgpu::AdapterInfo) -> bool {
+    info.device_type == wgpu::DeviceType::Cpu
+        || info.name.to_ascii_lowercase().contains("llvmpipe")
+}
+
+/// A headless wgpu device on the Vulkan backend, created with the adapter's own limits (so
+/// that kernels can size their bindings from [`GpuContext::limits`]) and with timestamp queries
+/// where the adapter has them.
+pub struct GpuContext {
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    info: wgpu::AdapterInfo,
+    limits: wgpu::Limits,
+    timestamps: bool,
+}
+
+impl GpuContext {
+    /// Opens the adapter `pref` selects.
+    ///
+    /// Errors: [`GpuError::NoAdapter`] when the Vulkan backend lists no adapter at all (no
+    /// driver installed), [`GpuError::AdapterNotFound`] when adapters exist but none matches.
+    pub fn new(pref: AdapterPreference) -> Result<GpuContext, GpuError> {
+        pollster::block_on(Self::new_async(pref))
+    }
+
+    async fn new_async(pref: AdapterPreference) -> Result<GpuContext, GpuError> {
+        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+        desc.backends = wgpu::Backends::VULKAN;
+        let instance = wgpu::Instance::new(desc);
+        let adapters = instance.enumerate_adapters(wgpu::Backends::VULKAN).await;
+        if adapters.is_empty() {
+            return Err(GpuError::NoAdapter);
+        }
+        let names: Vec<String> = adapters
+            .iter()
+            .map(|a| {
+                let i = a.get_info();
+                format!("{} ({:?})", i.name, i.device_type)
+            })
+            .collect();
+        let chosen = match &pref {
+            AdapterPreference::Auto => adapters
+                .into_iter()
+                .min_by_key(|a| hardware_rank(a.get_info().device_type)),
+            AdapterPreference::Lavapipe => adapters.into_iter().find(|a| is_cpu(&a.get_info())),
+            AdapterPreference::Hardware => adapters
+                .into_iter()
+                .filter(|a| !is_cpu(&a.get_info()))
+                .min_by_key(|a| hardware_rank(a.get_info().device_type)),
+            AdapterPreference::Name(n) => {
+                let n = n.to_ascii_lowercase();
+                adapters
+                    .into_iter()
+                    .find(|a| a.get_info().name.to_ascii_lowercase().contains(&n))
+            }
+        };
+        let adapter = chosen.ok_or_else(|| GpuError::AdapterNotFound {
+            requested: format!("{pref:?}"),
+            available: names.join(", "),
+        })?;
+        let info = adapter.get_info();
+        let limits = adapter.limits();
+        let timestamps = adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY);
+        let required_features = if timestamps {
+            wgpu::Features::TIMESTAMP_QUERY
+        } else {
+            wgpu::Features::empty()
+        };
+        let (device, queue) = adapter
+            .request_device(&wgpu::DeviceDescriptor {
+                label: Some("visfield"),
+                required_features,
+                required_limits: limits.clone(),
+                ..Default::default()
+            })
+            .await
+            .map_err(|e| GpuError::Device(e.to_string()))?;
+        Ok(GpuContext {
+            device,
+            queue,
+            info,
+            limits,
+            timestamps,
+        })
+    }
+
+    /// "name | driver driver_info | backend": what every result row records.
+    pub fn adapter_label(&self) -> String {
+        format!(
+            "{} | {} {} | {:?}",
+            self.info.name, self.info.driver, self.info.driver_info, self.info.backend
+        )
+    }
+
+    pub fn adapter_info(&self) -> &wgpu::AdapterInfo {
+        &self.info
+    }
+
+    /// Whether this is a CPU adapter (lavapipe).
+    pub fn is_cpu_adapter(&self) -> bool {
+        is_cpu(&self.info)
+    }
+
+    /// The device's limits (the adapter's best).
+    pub fn limits(&self) -> &wgpu::Limits {
+        &self.limits
+    }
+
+    /// Whether GPU timestamps are recorded.
+    pub fn has_timestamps(&self) -> bool {
+        self.timestamps
+    }
+
+    /// A storage buffer initialised with `data` (at least 4 bytes: empty inputs get one zero
+    /// word, since zero-sized bindings are invalid).
+    pub(crate) fn storage_buffer(&self, label: &str, data: &[u8]) -> wgpu::Buffer {
+        let zero = [0u8; 16];
+        let contents = if data.is_empty() { &zero[..] } else { data };
+        self.device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            })
+    }
+
+    /// A uniform buffer initialised with `data`.
+    pub(crate) fn uniform_buffer(&self, label: &str, data: &[u8]) -> wgpu::Buffer {
+        self.device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: data,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            })
+    }
+
+    /// A storage buffer of `size` bytes the kernel writes and the host reads back.
+    pub(crate) fn output_buffer(&self, label: &str, size: u64) -> wgpu::Buffer {
+        self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: size.max(16),
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        })
+    }
+
+    /// Compiles a WGSL compute shader, returning the validation error instead of panicking.
+    pub(crate) fn compute_pipeline(
+        &self,
+        label: &str,
+        source: &str,
+        entry: &str,
+    ) -> Result<wgpu::ComputePipeline, GpuError> {
+        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let module = self
+            .device
+            .create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some(label),
+                source: wgpu::ShaderSource::Wgsl(source.into()),
+            });
+        let pipeline = self
+            .device
+            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(label),
+                layout: None,
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            });
+        match pollster::block_on(scope.pop()) {
+            Some(e) => Err(GpuError::Shader {
+                shader: label.to_string(),
+                message: e.to_string(),
+            }),
+            None => Ok(pipeline),
+        }
+    }
+
+    /// Runs one compute dispatch of `groups` workgroups (split over the y dimension when it
+    /// passes the per-dimension limit: the shader linearises `gid.x + gid.y · stride`), copies
+    /// `output` back and returns its bytes with the kernel's GPU time where timestamps exist.
+    pub(crate) fn dispatch_and_read(
+        &self,
+        pipeline: &wgpu::ComputePipeline,
+        bind_group: &wgpu::BindGroup,
+        groups: u32,
+        output: &wgpu::Buffer,
+    ) -> Result<(Vec<u8>, Option<Duration>), GpuError> {
+        let size = output.size();
+        let readback = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let queries = self.timestamps.then(|| {
+            let set = self.device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("kernel time"),
+                ty: wgpu::QueryType::Timestamp,
+                count: 2,
+            });
+            let resolve = self.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("timestamps"),
+                size: 16,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            let read = self.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("timestamps readback"),
+                size: 16,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            (set, resolve, read)
+        });
+        let (gx, gy) = split_groups(groups, self.limits.max_compute_workgroups_per_dimension);
+        let mut encoder = self
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+        {
+            let timestamp_writes =
+                queries
+                    .as_ref()
+                    .map(|(set, _, _)| wgpu::ComputePassTimestampWrites {
+                        query_set: set,
+                        beginning_of_pass_write_index: Some(0),
+                        end_of_pass_write_index: Some(1),
+                    });
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: None,
+                timestamp_writes,
+            });
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, bind_group, &[]);
+            if groups > 0 {
+                pass.dispatch_workgroups(gx, gy, 1);
+            }
+        }
+        encoder.copy_buffer_to_buffer(output, 0, &readback, 0, size);
+        if let Some((set, resolve, read)) = &queries {
+            encoder.resolve_query_set(set, 0..2, resolve, 0);
+            encoder.copy_buffer_to_buffer(resolve, 0, read, 0, 16);
+        }
+        self.queue.submit([encoder.finish()]);
+        let bytes = self.read_buffer(&readback)?;
+        let kernel = match &queries {
+            Some((_, _, read)) => {
+                let ts: Vec<u64> = bytemuck::pod_collect_to_vec(&self.read_buffer(read)?);
+                let ticks = ts[1].saturating_sub(ts[0]);
+                let ns = ticks as f64 * self.queue.get_timestamp_period() as f64;
+                Some(Duration::from_nanos(ns.round() as u64))
+            }
+            None => None,
+        };
+        Ok((bytes, kernel))
+    }
+
+    /// Maps a `MAP_READ` buffer and copies its contents out.
+    fn read_buffer(&self, buffer: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
+        let (tx, rx) = std::sync::mpsc::channel();
+        buffer.map_async(wgpu::MapMode::Read, .., move |r| {
+            let _ = tx.send(r);
+        });
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| GpuError::Device(e.to_string()))?;
+        rx.recv()
+            .map_err(|e| GpuError::Device(e.to_string()))?
+            .map_err(|e| GpuError::Device(e.to_string()))?;
+        let bytes = buffer
+            .get_mapped_range(..)
+            .map_err(|e| GpuError::Device(e.to_string()))?
+            .to_vec();
+        buffer.unmap();
+        Ok(bytes)
+    }
+}
+
+/// Splits `groups` workgroups into (x, y) with x ≤ `max_dim`, x·y ≥ groups.
+pub(crate) fn split_groups(groups: u32, max_dim: u32) -> (u32, u32) {
+    if groups <= max_dim {
+        (groups, 1)
+    } else {
+        (max_dim, groups.div_ceil(max_dim))
+    }
+}

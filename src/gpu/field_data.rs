@@ -1,0 +1,222 @@
+//! Packing fields for the GPU: per-instance records, the shared tables (ray directions, sphere
+//! points, 1-bit means), the sphere triangulations for the interpolated selection, and the
+//! stored words of every distinct field.
+
+use super::GpuError;
+use crate::field::{FieldInstance, Storage, VisibilityField};
+use crate::sampling::{LayoutKind, SphereKind};
+use std::collections::HashMap;
+use std::sync::Arc;
+
+/// Twin of WGSL `Instance` (shaders/field_lookup.wgsl). One placed field.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct FieldInstanceGpu {
+    /// World → model rotation (the instance rotation's conjugate), (x, y, z, w).
+    pub rotation: [f32; 4],
+    /// World translation and uniform scale (w).
+    pub translation: [f32; 4],
+    pub world_sphere: [f32; 4],
+    pub model_sphere: [f32; 4],
+    /// Sphere kind (0 Slater, 1 lat-long), map count, ring parameter, layout kind
+    /// (0 polar, 1 rejection, 2 concentric).
+    pub kind: [u32; 4],
+    /// Resolution, precision (0 f32, 1 u16, 2 u8, 3 bit1), first data word or tile, first
+    /// mean entry in the tables.
+    pub data: [u32; 4],
+    /// First point entry in the tables, first mesh entry, walk step cap, tiles per row.
+    pub tables: [u32; 4],
+    /// Tiles per slice (texture layout), unused ×3.
+    pub extra: [u32; 4],
+}
+const _: () = assert!(std::mem::size_of::<FieldInstanceGpu>() == 128);
+
+/// Precision code shared with the shaders.
+pub(crate) fn precision_code(s: &Storage) -> u32 {
+    match s {
+        Storage::F32 { .. } => 0,
+        Storage::U16 { .. } => 1,
+        Storage::U8 { .. } => 2,
+        Storage::Bit1 { .. } => 3,
+    }
+}
+
+fn layout_code(k: LayoutKind) -> u32 {
+    match k {
+        LayoutKind::Polar => 0,
+        LayoutKind::Rejection => 1,
+        LayoutKind::Concentric => 2,
+    }
+}
+
+/// The sphere kind code and ring parameter (Slater n, lat-long rows).
+fn sphere_code(field: &VisibilityField) -> Result<(u32, u32), GpuError> {
+    let count = field.params.count as u64;
+    match field.params.sphere {
+        SphereKind::Slater => (1..=1024u64)
+            .find(|&n| 2 * (2 * n * n + 2 * n + 1) == count)
+            .map(|n| (0, n as u32))
+            .ok_or_else(|| GpuError::Unsupported(format!("slater set of {count} points"))),
+        SphereKind::LatLong => (2..=4096u64)
+            .find(|&r| r * (r + 1) == count)
+            .map(|r| (1, r as u32))
+            .ok_or_else(|| GpuError::Unsupported(format!("lat-long set of {count} points"))),
+        SphereKind::Fibonacci => Err(GpuError::Unsupported(
+            "fibonacci point sets have no GPU nearest-point query (use slater or lat_long)"
+                .to_string(),
+        )),
+    }
+}
+
+/// Everything but the stored distances, plus each distinct field once.
+pub(crate) struct PackedFields {
+    pub instances: Vec<FieldInstanceGpu>,
+    /// Ray directions (`ray_capacity` entries), then per field its points (w: bits of an
+    /// incident triangle) and its 1-bit means (four per entry).
+    pub tables: Vec<[f32; 4]>,
+    /// Per triangle: vertices, then the triangles across the edges opposite them.
+    pub mesh: Vec<[u32; 4]>,
+    /// The distinct fields, and which one each instance uses.
+    pub fields: Vec<Arc<VisibilityField>>,
+    pub field_of_instance: Vec<usize>,
+}
+
+impl PackedFields {
+    /// Packs `instances`, reserving `ray_capacity` table entries for ray directions. The data
+    /// references (`data[2]`) are left for the layout to fill.
+    pub fn new(instances: &[FieldInstance], ray_capacity: usize) -> Result<Self, GpuError> {
+        let mut tables = vec![[0.0f32; 4]; ray_capacity];
+        let mut mesh: Vec<[u32; 4]> = Vec::new();
+        let mut fields: Vec<Arc<VisibilityField>> = Vec::new();
+        let mut field_of_instance = Vec::with_capacity(instances.len());
+        // Per distinct field: (kind, data, tables) words.
+        let mut records: Vec<([u32; 4], [u32; 4], [u32; 4])> = Vec::new();
+        let mut index: HashMap<*const VisibilityField, usize> = HashMap::new();
+        for inst in instances {
+            let key = Arc::as_ptr(&inst.field);
+            let fi = match index.get(&key) {
+                Some(&fi) => fi,
+                None => {
+                    let f = &inst.field;
+                    let (sphere, ring) = sphere_code(f)?;
+                    let point_base = tables.len() as u32;
+                    let (incident, adj) = adjacency(f.points.triangles(), f.points.len())?;
+                    for (i, p) in f.points.points().iter().enumerate() {
+                        tables.push([p.x, p.y, p.z, f32::from_bits(incident[i])]);
+                    }
+                    let mean_base = tables.len() as u32;
+                    if let Storage::Bit1 { mean, .. } = &f.storage {
+                        for c in mean.chunks(4) {
+                            let mut e = [1.0f32; 4];
+                            e[..c.len()].copy_from_slice(c);
+                            tables.push(e);
+                        }
+                    }
+                    let mesh_base = mesh.len() as u32;
+                    for (t, a) in f.points.triangles().iter().zip(&adj) {
+                        mesh.push([t[0], t[1], t[2], 0]);
+                        mesh.push([a[0], a[1], a[2], 0]);
+                    }
+                    let steps = 64 + 4 * (f.points.len() as f64).sqrt() as u32;
+                    records.push((
+                        [
+                            sphere,
+                            f.params.count as u32,
+                            ring,
+                            layout_code(f.params.layout),
+                        ],
+                        [f.params.res, precision_code(&f.storage), 0, mean_base],
+                        [point_base, mesh_base, steps, 0],
+                    ));
+                    fields.push(inst.field.clone());
+                    index.insert(key, fields.len() - 1);
+                    fields.len() - 1
+                }
+            };
+            field_of_instance.push(fi);
+        }
+        let instances = instances
+            .iter()
+            .zip(&field_of_instance)
+            .map(|(inst, &fi)| {
+                let tr = &inst.transform;
+                let q = tr.rotation.inverse();
+                let (kind, data, tabs) = records[fi];
+                let b = &inst.field.bounds;
+                FieldInstanceGpu {
+                    rotation: [q.x, q.y, q.z, q.w],
+                    translation: tr.translation.extend(tr.scale).to_array(),
+                    world_sphere: inst.world_center.extend(inst.world_radius).to_array(),
+                    model_sphere: b.center.extend(b.radius).to_array(),
+                    kind,
+                    data,
+                    tables: tabs,
+                    extra: [0; 4],
+                }
+            })
+            .collect();
+        Ok(PackedFields {
+            instances,
+            tables,
+            mesh,
+            fields,
+            field_of_instance,
+        })
+    }
+
+    /// Sets `data[2]` of every instance from a per-field value.
+    pub fn set_data_base(&mut self, base_of_field: &[u32]) {
+        for (inst, &fi) in self.instances.iter_mut().zip(&self.field_of_instance) {
+            inst.data[2] = base_of_field[fi];
+        }
+    }
+}
+
+/// The triangle incident to each vertex (the last one listing it, as on the host) and, per
+/// triangle, the triangles across the edges opposite its vertices.
+fn adjacency(tris: &[[u32; 3]], points: usize) -> Result<(Vec<u32>, Vec<[u32; 3]>), GpuError> {
+    let mut half: HashMap<(u32, u32), u32> = HashMap::with_capacity(tris.len() * 3);
+    for (ti, t) in tris.iter().enumerate() {
+        for e in 0..3 {
+            half.insert((t[(e + 1) % 3], t[(e + 2) % 3]), ti as u32);
+        }
+    }
+    let mut adj = vec![[0u32; 3]; tris.len()];
+    for (ti, t) in tris.iter().enumerate() {
+        for (e, slot) in adj[ti].iter_mut().enumerate() {
+            let (a, b) = (t[(e + 1) % 3], t[(e + 2) % 3]);
+            *slot = *half.get(&(b, a)).ok_or_else(|| {
+                GpuError::Unsupported(format!("sphere triangulation edge ({a}, {b}) has no twin"))
+            })?;
+        }
+    }
+    let mut incident = vec![u32::MAX; points];
+    for (ti, t) in tris.iter().enumerate() {
+        for &v in t {
+            incident[v as usize] = ti as u32;
+        }
+    }
+    Ok((incident, adj))
+}
+
+/// Every distinct field's stored words, concatenated; returns the words and each field's first
+/// word. F32: one word per texel; U16 / U8: the bytes as stored, little-endian, padded to a
+/// word; Bit1: the 64-bit words as pairs of 32-bit words (low half first).
+pub(crate) fn field_words(fields: &[Arc<VisibilityField>]) -> (Vec<u32>, Vec<u32>) {
+    let mut words: Vec<u32> = Vec::new();
+    let mut bases = Vec::with_capacity(fields.len());
+    for f in fields {
+        bases.push(words.len() as u32);
+        let bytes: &[u8] = match &f.storage {
+            Storage::F32 { data, .. } => bytemuck::cast_slice(data),
+            Storage::U16 { data, .. } => bytemuck::cast_slice(data),
+            Storage::U8 { data, .. } => data,
+            Storage::Bit1 { bits, .. } => bytemuck::cast_slice(bits),
+        };
+        let start = words.len();
+        words.resize(start + bytes.len().div_ceil(4), 0);
+        bytemuck::cast_slice_mut::<u32, u8>(&mut words[start..])[..bytes.len()]
+            .copy_from_slice(bytes);
+    }
+    (words, bases)
+}
