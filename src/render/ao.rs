@@ -1,5 +1,6 @@
 //! Vertex ambient occlusion through the [`Visibility`] interface (Gaitatzes, Chrysanthou,
-//! Papaioannou, "Presampled Visibility for Ambient Occlusion", WSCG 2008, Section 1):
+//! Papaioannou, "Presampled Visibility for Ambient Occlusion", WSCG 2008, the integral of its
+//! introduction):
 //!
 //! `A(x, n) = 1/π ∫_Ω V(x, ω) (ω·n) dω`,
 //!

@@ -52,14 +52,17 @@ const BOX_PAD_RELATIVE: f32 = 1.0 / (1u32 << 18) as f32;
 /// Triangles hit from either side (no backface culling). Closest-hit ties (two triangles at
 /// exactly the same `t`) return one of them.
 ///
-/// Robustness (Woop et al. 2013, Section 5, note that the BVH box test must be conservative too,
-/// or a watertight triangle test is useless): obvhs's node test is a plain slab test on 8-bit
-/// quantised child boxes, which are rounded outwards, but it is not conservative by itself:
-/// the slab distances are rounded, a direction component with `|d| <= f32::EPSILON` is replaced
-/// by `±f32::EPSILON` (`safe_inverse`), boxes are flat for axis-aligned triangles, and the box
+/// Robustness: a watertight triangle test is only watertight behind a conservative box test
+/// (Woop et al. 2013: "we must dynamically enlarge bounds during BVH traversal to conservatively
+/// bound the triangles intersected"). obvhs's node test is a plain slab test on 8-bit quantised
+/// child boxes, which are rounded outwards, but it is not conservative by itself: the slab
+/// distances are rounded, a direction component with `|d| <= f32::EPSILON` is replaced by
+/// `±f32::EPSILON` (`safe_inverse`), boxes are flat for axis-aligned triangles, and the box
 /// interval starts at a fixed absolute `t = 1e-4` instead of `tmin`. A ray through a shared
 /// edge or vertex that lies on a child box face can then lose the box holding the one triangle
-/// the watertight test reports. Two deviations from plain obvhs make it conservative:
+/// the watertight test reports (the tests find such a ray on an axis-aligned grid). Deviation
+/// from the paper: instead of enlarging the bounds during traversal, two changes around plain
+/// obvhs make it conservative:
 /// - every triangle box is padded by `2^-18` of the scene extent before the build, which
 ///   exceeds the slab rounding error (a few ulps of the origin-to-box distance) for origins
 ///   within about 10 scene extents of the scene and rays shorter than about 30 extents, and
@@ -171,7 +174,7 @@ impl Tracer {
         tmin: f32,
         tmax: f32,
     ) -> Option<(Ray, WatertightRay, f32, f32)> {
-        debug_assert!(tmin >= 0.0, "tmin must be >= 0, got {tmin}");
+        debug_assert!(tmin.is_nan() || tmin >= 0.0, "tmin must be >= 0, got {tmin}");
         if self.triangles.is_empty() || tmin.is_nan() || tmax.is_nan() || tmin > tmax {
             return None;
         }

@@ -20,7 +20,7 @@
 use glam::{Vec3A, Vec3Swizzles};
 
 /// A ray prepared for [`WatertightRay::intersect`]: the per-ray part of the paper's algorithm
-/// (Section 3, "Algorithm"), computed once per ray and reused for every triangle.
+/// (axis permutation and shear constants), computed once per ray and reused for every triangle.
 ///
 /// The paper's permutation (kx, ky, kz) and shear (Sx, Sy, Sz) are stored as the rows of the
 /// equivalent 3×3 matrix, so that a triangle is transformed with SIMD arithmetic: row `x` is
