@@ -2,11 +2,36 @@
 //! renderers built on it (vertex AO as in 2008; image-space AO, soft shadows, reflections as in
 //! 2010).
 
+pub mod ao;
+
+use crate::trace::Tracer;
+use glam::Vec3;
+
 /// A visibility oracle. Every renderer is written against this trait so that ray casting and
 /// field lookup run on exactly the same rays.
+///
+/// Both queries cover the segment `origin + t·dir` with `tmin <= t <= tmax` (both ends
+/// inclusive), `dir` unit, `tmin >= 0`.
 pub trait Visibility: Sync {
     /// Whether the segment origin + t·dir, t in [tmin, tmax], is blocked. `dir` is unit.
-    fn occluded(&self, origin: glam::Vec3, dir: glam::Vec3, tmin: f32, tmax: f32) -> bool;
+    fn occluded(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> bool;
+
+    /// Distance `t` to the first blocker on the segment, `None` when it is free.
+    /// `occluded(..) == hit_distance(..).is_some()`.
+    fn hit_distance(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<f32>;
+}
+
+/// The ray-cast backend: exact watertight ray casting against the scene's triangles.
+impl Visibility for Tracer {
+    #[inline]
+    fn occluded(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> bool {
+        self.any_hit(origin, dir, tmin, tmax)
+    }
+
+    #[inline]
+    fn hit_distance(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<f32> {
+        self.closest_hit(origin, dir, tmin, tmax).map(|h| h.t)
+    }
 }
 
 pub mod camera;

@@ -4,4 +4,7 @@
 mod tracer;
 pub mod watertight;
 
-pub use tracer::{Hit, Tracer};
+#[cfg(test)]
+pub(crate) mod test_scenes;
+
+pub use tracer::{Hit, RayQuery, Tracer};
