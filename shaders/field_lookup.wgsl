@@ -69,13 +69,13 @@ fn ray_sphere(o: vec3<f32>, d: vec3<f32>, c: vec3<f32>, r: f32) -> vec3<f32> {
 fn field_sample(inst: Instance, u: vec3<f32>, dir: vec3<f32>, selection: u32) -> f32 {
     let kind = inst.kind.x;
     let n = inst.kind.z;
-    let layout = inst.kind.w;
+    let lay = inst.kind.w;
     let res = inst.data.x;
     let pbase = inst.tables.x;
     let m = nearest_point(u, kind, n, pbase);
     if selection == SELECT_NEAREST {
         let local = frame_to_local(frame_from_normal(-sphere_point(pbase, m)), dir);
-        return load_distance(inst, m, layout_to_texel(layout, res, local));
+        return load_distance(inst, m, layout_to_texel(lay, res, local));
     }
     // Interpolated: hits and misses blended as an occupancy (src/field/lookup.rs).
     let s = surrounding(u, m, pbase, inst.tables.y, inst.tables.z);
@@ -88,7 +88,7 @@ fn field_sample(inst: Instance, u: vec3<f32>, dir: vec3<f32>, selection: u32) ->
         }
         let mk = s.maps[k];
         let local = frame_to_local(frame_from_normal(-sphere_point(pbase, mk)), dir);
-        let fp = bilinear_footprint(layout, res, local);
+        let fp = bilinear_footprint(lay, res, local);
         for (var j = 0u; j < 4u; j++) {
             let tw = fp.weights[j];
             if tw <= 0.0 {

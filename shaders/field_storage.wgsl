@@ -18,16 +18,16 @@ fn load_distance(inst: Instance, m: u32, t: u32) -> f32 {
     let res = inst.data.x;
     let texels = res * res;
     let base = inst.data.z;
-    let precision = inst.data.y;
-    if precision == PRECISION_F32 {
+    let prec = inst.data.y;
+    if prec == PRECISION_F32 {
         return bitcast<f32>(load_word(base + m * texels + t));
     }
-    if precision == PRECISION_U16 {
+    if prec == PRECISION_U16 {
         let g = m * texels + t;
         let q = (load_word(base + g / 2u) >> (16u * (g % 2u))) & 0xffffu;
         return f32(q) / 65535.0;
     }
-    if precision == PRECISION_U8 {
+    if prec == PRECISION_U8 {
         let g = m * texels + t;
         let q = (load_word(base + g / 4u) >> (8u * (g % 4u))) & 0xffu;
         return f32(q) / 255.0;

@@ -48,8 +48,11 @@ fn concentric_disk_to_square(p: vec2<f32>) -> vec2<f32> {
 }
 
 // Polar map inverse: theta = v pi/2 from the pole, phi = u 2pi wrapped into [0, 2pi).
+// theta = atan2(sqrt((1 - z)(1 + z)), z) rather than acos(z): the same angle, but lavapipe's
+// acos is less accurate than the host's and put ~0.1% of directions in a neighbouring row.
 fn polar_hemisphere_to_square(d: vec3<f32>) -> vec2<f32> {
-    let theta = min(acos(clamp(d.z, -1.0, 1.0)), FRAC_PI_2);
+    let z = clamp(d.z, -1.0, 1.0);
+    let theta = min(atan2(sqrt((1.0 - z) * (1.0 + z)), z), FRAC_PI_2);
     var phi = atan2(d.y, d.x);
     if phi < 0.0 {
         phi += 2.0 * PI;

@@ -1,16 +1,15 @@
 // Positional samples of a field on the GPU: the constant-time nearest point of a ring set
-// (Slater's hemisphere subdivision and the latitude-longitude grid), the Duff et al. 2017 frame
-// of a map, and the triangle walk of the interpolated selection.
+// (Slater's hemisphere subdivision and the latitude-longitude grid) and the triangle walk of
+// the interpolated selection.
 //
-// Ports of src/sampling/rings.rs (`RingSet::bracket`, `RingSet::nearest`), frame.rs and
-// mesh.rs (`SphereMesh::try_locate`), in f32. The ring parameters are analytic (no table); the
-// points come from the host's f32 table, so candidates are compared on the same coordinates.
+// Ports of src/sampling/rings.rs (`RingSet::bracket`, `RingSet::nearest`) and
+// src/sampling/mesh.rs (`SphereMesh::try_locate`), in f32. The ring parameters are analytic
+// (no table); the points come from the host's f32 table, so candidates are compared on the
+// same coordinates.
 // Needs: `tables` (array<vec4<f32>>: ray directions, then every field's points with the incident
 // triangle's index in w) and `mesh` (array<vec4<u32>>: per triangle, its vertices then its
 // neighbours across the edges opposite them).
 
-const TAU: f32 = 6.283185307179586;
-const PI: f32 = 3.141592653589793;
 const SPHERE_SLATER: u32 = 0u;
 const SPHERE_LAT_LONG: u32 = 1u;
 
@@ -113,32 +112,6 @@ fn nearest_point(d: vec3<f32>, kind: u32, n: u32, base: u32) -> u32 {
         }
     }
     return best;
-}
-
-// Duff, Burgess, Christensen, Hery, Kensler, Liani, Villemin, "Building an Orthonormal Basis,
-// Revisited", JCGT 6(1), 2017: the frame around unit normal `nrm` (src/sampling/frame.rs).
-// copysign(1, z) reads the sign bit, so -0.0 takes the negative branch as on the host.
-struct Frame {
-    x: vec3<f32>,
-    y: vec3<f32>,
-    z: vec3<f32>,
-}
-
-fn frame_from_normal(nrm: vec3<f32>) -> Frame {
-    let sgn = select(1.0, -1.0, (bitcast<u32>(nrm.z) & 0x80000000u) != 0u);
-    let a = -1.0 / (sgn + nrm.z);
-    let b = nrm.x * nrm.y * a;
-    let x = vec3<f32>(1.0 + sgn * nrm.x * nrm.x * a, sgn * b, -sgn * nrm.x);
-    let y = vec3<f32>(b, sgn + nrm.y * nrm.y * a, -nrm.y);
-    return Frame(x, y, nrm);
-}
-
-fn frame_to_local(f: Frame, v: vec3<f32>) -> vec3<f32> {
-    return vec3<f32>(dot(v, f.x), dot(v, f.y), dot(v, f.z));
-}
-
-fn frame_to_world(f: Frame, v: vec3<f32>) -> vec3<f32> {
-    return f.x * v.x + f.y * v.y + f.z * v.z;
 }
 
 // The three points around `d` and their planar barycentric weights: the triangle containing d

@@ -3,7 +3,8 @@
 //! stored words of every distinct field.
 
 use super::GpuError;
-use crate::field::{FieldInstance, Storage, VisibilityField};
+use crate::field::scene::FieldInstance;
+use crate::field::{Storage, VisibilityField};
 use crate::sampling::{LayoutKind, SphereKind};
 use std::collections::HashMap;
 use std::sync::Arc;

@@ -1,1 +1,66 @@
-//! See the crate docs.
+//! Headless wgpu paths: the same experiments as the CPU path, on lavapipe (Mesa's Vulkan on the
+//! CPU) or on a real GPU (Gaitatzes, Andreadis, Papaioannou, Chrysanthou, "Fast Approximate
+//! Visibility on the GPU using Precomputed 4D Visibility Fields", WSCG 2010).
+//!
+//! - [`GpuContext`]: adapter choice ([`AdapterPreference`], `VISFIELD_ADAPTER`), the device
+//!   with the adapter's own limits, and [`GpuContext::adapter_label`] for result rows.
+//! - [`FieldAoKernel`]: vertex AO by field lookup (inter- and intra-object, nearest or
+//!   interpolated selection), with the CPU path's ray directions and map selection; fields
+//!   bound as storage-buffer windows or as slices of a 3D texture ([`FieldLayout`]).
+//! - [`GpuTracer`]: the GPU ray-cast reference, an obvhs CWBVH traversed in WGSL with the
+//!   watertight triangle test, so that GPU lookup is compared with GPU ray casting on the same
+//!   device.
+//! - [`GpuTiming`]: GPU timestamps (where the adapter has them) and wall time, separately.
+//!
+//! WGSL lives in `shaders/` and is included at compile time; every uniform and storage struct
+//! has a `#[repr(C)]`, `Pod` twin with a compile-time size assertion.
+
+mod context;
+mod field_ao;
+mod field_data;
+mod rays;
+mod texture;
+mod tracer;
+
+pub use context::{AdapterPreference, GpuContext, ADAPTER_ENV};
+pub use field_ao::{FieldAoKernel, FieldGpuOptions, FieldLayout, LookupProbe};
+pub use field_data::FieldInstanceGpu;
+pub use tracer::{GpuHit, GpuTracer};
+
+use std::time::Duration;
+
+/// Errors of the GPU paths.
+#[derive(Debug, thiserror::Error)]
+pub enum GpuError {
+    /// The Vulkan backend lists no adapter at all: no Vulkan driver is installed.
+    #[error("no Vulkan adapter (install mesa-vulkan-drivers for lavapipe)")]
+    NoAdapter,
+    #[error("no Vulkan adapter matches {requested}; available: {available}")]
+    AdapterNotFound { requested: String, available: String },
+    #[error("device: {0}")]
+    Device(String),
+    #[error("shader {shader}: {message}")]
+    Shader { shader: String, message: String },
+    #[error("unsupported on the GPU path: {0}")]
+    Unsupported(String),
+    #[error("{what} needs {need} bytes but the adapter allows {limit} ({limit_name})")]
+    TooLarge {
+        what: String,
+        need: u64,
+        limit: u64,
+        limit_name: &'static str,
+    },
+    #[error("invalid input: {0}")]
+    Invalid(String),
+}
+
+/// What a GPU call cost: the kernel alone (GPU timestamps) and the whole call on the host.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GpuTiming {
+    /// Kernel execution from GPU timestamps; `None` where the adapter has no timestamp queries.
+    pub kernel: Option<Duration>,
+    /// Host time spent creating and filling the per-call buffers.
+    pub upload: Duration,
+    /// Wall time of the whole call: upload, dispatch, wait and read-back.
+    pub wall: Duration,
+}

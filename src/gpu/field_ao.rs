@@ -1,0 +1,381 @@
+//! Vertex AO by field lookup on the GPU (Gaitatzes et al., WSCG 2008 Algorithm 2 and the WSCG
+//! 2010 intra-object test), with the CPU path's ray directions and map selection.
+
+use super::context::GpuContext;
+use super::field_data::{field_words, PackedFields};
+use super::rays::{base_directions, receivers, ReceiverGpu};
+use super::texture::FieldTexture;
+use super::{GpuError, GpuTiming};
+use crate::field::lookup::LookupOptions;
+use crate::field::scene::FieldInstance;
+use crate::field::Selection;
+use crate::render::ao::AoOptions;
+use crate::sampling::rays::RaySet;
+use glam::Vec3;
+use std::time::{Duration, Instant};
+
+/// How the stored distances are bound.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FieldLayout {
+    /// The stored words as they are on the host, in storage buffers bound in windows of at
+    /// most the adapter's `max_storage_buffer_binding_size`.
+    StorageBuffers,
+    /// The 2010 paper's packing: maps as tiles of the slices of a 3D texture (r32float, r16uint,
+    /// r8uint by precision; 1-bit maps as r32uint words), several maps per slice.
+    Texture3d,
+}
+
+/// Options of a [`FieldAoKernel`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FieldGpuOptions {
+    pub lookup: LookupOptions,
+    pub layout: FieldLayout,
+    /// Largest window in bytes (storage layout); `None`: the adapter's binding limit. Smaller
+    /// windows only serve to test the windowing.
+    pub window_bytes: Option<u64>,
+    /// Most rays per point a call may use (table entries reserved for directions).
+    pub ray_capacity: usize,
+}
+
+impl Default for FieldGpuOptions {
+    fn default() -> Self {
+        FieldGpuOptions {
+            lookup: LookupOptions::default(),
+            layout: FieldLayout::StorageBuffers,
+            window_bytes: None,
+            ray_capacity: 1024,
+        }
+    }
+}
+
+/// Twin of WGSL `Params` (shaders/field_ao.wgsl).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+struct AoParamsGpu {
+    /// Points, rays per point, instances, threads per dispatch row.
+    counts: [u32; 4],
+    /// Selection (0 nearest, 1 interpolated), unused ×3.
+    mode: [u32; 4],
+    /// Origin offset, tmax, intra-object bias, unused.
+    ray: [f32; 4],
+}
+const _: () = assert!(std::mem::size_of::<AoParamsGpu>() == 48);
+
+/// One lookup as the GPU answers it (see [`FieldAoKernel::probe`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LookupProbe {
+    /// Nearest map.
+    pub map: u32,
+    /// Texel of the direction in that map.
+    pub texel: u32,
+    /// Stored distance read with the nearest selection.
+    pub nearest: f32,
+    /// Stored distance read with the interpolated selection.
+    pub interpolated: f32,
+}
+
+const WORKGROUP: u32 = 64;
+/// Bindings before the field's own (params, receivers, tables, mesh, instances, output).
+const FIXED_BINDINGS: u32 = 6;
+const STORAGE_BUFFERS_FIXED: u32 = 5;
+
+/// The field's stored distances on the device.
+enum FieldBinding {
+    Windows(Vec<wgpu::Buffer>),
+    Texture(FieldTexture),
+}
+
+/// Field-lookup vertex AO over a set of field instances, uploaded once.
+pub struct FieldAoKernel<'a> {
+    ctx: &'a GpuContext,
+    ao: wgpu::ComputePipeline,
+    probe: wgpu::ComputePipeline,
+    tables: wgpu::Buffer,
+    mesh: wgpu::Buffer,
+    instances: wgpu::Buffer,
+    instance_count: u32,
+    field: FieldBinding,
+    ray_capacity: usize,
+    field_bytes: u64,
+    upload: Duration,
+    /// Selection and intra-object bias of the lookups (may be changed between calls).
+    pub lookup: LookupOptions,
+}
+
+impl<'a> FieldAoKernel<'a> {
+    /// Packs and uploads `instances` (their distinct fields once each) and compiles the kernels.
+    pub fn new(
+        ctx: &'a GpuContext,
+        instances: &[FieldInstance],
+        opts: &FieldGpuOptions,
+    ) -> Result<Self, GpuError> {
+        let start = Instant::now();
+        let mut packed = PackedFields::new(instances, opts.ray_capacity.max(1))?;
+        let limits = ctx.limits();
+        let (field, prelude, field_src, field_bytes) = match opts.layout {
+            FieldLayout::StorageBuffers => {
+                let (words, bases) = field_words(&packed.fields);
+                packed.set_data_base(&bases);
+                let max_binding =
+                    (limits.max_storage_buffer_binding_size as u64).min(limits.max_buffer_size);
+                let window_bytes = opts.window_bytes.unwrap_or(max_binding).min(max_binding);
+                let window_words = ((window_bytes / 4) / 64 * 64).max(64) as usize;
+                let windows_needed = words.len().div_ceil(window_words).max(1);
+                let max_windows = limits
+                    .max_storage_buffers_per_shader_stage
+                    .saturating_sub(STORAGE_BUFFERS_FIXED) as usize;
+                if windows_needed > max_windows {
+                    return Err(GpuError::TooLarge {
+                        what: format!("fields in {windows_needed} storage windows"),
+                        need: words.len() as u64 * 4,
+                        limit: max_windows as u64 * window_words as u64 * 4,
+                        limit_name: "max_storage_buffer_binding_size × free storage bindings",
+                    });
+                }
+                let buffers: Vec<wgpu::Buffer> = (0..windows_needed)
+                    .map(|w| {
+                        let lo = (w * window_words).min(words.len());
+                        let hi = ((w + 1) * window_words).min(words.len());
+                        ctx.storage_buffer("field window", bytemuck::cast_slice(&words[lo..hi]))
+                    })
+                    .collect();
+                (
+                    FieldBinding::Windows(buffers),
+                    window_prelude(windows_needed, window_words),
+                    include_str!("../../shaders/field_storage.wgsl"),
+                    words.len() as u64 * 4,
+                )
+            }
+            FieldLayout::Texture3d => {
+                let tex = FieldTexture::new(ctx, &packed.fields)?;
+                packed.set_data_base(tex.first_tiles());
+                for (inst, &fi) in packed.instances.iter_mut().zip(&packed.field_of_instance) {
+                    let (tx, per_slice) = tex.tiles(fi);
+                    let (tile_w, tile_h) = tex.tile_shape(fi);
+                    inst.tables[3] = tx;
+                    inst.extra = [per_slice, tile_w, tile_h, 0];
+                }
+                let prelude = tex.prelude(FIXED_BINDINGS);
+                let bytes = tex.bytes();
+                (
+                    FieldBinding::Texture(tex),
+                    prelude,
+                    include_str!("../../shaders/field_texture.wgsl"),
+                    bytes,
+                )
+            }
+        };
+        let source = [
+            prelude.as_str(),
+            include_str!("../../shaders/frame.wgsl"),
+            include_str!("../../shaders/sphere_points.wgsl"),
+            include_str!("../../shaders/layouts.wgsl"),
+            include_str!("../../shaders/field_lookup.wgsl"),
+            field_src,
+            include_str!("../../shaders/field_ao.wgsl"),
+        ]
+        .concat();
+        let ao = ctx.compute_pipeline("field_ao", &source, "ao_main")?;
+        let probe = ctx.compute_pipeline("field_probe", &source, "probe_main")?;
+        let tables = ctx.storage_buffer("tables", bytemuck::cast_slice(&packed.tables));
+        let mesh = ctx.storage_buffer("sphere mesh", bytemuck::cast_slice(&packed.mesh));
+        let instances_buf =
+            ctx.storage_buffer("instances", bytemuck::cast_slice(&packed.instances));
+        Ok(FieldAoKernel {
+            ctx,
+            ao,
+            probe,
+            tables,
+            mesh,
+            instances: instances_buf,
+            instance_count: packed.instances.len() as u32,
+            field,
+            ray_capacity: opts.ray_capacity.max(1),
+            field_bytes,
+            upload: start.elapsed(),
+            lookup: opts.lookup,
+        })
+    }
+
+    /// Bytes of stored distances on the device.
+    pub fn field_bytes(&self) -> u64 {
+        self.field_bytes
+    }
+
+    /// Host time of packing, uploading and compiling in [`Self::new`].
+    pub fn setup_time(&self) -> Duration {
+        self.upload
+    }
+
+    /// AO at every point (point `i` uses the directions of point index `i` of `rays`), as
+    /// [`crate::render::ao::ao_at_points`] computes it over a [`crate::field::FieldScene`] of
+    /// the same instances and lookup options.
+    pub fn vertex_ao(
+        &self,
+        points: &[Vec3],
+        normals: &[Vec3],
+        rays: &RaySet,
+        opts: &AoOptions,
+    ) -> Result<(Vec<f32>, GpuTiming), GpuError> {
+        let start = Instant::now();
+        let base = base_directions(rays)?;
+        if base.len() > self.ray_capacity {
+            return Err(GpuError::Invalid(format!(
+                "{} rays per point, the kernel was built for at most {}",
+                base.len(),
+                self.ray_capacity
+            )));
+        }
+        if !base.is_empty() {
+            self.ctx
+                .queue
+                .write_buffer(&self.tables, 0, bytemuck::cast_slice(&base));
+        }
+        let recv = receivers(points, normals, rays)?;
+        let tmax = opts.max_distance.unwrap_or(f32::MAX).min(f32::MAX);
+        let params = AoParamsGpu {
+            counts: [points.len() as u32, base.len() as u32, self.instance_count, 0],
+            mode: [selection_code(self.lookup.selection), 0, 0, 0],
+            ray: [opts.offset, tmax, self.lookup.intra_bias, 0.0],
+        };
+        let (words, kernel, upload) = self.run(&self.ao, params, &recv, 1)?;
+        let ao = words.into_iter().map(f32::from_bits).collect();
+        Ok((
+            ao,
+            GpuTiming {
+                kernel,
+                upload,
+                wall: start.elapsed(),
+            },
+        ))
+    }
+
+    /// Single lookups on the field of the first instance: for unit sphere position `u[i]`
+    /// (model space) and model direction `dirs[i]`, the nearest map, the texel, and the stored
+    /// distance under both selections, for comparison with [`crate::field::VisibilityField`]'s
+    /// `points.nearest`, `layout.to_texel` and `sample`.
+    pub fn probe(&self, u: &[Vec3], dirs: &[Vec3]) -> Result<Vec<LookupProbe>, GpuError> {
+        if u.len() != dirs.len() {
+            return Err(GpuError::Invalid(format!(
+                "{} positions but {} directions",
+                u.len(),
+                dirs.len()
+            )));
+        }
+        let recv: Vec<ReceiverGpu> = u
+            .iter()
+            .zip(dirs)
+            .map(|(p, d)| ReceiverGpu {
+                p: p.extend(0.0).to_array(),
+                n: d.extend(0.0).to_array(),
+            })
+            .collect();
+        let params = AoParamsGpu {
+            counts: [u.len() as u32, 0, self.instance_count, 0],
+            ..Default::default()
+        };
+        let (words, _, _) = self.run(&self.probe, params, &recv, 4)?;
+        Ok(words
+            .chunks_exact(4)
+            .map(|w| LookupProbe {
+                map: w[0],
+                texel: w[1],
+                nearest: f32::from_bits(w[2]),
+                interpolated: f32::from_bits(w[3]),
+            })
+            .collect())
+    }
+
+    /// Uploads the per-call buffers, dispatches one thread per receiver and reads back
+    /// `words_per_item` words per receiver.
+    fn run(
+        &self,
+        pipeline: &wgpu::ComputePipeline,
+        mut params: AoParamsGpu,
+        recv: &[ReceiverGpu],
+        words_per_item: u64,
+    ) -> Result<(Vec<u32>, Option<Duration>, Duration), GpuError> {
+        let t = Instant::now();
+        let n = recv.len() as u32;
+        let groups = n.div_ceil(WORKGROUP);
+        let (gx, _) = super::context::split_groups(
+            groups,
+            self.ctx.limits().max_compute_workgroups_per_dimension,
+        );
+        params.counts[3] = gx * WORKGROUP;
+        let uniform = self
+            .ctx
+            .uniform_buffer("ao params", bytemuck::bytes_of(&params));
+        let recv_buf = self
+            .ctx
+            .storage_buffer("receivers", bytemuck::cast_slice(recv));
+        let out_bytes = recv.len() as u64 * words_per_item * 4;
+        let out = self.ctx.output_buffer("ao out", out_bytes);
+        let mut entries = vec![
+            entry(0, uniform.as_entire_binding()),
+            entry(1, recv_buf.as_entire_binding()),
+            entry(2, self.tables.as_entire_binding()),
+            entry(3, self.mesh.as_entire_binding()),
+            entry(4, self.instances.as_entire_binding()),
+            entry(5, out.as_entire_binding()),
+        ];
+        let view;
+        match &self.field {
+            FieldBinding::Windows(ws) => {
+                for (i, w) in ws.iter().enumerate() {
+                    entries.push(entry(FIXED_BINDINGS + i as u32, w.as_entire_binding()));
+                }
+            }
+            FieldBinding::Texture(tex) => {
+                view = tex.view();
+                entries.push(entry(
+                    FIXED_BINDINGS,
+                    wgpu::BindingResource::TextureView(&view),
+                ));
+            }
+        }
+        let bind_group = self
+            .ctx
+            .device
+            .create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("field ao"),
+                layout: &pipeline.get_bind_group_layout(0),
+                entries: &entries,
+            });
+        let upload = t.elapsed();
+        let (bytes, kernel) = self
+            .ctx
+            .dispatch_and_read(pipeline, &bind_group, groups, &out)?;
+        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes[..out_bytes as usize]);
+        Ok((words, kernel, upload))
+    }
+}
+
+fn entry(binding: u32, resource: wgpu::BindingResource<'_>) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry { binding, resource }
+}
+
+fn selection_code(s: Selection) -> u32 {
+    match s {
+        Selection::Nearest => 0,
+        Selection::Interpolated => 1,
+    }
+}
+
+/// `WINDOW_WORDS`, the window bindings and `load_word` for `n` windows.
+fn window_prelude(n: usize, window_words: usize) -> String {
+    let mut s = format!("const WINDOW_WORDS: u32 = {window_words}u;\n");
+    for i in 0..n {
+        s += &format!(
+            "@group(0) @binding({}) var<storage, read> win{i}: array<u32>;\n",
+            FIXED_BINDINGS as usize + i
+        );
+    }
+    s += "fn load_word(address: u32) -> u32 {\n    let i = address % WINDOW_WORDS;\n    switch address / WINDOW_WORDS {\n";
+    for i in 0..n {
+        s += &format!("        case {i}u: {{ return win{i}[i]; }}\n");
+    }
+    s += "        default: { return 0u; }\n    }\n}\n";
+    s
+}

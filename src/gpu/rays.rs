@@ -1,0 +1,99 @@
+//! The CPU ray set ([`RaySet`]) as the GPU kernels consume it: the k² local base directions,
+//! identical for every point, and each point's rotation about the normal as (cos, sin),
+//! computed on the host with the CPU's own arithmetic so that the kernels rotate exactly the
+//! directions the CPU path traces.
+
+use super::GpuError;
+use crate::sampling::rays::{uniform, RaySet};
+use crate::sampling::warp::square_to_cosine_hemisphere;
+use glam::{Vec2, Vec3};
+
+/// Twin of WGSL `Receiver`: position with the cos of the point's rotation, normal with the sin.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct ReceiverGpu {
+    pub p: [f32; 4],
+    pub n: [f32; 4],
+}
+const _: () = assert!(std::mem::size_of::<ReceiverGpu>() == 32);
+
+/// The unrotated cell-centre directions of `rays`, cell j·k + i, as [`RaySet::fill`] makes
+/// them. Jittered sets differ per point and are refused.
+pub(crate) fn base_directions(rays: &RaySet) -> Result<Vec<[f32; 4]>, GpuError> {
+    if rays.jitter {
+        return Err(GpuError::Unsupported(
+            "jittered ray sets (the GPU kernels rotate one shared set of cell centres)".into(),
+        ));
+    }
+    let k = rays.k;
+    let inv = 1.0 / k as f32;
+    let mut v = Vec::with_capacity(rays.len());
+    for j in 0..k {
+        for i in 0..k {
+            let u = Vec2::new((i as f32 + 0.5) * inv, (j as f32 + 0.5) * inv);
+            let d = square_to_cosine_hemisphere(u);
+            v.push([d.x, d.y, d.z, 0.0]);
+        }
+    }
+    Ok(v)
+}
+
+/// (cos, sin) of point `point`'s rotation, as in [`RaySet::fill`].
+pub(crate) fn rotation(rays: &RaySet, point: u32) -> (f32, f32) {
+    let angle = std::f32::consts::TAU * uniform(point, u32::MAX, 0, rays.seed);
+    let (s, c) = angle.sin_cos();
+    (c, s)
+}
+
+/// Receiver records for `points` / `normals` (point i uses the rotation of index i).
+pub(crate) fn receivers(
+    points: &[Vec3],
+    normals: &[Vec3],
+    rays: &RaySet,
+) -> Result<Vec<ReceiverGpu>, GpuError> {
+    if points.len() != normals.len() {
+        return Err(GpuError::Invalid(format!(
+            "{} points but {} normals",
+            points.len(),
+            normals.len()
+        )));
+    }
+    Ok(points
+        .iter()
+        .zip(normals)
+        .enumerate()
+        .map(|(i, (p, n))| {
+            let (c, s) = rotation(rays, i as u32);
+            ReceiverGpu {
+                p: p.extend(c).to_array(),
+                n: n.extend(s).to_array(),
+            }
+        })
+        .collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rotated_base_directions_are_the_cpu_directions_bit_for_bit() {
+        // The kernels compute (c·x − s·y, s·x + c·y, z) from these, the same expression as
+        // RaySet::fill, so the f32 results are identical.
+        let set = RaySet::new(8, 99);
+        let base = base_directions(&set).unwrap();
+        for point in [0u32, 5, 1234] {
+            let (c, s) = rotation(&set, point);
+            let cpu = set.directions(point);
+            for (b, d) in base.iter().zip(&cpu) {
+                let g = Vec3::new(c * b[0] - s * b[1], s * b[0] + c * b[1], b[2]);
+                assert_eq!(g, *d, "point {point}");
+            }
+        }
+        let jittered = RaySet {
+            jitter: true,
+            ..set
+        };
+        assert!(base_directions(&jittered).is_err());
+    }
+}

@@ -1,0 +1,259 @@
+//! The GPU ray-cast reference: an obvhs CWBVH traversed in WGSL (Ylitie, Karras, Laine, HPG
+//! 2017) with the watertight triangle test (Woop, Benthin, Wald, JCGT 2013), so that GPU field
+//! lookup is compared with GPU ray casting on the same device.
+
+use super::context::{split_groups, GpuContext};
+use super::rays::{base_directions, receivers};
+use super::{GpuError, GpuTiming};
+use crate::render::ao::AoOptions;
+use crate::sampling::rays::RaySet;
+use crate::trace::RayQuery;
+use glam::Vec3;
+use obvhs::{aabb::Aabb, cwbvh::builder::build_cwbvh, cwbvh::node::CwBvhNode, BvhBuildParams};
+use std::time::{Duration, Instant};
+
+/// The node struct uploaded as is: WGSL reads it as five `vec4<u32>`.
+const _: () = assert!(std::mem::size_of::<CwBvhNode>() == 80);
+
+/// Twin of WGSL `Ray` (shaders/bvh.wgsl): origin and tmin, direction and tmax.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+struct RayGpu {
+    o: [f32; 4],
+    d: [f32; 4],
+}
+const _: () = assert!(std::mem::size_of::<RayGpu>() == 32);
+
+/// Twin of WGSL `Params` (shaders/bvh.wgsl).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+struct TraceParamsGpu {
+    /// Rays or points, rays per point, threads per dispatch row, node count.
+    counts: [u32; 4],
+    /// Origin offset, tmax (AO), unused ×2.
+    ray: [f32; 4],
+}
+const _: () = assert!(std::mem::size_of::<TraceParamsGpu>() == 32);
+
+/// Box padding relative to the scene extent, as the CPU tracer pads (`2^-18`), so that the
+/// quantised node test stays conservative for the watertight triangle test.
+const BOX_PAD_RELATIVE: f32 = 1.0 / (1u32 << 18) as f32;
+const WORKGROUP: u32 = 64;
+
+/// A closest hit found on the GPU.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GpuHit {
+    pub t: f32,
+    /// Index into the triangles the tracer was built from.
+    pub triangle: u32,
+}
+
+/// CWBVH ray casting on the GPU over a fixed set of world-space triangles (both windings hit,
+/// `tmin <= t <= tmax` inclusive, as [`crate::trace::Tracer`]).
+pub struct GpuTracer<'a> {
+    ctx: &'a GpuContext,
+    nodes: wgpu::Buffer,
+    tris: wgpu::Buffer,
+    node_count: u32,
+    any: wgpu::ComputePipeline,
+    closest: wgpu::ComputePipeline,
+    ao: wgpu::ComputePipeline,
+    setup: Duration,
+}
+
+impl<'a> GpuTracer<'a> {
+    /// Builds the CWBVH (obvhs, `medium_build`, boxes padded) on the host and uploads it.
+    pub fn new(ctx: &'a GpuContext, triangles: &[[Vec3; 3]]) -> Result<Self, GpuError> {
+        let start = Instant::now();
+        if triangles.iter().flatten().any(|v| !v.is_finite()) {
+            return Err(GpuError::Invalid("triangle vertices must be finite".into()));
+        }
+        let (lo, hi) = triangles.iter().flatten().fold(
+            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+            |(lo, hi), &v| (lo.min(v), hi.max(v)),
+        );
+        let extent = (hi - lo).max_element().max(0.0);
+        let pad = glam::Vec3A::splat(BOX_PAD_RELATIVE * extent);
+        let boxes: Vec<Aabb> = triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(glam::Vec3A::from);
+                Aabb::new(a.min(b).min(c) - pad, a.max(b).max(c) + pad)
+            })
+            .collect();
+        let bvh = if boxes.is_empty() {
+            obvhs::cwbvh::CwBvh::default()
+        } else {
+            build_cwbvh(
+                &boxes,
+                BvhBuildParams::medium_build(),
+                &mut Duration::default(),
+            )
+        };
+        let mut tri_data: Vec<[f32; 4]> = Vec::with_capacity(bvh.primitive_indices.len() * 3);
+        for &i in &bvh.primitive_indices {
+            let [a, b, c] = triangles[i as usize];
+            tri_data.push([a.x, a.y, a.z, f32::from_bits(i)]);
+            tri_data.push(b.extend(0.0).to_array());
+            tri_data.push(c.extend(0.0).to_array());
+        }
+        let source = [
+            include_str!("../../shaders/frame.wgsl"),
+            include_str!("../../shaders/bvh.wgsl"),
+        ]
+        .concat();
+        Ok(GpuTracer {
+            ctx,
+            nodes: ctx.storage_buffer("cwbvh nodes", bytemuck::cast_slice(&bvh.nodes)),
+            tris: ctx.storage_buffer("triangles", bytemuck::cast_slice(&tri_data)),
+            node_count: bvh.nodes.len() as u32,
+            any: ctx.compute_pipeline("bvh_any", &source, "any_main")?,
+            closest: ctx.compute_pipeline("bvh_closest", &source, "closest_main")?,
+            ao: ctx.compute_pipeline("bvh_ao", &source, "ao_main")?,
+            setup: start.elapsed(),
+        })
+    }
+
+    /// Host time of the BVH build, upload and shader compilation.
+    pub fn setup_time(&self) -> Duration {
+        self.setup
+    }
+
+    /// Whether each ray hits any triangle with `tmin <= t <= tmax`.
+    pub fn any_hits(&self, rays: &[RayQuery]) -> Result<(Vec<bool>, GpuTiming), GpuError> {
+        let start = Instant::now();
+        let (words, kernel, upload) = self.dispatch(&self.any, &ray_records(rays), 1, 0, None, [0.0; 4])?;
+        let hits = words.into_iter().map(|w| w != 0).collect();
+        Ok((hits, timing(kernel, upload, start)))
+    }
+
+    /// The closest hit of each ray with `tmin <= t <= tmax`.
+    pub fn closest_hits(
+        &self,
+        rays: &[RayQuery],
+    ) -> Result<(Vec<Option<GpuHit>>, GpuTiming), GpuError> {
+        let start = Instant::now();
+        let (words, kernel, upload) =
+            self.dispatch(&self.closest, &ray_records(rays), 2, 0, None, [0.0; 4])?;
+        let hits = words
+            .chunks_exact(2)
+            .map(|w| {
+                (w[1] != u32::MAX).then(|| GpuHit {
+                    t: f32::from_bits(w[0]),
+                    triangle: w[1],
+                })
+            })
+            .collect();
+        Ok((hits, timing(kernel, upload, start)))
+    }
+
+    /// Vertex AO by ray casting with the same rays as [`crate::render::ao::ao_at_points`].
+    pub fn ao(
+        &self,
+        points: &[Vec3],
+        normals: &[Vec3],
+        rays: &RaySet,
+        opts: &AoOptions,
+    ) -> Result<(Vec<f32>, GpuTiming), GpuError> {
+        let start = Instant::now();
+        let base = base_directions(rays)?;
+        let recv = receivers(points, normals, rays)?;
+        let records: Vec<RayGpu> = recv
+            .iter()
+            .map(|r| RayGpu { o: r.p, d: r.n })
+            .collect();
+        let tmax = opts.max_distance.unwrap_or(f32::MAX).min(f32::MAX);
+        let (words, kernel, upload) = self.dispatch(
+            &self.ao,
+            &records,
+            1,
+            base.len() as u32,
+            Some(&base),
+            [opts.offset, tmax, 0.0, 0.0],
+        )?;
+        let ao = words.into_iter().map(f32::from_bits).collect();
+        Ok((ao, timing(kernel, upload, start)))
+    }
+
+    fn dispatch(
+        &self,
+        pipeline: &wgpu::ComputePipeline,
+        records: &[RayGpu],
+        words_per_item: u64,
+        per_point: u32,
+        dirs: Option<&[[f32; 4]]>,
+        ray: [f32; 4],
+    ) -> Result<(Vec<u32>, Option<Duration>, Duration), GpuError> {
+        let t = Instant::now();
+        let ctx = self.ctx;
+        let n = records.len() as u32;
+        let groups = n.div_ceil(WORKGROUP);
+        let (gx, _) = split_groups(groups, ctx.limits().max_compute_workgroups_per_dimension);
+        let params = TraceParamsGpu {
+            counts: [n, per_point, gx * WORKGROUP, self.node_count],
+            ray,
+        };
+        let uniform = ctx.uniform_buffer("trace params", bytemuck::bytes_of(&params));
+        let rays = ctx.storage_buffer("rays", bytemuck::cast_slice(records));
+        let out_bytes = records.len() as u64 * words_per_item * 4;
+        let out = ctx.output_buffer("trace out", out_bytes);
+        let dir_buf = dirs.map(|d| ctx.storage_buffer("directions", bytemuck::cast_slice(d)));
+        let mut entries = vec![
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: uniform.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: self.nodes.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 2,
+                resource: self.tris.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 3,
+                resource: rays.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 4,
+                resource: out.as_entire_binding(),
+            },
+        ];
+        if let Some(b) = &dir_buf {
+            entries.push(wgpu::BindGroupEntry {
+                binding: 5,
+                resource: b.as_entire_binding(),
+            });
+        }
+        let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("trace"),
+            layout: &pipeline.get_bind_group_layout(0),
+            entries: &entries,
+        });
+        let upload = t.elapsed();
+        let (bytes, kernel) = ctx.dispatch_and_read(pipeline, &bind_group, groups, &out)?;
+        Ok((
+            bytemuck::pod_collect_to_vec(&bytes[..out_bytes as usize]),
+            kernel,
+            upload,
+        ))
+    }
+}
+
+fn ray_records(rays: &[RayQuery]) -> Vec<RayGpu> {
+    rays.iter()
+        .map(|r| RayGpu {
+            o: r.origin.extend(r.tmin).to_array(),
+            d: r.dir.extend(r.tmax.min(f32::MAX)).to_array(),
+        })
+        .collect()
+}
+
+fn timing(kernel: Option<Duration>, upload: Duration, start: Instant) -> GpuTiming {
+    GpuTiming {
+        kernel,
+        upload,
+        wall: start.elapsed(),
+    }
+}
