@@ -167,10 +167,10 @@ impl GpuContext {
         self.timestamps
     }
 
-    /// A storage buffer initialised with `data` (at least 4 bytes: empty inputs get one zero
-    /// word, since zero-sized bindings are invalid).
+    /// A storage buffer initialised with `data`; empty inputs get 256 zero bytes, since
+    /// bindings must hold at least one element of their array.
     pub(crate) fn storage_buffer(&self, label: &str, data: &[u8]) -> wgpu::Buffer {
-        let zero = [0u8; 16];
+        let zero = [0u8; 256];
         let contents = if data.is_empty() { &zero[..] } else { data };
         self.device
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {

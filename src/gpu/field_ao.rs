@@ -36,6 +36,9 @@ pub struct FieldGpuOptions {
     pub window_bytes: Option<u64>,
     /// Most rays per point a call may use (table entries reserved for directions).
     pub ray_capacity: usize,
+    /// Largest texture depth (texture layout); `None`: the adapter's
+    /// `max_texture_dimension_3d`. Smaller depths only serve to test the tiling.
+    pub max_texture_depth: Option<u32>,
 }
 
 impl Default for FieldGpuOptions {
@@ -45,6 +48,7 @@ impl Default for FieldGpuOptions {
             layout: FieldLayout::StorageBuffers,
             window_bytes: None,
             ray_capacity: 1024,
+            max_texture_depth: None,
         }
     }
 }
@@ -148,7 +152,7 @@ impl<'a> FieldAoKernel<'a> {
                 )
             }
             FieldLayout::Texture3d => {
-                let tex = FieldTexture::new(ctx, &packed.fields)?;
+                let tex = FieldTexture::new(ctx, &packed.fields, opts.max_texture_depth)?;
                 packed.set_data_base(tex.first_tiles());
                 for (inst, &fi) in packed.instances.iter_mut().zip(&packed.field_of_instance) {
                     let (tx, per_slice) = tex.tiles(fi);
@@ -201,6 +205,22 @@ impl<'a> FieldAoKernel<'a> {
     /// Bytes of stored distances on the device.
     pub fn field_bytes(&self) -> u64 {
         self.field_bytes
+    }
+
+    /// Storage windows the fields occupy (storage layout), `None` for the texture layout.
+    pub fn storage_windows(&self) -> Option<usize> {
+        match &self.field {
+            FieldBinding::Windows(w) => Some(w.len()),
+            FieldBinding::Texture(_) => None,
+        }
+    }
+
+    /// Slices of the field texture (texture layout), `None` for the storage layout.
+    pub fn texture_depth(&self) -> Option<u32> {
+        match &self.field {
+            FieldBinding::Windows(_) => None,
+            FieldBinding::Texture(t) => Some(t.depth()),
+        }
     }
 
     /// Host time of packing, uploading and compiling in [`Self::new`].
@@ -297,6 +317,9 @@ impl<'a> FieldAoKernel<'a> {
         words_per_item: u64,
     ) -> Result<(Vec<u32>, Option<Duration>, Duration), GpuError> {
         let t = Instant::now();
+        if recv.is_empty() {
+            return Ok((Vec::new(), None, t.elapsed()));
+        }
         let n = recv.len() as u32;
         let groups = n.div_ceil(WORKGROUP);
         let (gx, _) = super::context::split_groups(

@@ -43,7 +43,13 @@ fn tile_shape(f: &VisibilityField) -> (u32, u32) {
 }
 
 impl FieldTexture {
-    pub fn new(ctx: &GpuContext, fields: &[Arc<VisibilityField>]) -> Result<Self, GpuError> {
+    /// Packs `fields` (all of one precision) with at most `max_depth` slices (the adapter's
+    /// limit when `None` or larger).
+    pub fn new(
+        ctx: &GpuContext,
+        fields: &[Arc<VisibilityField>],
+        max_depth: Option<u32>,
+    ) -> Result<Self, GpuError> {
         let precision = fields
             .first()
             .map(|f| f.storage.precision())
@@ -60,6 +66,7 @@ impl FieldTexture {
             crate::field::Precision::Bit1 => (wgpu::TextureFormat::R32Uint, 4),
         };
         let max_dim = ctx.limits().max_texture_dimension_3d;
+        let max_depth = max_depth.unwrap_or(max_dim).clamp(1, max_dim);
         let shapes: Vec<(u32, u32)> = fields.iter().map(|f| tile_shape(f)).collect();
         let tw = shapes.iter().map(|s| s.0).max().unwrap_or(1);
         let th = shapes.iter().map(|s| s.1).max().unwrap_or(1);
@@ -93,7 +100,7 @@ impl FieldTexture {
                     t
                 })
                 .collect();
-            if first <= max_dim {
+            if first <= max_depth {
                 break (tiles, first.max(1));
             }
             n += 1;
@@ -160,6 +167,11 @@ impl FieldTexture {
             format,
             bytes: slices.len() as u64,
         })
+    }
+
+    /// Slices of the texture.
+    pub fn depth(&self) -> u32 {
+        self.texture.depth_or_array_layers()
     }
 
     /// Each field's first slice (the instances' `data[2]`).

@@ -185,6 +185,9 @@ impl<'a> GpuTracer<'a> {
         ray: [f32; 4],
     ) -> Result<(Vec<u32>, Option<Duration>, Duration), GpuError> {
         let t = Instant::now();
+        if records.is_empty() {
+            return Ok((Vec::new(), None, t.elapsed()));
+        }
         let ctx = self.ctx;
         let n = records.len() as u32;
         let groups = n.div_ceil(WORKGROUP);
