@@ -341,3 +341,30 @@ pub(crate) fn split_groups(groups: u32, max_dim: u32) -> (u32, u32) {
         (max_dim, groups.div_ceil(max_dim))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn adapter_preferences_parse() {
+        assert_eq!(AdapterPreference::parse(""), AdapterPreference::Auto);
+        assert_eq!(AdapterPreference::parse("Auto"), AdapterPreference::Auto);
+        assert_eq!(AdapterPreference::parse("lavapipe"), AdapterPreference::Lavapipe);
+        assert_eq!(AdapterPreference::parse(" LLVMpipe "), AdapterPreference::Lavapipe);
+        assert_eq!(AdapterPreference::parse("hardware"), AdapterPreference::Hardware);
+        assert_eq!(
+            AdapterPreference::parse("NVIDIA H100"),
+            AdapterPreference::Name("NVIDIA H100".into())
+        );
+    }
+
+    #[test]
+    fn workgroups_split_over_two_dimensions_cover_every_item() {
+        assert_eq!(split_groups(0, 65535), (0, 1));
+        assert_eq!(split_groups(65535, 65535), (65535, 1));
+        let (x, y) = split_groups(200_000, 65535);
+        assert_eq!((x, y), (65535, 4));
+        assert!(x as u64 * y as u64 >= 200_000);
+    }
+}

@@ -402,3 +402,20 @@ fn window_prelude(n: usize, window_words: usize) -> String {
     s += "        default: { return 0u; }\n    }\n}\n";
     s
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn window_prelude_declares_every_window_once() {
+        let s = window_prelude(3, 1024);
+        assert!(s.contains("const WINDOW_WORDS: u32 = 1024u;"));
+        for i in 0..3 {
+            let b = FIXED_BINDINGS + i;
+            assert_eq!(s.matches(&format!("@binding({b})")).count(), 1);
+            assert!(s.contains(&format!("case {i}u: {{ return win{i}[i]; }}")));
+        }
+        assert!(!s.contains("win3"));
+    }
+}

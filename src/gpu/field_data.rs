@@ -221,3 +221,150 @@ pub(crate) fn field_words(fields: &[Arc<VisibilityField>]) -> (Vec<u32>, Vec<u32
     }
     (words, bases)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::field::{FieldParams, Precision};
+    use crate::geometry::Sphere;
+    use crate::sampling::rays::uniform;
+
+    /// Host twin of `load_distance` in shaders/field_storage.wgsl.
+    fn decode(words: &[u32], base: u32, precision: u32, res: u32, mean: &[f32], m: u32, t: u32) -> f32 {
+        let texels = res * res;
+        match precision {
+            0 => f32::from_bits(words[(base + m * texels + t) as usize]),
+            1 => {
+                let g = m * texels + t;
+                let q = (words[(base + g / 2) as usize] >> (16 * (g % 2))) & 0xffff;
+                q as f32 / 65535.0
+            }
+            2 => {
+                let g = m * texels + t;
+                let q = (words[(base + g / 4) as usize] >> (8 * (g % 4))) & 0xff;
+                q as f32 / 255.0
+            }
+            _ => {
+                let per_map = 2 * texels.div_ceil(64);
+                let w = words[(base + m * per_map + t / 32) as usize];
+                if (w >> (t % 32)) & 1 == 1 {
+                    mean[m as usize]
+                } else {
+                    1.0
+                }
+            }
+        }
+    }
+
+    fn field(precision: Precision, res: u32, seed: u64) -> Arc<VisibilityField> {
+        let count = 26; // Slater n = 2
+        let texels = (res * res) as usize;
+        let mut storage = Storage::new(precision, count, texels);
+        for (m, slot) in storage.map_slots().iter_mut().enumerate() {
+            let row: Vec<f32> = (0..texels)
+                .map(|t| {
+                    let u = uniform(m as u32, t as u32, 0, seed);
+                    if u < 0.3 {
+                        1.0
+                    } else {
+                        u
+                    }
+                })
+                .collect();
+            slot.store(&row);
+        }
+        let params = FieldParams {
+            sphere: SphereKind::Slater,
+            count,
+            layout: LayoutKind::Concentric,
+            res,
+            precision,
+        };
+        let sphere = Sphere {
+            center: glam::Vec3::ZERO,
+            radius: 1.0,
+        };
+        Arc::new(VisibilityField::from_storage(params, sphere, storage).unwrap())
+    }
+
+    #[test]
+    fn packed_words_decode_to_the_stored_distances_bit_for_bit() {
+        // Odd resolutions leave u8 / u16 maps straddling words and 1-bit maps padded.
+        let fields: Vec<Arc<VisibilityField>> = [
+            (Precision::F32, 5),
+            (Precision::U16, 5),
+            (Precision::U8, 7),
+            (Precision::Bit1, 9),
+            (Precision::U8, 16),
+        ]
+        .iter()
+        .enumerate()
+        .map(|(i, &(p, r))| field(p, r, i as u64))
+        .collect();
+        let (words, bases) = field_words(&fields);
+        for (f, &base) in fields.iter().zip(&bases) {
+            let mean: Vec<f32> = match &f.storage {
+                Storage::Bit1 { mean, .. } => mean.clone(),
+                _ => Vec::new(),
+            };
+            let code = precision_code(&f.storage);
+            for m in 0..f.params.count {
+                for t in 0..f.params.texels() {
+                    let got = decode(&words, base, code, f.params.res, &mean, m as u32, t as u32);
+                    let want = f.storage.get(m, t);
+                    assert_eq!(got.to_bits(), want.to_bits(), "{:?} map {m} texel {t}", f.params.precision);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn adjacency_matches_a_brute_force_edge_search() {
+        let f = field(Precision::U8, 4, 0);
+        let tris = f.points.triangles();
+        let (incident, adj) = adjacency(tris, f.points.len()).unwrap();
+        for (ti, t) in tris.iter().enumerate() {
+            for e in 0..3 {
+                let (a, b) = (t[(e + 1) % 3], t[(e + 2) % 3]);
+                // The one other triangle holding both a and b.
+                let other: Vec<usize> = (0..tris.len())
+                    .filter(|&u| u != ti && tris[u].contains(&a) && tris[u].contains(&b))
+                    .collect();
+                assert_eq!(other, vec![adj[ti][e] as usize]);
+            }
+        }
+        for (v, &t) in incident.iter().enumerate() {
+            assert!(tris[t as usize].contains(&(v as u32)));
+        }
+    }
+
+    #[test]
+    fn instances_carry_their_field_and_transform() {
+        use crate::geometry::Similarity;
+        let a = field(Precision::U8, 4, 1);
+        let b = field(Precision::Bit1, 4, 2);
+        let tr = Similarity::new(glam::Quat::from_rotation_z(0.3), glam::Vec3::X, 2.0);
+        let insts = [
+            FieldInstance::new(a.clone(), tr),
+            FieldInstance::new(b.clone(), Similarity::default()),
+            FieldInstance::new(a.clone(), Similarity::default()),
+        ];
+        let packed = PackedFields::new(&insts, 16).unwrap();
+        // Two distinct fields; the third instance reuses the first.
+        assert_eq!(packed.fields.len(), 2);
+        assert_eq!(packed.field_of_instance, vec![0, 1, 0]);
+        let i0 = packed.instances[0];
+        assert_eq!(i0.kind, [0, 26, 2, 2]); // Slater, 26 maps, n = 2, concentric
+        assert_eq!(i0.translation, [1.0, 0.0, 0.0, 2.0]);
+        // The rotation is world → model: its conjugate maps model X to world.
+        let q = glam::Quat::from_array(i0.rotation).inverse();
+        assert!((q * glam::Vec3::X - tr.rotation * glam::Vec3::X).length() < 1e-6);
+        // Points follow the 16 reserved direction entries; the 1-bit field's means follow its
+        // points (26 means in 7 entries).
+        assert_eq!(i0.tables[0], 16);
+        let i1 = packed.instances[1];
+        assert_eq!(i1.data[1], 3);
+        assert_eq!(i1.data[3], i1.tables[0] + 26);
+        assert_eq!(packed.tables.len(), 16 + 26 + 26 + 7);
+    }
+}

@@ -20,6 +20,75 @@ struct FieldTiles {
     first_slice: u32,
 }
 
+impl FieldTiles {
+    /// Texel (x, y, slice) of element `e` of map `m`: the host twin of `load_tile` in
+    /// shaders/field_texture.wgsl.
+    fn texel_of(&self, m: u32, e: u32) -> (u32, u32, u32) {
+        let k = m % self.per_slice;
+        (
+            (k % self.tiles_x) * self.tile_w + e % self.tile_w,
+            (k / self.tiles_x) * self.tile_h + e / self.tile_w,
+            self.first_slice + m / self.per_slice,
+        )
+    }
+}
+
+/// Texture size and each field's tiles.
+#[derive(Clone, Debug)]
+struct TexturePlan {
+    width: u32,
+    height: u32,
+    depth: u32,
+    tiles: Vec<FieldTiles>,
+}
+
+/// Places fields of `counts` maps with tiles of `shapes` (width, height) in square grids of
+/// n × n of the largest tile per slice, n growing from 1 until the slices fit `max_depth`;
+/// `None` when the slice would pass `max_dim` first. One map per slice whenever that fits.
+fn plan_tiles(
+    shapes: &[(u32, u32)],
+    counts: &[u32],
+    max_dim: u32,
+    max_depth: u32,
+) -> Option<TexturePlan> {
+    let tw = shapes.iter().map(|s| s.0).max().unwrap_or(1);
+    let th = shapes.iter().map(|s| s.1).max().unwrap_or(1);
+    let mut n = 1u32;
+    loop {
+        let (width, height) = (n * tw, n * th);
+        if width > max_dim || height > max_dim {
+            return None;
+        }
+        let mut first = 0u32;
+        let tiles: Vec<FieldTiles> = shapes
+            .iter()
+            .zip(counts)
+            .map(|(&(tile_w, tile_h), &count)| {
+                let tiles_x = width / tile_w;
+                let per_slice = tiles_x * (height / tile_h);
+                let t = FieldTiles {
+                    tile_w,
+                    tile_h,
+                    tiles_x,
+                    per_slice,
+                    first_slice: first,
+                };
+                first += count.div_ceil(per_slice);
+                t
+            })
+            .collect();
+        if first <= max_depth {
+            return Some(TexturePlan {
+                width,
+                height,
+                depth: first.max(1),
+                tiles,
+            });
+        }
+        n += 1;
+    }
+}
+
 /// The texture holding every field of a kernel (all of one precision).
 pub(crate) struct FieldTexture {
     texture: wgpu::Texture,
@@ -68,44 +137,21 @@ impl FieldTexture {
         let max_dim = ctx.limits().max_texture_dimension_3d;
         let max_depth = max_depth.unwrap_or(max_dim).clamp(1, max_dim);
         let shapes: Vec<(u32, u32)> = fields.iter().map(|f| tile_shape(f)).collect();
-        let tw = shapes.iter().map(|s| s.0).max().unwrap_or(1);
-        let th = shapes.iter().map(|s| s.1).max().unwrap_or(1);
-        // Square grids of n × n tiles per slice, n growing until the slices fit the depth limit.
-        let mut n = 1u32;
-        let (tiles, depth) = loop {
-            let (w, h) = (n * tw, n * th);
-            if w > max_dim || h > max_dim {
-                return Err(GpuError::TooLarge {
-                    what: "field maps in one 3D texture".into(),
-                    need: fields.iter().map(|f| f.bytes()).sum(),
-                    limit: max_dim as u64 * max_dim as u64 * max_dim as u64 * bpp,
-                    limit_name: "max_texture_dimension_3d",
-                });
+        let counts: Vec<u32> = fields.iter().map(|f| f.params.count as u32).collect();
+        let plan = plan_tiles(&shapes, &counts, max_dim, max_depth).ok_or_else(|| {
+            GpuError::TooLarge {
+                what: "field maps in one 3D texture".into(),
+                need: fields.iter().map(|f| f.bytes()).sum(),
+                limit: max_dim as u64 * max_dim as u64 * max_depth as u64 * bpp,
+                limit_name: "max_texture_dimension_3d",
             }
-            let mut first = 0u32;
-            let tiles: Vec<FieldTiles> = fields
-                .iter()
-                .zip(&shapes)
-                .map(|(f, &(tile_w, tile_h))| {
-                    let tiles_x = w / tile_w;
-                    let per_slice = tiles_x * (h / tile_h);
-                    let t = FieldTiles {
-                        tile_w,
-                        tile_h,
-                        tiles_x,
-                        per_slice,
-                        first_slice: first,
-                    };
-                    first += (f.params.count as u32).div_ceil(per_slice);
-                    t
-                })
-                .collect();
-            if first <= max_depth {
-                break (tiles, first.max(1));
-            }
-            n += 1;
-        };
-        let (width, height) = (n * tw, n * th);
+        })?;
+        let TexturePlan {
+            width,
+            height,
+            depth,
+            tiles,
+        } = plan;
         let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
             label: Some("field maps"),
             size: wgpu::Extent3d {
@@ -124,18 +170,13 @@ impl FieldTexture {
         let slice_bytes = (width * height) as usize * bpp as usize;
         let mut slices = vec![0u8; slice_bytes * depth as usize];
         for (f, t) in fields.iter().zip(&tiles) {
-            let elements = (t.tile_w * t.tile_h) as usize;
-            let per_map = map_bytes(&f.storage);
+            let (per_map, bytes) = map_bytes(&f.storage);
+            let bpe = bpp as usize;
             for m in 0..f.params.count {
-                let m32 = m as u32;
-                let slice = (t.first_slice + m32 / t.per_slice) as usize;
-                let k = m32 % t.per_slice;
-                let (x0, y0) = ((k % t.tiles_x) * t.tile_w, (k / t.tiles_x) * t.tile_h);
-                let src = &per_map.1[m * per_map.0..(m + 1) * per_map.0];
-                let bpe = bpp as usize;
-                for e in 0..elements.min(per_map.0 / bpe) {
-                    let (x, y) = (x0 + e as u32 % t.tile_w, y0 + e as u32 / t.tile_w);
-                    let dst = slice * slice_bytes + ((y * width + x) as usize) * bpe;
+                let src = &bytes[m * per_map..(m + 1) * per_map];
+                for e in 0..per_map / bpe {
+                    let (x, y, z) = t.texel_of(m as u32, e as u32);
+                    let dst = z as usize * slice_bytes + ((y * width + x) as usize) * bpe;
                     slices[dst..dst + bpe].copy_from_slice(&src[e * bpe..(e + 1) * bpe]);
                 }
             }
@@ -223,6 +264,75 @@ fn map_bytes(s: &Storage) -> (usize, &[u8]) {
         Storage::U8 { texels, data } => (*texels, data),
         Storage::Bit1 { texels, bits, .. } => {
             (words_per_map(*texels) * 8, bytemuck::cast_slice(bits))
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::collections::HashSet;
+
+    #[test]
+    fn tiles_never_overlap_and_stay_inside_the_texture() {
+        // Two fields of different tile shapes, depth limits that force 1, 2 and 3 tiles a side.
+        let shapes = [(16, 16), (8, 1)];
+        let counts = [290, 100];
+        for (max_depth, side) in [(4096, 1), (100, 2), (40, 3)] {
+            let plan = plan_tiles(&shapes, &counts, 4096, max_depth).unwrap();
+            assert_eq!(plan.width, 16 * side, "depth limit {max_depth}");
+            assert!(plan.depth <= max_depth);
+            let mut seen = HashSet::new();
+            for (t, (&(w, h), &count)) in plan.tiles.iter().zip(shapes.iter().zip(&counts)) {
+                for m in 0..count {
+                    for e in 0..w * h {
+                        let (x, y, z) = t.texel_of(m, e);
+                        assert!(x < plan.width && y < plan.height && z < plan.depth);
+                        assert!(seen.insert((x, y, z)), "texel ({x}, {y}, {z}) used twice");
+                    }
+                }
+            }
+        }
+        // One 16² map per slice when the depth allows; the 8 × 1 tiles of the second field
+        // still share a 16 × 16 slice 32 at a time: 290 + ⌈100 / 32⌉ = 294 slices.
+        assert_eq!(plan_tiles(&shapes, &counts, 4096, 4096).unwrap().depth, 294);
+        // Slices wider than the dimension limit: refused.
+        assert!(plan_tiles(&shapes, &counts, 32, 10).is_none());
+    }
+
+    #[test]
+    fn tile_shapes_hold_a_whole_map() {
+        use crate::field::{FieldParams, Precision};
+        use crate::geometry::Sphere;
+        use crate::sampling::{LayoutKind, SphereKind};
+        // Value maps: res × res texels. 1-bit maps: res 16 has 256 bits = 8 words in one row;
+        // res 64: 4096 bits = 128 words in 2 rows of 64; res 5: 25 bits pad to one u64 = 2
+        // words.
+        for (precision, res, shape) in [
+            (Precision::U8, 16, (16, 16)),
+            (Precision::F32, 5, (5, 5)),
+            (Precision::Bit1, 16, (8, 1)),
+            (Precision::Bit1, 64, (64, 2)),
+            (Precision::Bit1, 5, (2, 1)),
+        ] {
+            let params = FieldParams {
+                sphere: SphereKind::Slater,
+                count: 10,
+                layout: LayoutKind::Concentric,
+                res,
+                precision,
+            };
+            let storage = Storage::new(precision, 10, (res * res) as usize);
+            let sphere = Sphere {
+                center: glam::Vec3::ZERO,
+                radius: 1.0,
+            };
+            let f = VisibilityField::from_storage(params, sphere, storage).unwrap();
+            assert_eq!(tile_shape(&f), shape, "{precision:?} res {res}");
+            assert_eq!(
+                map_bytes(&f.storage).0,
+                (shape.0 * shape.1) as usize * if precision == Precision::U8 { 1 } else { 4 }
+            );
         }
     }
 }
