@@ -24,8 +24,10 @@ pub fn main() {
     let cli = Cli::parse();
     match cli.command {
         Command::Quickstart { out } => {
-            eprintln!("quickstart: not yet implemented ({})", out.display());
-            std::process::exit(2);
+            if let Err(e) = super::quickstart::run(&out) {
+                eprintln!("error: {e}");
+                std::process::exit(1);
+            }
         }
     }
 }

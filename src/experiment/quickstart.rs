@@ -9,11 +9,11 @@ use super::plot::{self, Axes, Series};
 use super::progress::stage;
 use crate::field::bake::{bake, BakeOptions};
 use crate::field::scene::{FieldInstance, FieldScene};
-use crate::field::{FieldParams, Precision, Selection};
+use crate::field::{FieldParams, Precision};
 use crate::geometry::{procedural, Scene};
 use crate::render::ao::{ao_at_points, AoOptions};
 use crate::render::camera::Camera;
-use crate::render::image::{rms_255, GrayImage};
+use crate::render::image::rms_255;
 use crate::render::primary::{gbuffer, shade_vertex_ao, PrimaryScene};
 use crate::sampling::rays::RaySet;
 use crate::sampling::{LayoutKind, SphereKind};
@@ -84,7 +84,10 @@ pub fn corner_camera() -> Camera {
 pub fn run(out: &Path) -> Result<(), String> {
     std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
     let meta = RunMeta::collect(None);
-    eprintln!("quickstart: supershape over the corner receiver -> {}", out.display());
+    eprintln!(
+        "quickstart: supershape over the corner receiver -> {}",
+        out.display()
+    );
 
     let scene = procedural::default_scene();
     let recv = Receivers::of(&scene);
@@ -163,22 +166,44 @@ pub fn run(out: &Path) -> Result<(), String> {
     let (img_field, _) = shade_vertex_ao(&scene, &gb, w, h, &recv.split(&scene, &ao_field));
     let rms_i = rms_255(&img_field.data, &img_ref.data, Some(&mask));
     let diff = img_field.difference(&img_ref, 5.0);
-    let io = |r: std::io::Result<()>, p: &str| r.map_err(|e| format!("{}: {e}", out.join(p).display()));
-    io(img_ref.save_png(&out.join("ao_reference.png")), "ao_reference.png")?;
-    io(img_field.save_png(&out.join("ao_field.png")), "ao_field.png")?;
-    io(diff.save_png(&out.join("difference_x5.png")), "difference_x5.png")?;
-    io(img_ref.save_exr(&out.join("ao_reference.exr")), "ao_reference.exr")?;
-    io(img_field.save_exr(&out.join("ao_field.exr")), "ao_field.exr")?;
+    let io =
+        |r: std::io::Result<()>, p: &str| r.map_err(|e| format!("{}: {e}", out.join(p).display()));
+    io(
+        img_ref.save_png(&out.join("ao_reference.png")),
+        "ao_reference.png",
+    )?;
+    io(
+        img_field.save_png(&out.join("ao_field.png")),
+        "ao_field.png",
+    )?;
+    io(
+        diff.save_png(&out.join("difference_x5.png")),
+        "difference_x5.png",
+    )?;
+    io(
+        img_ref.save_exr(&out.join("ao_reference.exr")),
+        "ao_reference.exr",
+    )?;
+    io(
+        img_field.save_exr(&out.join("ao_field.exr")),
+        "ao_field.exr",
+    )?;
     plot::image_grid(
         &out.join("images.png"),
         "quickstart: reference | field 1090 × 32² u8 | difference ×5",
         &[
-            (&img_ref, vec!["ray cast, 256 rays".into(), format!("{ref_s:.3} s")]),
+            (
+                &img_ref,
+                vec!["ray cast, 256 rays".into(), format!("{ref_s:.3} s")],
+            ),
             (
                 &img_field,
                 vec![
                     "field lookup, 256 rays".into(),
-                    format!("bake {:.2} s, AO {field_s:.3} s, RMS {rms_i:.3}", stats.seconds),
+                    format!(
+                        "bake {:.2} s, AO {field_s:.3} s, RMS {rms_i:.3}",
+                        stats.seconds
+                    ),
                 ],
             ),
             (&diff, vec!["|field − reference| × 5".into()]),
@@ -212,9 +237,16 @@ pub fn run(out: &Path) -> Result<(), String> {
     // Per-vertex CSV.
     let mut csv = String::from("vertex,x,y,z,ao_reference,ao_field\n");
     for (i, p) in recv.points.iter().enumerate() {
-        let _ = writeln!(csv, "{i},{},{},{},{},{}", p.x, p.y, p.z, ao_ref[i], ao_field[i]);
+        let _ = writeln!(
+            csv,
+            "{i},{},{},{},{},{}",
+            p.x, p.y, p.z, ao_ref[i], ao_field[i]
+        );
     }
-    io(crate::io::write_atomic(&out.join("vertex_ao.csv"), csv.as_bytes()), "vertex_ao.csv")?;
+    io(
+        crate::io::write_atomic(&out.join("vertex_ao.csv"), csv.as_bytes()),
+        "vertex_ao.csv",
+    )?;
 
     let speedup = ref_s / field_s.max(1e-12);
     let summary = serde_json::json!({
@@ -246,14 +278,23 @@ pub fn run(out: &Path) -> Result<(), String> {
     io(
         crate::io::write_atomic(
             &out.join("run.json"),
-            serde_json::to_string_pretty(&summary).expect("json").as_bytes(),
+            serde_json::to_string_pretty(&summary)
+                .expect("json")
+                .as_bytes(),
         ),
         "run.json",
     )?;
 
     println!();
-    println!("visfield quickstart ({} threads, {})", meta.threads, meta.cpu);
-    println!("  receiver: corner, {} vertices; caster: supershape, {} triangles", recv.points.len(), caster.mesh.triangles.len());
+    println!(
+        "visfield quickstart ({} threads, {})",
+        meta.threads, meta.cpu
+    );
+    println!(
+        "  receiver: corner, {} vertices; caster: supershape, {} triangles",
+        recv.points.len(),
+        caster.mesh.triangles.len()
+    );
     println!("  ray-cast AO (256 rays/vertex):   {ref_s:>8.3} s");
     println!(
         "  field bake (1090 × 32² u8):      {:>8.3} s  ({:.1} Mrays/s, {} KiB)",

@@ -36,3 +36,4 @@ impl Visibility for Tracer {
 
 pub mod camera;
 pub mod image;
+pub mod primary;
