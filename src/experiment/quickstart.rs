@@ -6,15 +6,16 @@
 
 use super::meta::RunMeta;
 use super::plot::{self, Axes, Series};
-use super::progress::stage;
+use super::progress::{stage, stage_best_of};
 use crate::field::bake::{bake, BakeOptions};
 use crate::field::scene::{FieldInstance, FieldScene};
 use crate::field::{FieldParams, Precision};
-use crate::geometry::{procedural, Scene};
+use crate::geometry::procedural;
 use crate::render::ao::{ao_at_points, AoOptions};
 use crate::render::camera::Camera;
-use crate::render::image::rms_255;
+use crate::render::image::{rms_255, rms_vertex};
 use crate::render::primary::{gbuffer, shade_vertex_ao, PrimaryScene};
+use crate::render::receivers::Receivers;
 use crate::sampling::rays::RaySet;
 use crate::sampling::{LayoutKind, SphereKind};
 use crate::trace::Tracer;
@@ -22,53 +23,6 @@ use glam::Vec3;
 use std::fmt::Write as _;
 use std::path::Path;
 use std::sync::Arc;
-
-/// Receiver points and normals of a scene, world space, concatenated over receivers.
-pub struct Receivers {
-    pub points: Vec<Vec3>,
-    pub normals: Vec<Vec3>,
-    /// Per receiver: (instance index, first point, point count).
-    pub ranges: Vec<(usize, usize, usize)>,
-}
-
-impl Receivers {
-    pub fn of(scene: &Scene) -> Receivers {
-        let (mut points, mut normals, mut ranges) = (Vec::new(), Vec::new(), Vec::new());
-        for (i, inst) in scene.receivers() {
-            let start = points.len();
-            for (p, n) in inst.mesh.positions.iter().zip(&inst.mesh.normals) {
-                points.push(inst.transform.to_world_point(*p));
-                normals.push(inst.transform.to_world_dir(*n).normalize());
-            }
-            ranges.push((i, start, points.len() - start));
-        }
-        Receivers {
-            points,
-            normals,
-            ranges,
-        }
-    }
-
-    /// Per instance: its slice of `ao` (None for non-receivers), for shading.
-    pub fn split(&self, scene: &Scene, ao: &[f32]) -> Vec<Option<Vec<f32>>> {
-        let mut out = vec![None; scene.instances.len()];
-        for &(i, s, n) in &self.ranges {
-            out[i] = Some(ao[s..s + n].to_vec());
-        }
-        out
-    }
-}
-
-/// RMS of two AO vectors on the 0–255 scale, unquantised (the per-vertex figure).
-pub fn rms_vertex(a: &[f32], b: &[f32]) -> f64 {
-    assert_eq!(a.len(), b.len());
-    let s: f64 = a
-        .iter()
-        .zip(b)
-        .map(|(x, y)| (255.0 * (*x as f64 - *y as f64)).powi(2))
-        .sum();
-    (s / a.len().max(1) as f64).sqrt()
-}
 
 /// The default camera of the corner scenes: looking into the corner from the open octant.
 pub fn corner_camera() -> Camera {
@@ -105,7 +59,7 @@ pub fn run(out: &Path) -> Result<(), String> {
     let rays = RaySet::new(16, seed); // 256 rays per vertex, as in the papers
 
     let (tracer, bvh_s) = stage("build BVH (reference)", || Tracer::new(&casters));
-    let (ao_ref, ref_s) = stage("ray-cast AO, 256 rays/vertex", || {
+    let (ao_ref, ref_s) = stage_best_of("ray-cast AO, 256 rays/vertex", 3, || {
         ao_at_points(&tracer, &recv.points, &recv.normals, &rays, &opts)
     });
 
@@ -134,26 +88,29 @@ pub fn run(out: &Path) -> Result<(), String> {
         instances: vec![FieldInstance::new(Arc::new(field), caster.transform)],
         options: Default::default(),
     };
-    let (ao_field, field_s) = stage("field-lookup AO, 256 rays/vertex", || {
+    let (ao_field, field_s) = stage_best_of("field-lookup AO, 256 rays/vertex", 3, || {
         ao_at_points(&fscene, &recv.points, &recv.normals, &rays, &opts)
     });
     let rms_v = rms_vertex(&ao_field, &ao_ref);
 
     // Error against time: ray casting with fewer rays, the field with more.
     let mut rc_pts = Vec::new();
-    for k in [4u32, 8, 16] {
+    for k in [4u32, 8] {
         let r = RaySet::new(k, seed);
-        let (ao, s) = stage(&format!("ray-cast AO, {} rays/vertex", k * k), || {
+        let (ao, s) = stage_best_of(&format!("ray-cast AO, {} rays/vertex", k * k), 3, || {
             ao_at_points(&tracer, &recv.points, &recv.normals, &r, &opts)
         });
         rc_pts.push((s, rms_vertex(&ao, &ao_ref), k * k));
     }
+    rc_pts.push((ref_s, 0.0, 256));
     let mut f_pts = vec![(field_s, rms_v, 256)];
     for k in [8u32, 32] {
         let r = RaySet::new(k, seed);
-        let (ao, s) = stage(&format!("field-lookup AO, {} rays/vertex", k * k), || {
-            ao_at_points(&fscene, &recv.points, &recv.normals, &r, &opts)
-        });
+        let (ao, s) = stage_best_of(
+            &format!("field-lookup AO, {} rays/vertex", k * k),
+            3,
+            || ao_at_points(&fscene, &recv.points, &recv.normals, &r, &opts),
+        );
         f_pts.push((s, rms_vertex(&ao, &ao_ref), k * k));
     }
 

@@ -37,3 +37,4 @@ impl Visibility for Tracer {
 pub mod camera;
 pub mod image;
 pub mod primary;
+pub mod receivers;
