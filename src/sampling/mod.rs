@@ -5,11 +5,14 @@
 //! Sources (stratified sets, seeded sequences) live apart from mappings; each mapping has its
 //! forward map, inverse and density side by side.
 
+mod approx;
 mod fibonacci;
 mod frame;
 mod layout;
 mod mesh;
 pub mod rays;
+pub mod report;
+mod report_plots;
 mod rings;
 mod sphere;
 mod texel_measure;

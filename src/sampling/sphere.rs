@@ -72,8 +72,9 @@ enum Index {
 ///   lattice triangles.
 /// - [`SphereKind::LatLong`]: R rows × (R + 1) columns at cell centres, θ_r = (r + ½)π/R,
 ///   φ_c = 2π(c + ½)/(R + 1); no point on a pole. 1122 = 33 × 34 is the Figure 5 set.
-/// - [`SphereKind::Fibonacci`]: Keinert et al. 2015 (any N ≥ 4), with their inverse made exact
-///   by a certificate (beyond the paper, for comparison).
+/// - [`SphereKind::Fibonacci`]: Keinert et al., "Spherical Fibonacci Mapping", TOG 2015 (any
+///   N ≥ 4): their inverse plus a certificate that guarantees exactness (beyond the paper, for
+///   comparison).
 ///
 /// `nearest` is exact: it equals a brute-force search over f64 dot products up to exact ties.
 #[derive(Clone, Debug)]
@@ -188,7 +189,8 @@ impl SpherePoints {
         }
     }
 
-    /// Keinert et al.'s published four-candidate inverse for Fibonacci sets (approximate);
+    /// Keinert et al.'s published four-candidate inverse for Fibonacci sets, without our
+    /// exactness certificate (it agreed with [`Self::nearest`] on every direction tested);
     /// `None` for other kinds.
     pub fn nearest_keinert(&self, d: Vec3) -> Option<usize> {
         match &self.index {
