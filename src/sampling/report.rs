@@ -104,6 +104,10 @@ struct MeasureRow {
 
 /// Runs the report into `out` (created if missing).
 pub fn run(out: &Path) -> Result<(), ReportError> {
+    // Timings depend on what else runs on the machine; record the load they were taken under.
+    let load_average = std::fs::read_to_string("/proc/loadavg")
+        .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
+        .unwrap_or_else(|_| "unknown".into());
     let dirs: Vec<Vec3> = (0..CHECK_DIRECTIONS as u64)
         .map(|i| seeded_sphere_direction(i, SEED))
         .collect();
@@ -188,6 +192,7 @@ pub fn run(out: &Path) -> Result<(), ReportError> {
         "date_utc": utc_now_iso8601(),
         "cpu": cpu_model(),
         "threads": rayon::current_num_threads(),
+        "load_average_at_start": load_average,
         "git_commit": git_commit(),
         "check_directions": CHECK_DIRECTIONS,
         "timing": format!(

@@ -133,7 +133,12 @@ fn layout_title(layout: &HemisphereLayout) -> String {
         LayoutKind::Rejection => "Rejection + Malley",
         LayoutKind::Concentric => "Concentric + Malley",
     };
-    format!("{name} {0}×{0}: texel solid angle (sr)", layout.res)
+    let unused = if layout.kind == LayoutKind::Rejection {
+        ", grey = unused"
+    } else {
+        ""
+    };
+    format!("{name} {0}×{0}: texel solid angle (sr){unused}", layout.res)
 }
 
 /// Heat map of each texel's solid angle (viridis, own colour bar; unused texels grey).
@@ -170,6 +175,8 @@ pub fn plot_layout_solid_angle(path: &Path, layout: &HemisphereLayout) -> Result
             .disable_mesh()
             .x_desc(col_desc)
             .y_desc(row_desc)
+            .x_label_formatter(&|v| format!("{v:.0}"))
+            .y_label_formatter(&|v| format!("{v:.0}"))
             .label_style(("sans-serif", 14))
             .axis_desc_style(("sans-serif", 16))
             .draw()

@@ -14,7 +14,7 @@
 //!    (an error δ < ½ moves u by less than one, and round(u_exact) stays in
 //!    {floor u, floor u + 1}). Both are candidates. φ comes from [`atan2_approx`], off by at most
 //!    2e-5 rad, so u is off by less than 2e-5 · m / 2π < ½ for every ring of up to 1.5·10⁵
-//!    points (the constructors allow 4097).
+//!    points (the sets built by `SpherePoints` have at most 1024 per ring).
 //! 2. *Ring bound.* For any point p of ring r, Cauchy–Schwarz on the xy parts gives
 //!    d · p ≤ d_z cos θ_r + |d_xy| sin θ_r = |d| cos(θ − θ_r) =: B_r. The stored points are f32
 //!    roundings, off the ideal ring by < 1e-7 per coordinate, so d · p < B_r + 1e-6 |d|.

@@ -36,13 +36,15 @@ impl SphereKind {
     }
 }
 
-/// Largest Slater subdivision accepted (4 198 402 points).
-const MAX_SLATER_N: u64 = 1024;
-/// Largest lat-long row count accepted.
-const MAX_LAT_LONG_ROWS: u64 = 4096;
-/// Fibonacci sets accept 4 ≤ N ≤ 2²⁴.
+// Size limits: about 2.6·10⁵ points for every kind, which keeps the triangulation (built once
+// per set, in O(N) for ring sets and O(N^1.5) for Fibonacci sets) within seconds.
+/// Largest Slater subdivision accepted (263 170 points).
+const MAX_SLATER_N: u64 = 256;
+/// Largest lat-long row count accepted (262 656 points).
+const MAX_LAT_LONG_ROWS: u64 = 512;
+/// Fibonacci sets accept 4 ≤ N ≤ 2¹⁸.
 const MIN_FIBONACCI: usize = 4;
-const MAX_FIBONACCI: usize = 1 << 24;
+const MAX_FIBONACCI: usize = 1 << 18;
 
 #[derive(Clone, Debug)]
 enum Index {
