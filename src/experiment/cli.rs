@@ -18,6 +18,12 @@ pub enum Command {
         #[arg(long, default_value = "results/quickstart")]
         out: std::path::PathBuf,
     },
+    /// Sphere point sets and hemisphere layouts: exactness, spacing, timings and plots.
+    Sampling {
+        /// Output folder.
+        #[arg(long, default_value = "results/sampling")]
+        out: std::path::PathBuf,
+    },
 }
 
 pub fn main() {
@@ -26,6 +32,12 @@ pub fn main() {
         Command::Quickstart { out } => {
             if let Err(e) = super::quickstart::run(&out) {
                 eprintln!("error: {e}");
+                std::process::exit(1);
+            }
+        }
+        Command::Sampling { out } => {
+            if let Err(e) = crate::sampling::report::run(&out) {
+                eprintln!("sampling: {e}");
                 std::process::exit(1);
             }
         }
