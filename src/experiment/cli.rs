@@ -18,14 +18,28 @@ pub enum Command {
         #[arg(long, default_value = "results/quickstart")]
         out: std::path::PathBuf,
     },
+    /// Sphere point sets and hemisphere layouts: exactness, spacing, timings and plots.
+    Sampling {
+        /// Output folder.
+        #[arg(long, default_value = "results/sampling")]
+        out: std::path::PathBuf,
+    },
 }
 
 pub fn main() {
     let cli = Cli::parse();
     match cli.command {
         Command::Quickstart { out } => {
-            eprintln!("quickstart: not yet implemented ({})", out.display());
-            std::process::exit(2);
+            if let Err(e) = super::quickstart::run(&out) {
+                eprintln!("error: {e}");
+                std::process::exit(1);
+            }
+        }
+        Command::Sampling { out } => {
+            if let Err(e) = crate::sampling::report::run(&out) {
+                eprintln!("sampling: {e}");
+                std::process::exit(1);
+            }
         }
     }
 }

@@ -3,3 +3,5 @@
 pub mod cli;
 pub mod meta;
 pub mod plot;
+pub mod progress;
+pub mod quickstart;

@@ -87,6 +87,9 @@ pub fn xy_plot(path: &Path, axes: &Axes, series: &[Series], hlines: &[HLine]) ->
                     .x_desc(axes.x_label.as_str())
                     .y_desc(axes.y_label.as_str())
                     .label_style(("sans-serif", 16))
+                    .x_label_formatter(&|v| tick(*v))
+                    .y_label_formatter(&|v| tick(*v))
+                    .light_line_style(BLACK.mix(0.04))
                     .draw()
                     .map_err(err(path))?;
                 for (i, s) in series.iter().enumerate() {
@@ -157,6 +160,24 @@ pub fn xy_plot(path: &Path, axes: &Axes, series: &[Series], hlines: &[HLine]) ->
     write_rgb_png(path, 1000, 700, buf)
 }
 
+/// A compact tick label: 3 significant digits, no float noise.
+fn tick(v: f64) -> String {
+    if v == 0.0 {
+        return "0".into();
+    }
+    let a = v.abs();
+    if !(1e-3..1e5).contains(&a) {
+        return format!("{v:.1e}");
+    }
+    let digits = (2 - a.log10().floor() as i32).max(0) as usize;
+    let s = format!("{v:.digits$}");
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
+}
+
 fn write_rgb_png(path: &Path, w: u32, h: u32, buf: Vec<u8>) -> PlotResult {
     let img = image::RgbImage::from_raw(w, h, buf).ok_or("buffer size mismatch")?;
     let mut out = std::io::Cursor::new(Vec::new());
@@ -219,6 +240,16 @@ pub fn image_grid(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn tick_labels_are_compact() {
+        assert_eq!(tick(0.23000000000004), "0.23");
+        assert_eq!(tick(0.01), "0.01");
+        assert_eq!(tick(12.5), "12.5");
+        assert_eq!(tick(4000.0), "4000");
+        assert_eq!(tick(0.0), "0");
+        assert_eq!(tick(2.5e-5), "2.5e-5");
+    }
 
     #[test]
     fn plots_write_decodable_pngs_of_the_expected_size() {

@@ -31,3 +31,22 @@ pub fn stage<T>(msg: &str, f: impl FnOnce() -> T) -> (T, f64) {
     eprintln!("  {msg:<40} {:>9.3} s", s);
     (v, s)
 }
+
+/// Like [`stage`], but runs `f` `repeats` times (at least once) and reports the fastest run:
+/// the first run warms caches and thread pools, and the minimum is the least noisy estimate of
+/// the cost on a shared machine. Returns the last value.
+pub fn stage_best_of<T>(msg: &str, repeats: usize, mut f: impl FnMut() -> T) -> (T, f64) {
+    let pb = ProgressBar::new_spinner();
+    pb.set_message(msg.to_string());
+    pb.enable_steady_tick(Duration::from_millis(120));
+    let mut best = f64::INFINITY;
+    let mut value = None;
+    for _ in 0..repeats.max(1) {
+        let t = Instant::now();
+        value = Some(f());
+        best = best.min(t.elapsed().as_secs_f64());
+    }
+    pb.finish_and_clear();
+    eprintln!("  {msg:<40} {best:>9.3} s (best of {})", repeats.max(1));
+    (value.expect("ran at least once"), best)
+}

@@ -6,15 +6,16 @@
 
 use super::meta::RunMeta;
 use super::plot::{self, Axes, Series};
-use super::progress::stage;
+use super::progress::{stage, stage_best_of};
 use crate::field::bake::{bake, BakeOptions};
 use crate::field::scene::{FieldInstance, FieldScene};
-use crate::field::{FieldParams, Precision, Selection};
-use crate::geometry::{procedural, Scene};
+use crate::field::{FieldParams, Precision};
+use crate::geometry::procedural;
 use crate::render::ao::{ao_at_points, AoOptions};
 use crate::render::camera::Camera;
-use crate::render::image::{rms_255, GrayImage};
+use crate::render::image::{rms_255, rms_vertex};
 use crate::render::primary::{gbuffer, shade_vertex_ao, PrimaryScene};
+use crate::render::receivers::Receivers;
 use crate::sampling::rays::RaySet;
 use crate::sampling::{LayoutKind, SphereKind};
 use crate::trace::Tracer;
@@ -22,53 +23,6 @@ use glam::Vec3;
 use std::fmt::Write as _;
 use std::path::Path;
 use std::sync::Arc;
-
-/// Receiver points and normals of a scene, world space, concatenated over receivers.
-pub struct Receivers {
-    pub points: Vec<Vec3>,
-    pub normals: Vec<Vec3>,
-    /// Per receiver: (instance index, first point, point count).
-    pub ranges: Vec<(usize, usize, usize)>,
-}
-
-impl Receivers {
-    pub fn of(scene: &Scene) -> Receivers {
-        let (mut points, mut normals, mut ranges) = (Vec::new(), Vec::new(), Vec::new());
-        for (i, inst) in scene.receivers() {
-            let start = points.len();
-            for (p, n) in inst.mesh.positions.iter().zip(&inst.mesh.normals) {
-                points.push(inst.transform.to_world_point(*p));
-                normals.push(inst.transform.to_world_dir(*n).normalize());
-            }
-            ranges.push((i, start, points.len() - start));
-        }
-        Receivers {
-            points,
-            normals,
-            ranges,
-        }
-    }
-
-    /// Per instance: its slice of `ao` (None for non-receivers), for shading.
-    pub fn split(&self, scene: &Scene, ao: &[f32]) -> Vec<Option<Vec<f32>>> {
-        let mut out = vec![None; scene.instances.len()];
-        for &(i, s, n) in &self.ranges {
-            out[i] = Some(ao[s..s + n].to_vec());
-        }
-        out
-    }
-}
-
-/// RMS of two AO vectors on the 0–255 scale, unquantised (the per-vertex figure).
-pub fn rms_vertex(a: &[f32], b: &[f32]) -> f64 {
-    assert_eq!(a.len(), b.len());
-    let s: f64 = a
-        .iter()
-        .zip(b)
-        .map(|(x, y)| (255.0 * (*x as f64 - *y as f64)).powi(2))
-        .sum();
-    (s / a.len().max(1) as f64).sqrt()
-}
 
 /// The default camera of the corner scenes: looking into the corner from the open octant.
 pub fn corner_camera() -> Camera {
@@ -84,7 +38,10 @@ pub fn corner_camera() -> Camera {
 pub fn run(out: &Path) -> Result<(), String> {
     std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
     let meta = RunMeta::collect(None);
-    eprintln!("quickstart: supershape over the corner receiver -> {}", out.display());
+    eprintln!(
+        "quickstart: supershape over the corner receiver -> {}",
+        out.display()
+    );
 
     let scene = procedural::default_scene();
     let recv = Receivers::of(&scene);
@@ -102,7 +59,7 @@ pub fn run(out: &Path) -> Result<(), String> {
     let rays = RaySet::new(16, seed); // 256 rays per vertex, as in the papers
 
     let (tracer, bvh_s) = stage("build BVH (reference)", || Tracer::new(&casters));
-    let (ao_ref, ref_s) = stage("ray-cast AO, 256 rays/vertex", || {
+    let (ao_ref, ref_s) = stage_best_of("ray-cast AO, 256 rays/vertex", 3, || {
         ao_at_points(&tracer, &recv.points, &recv.normals, &rays, &opts)
     });
 
@@ -131,26 +88,29 @@ pub fn run(out: &Path) -> Result<(), String> {
         instances: vec![FieldInstance::new(Arc::new(field), caster.transform)],
         options: Default::default(),
     };
-    let (ao_field, field_s) = stage("field-lookup AO, 256 rays/vertex", || {
+    let (ao_field, field_s) = stage_best_of("field-lookup AO, 256 rays/vertex", 3, || {
         ao_at_points(&fscene, &recv.points, &recv.normals, &rays, &opts)
     });
     let rms_v = rms_vertex(&ao_field, &ao_ref);
 
     // Error against time: ray casting with fewer rays, the field with more.
     let mut rc_pts = Vec::new();
-    for k in [4u32, 8, 16] {
+    for k in [4u32, 8] {
         let r = RaySet::new(k, seed);
-        let (ao, s) = stage(&format!("ray-cast AO, {} rays/vertex", k * k), || {
+        let (ao, s) = stage_best_of(&format!("ray-cast AO, {} rays/vertex", k * k), 3, || {
             ao_at_points(&tracer, &recv.points, &recv.normals, &r, &opts)
         });
         rc_pts.push((s, rms_vertex(&ao, &ao_ref), k * k));
     }
+    rc_pts.push((ref_s, 0.0, 256));
     let mut f_pts = vec![(field_s, rms_v, 256)];
     for k in [8u32, 32] {
         let r = RaySet::new(k, seed);
-        let (ao, s) = stage(&format!("field-lookup AO, {} rays/vertex", k * k), || {
-            ao_at_points(&fscene, &recv.points, &recv.normals, &r, &opts)
-        });
+        let (ao, s) = stage_best_of(
+            &format!("field-lookup AO, {} rays/vertex", k * k),
+            3,
+            || ao_at_points(&fscene, &recv.points, &recv.normals, &r, &opts),
+        );
         f_pts.push((s, rms_vertex(&ao, &ao_ref), k * k));
     }
 
@@ -163,22 +123,44 @@ pub fn run(out: &Path) -> Result<(), String> {
     let (img_field, _) = shade_vertex_ao(&scene, &gb, w, h, &recv.split(&scene, &ao_field));
     let rms_i = rms_255(&img_field.data, &img_ref.data, Some(&mask));
     let diff = img_field.difference(&img_ref, 5.0);
-    let io = |r: std::io::Result<()>, p: &str| r.map_err(|e| format!("{}: {e}", out.join(p).display()));
-    io(img_ref.save_png(&out.join("ao_reference.png")), "ao_reference.png")?;
-    io(img_field.save_png(&out.join("ao_field.png")), "ao_field.png")?;
-    io(diff.save_png(&out.join("difference_x5.png")), "difference_x5.png")?;
-    io(img_ref.save_exr(&out.join("ao_reference.exr")), "ao_reference.exr")?;
-    io(img_field.save_exr(&out.join("ao_field.exr")), "ao_field.exr")?;
+    let io =
+        |r: std::io::Result<()>, p: &str| r.map_err(|e| format!("{}: {e}", out.join(p).display()));
+    io(
+        img_ref.save_png(&out.join("ao_reference.png")),
+        "ao_reference.png",
+    )?;
+    io(
+        img_field.save_png(&out.join("ao_field.png")),
+        "ao_field.png",
+    )?;
+    io(
+        diff.save_png(&out.join("difference_x5.png")),
+        "difference_x5.png",
+    )?;
+    io(
+        img_ref.save_exr(&out.join("ao_reference.exr")),
+        "ao_reference.exr",
+    )?;
+    io(
+        img_field.save_exr(&out.join("ao_field.exr")),
+        "ao_field.exr",
+    )?;
     plot::image_grid(
         &out.join("images.png"),
         "quickstart: reference | field 1090 × 32² u8 | difference ×5",
         &[
-            (&img_ref, vec!["ray cast, 256 rays".into(), format!("{ref_s:.3} s")]),
+            (
+                &img_ref,
+                vec!["ray cast, 256 rays".into(), format!("{ref_s:.3} s")],
+            ),
             (
                 &img_field,
                 vec![
                     "field lookup, 256 rays".into(),
-                    format!("bake {:.2} s, AO {field_s:.3} s, RMS {rms_i:.3}", stats.seconds),
+                    format!(
+                        "bake {:.2} s, AO {field_s:.3} s, RMS {rms_i:.3}",
+                        stats.seconds
+                    ),
                 ],
             ),
             (&diff, vec!["|field − reference| × 5".into()]),
@@ -212,9 +194,16 @@ pub fn run(out: &Path) -> Result<(), String> {
     // Per-vertex CSV.
     let mut csv = String::from("vertex,x,y,z,ao_reference,ao_field\n");
     for (i, p) in recv.points.iter().enumerate() {
-        let _ = writeln!(csv, "{i},{},{},{},{},{}", p.x, p.y, p.z, ao_ref[i], ao_field[i]);
+        let _ = writeln!(
+            csv,
+            "{i},{},{},{},{},{}",
+            p.x, p.y, p.z, ao_ref[i], ao_field[i]
+        );
     }
-    io(crate::io::write_atomic(&out.join("vertex_ao.csv"), csv.as_bytes()), "vertex_ao.csv")?;
+    io(
+        crate::io::write_atomic(&out.join("vertex_ao.csv"), csv.as_bytes()),
+        "vertex_ao.csv",
+    )?;
 
     let speedup = ref_s / field_s.max(1e-12);
     let summary = serde_json::json!({
@@ -246,14 +235,23 @@ pub fn run(out: &Path) -> Result<(), String> {
     io(
         crate::io::write_atomic(
             &out.join("run.json"),
-            serde_json::to_string_pretty(&summary).expect("json").as_bytes(),
+            serde_json::to_string_pretty(&summary)
+                .expect("json")
+                .as_bytes(),
         ),
         "run.json",
     )?;
 
     println!();
-    println!("visfield quickstart ({} threads, {})", meta.threads, meta.cpu);
-    println!("  receiver: corner, {} vertices; caster: supershape, {} triangles", recv.points.len(), caster.mesh.triangles.len());
+    println!(
+        "visfield quickstart ({} threads, {})",
+        meta.threads, meta.cpu
+    );
+    println!(
+        "  receiver: corner, {} vertices; caster: supershape, {} triangles",
+        recv.points.len(),
+        caster.mesh.triangles.len()
+    );
     println!("  ray-cast AO (256 rays/vertex):   {ref_s:>8.3} s");
     println!(
         "  field bake (1090 × 32² u8):      {:>8.3} s  ({:.1} Mrays/s, {} KiB)",

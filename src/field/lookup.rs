@@ -195,7 +195,10 @@ fn bilinear_texels(layout: &HemisphereLayout, local: Vec3) -> ([(u32, f32); 4], 
         }
     }
     if n == 0 {
-        return ([(layout.to_texel(local), 1.0), (0, 0.0), (0, 0.0), (0, 0.0)], 1);
+        return (
+            [(layout.to_texel(local), 1.0), (0, 0.0), (0, 0.0), (0, 0.0)],
+            1,
+        );
     }
     for o in &mut out[..n] {
         o.1 /= total;

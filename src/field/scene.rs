@@ -61,21 +61,80 @@ pub struct FieldScene {
     pub options: LookupOptions,
 }
 
-impl Visibility for FieldScene {
-    fn occluded(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> bool {
-        let mut order: Vec<(f32, usize)> = Vec::with_capacity(self.instances.len());
+impl FieldScene {
+    /// Calls `f` on the instances whose world spheres the segment meets, in order of entry
+    /// distance, until it returns `false`. No allocation for up to 16 instances.
+    fn for_each_candidate(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        tmin: f32,
+        tmax: f32,
+        mut f: impl FnMut(f32, &FieldInstance) -> bool,
+    ) {
+        if let [only] = self.instances.as_slice() {
+            // One instance: its own lookup does the sphere test.
+            f(tmin, only);
+            return;
+        }
+        let mut stack = [(0.0f32, 0usize); 16];
+        let mut heap = Vec::new();
+        let mut n = 0;
         for (i, inst) in self.instances.iter().enumerate() {
             if let Some((t0, t1)) = ray_sphere(origin, dir, inst.world_center, inst.world_radius) {
                 if t1 >= tmin && t0 <= tmax {
-                    order.push((t0.max(tmin), i));
+                    if n < stack.len() {
+                        stack[n] = (t0.max(tmin), i);
+                    } else {
+                        if heap.is_empty() {
+                            heap.extend_from_slice(&stack);
+                        }
+                        heap.push((t0.max(tmin), i));
+                    }
+                    n += 1;
                 }
             }
         }
-        order.sort_by(|a, b| a.0.total_cmp(&b.0));
-        order.iter().any(|&(_, i)| {
-            self.instances[i]
+        let order = if heap.is_empty() {
+            &mut stack[..n]
+        } else {
+            &mut heap[..]
+        };
+        order.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        for &(t, i) in order.iter() {
+            if !f(t, &self.instances[i]) {
+                return;
+            }
+        }
+    }
+}
+
+impl Visibility for FieldScene {
+    fn occluded(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> bool {
+        let mut hit = false;
+        self.for_each_candidate(origin, dir, tmin, tmax, |_, inst| {
+            hit = inst
                 .hit_distance(origin, dir, tmin, tmax, &self.options)
-                .is_some()
-        })
+                .is_some();
+            !hit
+        });
+        hit
+    }
+
+    fn hit_distance(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<f32> {
+        // Spheres may overlap, so a later entry can still hold a nearer surface: keep the
+        // nearest hit, stopping once no remaining sphere starts before it.
+        let mut best: Option<f32> = None;
+        self.for_each_candidate(origin, dir, tmin, tmax, |t_entry, inst| {
+            if best.is_some_and(|b| t_entry > b) {
+                return false;
+            }
+            let limit = best.unwrap_or(tmax);
+            if let Some(t) = inst.hit_distance(origin, dir, tmin, limit, &self.options) {
+                best = Some(best.map_or(t, |b| b.min(t)));
+            }
+            true
+        });
+        best
     }
 }

@@ -119,10 +119,16 @@ pub fn uv_sphere(radius: f32, stacks: usize, slices: usize) -> Result<Mesh, Geom
 /// sphere stays clear of the corner's three planes, so the caster's field is valid everywhere on
 /// the receiver.
 pub fn default_scene() -> Scene {
-    let corner = corner(33).expect("corner(33) is valid");
     let shape = supershape(&Supershape::default(), 10_000).expect("default supershape is valid");
-    let sphere = shape.bounding_sphere();
-    let rotation = Quat::from_euler(glam::EulerRot::YXZ, 0.4, 0.25, 0.0);
+    over_corner(shape, Quat::from_euler(glam::EulerRot::YXZ, 0.4, 0.25, 0.0))
+}
+
+/// The 2008 paper's test layout: `caster` (any mesh) rotated by `rotation`, scaled so that its
+/// minimal bounding sphere has radius 0.35 and centred at (0.5, 0.45, 0.5), above the [`corner`]
+/// receiver (n = 33). The caster's sphere stays clear of the corner's planes.
+pub fn over_corner(caster: Mesh, rotation: Quat) -> Scene {
+    let corner = corner(33).expect("corner(33) is valid");
+    let sphere = caster.bounding_sphere();
     let scale = 0.35 / sphere.radius;
     let transform = Similarity::new(
         rotation,
@@ -138,7 +144,7 @@ pub fn default_scene() -> Scene {
                 receiver: true,
             },
             Instance {
-                mesh: Arc::new(shape),
+                mesh: Arc::new(caster),
                 transform,
                 caster: true,
                 receiver: false,

@@ -12,7 +12,8 @@
 //! else 0); the paper allows an empirical falloff of the hit distance.
 
 use super::Visibility;
-use crate::sampling::{rays::RaySet, Frame};
+use crate::sampling::rays::{PreparedRaySet, RaySet};
+use crate::sampling::Frame;
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -54,7 +55,7 @@ pub fn ao_at_point<V: Visibility + ?Sized>(
     point_index: u32,
     point: Vec3,
     normal: Vec3,
-    rays: &RaySet,
+    rays: &PreparedRaySet,
     opts: &AoOptions,
     scratch: &mut Vec<Vec3>,
 ) -> f32 {
@@ -95,13 +96,14 @@ pub fn ao_at_points<V: Visibility + ?Sized>(
         points.len(),
         normals.len()
     );
+    let prepared = rays.prepare();
     points
         .par_iter()
         .zip(normals)
         .enumerate()
         .map_init(
             || Vec::with_capacity(rays.len()),
-            |scratch, (i, (&p, &n))| ao_at_point(vis, i as u32, p, n, rays, opts, scratch),
+            |scratch, (i, (&p, &n))| ao_at_point(vis, i as u32, p, n, &prepared, opts, scratch),
         )
         .collect()
 }

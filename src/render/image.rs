@@ -93,6 +93,17 @@ pub fn rms_255(a: &[f32], b: &[f32], mask: Option<&[bool]>) -> f64 {
     }
 }
 
+/// RMS of two AO vectors on the 0–255 scale, unquantised (the per-vertex figure).
+pub fn rms_vertex(a: &[f32], b: &[f32]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    let s: f64 = a
+        .iter()
+        .zip(b)
+        .map(|(x, y)| (255.0 * (*x as f64 - *y as f64)).powi(2))
+        .sum();
+    (s / a.len().max(1) as f64).sqrt()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

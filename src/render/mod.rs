@@ -36,3 +36,5 @@ impl Visibility for Tracer {
 
 pub mod camera;
 pub mod image;
+pub mod primary;
+pub mod receivers;

@@ -49,7 +49,12 @@ pub struct PixelHit {
 }
 
 /// The G-buffer of a view: one optional hit per pixel, row-major, row 0 at the top.
-pub fn gbuffer(ps: &PrimaryScene, camera: &Camera, width: u32, height: u32) -> Vec<Option<PixelHit>> {
+pub fn gbuffer(
+    ps: &PrimaryScene,
+    camera: &Camera,
+    width: u32,
+    height: u32,
+) -> Vec<Option<PixelHit>> {
     (0..width * height)
         .into_par_iter()
         .map(|i| {
@@ -59,7 +64,11 @@ pub fn gbuffer(ps: &PrimaryScene, camera: &Camera, width: u32, height: u32) -> V
                 .closest_hit(camera.eye, d, 0.0, f32::INFINITY)
                 .map(|h| {
                     let (instance, triangle) = ps.owner[h.triangle as usize];
-                    let n = if h.normal.dot(d) > 0.0 { -h.normal } else { h.normal };
+                    let n = if h.normal.dot(d) > 0.0 {
+                        -h.normal
+                    } else {
+                        h.normal
+                    };
                     PixelHit {
                         instance,
                         triangle,

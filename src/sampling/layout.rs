@@ -294,7 +294,7 @@ impl HemisphereLayout {
         (0..self.texel_count() as u32)
             .filter(|&t| !self.is_used(t))
             .map(|t| self.solid_angle(t))
-            .sum()
+            .fold(0.0, |a, b| a + b)
     }
 }
 

@@ -4,12 +4,25 @@
 //!
 //! Sources (stratified sets, seeded sequences) live apart from mappings; each mapping has its
 //! forward map, inverse and density side by side.
+//!
+//! Files: `sphere` (the public point-set type) over `rings` (Slater and lat-long: ring sets with
+//! an exact O(1) nearest query) and `fibonacci` (Keinert et al.'s inverse plus a certificate);
+//! `mesh` (spherical triangulations: interpolation triangles, Delaunay spacing); `layout` with
+//! `texel_measure` (closed-form texel solid angles); `warp` (square/disk/hemisphere maps);
+//! `frame`; `rays`; `approx` (cheap atan2/floor with stated error bounds); `report` and
+//! `report_plots` (`experiment sampling`).
+//!
+//! Every `nearest` is exact — equal to a brute-force search over f64 dot products up to exact
+//! ties — and every used layout texel round-trips exactly: `to_texel(to_direction(t)) == t`.
 
+mod approx;
 mod fibonacci;
 mod frame;
 mod layout;
 mod mesh;
 pub mod rays;
+pub mod report;
+mod report_plots;
 mod rings;
 mod sphere;
 mod texel_measure;

@@ -5,37 +5,38 @@
 //! # Why `nearest` is exact
 //!
 //! Rings are numbered r = 0, 1, … by increasing polar angle θ_r; ring r holds m_r points at
-//! azimuths 2π (j + phase_r) / m_r. Let d have polar angle θ and azimuth φ, and let g(r) be the
-//! angular (geodesic) distance from d to the closest point of ring r.
+//! azimuths 2π (j + phase_r) / m_r. Let d have polar angle θ and azimuth φ.
 //!
 //! 1. *Within a ring.* For points at a fixed θ_r the dot product with d is
-//!    cos θ cos θ_r + sin θ sin θ_r cos Δφ, decreasing in |Δφ| ∈ [0, π]; so the closest point of
-//!    ring r is the one nearest in azimuth. With u = φ m_r / 2π − phase_r it is round(u), which is
-//!    always floor(u) or floor(u) + 1, even when u carries a rounding error below ½ (an error
-//!    δ < ½ moves u by less than one, and round(u_exact) stays in {floor u, floor u + 1}). Both are
-//!    candidates.
-//! 2. *Bounds.* The polar-angle difference is a lower bound on geodesic distance:
-//!    g(r) ≥ |θ − θ_r|. Walking along the meridian to θ_r, then along the ring, gives an upper
-//!    bound: g(r) ≤ |θ − θ_r| + h_r, with h_r = sin θ_r · π / m_r (half the azimuthal spacing,
-//!    as arc length; 0 for a pole point).
-//! 3. *Bracket.* We compute an index a with θ_a ≤ θ̂ < θ_{a+1} (a = −1 above the first ring,
-//!    a = last ring below it) from an estimate θ̂ with |θ̂ − θ| ≤ ε, and test rings a−1 … a+2.
-//!    For any ring c ≥ a+3:
-//!    g(c) ≥ θ_c − θ ≥ θ_{a+3} − θ̂ − ε = (θ_{a+3} − θ_{a+1}) + (θ_{a+1} − θ̂) − ε, while
-//!    g(a+1) ≤ |θ − θ_{a+1}| + h_{a+1} ≤ (θ_{a+1} − θ̂) + ε + h_{a+1}.
-//!    So g(c) ≥ g(a+1) whenever θ_{a+3} − θ_{a+1} ≥ h_{a+1} + 2ε. Symmetrically every ring
-//!    c ≤ a−2 loses to ring a when θ_a − θ_{a−2} ≥ h_a + 2ε.
-//! 4. *The premise* — for every ring r, θ_{r+2} − θ_r ≥ h_r + 2ε and θ_r − θ_{r−2} ≥ h_r + 2ε
-//!    where those rings exist — is checked by [`RingSet::check_gap_condition`] (a test runs it for
-//!    every Slater n ≤ 256 and every lat-long grid up to 256 rows with ε = 1e-5 rad, far above the
-//!    ≈1e-7 rad by which f32-rounded points and f64 estimates move). For Slater rings the ratio
-//!    h_r / (θ_{r+1} − θ_r) tends to π/4 and is at most ≈1.1 next to the pole, so two gaps leave a
-//!    wide margin; for an R × (R+1) lat-long grid, 2π/R ≥ π/(R+1) holds trivially.
-//!
-//! Hence the true nearest point is among at most 4 rings × 2 azimuths = 8 candidates, compared
-//! by f64 dot products (the same arithmetic a brute-force search uses), so the answer equals brute
-//! force up to exact ties.
+//!    |d| (cos θ cos θ_r + sin θ sin θ_r cos Δφ), decreasing in |Δφ| ∈ [0, π]; so the closest
+//!    point of ring r is the one nearest in azimuth. With u = φ m_r / 2π − phase_r it is
+//!    round(u), which is always floor(u) or floor(u) + 1, even when u carries an error below ½
+//!    (an error δ < ½ moves u by less than one, and round(u_exact) stays in
+//!    {floor u, floor u + 1}). Both are candidates. φ comes from [`atan2_approx`], off by at most
+//!    2e-5 rad, so u is off by less than 2e-5 · m / 2π < ½ for every ring of up to 1.5·10⁵
+//!    points (the sets built by `SpherePoints` have at most 1024 per ring).
+//! 2. *Ring bound.* For any point p of ring r, Cauchy–Schwarz on the xy parts gives
+//!    d · p ≤ d_z cos θ_r + |d_xy| sin θ_r = |d| cos(θ − θ_r) =: B_r. The stored points are f32
+//!    roundings, off the ideal ring by < 1e-7 per coordinate, so d · p < B_r + 1e-6 |d|.
+//! 3. *Search.* We compute in O(1) the ring index a with θ_a ≤ θ < θ_{a+1} (a = −1 above the
+//!    first ring, a = last ring below the last; the computation is accurate to ~1e-15 rad and
+//!    only ever needs to be right to within one ring), test the two bracket rings, then walk
+//!    outwards on each side while B_c + 1e-6 |d| exceeds the best dot product found. Beyond the
+//!    bracket, |θ − θ_c| grows with every step away, so B_c only decreases: the first ring that
+//!    fails the test proves every ring beyond it worse. The walk therefore never skips a closer
+//!    point, and the candidates are compared by f64 dot products — the arithmetic a brute-force
+//!    search uses — so the answer equals brute force up to exact ties.
+//! 4. *Constant time.* The walk stops after at most one ring past the bracket on each side when
+//!    θ_{r+2} − θ_r ≥ h_r + 2ε and θ_r − θ_{r−2} ≥ h_r + 2ε for every ring r, with
+//!    h_r = sin θ_r · π / m_r half the azimuthal spacing as arc length and ε a small slack:
+//!    the best bracket ring is then within angle (distance to the ring) + h_r of d, while ring
+//!    a+3 (or a−2) lies at least that far away in θ alone. [`RingSet::check_gap_condition`]
+//!    verifies this for every set built (a test runs it for every Slater n ≤ 256 and every
+//!    lat-long grid up to 256 rows with ε = 1e-5 rad). For Slater rings h_r / (θ_{r+1} − θ_r)
+//!    tends to π/4 and is at most ≈1.1 next to the pole; for an R × (R+1) lat-long grid,
+//!    2π/R ≥ π/(R+1) holds trivially. So at most 4 rings × 2 azimuths = 8 dot products.
 
+use super::approx::{atan2_approx, floor_i64};
 use glam::{DVec3, Vec3};
 use std::f64::consts::{PI, TAU};
 
@@ -206,7 +207,7 @@ impl RingSet {
                 let k = if t < 3.0 {
                     0
                 } else {
-                    (((t - 1.0) * 0.5).sqrt().floor() as i64).min(n as i64)
+                    floor_i64(((t - 1.0) * 0.5).sqrt()).min(n as i64)
                 };
                 if d.z >= 0.0 {
                     k
@@ -218,41 +219,75 @@ impl RingSet {
             }
             Bracket::LatLong { rows } => {
                 let theta = rho2.sqrt().atan2(d.z);
-                ((theta * rows as f64 / PI - 0.5).floor() as i64).clamp(-1, rows as i64 - 1)
+                floor_i64(theta * rows as f64 / PI - 0.5).clamp(-1, rows as i64 - 1)
             }
         }
     }
 
     /// Index of the point of `points` (this set's points) nearest to `d`: exact, see the module
     /// proof. `d` need not be normalised; the zero vector returns some valid index.
+    #[inline]
     pub fn nearest(&self, points: &[Vec3], d: Vec3) -> usize {
-        let dd = d.as_dvec3();
-        let a = self.bracket(dd);
-        let last = self.rings.len() as i64 - 1;
-        let lo = (a - 1).clamp(0, last) as usize;
-        let hi = (a + 2).clamp(0, last) as usize;
-        // Azimuth in turns; f32 accuracy suffices (step 1 of the proof).
-        let turns = d.y.atan2(d.x) as f64 * (1.0 / TAU);
-        let mut best = 0usize;
-        let mut best_dot = f64::NEG_INFINITY;
-        for ring in &self.rings[lo..=hi] {
-            let m = ring.count;
-            let u = turns * m as f64 - ring.phase;
-            let j0 = (u.floor() as i64).rem_euclid(m as i64) as u32;
-            let j1 = if j0 + 1 == m { 0 } else { j0 + 1 };
-            for j in [j0, j1] {
-                let i = (ring.first + j) as usize;
-                let dot = dd.dot(points[i].as_dvec3());
-                if dot > best_dot {
-                    best_dot = dot;
-                    best = i;
-                }
-            }
-        }
-        best
+        self.nearest_counted(points, d).0
     }
 
-    /// Checks the premise of the proof (step 4) with slack `eps` radians.
+    /// [`Self::nearest`] and the number of rings it scanned.
+    #[inline]
+    fn nearest_counted(&self, points: &[Vec3], d: Vec3) -> (usize, usize) {
+        let dd = d.as_dvec3();
+        let rho = (dd.x * dd.x + dd.y * dd.y).sqrt();
+        let margin = 1e-6 * (rho * rho + dd.z * dd.z).sqrt();
+        // Azimuth in turns, in [−½, ½] up to the approximation (step 1 of the proof).
+        let turns = atan2_approx(dd.y, dd.x) * (1.0 / TAU);
+        let mut best = (0usize, f64::NEG_INFINITY);
+        let mut scanned = 0usize;
+        let mut scan = |ring: &Ring, best: &mut (usize, f64)| {
+            scanned += 1;
+            let m = ring.count as i64;
+            // u ∈ [−m/2 − 1, m/2] since phase ∈ [0, 1): one wrap each way suffices.
+            let mut j0 = floor_i64(turns * m as f64 - ring.phase);
+            if j0 < 0 {
+                j0 += m;
+            }
+            if j0 >= m {
+                j0 -= m;
+            }
+            let j1 = if j0 + 1 == m { 0 } else { j0 + 1 };
+            for j in [j0 as u32, j1 as u32] {
+                let i = (ring.first + j) as usize;
+                let dot = dd.dot(points[i].as_dvec3());
+                if dot > best.1 {
+                    *best = (i, dot);
+                }
+            }
+        };
+        // Step 2: no point of `ring` beats `best` when its bound does not exceed it.
+        let may_beat = |ring: &Ring, best: &(usize, f64)| {
+            dd.z * ring.z + rho * ring.sin_theta + margin > best.1
+        };
+        let last = self.rings.len() - 1;
+        let a = self.bracket(dd);
+        let lo = a.max(0) as usize;
+        let hi = ((a + 1).max(0) as usize).min(last);
+        for ring in &self.rings[lo..=hi] {
+            scan(ring, &mut best);
+        }
+        for ring in self.rings[..lo].iter().rev() {
+            if !may_beat(ring, &best) {
+                break;
+            }
+            scan(ring, &mut best);
+        }
+        for ring in &self.rings[hi + 1..] {
+            if !may_beat(ring, &best) {
+                break;
+            }
+            scan(ring, &mut best);
+        }
+        (best.0, scanned)
+    }
+
+    /// Checks the premise of the constant-time bound (step 4) with slack `eps` radians.
     pub fn check_gap_condition(&self, eps: f64) -> Result<(), String> {
         let theta: Vec<f64> = self.rings.iter().map(Ring::theta).collect();
         for (r, ring) in self.rings.iter().enumerate() {
@@ -401,6 +436,23 @@ mod tests {
                         a + 1
                     );
                 }
+            }
+        }
+    }
+
+    #[test]
+    fn nearest_visits_at_most_four_rings() {
+        // Step 4 of the module proof: two bracket rings plus at most one on each side.
+        for set in [
+            RingSet::slater(8),
+            RingSet::slater(64),
+            RingSet::lat_long(33, 34),
+        ] {
+            let points = set.points();
+            for i in 0..100_000 {
+                let d = crate::sampling::rays::seeded_sphere_direction(i, 4);
+                let (_, v) = set.nearest_counted(&points, d);
+                assert!(v <= 4, "{v} rings for {d}");
             }
         }
     }

@@ -36,13 +36,15 @@ impl SphereKind {
     }
 }
 
-/// Largest Slater subdivision accepted (4 198 402 points).
-const MAX_SLATER_N: u64 = 1024;
-/// Largest lat-long row count accepted.
-const MAX_LAT_LONG_ROWS: u64 = 4096;
-/// Fibonacci sets accept 4 ≤ N ≤ 2²⁴.
+// Size limits: about 2.6·10⁵ points for every kind, which keeps the triangulation (built once
+// per set, in O(N) for ring sets and O(N^1.5) for Fibonacci sets) within seconds.
+/// Largest Slater subdivision accepted (263 170 points).
+const MAX_SLATER_N: u64 = 256;
+/// Largest lat-long row count accepted (262 656 points).
+const MAX_LAT_LONG_ROWS: u64 = 512;
+/// Fibonacci sets accept 4 ≤ N ≤ 2¹⁸.
 const MIN_FIBONACCI: usize = 4;
-const MAX_FIBONACCI: usize = 1 << 24;
+const MAX_FIBONACCI: usize = 1 << 18;
 
 #[derive(Clone, Debug)]
 enum Index {
@@ -72,8 +74,9 @@ enum Index {
 ///   lattice triangles.
 /// - [`SphereKind::LatLong`]: R rows × (R + 1) columns at cell centres, θ_r = (r + ½)π/R,
 ///   φ_c = 2π(c + ½)/(R + 1); no point on a pole. 1122 = 33 × 34 is the Figure 5 set.
-/// - [`SphereKind::Fibonacci`]: Keinert et al. 2015 (any N ≥ 4), with their inverse made exact
-///   by a certificate (beyond the paper, for comparison).
+/// - [`SphereKind::Fibonacci`]: Keinert et al., "Spherical Fibonacci Mapping", TOG 2015 (any
+///   N ≥ 4): their inverse plus a certificate that guarantees exactness (beyond the paper, for
+///   comparison).
 ///
 /// `nearest` is exact: it equals a brute-force search over f64 dot products up to exact ties.
 #[derive(Clone, Debug)]
@@ -188,7 +191,8 @@ impl SpherePoints {
         }
     }
 
-    /// Keinert et al.'s published four-candidate inverse for Fibonacci sets (approximate);
+    /// Keinert et al.'s published four-candidate inverse for Fibonacci sets, without our
+    /// exactness certificate (it agreed with [`Self::nearest`] on every direction tested);
     /// `None` for other kinds.
     pub fn nearest_keinert(&self, d: Vec3) -> Option<usize> {
         match &self.index {

@@ -174,7 +174,10 @@ impl Tracer {
         tmin: f32,
         tmax: f32,
     ) -> Option<(Ray, WatertightRay, f32, f32)> {
-        debug_assert!(tmin.is_nan() || tmin >= 0.0, "tmin must be >= 0, got {tmin}");
+        debug_assert!(
+            tmin.is_nan() || tmin >= 0.0,
+            "tmin must be >= 0, got {tmin}"
+        );
         if self.triangles.is_empty() || tmin.is_nan() || tmax.is_nan() || tmin > tmax {
             return None;
         }

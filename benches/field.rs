@@ -1,0 +1,148 @@
+//! Field lookup against obvhs ray casting on the same AO rays (2008 paper's setting: 256
+//! stratified cosine rays at each of the corner's 3 × 33 × 33 vertices), for casters of growing
+//! triangle count, every precision and both map selections; and bake throughput against the
+//! tracer's raw closest-hit throughput on the same rays.
+//!
+//! `cargo bench --bench field`. Casters: stanford-bunny_39k (38,889 triangles), dragon
+//! (100,000) and a 261,120-triangle supershape (the 2010 paper's count). Real models are found
+//! as everywhere else (`$VISFIELD_MODELS`, `data/models/`, `../shared/models/`); a missing model
+//! is skipped with a note.
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use glam::Quat;
+use std::sync::Arc;
+use std::time::Duration;
+use visfield::field::bake::{bake, bake_with, BakeOptions};
+use visfield::field::lookup::LookupOptions;
+use visfield::field::scene::{FieldInstance, FieldScene};
+use visfield::field::{FieldParams, Precision, Selection};
+use visfield::geometry::procedural::{over_corner, supershape, Supershape};
+use visfield::geometry::{models, Mesh};
+use visfield::render::ao::{ao_at_points, AoOptions};
+use visfield::render::receivers::Receivers;
+use visfield::sampling::rays::RaySet;
+use visfield::sampling::{Frame, HemisphereLayout, LayoutKind, SphereKind, SpherePoints};
+use visfield::trace::Tracer;
+
+fn casters() -> Vec<(String, Mesh)> {
+    let mut v = Vec::new();
+    for name in ["stanford-bunny_39k", "dragon"] {
+        match models::load_model(name) {
+            Ok(m) => v.push((name.to_string(), m)),
+            Err(e) => eprintln!("skipping {name}: {e}"),
+        }
+    }
+    let ss = supershape(&Supershape::default(), 261_120).expect("supershape");
+    v.push((format!("supershape_{}", ss.triangles.len()), ss));
+    v
+}
+
+fn ao_lookup_vs_raycast(c: &mut Criterion) {
+    let rays = RaySet::new(16, 1);
+    for (name, mesh) in casters() {
+        let scene = over_corner(mesh, Quat::IDENTITY);
+        let recv = Receivers::of(&scene);
+        let caster = &scene.instances[1];
+        let tracer = Tracer::new(&scene.caster_triangles());
+        let opts = AoOptions::for_scene_radius(0.9);
+        let mut group = c.benchmark_group(format!("ao_256_rays/{name}"));
+        group.sample_size(10);
+        group.warm_up_time(Duration::from_millis(500));
+        group.measurement_time(Duration::from_secs(3));
+        group.throughput(Throughput::Elements(
+            (recv.points.len() * rays.len()) as u64,
+        ));
+        group.bench_function("raycast_anyhit", |b| {
+            b.iter(|| ao_at_points(&tracer, &recv.points, &recv.normals, &rays, &opts))
+        });
+        for precision in [
+            Precision::U8,
+            Precision::U16,
+            Precision::F32,
+            Precision::Bit1,
+        ] {
+            let params = FieldParams {
+                sphere: SphereKind::Slater,
+                count: 4226,
+                layout: LayoutKind::Concentric,
+                res: 32,
+                precision,
+            };
+            let (field, _) = bake(&caster.mesh, params, &BakeOptions::default()).expect("bake");
+            let field = Arc::new(field);
+            for selection in [Selection::Nearest, Selection::Interpolated] {
+                let fs = FieldScene {
+                    instances: vec![FieldInstance::new(field.clone(), caster.transform)],
+                    options: LookupOptions {
+                        selection,
+                        ..LookupOptions::default()
+                    },
+                };
+                let id = BenchmarkId::new(
+                    format!("field_{selection:?}").to_lowercase(),
+                    precision.name(),
+                );
+                group.bench_function(id, |b| {
+                    b.iter(|| ao_at_points(&fs, &recv.points, &recv.normals, &rays, &opts))
+                });
+            }
+        }
+        group.finish();
+    }
+}
+
+/// Bake throughput against the tracer's raw closest-hit throughput on exactly the bake's rays.
+fn bake_vs_closest_hit(c: &mut Criterion) {
+    let mesh = casters().remove(0).1;
+    let tris: Vec<_> = (0..mesh.triangles.len())
+        .map(|i| mesh.triangle(i))
+        .collect();
+    let tracer = Tracer::new(&tris);
+    let bounds = mesh.bounding_sphere();
+    let params = FieldParams {
+        sphere: SphereKind::Slater,
+        count: 290,
+        layout: LayoutKind::Concentric,
+        res: 64,
+        precision: Precision::U8,
+    };
+    let points = SpherePoints::new(params.sphere, params.count).expect("points");
+    let layout = HemisphereLayout::new(params.layout, params.res);
+    let rays: Vec<(glam::Vec3, glam::Vec3)> = (0..points.len())
+        .flat_map(|m| {
+            let frame = Frame::from_normal(-points.point(m));
+            let origin = bounds.center + bounds.radius * points.point(m);
+            (0..layout.texel_count() as u32)
+                .filter_map(|t| layout.to_direction(t))
+                .map(move |d| (origin, frame.to_world(d)))
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    let mut group = c.benchmark_group("bake_290x64");
+    group.sample_size(10);
+    group.throughput(Throughput::Elements(rays.len() as u64));
+    group.bench_function("raw_closest_hit", |b| {
+        use rayon::prelude::*;
+        b.iter(|| {
+            rays.par_chunks(layout.texel_count())
+                .map(|chunk| {
+                    chunk
+                        .iter()
+                        .filter(|(o, d)| {
+                            tracer
+                                .closest_hit(*o, *d, 0.0, 2.0 * bounds.radius)
+                                .is_some()
+                        })
+                        .count()
+                })
+                .sum::<usize>()
+        })
+    });
+    group.bench_function("bake", |b| {
+        b.iter(|| bake_with(&tracer, bounds, params, &BakeOptions::default()).expect("bake"))
+    });
+    group.finish();
+}
+
+criterion_group!(benches, ao_lookup_vs_raycast, bake_vs_closest_hit);
+criterion_main!(benches);

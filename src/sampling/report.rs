@@ -1,0 +1,367 @@
+//! `experiment sampling`: measures the sphere point sets and hemisphere layouts and writes
+//! `sphere_sets.csv`, `hemisphere_layouts.csv`, two supplementary tables, PNG plots and
+//! `run.json` (date, CPU, threads, git commit).
+//!
+//! Exactness columns compare against brute force on 10⁶ seeded directions (sphere sets) and on
+//! every used texel centre (layouts); they must be zero. Timings are single-threaded, the minimum
+//! over five passes of 2·10⁵ seeded queries (the machine is shared, the minimum is the least
+//! disturbed pass).
+
+use super::report_plots::{plot_layout_solid_angle, plot_sphere_points, PlotError};
+use super::{rays::seeded_sphere_direction, HemisphereLayout, LayoutKind, SamplingError};
+use super::{SphereKind, SpherePoints};
+use crate::io::write_atomic;
+use glam::Vec3;
+use std::hint::black_box;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Seed of the report's query directions.
+const SEED: u64 = 0x5a4d_9e37;
+/// Directions for the brute-force exactness check of each sphere set.
+const CHECK_DIRECTIONS: usize = 1_000_000;
+/// Queries per timing pass.
+const TIMING_QUERIES: usize = 200_000;
+const TIMING_PASSES: usize = 5;
+
+/// The sphere sets measured: the paper's Slater counts and Figure 5 lat-long set, lat-long and
+/// Fibonacci sets of comparable sizes.
+const SPHERE_SETS: [(SphereKind, usize); 13] = [
+    (SphereKind::Slater, 290),
+    (SphereKind::Slater, 1090),
+    (SphereKind::Slater, 4226),
+    (SphereKind::Slater, 16642),
+    (SphereKind::LatLong, 272),
+    (SphereKind::LatLong, 1122),
+    (SphereKind::LatLong, 4160),
+    (SphereKind::LatLong, 16512),
+    (SphereKind::Fibonacci, 290),
+    (SphereKind::Fibonacci, 1090),
+    (SphereKind::Fibonacci, 1122),
+    (SphereKind::Fibonacci, 4226),
+    (SphereKind::Fibonacci, 16642),
+];
+
+const LAYOUT_RESOLUTIONS: [u32; 4] = [32, 64, 128, 256];
+
+/// What can go wrong while writing the report.
+#[derive(Debug, thiserror::Error)]
+pub enum ReportError {
+    #[error("writing {path}: {source}")]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("building {path}: {source}")]
+    Csv { path: PathBuf, source: csv::Error },
+    #[error(transparent)]
+    Plot(#[from] PlotError),
+    #[error(transparent)]
+    Sampling(#[from] SamplingError),
+}
+
+#[derive(serde::Serialize)]
+struct SphereRow {
+    set: &'static str,
+    count: usize,
+    max_gap_deg: f64,
+    min_separation_deg: f64,
+    nearest_mismatches: usize,
+    nearest_ns: f64,
+}
+
+#[derive(serde::Serialize)]
+struct KeinertRow {
+    count: usize,
+    directions: usize,
+    keinert_mismatches: usize,
+    keinert_ns: f64,
+    exact_ns: f64,
+}
+
+#[derive(serde::Serialize)]
+struct LayoutRow {
+    layout: &'static str,
+    res: u32,
+    texels: usize,
+    unused_fraction: f64,
+    roundtrip_mismatches: usize,
+    to_texel_ns: f64,
+}
+
+#[derive(serde::Serialize)]
+struct MeasureRow {
+    layout: &'static str,
+    res: u32,
+    solid_angle_sum_sr: f64,
+    projected_sum_sr: f64,
+    used_solid_angle_sr: f64,
+    rim_solid_angle_sr: f64,
+    min_texel_sr: f64,
+    max_texel_sr: f64,
+    max_over_min: f64,
+}
+
+/// Runs the report into `out` (created if missing).
+pub fn run(out: &Path) -> Result<(), ReportError> {
+    // Timings depend on what else runs on the machine; record the load they were taken under.
+    let load_average = std::fs::read_to_string("/proc/loadavg")
+        .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
+        .unwrap_or_else(|_| "unknown".into());
+    let dirs: Vec<Vec3> = (0..CHECK_DIRECTIONS as u64)
+        .map(|i| seeded_sphere_direction(i, SEED))
+        .collect();
+    let timing = &dirs[..TIMING_QUERIES];
+
+    let mut sphere_rows = Vec::new();
+    let mut keinert_rows = Vec::new();
+    for (kind, count) in SPHERE_SETS {
+        let set = SpherePoints::new(kind, count)?;
+        let spacing = set.spacing()?;
+        let mismatches = set.nearest_mismatches(&dirs);
+        let nearest_ns = time_per_query(timing, |&d| set.nearest(d));
+        eprintln!(
+            "sampling: {} {count}: gap {:.3}°, {mismatches} mismatches, {nearest_ns:.1} ns",
+            kind.name(),
+            spacing.max_gap.to_degrees()
+        );
+        sphere_rows.push(SphereRow {
+            set: kind.name(),
+            count,
+            max_gap_deg: spacing.max_gap.to_degrees(),
+            min_separation_deg: spacing.min_separation.to_degrees(),
+            nearest_mismatches: mismatches,
+            nearest_ns,
+        });
+        if kind == SphereKind::Fibonacci {
+            keinert_rows.push(keinert_row(&set, &dirs, nearest_ns));
+        }
+    }
+    write_csv(&out.join("sphere_sets.csv"), &sphere_rows)?;
+    write_csv(&out.join("fibonacci_keinert_inverse.csv"), &keinert_rows)?;
+
+    let hemi: Vec<Vec3> = timing
+        .iter()
+        .map(|d| Vec3::new(d.x, d.y, d.z.abs()))
+        .collect();
+    let mut layout_rows = Vec::new();
+    let mut measure_rows = Vec::new();
+    for kind in LayoutKind::ALL {
+        for res in LAYOUT_RESOLUTIONS {
+            let layout = HemisphereLayout::try_new(kind, res)?;
+            let n = layout.texel_count() as u32;
+            let roundtrip_mismatches = (0..n)
+                .filter(|&t| {
+                    layout
+                        .to_direction(t)
+                        .is_some_and(|d| layout.to_texel(d) != t)
+                })
+                .count();
+            let to_texel_ns = time_per_query(&hemi, |&d| layout.to_texel(d) as usize);
+            layout_rows.push(LayoutRow {
+                layout: kind.name(),
+                res,
+                texels: layout.texel_count(),
+                unused_fraction: 1.0 - layout.used_count() as f64 / layout.texel_count() as f64,
+                roundtrip_mismatches,
+                to_texel_ns,
+            });
+            measure_rows.push(measure_row(&layout));
+        }
+    }
+    write_csv(&out.join("hemisphere_layouts.csv"), &layout_rows)?;
+    write_csv(&out.join("layout_measures.csv"), &measure_rows)?;
+
+    for (kind, count) in [
+        (SphereKind::Slater, 1090),
+        (SphereKind::LatLong, 1122),
+        (SphereKind::Fibonacci, 1090),
+    ] {
+        let set = SpherePoints::new(kind, count)?;
+        let path = out.join(format!("sphere_points_{}_{count}.png", kind.name()));
+        plot_sphere_points(&path, &set)?;
+    }
+    for kind in LayoutKind::ALL {
+        let layout = HemisphereLayout::try_new(kind, 32)?;
+        let path = out.join(format!("layout_solid_angle_{}_32.png", kind.name()));
+        plot_layout_solid_angle(&path, &layout)?;
+    }
+
+    let run = serde_json::json!({
+        "command": "experiment sampling",
+        "date_utc": utc_now_iso8601(),
+        "cpu": cpu_model(),
+        "threads": rayon::current_num_threads(),
+        "load_average_at_start": load_average,
+        "git_commit": git_commit(),
+        "check_directions": CHECK_DIRECTIONS,
+        "timing": format!(
+            "single thread, minimum over {TIMING_PASSES} passes of {TIMING_QUERIES} seeded queries"
+        ),
+        "seed": SEED,
+    });
+    let path = out.join("run.json");
+    let text = serde_json::to_string_pretty(&run).unwrap_or_default() + "\n";
+    write_atomic(&path, text.as_bytes()).map_err(|source| ReportError::Io { path, source })?;
+    eprintln!("sampling: report written to {}", out.display());
+    Ok(())
+}
+
+fn keinert_row(set: &SpherePoints, dirs: &[Vec3], exact_ns: f64) -> KeinertRow {
+    use rayon::prelude::*;
+    let keinert_mismatches = dirs
+        .par_iter()
+        .filter(|&&d| {
+            let (k, e) = (set.nearest_keinert(d).unwrap_or(0), set.nearest(d));
+            let dd = d.as_dvec3();
+            dd.dot(set.point(e).as_dvec3()) - dd.dot(set.point(k).as_dvec3()) > 1e-12
+        })
+        .count();
+    KeinertRow {
+        count: set.len(),
+        directions: dirs.len(),
+        keinert_mismatches,
+        keinert_ns: time_per_query(&dirs[..TIMING_QUERIES], |&d| {
+            set.nearest_keinert(d).unwrap_or(0)
+        }),
+        exact_ns,
+    }
+}
+
+fn measure_row(layout: &HemisphereLayout) -> MeasureRow {
+    let n = layout.texel_count() as u32;
+    let omega: Vec<f64> = (0..n).map(|t| layout.solid_angle(t)).collect();
+    let used: Vec<f64> = (0..n)
+        .filter(|&t| layout.is_used(t))
+        .map(|t| omega[t as usize])
+        .collect();
+    let min = used.iter().copied().fold(f64::INFINITY, f64::min);
+    let max = used.iter().copied().fold(0.0, f64::max);
+    MeasureRow {
+        layout: layout.kind.name(),
+        res: layout.res,
+        solid_angle_sum_sr: omega.iter().sum(),
+        projected_sum_sr: (0..n).map(|t| layout.projected_solid_angle(t)).sum(),
+        used_solid_angle_sr: used.iter().sum(),
+        rim_solid_angle_sr: layout.rim_solid_angle(),
+        min_texel_sr: min,
+        max_texel_sr: max,
+        max_over_min: max / min,
+    }
+}
+
+/// Nanoseconds per call of `f`, single-threaded: the fastest of several passes.
+fn time_per_query<T>(items: &[T], f: impl Fn(&T) -> usize) -> f64 {
+    let mut best = f64::INFINITY;
+    for _ in 0..TIMING_PASSES {
+        let start = Instant::now();
+        let mut acc = 0usize;
+        for x in items {
+            acc = acc.wrapping_add(f(black_box(x)));
+        }
+        black_box(acc);
+        best = best.min(start.elapsed().as_secs_f64() * 1e9 / items.len() as f64);
+    }
+    best
+}
+
+fn write_csv<R: serde::Serialize>(path: &Path, rows: &[R]) -> Result<(), ReportError> {
+    let csv_err = |source| ReportError::Csv {
+        path: path.to_path_buf(),
+        source,
+    };
+    let mut w = csv::Writer::from_writer(Vec::new());
+    for r in rows {
+        w.serialize(r).map_err(csv_err)?;
+    }
+    let bytes = w
+        .into_inner()
+        .map_err(|e| csv_err(csv::Error::from(e.into_error())))?;
+    write_atomic(path, &bytes).map_err(|source| ReportError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+fn cpu_model() -> String {
+    std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1))
+                .map(|m| m.trim().to_string())
+        })
+        .unwrap_or_else(|| "unknown".into())
+}
+
+fn git_commit() -> String {
+    std::process::Command::new("git")
+        .args(["rev-parse", "HEAD"])
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+        .unwrap_or_else(|| "unknown".into())
+}
+
+/// The current UTC time as `YYYY-MM-DDThh:mm:ssZ`.
+fn utc_now_iso8601() -> String {
+    let secs = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_secs())
+        .unwrap_or(0);
+    let (y, m, d) = civil_from_days((secs / 86_400) as i64);
+    let s = secs % 86_400;
+    format!(
+        "{y:04}-{m:02}-{d:02}T{:02}:{:02}:{:02}Z",
+        s / 3600,
+        s / 60 % 60,
+        s % 60
+    )
+}
+
+/// Proleptic Gregorian date of a day count since 1970-01-01 (H. Hinnant's `civil_from_days`).
+fn civil_from_days(z: i64) -> (i64, u32, u32) {
+    let z = z + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z.rem_euclid(146_097);
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = (doy - (153 * mp + 2) / 5 + 1) as u32;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 } as u32;
+    (yoe + era * 400 + (m <= 2) as i64, m, d)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn civil_dates() {
+        // 1970-01-01 is day 0; 2000-03-01 is day 11017; 2024-02-29 is day 19782.
+        assert_eq!(civil_from_days(0), (1970, 1, 1));
+        assert_eq!(civil_from_days(11_017), (2000, 3, 1));
+        assert_eq!(civil_from_days(19_782), (2024, 2, 29));
+    }
+
+    #[test]
+    fn csv_has_the_specified_header() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("s.csv");
+        let row = SphereRow {
+            set: "slater",
+            count: 290,
+            max_gap_deg: 1.0,
+            min_separation_deg: 0.5,
+            nearest_mismatches: 0,
+            nearest_ns: 20.0,
+        };
+        write_csv(&path, &[row]).unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert!(text.starts_with(
+            "set,count,max_gap_deg,min_separation_deg,nearest_mismatches,nearest_ns\n"
+        ));
+    }
+}

@@ -1,0 +1,224 @@
+//! PNG plots of the sampling report: sphere point sets in an equal-area projection and layout
+//! texel solid angles as heat maps. Rendered into memory with plotters, encoded with `image`
+//! and written atomically.
+
+use super::{HemisphereLayout, LayoutKind, SpherePoints};
+use crate::io::write_atomic;
+use plotters::prelude::*;
+use plotters::style::colors::colormaps::ViridisRGB;
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+/// A plot could not be drawn, encoded or written.
+#[derive(Debug, thiserror::Error)]
+#[error("plotting {path}: {msg}")]
+pub struct PlotError {
+    pub path: PathBuf,
+    pub msg: String,
+}
+
+/// Registers the bundled DejaVu Sans as plotters' "sans-serif" (no system fonts are used).
+fn ensure_font() -> Result<(), String> {
+    static FONT: OnceLock<Result<(), String>> = OnceLock::new();
+    FONT.get_or_init(|| {
+        plotters::style::register_font(
+            "sans-serif",
+            FontStyle::Normal,
+            include_bytes!("../../assets/fonts/DejaVuSans.ttf"),
+        )
+        .map_err(|_| "assets/fonts/DejaVuSans.ttf is not a valid font".to_string())
+    })
+    .clone()
+}
+
+/// Draws into a `w × h` RGB buffer with `draw`, then writes it to `path` as PNG.
+fn render(
+    path: &Path,
+    (w, h): (u32, u32),
+    draw: impl FnOnce(DrawingArea<BitMapBackend, plotters::coord::Shift>) -> Result<(), String>,
+) -> Result<(), PlotError> {
+    let err = |msg: String| PlotError {
+        path: path.to_path_buf(),
+        msg,
+    };
+    ensure_font().map_err(err)?;
+    let mut buf = vec![0u8; (w * h * 3) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| err(e.to_string()))?;
+        draw(root.clone()).map_err(err)?;
+        root.present().map_err(|e| err(e.to_string()))?;
+    }
+    let img = image::RgbImage::from_raw(w, h, buf).ok_or_else(|| err("bad buffer size".into()))?;
+    let mut bytes = Vec::new();
+    img.write_to(
+        &mut std::io::Cursor::new(&mut bytes),
+        image::ImageFormat::Png,
+    )
+    .map_err(|e| err(e.to_string()))?;
+    write_atomic(path, &bytes).map_err(|e| err(e.to_string()))
+}
+
+fn title_of(set: &SpherePoints) -> String {
+    let name = match set.kind {
+        super::SphereKind::Slater => "Slater hemisphere subdivision",
+        super::SphereKind::LatLong => "Lat-long grid",
+        super::SphereKind::Fibonacci => "Spherical Fibonacci",
+    };
+    format!(
+        "{name}, {} points (Lambert azimuthal equal-area)",
+        set.len()
+    )
+}
+
+/// Both hemispheres side by side in Lambert's azimuthal equal-area projection about each pole:
+/// (x, y) · √(2 / (1 + |z|)), so the hemisphere fills a disk of radius √2 and equal areas on the
+/// sphere stay equal in the plot. The southern view looks through the sphere from above
+/// (x and y keep their signs).
+pub fn plot_sphere_points(path: &Path, set: &SpherePoints) -> Result<(), PlotError> {
+    render(path, (1200, 660), |root| {
+        let root = root
+            .titled(&title_of(set), ("sans-serif", 26))
+            .map_err(|e| e.to_string())?;
+        let halves = root.split_evenly((1, 2));
+        for (area, north) in halves.iter().zip([true, false]) {
+            let caption = if north {
+                "northern hemisphere (z ≥ 0), seen from +z"
+            } else {
+                "southern hemisphere (z < 0), seen from +z"
+            };
+            let r = std::f64::consts::SQRT_2;
+            let mut chart = ChartBuilder::on(area)
+                .caption(caption, ("sans-serif", 18))
+                .margin(12)
+                .x_label_area_size(40)
+                .y_label_area_size(50)
+                .build_cartesian_2d(-1.5f64..1.5, -1.5f64..1.5)
+                .map_err(|e| e.to_string())?;
+            chart
+                .configure_mesh()
+                .x_desc("projected x")
+                .y_desc("projected y")
+                .label_style(("sans-serif", 14))
+                .axis_desc_style(("sans-serif", 16))
+                .light_line_style(WHITE)
+                .draw()
+                .map_err(|e| e.to_string())?;
+            let rim = (0..=360).map(|a| {
+                let t = (a as f64).to_radians();
+                (r * t.cos(), r * t.sin())
+            });
+            chart
+                .draw_series(LineSeries::new(rim, BLACK.stroke_width(1)))
+                .map_err(|e| e.to_string())?;
+            let pts = set
+                .points()
+                .iter()
+                .filter(|p| (p.z >= 0.0) == north)
+                .map(|p| {
+                    let k = (2.0 / (1.0 + p.z.abs() as f64)).sqrt();
+                    (p.x as f64 * k, p.y as f64 * k)
+                });
+            chart
+                .draw_series(pts.map(|c| Circle::new(c, 2, BLUE.filled())))
+                .map_err(|e| e.to_string())?;
+        }
+        Ok(())
+    })
+}
+
+fn layout_title(layout: &HemisphereLayout) -> String {
+    let name = match layout.kind {
+        LayoutKind::Polar => "Polar (uniform θ, φ)",
+        LayoutKind::Rejection => "Rejection + Malley",
+        LayoutKind::Concentric => "Concentric + Malley",
+    };
+    let unused = if layout.kind == LayoutKind::Rejection {
+        ", grey = unused"
+    } else {
+        ""
+    };
+    format!("{name} {0}×{0}: texel solid angle (sr){unused}", layout.res)
+}
+
+/// Heat map of each texel's solid angle (viridis, own colour bar; unused texels grey).
+pub fn plot_layout_solid_angle(path: &Path, layout: &HemisphereLayout) -> Result<(), PlotError> {
+    let res = layout.res;
+    let n = layout.texel_count() as u32;
+    let omega: Vec<f64> = (0..n).map(|t| layout.solid_angle(t)).collect();
+    let used = |t: u32| layout.is_used(t);
+    let lo = (0..n)
+        .filter(|&t| used(t))
+        .map(|t| omega[t as usize])
+        .fold(f64::INFINITY, f64::min);
+    let hi = (0..n)
+        .filter(|&t| used(t))
+        .map(|t| omega[t as usize])
+        .fold(0.0, f64::max);
+    let (col_desc, row_desc) = match layout.kind {
+        LayoutKind::Polar => ("column (azimuth φ)", "row (polar angle θ, 0 = zenith)"),
+        _ => ("column (u)", "row (v)"),
+    };
+    render(path, (900, 760), |root| {
+        let root = root
+            .titled(&layout_title(layout), ("sans-serif", 24))
+            .map_err(|e| e.to_string())?;
+        let (map, bar) = root.split_horizontally(760);
+        let mut chart = ChartBuilder::on(&map)
+            .margin(12)
+            .x_label_area_size(45)
+            .y_label_area_size(55)
+            .build_cartesian_2d(0f64..res as f64, 0f64..res as f64)
+            .map_err(|e| e.to_string())?;
+        chart
+            .configure_mesh()
+            .disable_mesh()
+            .x_desc(col_desc)
+            .y_desc(row_desc)
+            .x_label_formatter(&|v| format!("{v:.0}"))
+            .y_label_formatter(&|v| format!("{v:.0}"))
+            .label_style(("sans-serif", 14))
+            .axis_desc_style(("sans-serif", 16))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        let grey = RGBColor(200, 200, 200);
+        chart
+            .draw_series((0..n).map(|t| {
+                let (c, r) = layout.col_row(t);
+                let colour = if used(t) {
+                    ViridisRGB::get_color_normalized(omega[t as usize], lo, hi)
+                } else {
+                    grey
+                };
+                let (c, r) = (c as f64, r as f64);
+                Rectangle::new([(c, r), (c + 1.0, r + 1.0)], colour.filled())
+            }))
+            .map_err(|e| e.to_string())?;
+        let mut scale = ChartBuilder::on(&bar)
+            .margin_top(12)
+            .margin_bottom(57)
+            .margin_right(10)
+            .y_label_area_size(80)
+            .caption("sr", ("sans-serif", 16))
+            .build_cartesian_2d(0f64..1.0, lo..hi)
+            .map_err(|e| e.to_string())?;
+        scale
+            .configure_mesh()
+            .disable_mesh()
+            .disable_x_axis()
+            .y_label_formatter(&|v| format!("{v:.2e}"))
+            .label_style(("sans-serif", 13))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        let steps = 200;
+        scale
+            .draw_series((0..steps).map(|i| {
+                let a = lo + (hi - lo) * i as f64 / steps as f64;
+                let b = lo + (hi - lo) * (i + 1) as f64 / steps as f64;
+                let colour = ViridisRGB::get_color_normalized(0.5 * (a + b), lo, hi);
+                Rectangle::new([(0.0, a), (1.0, b)], colour.filled())
+            }))
+            .map_err(|e| e.to_string())?;
+        Ok(())
+    })
+}
