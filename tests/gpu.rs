@@ -225,18 +225,23 @@ fn nearest_map_texel_and_samples_agree_with_the_cpu() {
              mismatches {interp_miss}"
         );
         if tie_miss > 0 || map_miss * 10_000 > n as usize {
-            let path = dump(
-                "nearest",
-                "index,u,dir,cpu_map,gpu_map",
-                bad.into_iter(),
+            let path = dump("nearest", "index,u,dir,cpu_map,gpu_map", bad);
+            panic!(
+                "{label}: {map_miss} nearest mismatches ({tie_miss} not ties); see {}",
+                path.display()
             );
-            panic!("{label}: {map_miss} nearest mismatches ({tie_miss} not ties); see {}", path.display());
         }
         // Texels: mismatches only at cell edges, at most 0.01%.
-        assert!(texel_miss * 10_000 <= n as usize, "{label}: {texel_miss} texel mismatches");
+        assert!(
+            texel_miss * 10_000 <= n as usize,
+            "{label}: {texel_miss} texel mismatches"
+        );
         // Same map and texel: the same stored value, bit for bit.
         assert_eq!(sample_miss, 0, "{label}");
-        assert!(interp_miss * 1000 <= n as usize, "{label}: {interp_miss} interpolated mismatches");
+        assert!(
+            interp_miss * 1000 <= n as usize,
+            "{label}: {interp_miss} interpolated mismatches"
+        );
     }
 }
 
@@ -277,7 +282,12 @@ fn field_ao_matches_the_cpu_for_every_precision_layout_and_selection() {
     let Some(ctx) = context() else { return };
     let rays = RaySet::new(8, 3);
     let mut failures = Vec::new();
-    for precision in [Precision::F32, Precision::U16, Precision::U8, Precision::Bit1] {
+    for precision in [
+        Precision::F32,
+        Precision::U16,
+        Precision::U8,
+        Precision::Bit1,
+    ] {
         let field = baked(params(290, 16, precision, LayoutKind::Concentric));
         let inst = placed(&field);
         for layout in [FieldLayout::StorageBuffers, FieldLayout::Texture3d] {
@@ -285,7 +295,7 @@ fn field_ao_matches_the_cpu_for_every_precision_layout_and_selection() {
                 layout,
                 ..Default::default()
             };
-            let mut kernel = FieldAoKernel::new(ctx, &[inst.clone()], &opts).unwrap();
+            let mut kernel = FieldAoKernel::new(ctx, std::slice::from_ref(&inst), &opts).unwrap();
             for selection in [Selection::Nearest, Selection::Interpolated] {
                 let lookup = LookupOptions {
                     selection,
@@ -313,7 +323,11 @@ fn field_ao_matches_the_cpu_for_every_precision_layout_and_selection() {
             }
         }
     }
-    assert!(failures.is_empty(), "parity failures:\n{}", failures.join("\n"));
+    assert!(
+        failures.is_empty(),
+        "parity failures:\n{}",
+        failures.join("\n")
+    );
 }
 
 #[test]
@@ -343,7 +357,11 @@ fn windows_tiles_and_mixed_fields_give_the_cpu_answer() {
     );
     let inst_c = FieldInstance::new(
         a.clone(),
-        Similarity::new(Quat::from_rotation_x(-0.7), Vec3::new(0.2, 0.25, 0.8), inst_a.transform.scale * 0.5),
+        Similarity::new(
+            Quat::from_rotation_x(-0.7),
+            Vec3::new(0.2, 0.25, 0.8),
+            inst_a.transform.scale * 0.5,
+        ),
     );
     let instances = vec![inst_a.clone(), inst_b, inst_c];
     let (p, n) = receivers(&inst_a);
@@ -432,7 +450,7 @@ fn unsupported_inputs_are_refused_not_approximated() {
         window_bytes: Some(1),
         ..Default::default()
     };
-    let kernel = FieldAoKernel::new(ctx, &[inst.clone()], &tiny).unwrap();
+    let kernel = FieldAoKernel::new(ctx, std::slice::from_ref(&inst), &tiny).unwrap();
     assert_eq!(kernel.storage_windows(), Some(1));
     let jittered = RaySet {
         k: 4,
@@ -449,16 +467,22 @@ fn unsupported_inputs_are_refused_not_approximated() {
         Err(GpuError::Invalid(_))
     ));
     // No points: an empty answer, not an error.
-    let (ao, _) = kernel.vertex_ao(&[], &[], &RaySet::new(4, 1), &opts).unwrap();
+    let (ao, _) = kernel
+        .vertex_ao(&[], &[], &RaySet::new(4, 1), &opts)
+        .unwrap();
     assert!(ao.is_empty());
 }
 
 /// The ray-cast scene: the corner receiver and the placed caster (about 2800 triangles).
 fn trace_scene(inst: &FieldInstance) -> Vec<[Vec3; 3]> {
     let corner = procedural::corner(17).expect("corner");
-    let mut tris: Vec<[Vec3; 3]> = (0..corner.triangles.len()).map(|i| corner.triangle(i)).collect();
+    let mut tris: Vec<[Vec3; 3]> = (0..corner.triangles.len())
+        .map(|i| corner.triangle(i))
+        .collect();
     let c = caster();
-    tris.extend((0..c.triangles.len()).map(|i| c.triangle(i).map(|v| inst.transform.to_world_point(v))));
+    tris.extend(
+        (0..c.triangles.len()).map(|i| c.triangle(i).map(|v| inst.transform.to_world_point(v))),
+    );
     tris
 }
 
@@ -469,7 +493,11 @@ fn seeded_rays(n: u64) -> Vec<RayQuery> {
         .map(|i| {
             let o = seeded_sphere_direction(i, 21) * 0.5 + Vec3::splat(0.5);
             let o = o + 0.25 * seeded_sphere_direction(i, 22);
-            let (tmin, tmax) = if i % 4 == 0 { (0.05, 0.4) } else { (0.0, f32::INFINITY) };
+            let (tmin, tmax) = if i % 4 == 0 {
+                (0.05, 0.4)
+            } else {
+                (0.0, f32::INFINITY)
+            };
             RayQuery {
                 origin: o,
                 dir: seeded_sphere_direction(i, 23),
@@ -494,7 +522,10 @@ fn gpu_ray_casting_agrees_with_the_cpu_tracer() {
     let cpu_closest = cpu.closest_hits(&rays);
     let hits = cpu_any.iter().filter(|&&h| h).count();
     // Both outcomes must be common, or agreement proves little.
-    assert!(hits > rays.len() / 5 && hits < rays.len() * 4 / 5, "{hits} hits");
+    assert!(
+        hits > rays.len() / 5 && hits < rays.len() * 4 / 5,
+        "{hits} hits"
+    );
     let any_miss = any.iter().zip(&cpu_any).filter(|(g, c)| g != c).count();
     let mut closest_miss = 0;
     let mut rows = Vec::new();
@@ -507,7 +538,12 @@ fn gpu_ray_casting_agrees_with_the_cpu_tracer() {
         };
         if !same {
             closest_miss += 1;
-            rows.push(format!("{i},{:?},{:?},{:?}", rays[i], g, c.map(|h| (h.t, h.triangle))));
+            rows.push(format!(
+                "{i},{:?},{:?},{:?}",
+                rays[i],
+                g,
+                c.map(|h| (h.t, h.triangle))
+            ));
         }
     }
     eprintln!(
@@ -522,7 +558,10 @@ fn gpu_ray_casting_agrees_with_the_cpu_tracer() {
     // ≥ 99.9% agreement.
     if any_miss * 1000 > rays.len() || closest_miss * 1000 > rays.len() {
         let path = dump("trace", "ray,query,gpu,cpu", rows);
-        panic!("GPU ray casting disagrees with the CPU tracer; see {}", path.display());
+        panic!(
+            "GPU ray casting disagrees with the CPU tracer; see {}",
+            path.display()
+        );
     }
     // Empty scenes miss everything.
     let empty = GpuTracer::new(ctx, &[]).unwrap();
@@ -570,11 +609,15 @@ fn gpu_ray_cast_ao_matches_the_cpu_and_serves_as_field_reference() {
     );
     if q.over_one_step > 0 || q.rms_255 > 0.5 {
         let path = dump_ao("raycast_ao", &gpu, &cpu);
-        panic!("GPU ray-cast AO disagrees with the CPU; see {}", path.display());
+        panic!(
+            "GPU ray-cast AO disagrees with the CPU; see {}",
+            path.display()
+        );
     }
     // GPU field lookup against GPU ray casting on the same device (the caster only: the
     // field knows nothing of the corner). A measurement, not a parity claim: printed.
-    let caster_tris: Vec<[Vec3; 3]> = tris[procedural::corner(17).unwrap().triangles.len()..].to_vec();
+    let caster_tris: Vec<[Vec3; 3]> =
+        tris[procedural::corner(17).unwrap().triangles.len()..].to_vec();
     let caster_tracer = GpuTracer::new(ctx, &caster_tris).unwrap();
     let (reference, _) = caster_tracer.ao(&p, &n, &rays, &opts).unwrap();
     let kernel = FieldAoKernel::new(ctx, &[inst], &FieldGpuOptions::default()).unwrap();

@@ -55,8 +55,7 @@ fn hardware_rank(t: wgpu::DeviceType) -> u32 {
 }
 
 fn is_cpu(info: &wgpu::AdapterInfo) -> bool {
-    info.device_type == wgpu::DeviceType::Cpu
-        || info.name.to_ascii_lowercase().contains("llvmpipe")
+    info.device_type == wgpu::DeviceType::Cpu || info.name.to_ascii_lowercase().contains("llvmpipe")
 }
 
 /// A headless wgpu device on the Vulkan backend, created with the adapter's own limits (so
@@ -350,9 +349,18 @@ mod tests {
     fn adapter_preferences_parse() {
         assert_eq!(AdapterPreference::parse(""), AdapterPreference::Auto);
         assert_eq!(AdapterPreference::parse("Auto"), AdapterPreference::Auto);
-        assert_eq!(AdapterPreference::parse("lavapipe"), AdapterPreference::Lavapipe);
-        assert_eq!(AdapterPreference::parse(" LLVMpipe "), AdapterPreference::Lavapipe);
-        assert_eq!(AdapterPreference::parse("hardware"), AdapterPreference::Hardware);
+        assert_eq!(
+            AdapterPreference::parse("lavapipe"),
+            AdapterPreference::Lavapipe
+        );
+        assert_eq!(
+            AdapterPreference::parse(" LLVMpipe "),
+            AdapterPreference::Lavapipe
+        );
+        assert_eq!(
+            AdapterPreference::parse("hardware"),
+            AdapterPreference::Hardware
+        );
         assert_eq!(
             AdapterPreference::parse("NVIDIA H100"),
             AdapterPreference::Name("NVIDIA H100".into())

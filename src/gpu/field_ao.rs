@@ -121,14 +121,16 @@ impl<'a> FieldAoKernel<'a> {
             FieldLayout::StorageBuffers => {
                 let (words, bases) = field_words(&packed.fields);
                 packed.set_data_base(&bases);
-                let max_binding =
-                    (limits.max_storage_buffer_binding_size as u64).min(limits.max_buffer_size);
+                let max_binding = limits
+                    .max_storage_buffer_binding_size
+                    .min(limits.max_buffer_size);
                 let window_bytes = opts.window_bytes.unwrap_or(max_binding).min(max_binding);
                 let window_words = ((window_bytes / 4) / 64 * 64).max(64) as usize;
                 let windows_needed = words.len().div_ceil(window_words).max(1);
                 let max_windows = limits
                     .max_storage_buffers_per_shader_stage
-                    .saturating_sub(STORAGE_BUFFERS_FIXED) as usize;
+                    .saturating_sub(STORAGE_BUFFERS_FIXED)
+                    as usize;
                 if windows_needed > max_windows {
                     return Err(GpuError::TooLarge {
                         what: format!("fields in {windows_needed} storage windows"),
@@ -255,7 +257,12 @@ impl<'a> FieldAoKernel<'a> {
         let recv = receivers(points, normals, rays)?;
         let tmax = opts.max_distance.unwrap_or(f32::MAX).min(f32::MAX);
         let params = AoParamsGpu {
-            counts: [points.len() as u32, base.len() as u32, self.instance_count, 0],
+            counts: [
+                points.len() as u32,
+                base.len() as u32,
+                self.instance_count,
+                0,
+            ],
             mode: [selection_code(self.lookup.selection), 0, 0, 0],
             ray: [opts.offset, tmax, self.lookup.intra_bias, 0.0],
         };

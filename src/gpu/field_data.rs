@@ -230,7 +230,15 @@ mod tests {
     use crate::sampling::rays::uniform;
 
     /// Host twin of `load_distance` in shaders/field_storage.wgsl.
-    fn decode(words: &[u32], base: u32, precision: u32, res: u32, mean: &[f32], m: u32, t: u32) -> f32 {
+    fn decode(
+        words: &[u32],
+        base: u32,
+        precision: u32,
+        res: u32,
+        mean: &[f32],
+        m: u32,
+        t: u32,
+    ) -> f32 {
         let texels = res * res;
         match precision {
             0 => f32::from_bits(words[(base + m * texels + t) as usize]),
@@ -312,7 +320,12 @@ mod tests {
                 for t in 0..f.params.texels() {
                     let got = decode(&words, base, code, f.params.res, &mean, m as u32, t as u32);
                     let want = f.storage.get(m, t);
-                    assert_eq!(got.to_bits(), want.to_bits(), "{:?} map {m} texel {t}", f.params.precision);
+                    assert_eq!(
+                        got.to_bits(),
+                        want.to_bits(),
+                        "{:?} map {m} texel {t}",
+                        f.params.precision
+                    );
                 }
             }
         }

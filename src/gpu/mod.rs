@@ -36,7 +36,10 @@ pub enum GpuError {
     #[error("no Vulkan adapter (install mesa-vulkan-drivers for lavapipe)")]
     NoAdapter,
     #[error("no Vulkan adapter matches {requested}; available: {available}")]
-    AdapterNotFound { requested: String, available: String },
+    AdapterNotFound {
+        requested: String,
+        available: String,
+    },
     #[error("device: {0}")]
     Device(String),
     #[error("shader {shader}: {message}")]

@@ -4,9 +4,8 @@
 //! directions the CPU path traces.
 
 use super::GpuError;
-use crate::sampling::rays::{uniform, RaySet};
-use crate::sampling::warp::square_to_cosine_hemisphere;
-use glam::{Vec2, Vec3};
+use crate::sampling::rays::RaySet;
+use glam::Vec3;
 
 /// Twin of WGSL `Receiver`: position with the cos of the point's rotation, normal with the sin.
 #[repr(C)]
@@ -17,31 +16,24 @@ pub struct ReceiverGpu {
 }
 const _: () = assert!(std::mem::size_of::<ReceiverGpu>() == 32);
 
-/// The unrotated cell-centre directions of `rays`, cell j·k + i, as [`RaySet::fill`] makes
-/// them. Jittered sets differ per point and are refused.
+/// The unrotated cell-centre directions of `rays` ([`RaySet::base_directions`]), padded to
+/// vec4. Jittered sets differ per point and are refused.
 pub(crate) fn base_directions(rays: &RaySet) -> Result<Vec<[f32; 4]>, GpuError> {
     if rays.jitter {
         return Err(GpuError::Unsupported(
             "jittered ray sets (the GPU kernels rotate one shared set of cell centres)".into(),
         ));
     }
-    let k = rays.k;
-    let inv = 1.0 / k as f32;
-    let mut v = Vec::with_capacity(rays.len());
-    for j in 0..k {
-        for i in 0..k {
-            let u = Vec2::new((i as f32 + 0.5) * inv, (j as f32 + 0.5) * inv);
-            let d = square_to_cosine_hemisphere(u);
-            v.push([d.x, d.y, d.z, 0.0]);
-        }
-    }
-    Ok(v)
+    Ok(rays
+        .base_directions()
+        .into_iter()
+        .map(|d| d.extend(0.0).to_array())
+        .collect())
 }
 
-/// (cos, sin) of point `point`'s rotation, as in [`RaySet::fill`].
+/// (cos, sin) of point `point`'s rotation ([`RaySet::rotation`]).
 pub(crate) fn rotation(rays: &RaySet, point: u32) -> (f32, f32) {
-    let angle = std::f32::consts::TAU * uniform(point, u32::MAX, 0, rays.seed);
-    let (s, c) = angle.sin_cos();
+    let (s, c) = rays.rotation(point);
     (c, s)
 }
 

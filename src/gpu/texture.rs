@@ -138,14 +138,13 @@ impl FieldTexture {
         let max_depth = max_depth.unwrap_or(max_dim).clamp(1, max_dim);
         let shapes: Vec<(u32, u32)> = fields.iter().map(|f| tile_shape(f)).collect();
         let counts: Vec<u32> = fields.iter().map(|f| f.params.count as u32).collect();
-        let plan = plan_tiles(&shapes, &counts, max_dim, max_depth).ok_or_else(|| {
-            GpuError::TooLarge {
+        let plan =
+            plan_tiles(&shapes, &counts, max_dim, max_depth).ok_or_else(|| GpuError::TooLarge {
                 what: "field maps in one 3D texture".into(),
                 need: fields.iter().map(|f| f.bytes()).sum(),
                 limit: max_dim as u64 * max_dim as u64 * max_depth as u64 * bpp,
                 limit_name: "max_texture_dimension_3d",
-            }
-        })?;
+            })?;
         let TexturePlan {
             width,
             height,
@@ -236,7 +235,8 @@ impl FieldTexture {
     }
 
     pub fn view(&self) -> wgpu::TextureView {
-        self.texture.create_view(&wgpu::TextureViewDescriptor::default())
+        self.texture
+            .create_view(&wgpu::TextureViewDescriptor::default())
     }
 
     /// The texture binding and `load_element(coords) -> u32` (raw bits of one element).

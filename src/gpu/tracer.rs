@@ -122,7 +122,8 @@ impl<'a> GpuTracer<'a> {
     /// Whether each ray hits any triangle with `tmin <= t <= tmax`.
     pub fn any_hits(&self, rays: &[RayQuery]) -> Result<(Vec<bool>, GpuTiming), GpuError> {
         let start = Instant::now();
-        let (words, kernel, upload) = self.dispatch(&self.any, &ray_records(rays), 1, 0, None, [0.0; 4])?;
+        let (words, kernel, upload) =
+            self.dispatch(&self.any, &ray_records(rays), 1, 0, None, [0.0; 4])?;
         let hits = words.into_iter().map(|w| w != 0).collect();
         Ok((hits, timing(kernel, upload, start)))
     }
@@ -158,10 +159,7 @@ impl<'a> GpuTracer<'a> {
         let start = Instant::now();
         let base = base_directions(rays)?;
         let recv = receivers(points, normals, rays)?;
-        let records: Vec<RayGpu> = recv
-            .iter()
-            .map(|r| RayGpu { o: r.p, d: r.n })
-            .collect();
+        let records: Vec<RayGpu> = recv.iter().map(|r| RayGpu { o: r.p, d: r.n }).collect();
         let tmax = opts.max_distance.unwrap_or(f32::MAX).min(f32::MAX);
         let (words, kernel, upload) = self.dispatch(
             &self.ao,
