@@ -147,6 +147,22 @@ impl GpuContext {
         )
     }
 
+    /// The adapter name with anything but letters, digits, `-` and `_` replaced by `_`, for
+    /// benchmark and file names.
+    pub fn info_short(&self) -> String {
+        self.info
+            .name
+            .chars()
+            .map(|c| {
+                if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                    c
+                } else {
+                    '_'
+                }
+            })
+            .collect()
+    }
+
     pub fn adapter_info(&self) -> &wgpu::AdapterInfo {
         &self.info
     }
