@@ -43,6 +43,15 @@ impl AdapterPreference {
     }
 }
 
+impl std::str::FromStr for AdapterPreference {
+    type Err = std::convert::Infallible;
+
+    /// [`AdapterPreference::parse`], for command-line flags.
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Ok(AdapterPreference::parse(s))
+    }
+}
+
 /// Rank of a device type for [`AdapterPreference::Auto`] (lower is preferred).
 fn hardware_rank(t: wgpu::DeviceType) -> u32 {
     match t {

@@ -1,5 +1,19 @@
 //! Vertex AO by field lookup on the GPU (Gaitatzes et al., WSCG 2008 Algorithm 2 and the WSCG
 //! 2010 intra-object test), with the CPU path's ray directions and map selection.
+//!
+//! One thread per receiver point loops over the point's rays and over the instances
+//! (shaders/field_ao.wgsl); the lookup is a line-by-line f32 port of `field::lookup` and
+//! `field::scene`: the Slater / lat-long nearest point (4 rings × 2 azimuths), the Duff frame,
+//! the three layouts' `to_texel`, the interpolated selection's triangle walk and bilinear
+//! footprint. On lavapipe it reproduces the CPU AO bit for bit in the parity tests.
+//!
+//! Deviations from the CPU path: the world-space ray–sphere test and the entry point are
+//! computed in f32 (the host uses f64), so near-tangent rays and near-ties between maps may
+//! resolve differently; the interpolated selection's walk uses an f32 edge tolerance and, when
+//! it does not settle within the host's step cap, reads the nearest map alone (the host scans
+//! every triangle). Fibonacci point sets (no GPU nearest query) and jittered ray sets (no shared
+//! directions) are refused with [`GpuError::Unsupported`]. Instances are tested in index order
+//! (the host sorts them by entry distance); for the boolean AO query the order does not matter.
 
 use super::context::GpuContext;
 use super::field_data::{field_words, PackedFields};
@@ -231,7 +245,7 @@ impl<'a> FieldAoKernel<'a> {
     }
 
     /// AO at every point (point `i` uses the directions of point index `i` of `rays`), as
-    /// [`crate::render::ao::ao_at_points`] computes it over a [`crate::field::FieldScene`] of
+    /// [`crate::render::ao::ao_at_points`] computes it over a [`crate::field::scene::FieldScene`] of
     /// the same instances and lookup options.
     pub fn vertex_ao(
         &self,
