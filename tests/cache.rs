@@ -68,7 +68,8 @@ fn damaged_cache_files_are_detected_and_rebaked() {
         panic!("first call must bake")
     };
     let good = std::fs::read(&path).unwrap();
-    let damages: Vec<(&str, Box<dyn Fn(&mut Vec<u8>)>)> = vec![
+    type Damage = Box<dyn Fn(&mut Vec<u8>)>;
+    let damages: Vec<(&str, Damage)> = vec![
         ("truncated payload", Box::new(|b| b.truncate(b.len() - 10))),
         ("truncated header", Box::new(|b| b.truncate(20))),
         (
