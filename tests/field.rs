@@ -326,3 +326,48 @@ fn oversized_field_is_refused_before_allocation() {
     assert!(msg.contains("4.06 GiB") && msg.contains("16642"), "{msg}");
     assert!(t.elapsed().as_secs_f64() < 1.0);
 }
+
+/// Normal fields (2010 §4.2) on a box: where field and ray cast agree on a hit, the field's
+/// normal is the face normal the ray really hits (up to octahedral quantisation) for all but the
+/// rays near an edge, and the approximate hit point lies on the box to within a map cell.
+#[test]
+fn normal_field_returns_the_hit_face_normal() {
+    use visfield::field::bake::bake_with_normals;
+    use visfield::field::normals::hit_with_normal;
+    let mesh = box_mesh(Vec3::new(0.6, 0.35, 0.45));
+    let tracer = tracer_of(&mesh);
+    let bounds = mesh.bounding_sphere();
+    let (field, normals, _) = bake_with_normals(
+        &tracer,
+        bounds,
+        params(4226, 64, Precision::U16),
+        16,
+        &BakeOptions::default(),
+    )
+    .unwrap();
+    let (c, r) = (bounds.center, bounds.radius);
+    let (mut both, mut same_normal, mut worst_point) = (0, 0, 0.0f32);
+    for i in 0..20_000u32 {
+        let origin = c + r * (1.5 + uniform(i, 1, 0, 8)) * unit(i, 31);
+        let aim = c + 0.5 * r * unit(i, 32);
+        let dir = (aim - origin).normalize();
+        let (Some(exact), Some((_, p, n))) = (
+            tracer.closest_hit(origin, dir, 0.0, f32::INFINITY),
+            hit_with_normal(&field, &normals, origin, dir, 0.0, f32::INFINITY),
+        ) else {
+            continue;
+        };
+        both += 1;
+        if n.dot(exact.normal) > 0.999 {
+            same_normal += 1;
+        }
+        // Distance of the approximate point from the box surface.
+        let q = (p.abs() - Vec3::new(0.6, 0.35, 0.45)).abs().min_element();
+        worst_point = worst_point.max(q);
+    }
+    assert!(both > 10_000, "only {both} rays hit");
+    let share = same_normal as f64 / both as f64;
+    assert!(share > 0.95, "normal agreement {share:.4}");
+    // A map cell at 4226 maps is about 0.055 rad: the point can be off by about R·cell.
+    assert!(worst_point < 0.1 * r, "worst point offset {worst_point}");
+}

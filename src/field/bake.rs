@@ -4,6 +4,7 @@
 //! direction in the map's inward frame is traced from p; the closest hit distance over 2R is
 //! stored, a miss (no hit within 2R) stores 1. Unused texels (rejection layout) store 1.
 
+use super::normals::{pack_normal, NormalField};
 use super::{frames_for, FieldError, FieldParams, Storage, VisibilityField};
 use crate::geometry::{Mesh, Sphere};
 use crate::sampling::{HemisphereLayout, SpherePoints};
@@ -72,6 +73,42 @@ pub fn bake_with(
     params: FieldParams,
     opts: &BakeOptions,
 ) -> Result<(VisibilityField, BakeStats), FieldError> {
+    bake_maps(tracer, bounds, params, opts, None)
+}
+
+/// Bakes a distance field and its normal field (2010 §4.2) in one pass over the same rays: per
+/// texel, the hit's unit geometric normal packed octahedrally in 2 × `normal_bits` bits
+/// (8 or 16); misses store the inward direction's reverse (unused by lookups).
+pub fn bake_with_normals(
+    tracer: &Tracer,
+    bounds: Sphere,
+    params: FieldParams,
+    normal_bits: u32,
+    opts: &BakeOptions,
+) -> Result<(VisibilityField, NormalField, BakeStats), FieldError> {
+    if !(normal_bits == 8 || normal_bits == 16) {
+        return Err(FieldError::Invalid(format!(
+            "normal fields pack 8 or 16 bits per component, not {normal_bits}"
+        )));
+    }
+    let normal_bytes = (params.count * params.texels()) as u64 * 4;
+    params.check_memory(opts.memory_limit.saturating_sub(normal_bytes))?;
+    let mut normals = NormalField {
+        texels: params.texels(),
+        bits: normal_bits,
+        data: vec![[0, 0]; params.count * params.texels()],
+    };
+    let (field, stats) = bake_maps(tracer, bounds, params, opts, Some(&mut normals))?;
+    Ok((field, normals, stats))
+}
+
+fn bake_maps(
+    tracer: &Tracer,
+    bounds: Sphere,
+    params: FieldParams,
+    opts: &BakeOptions,
+    normals: Option<&mut NormalField>,
+) -> Result<(VisibilityField, BakeStats), FieldError> {
     params.check_memory(opts.memory_limit)?;
     if !(bounds.radius > 0.0 && bounds.radius.is_finite() && bounds.center.is_finite()) {
         return Err(FieldError::Invalid(format!(
@@ -87,23 +124,36 @@ pub fn bake_with(
         .filter_map(|t| layout.to_direction(t as u32).map(|d| (t, d)))
         .collect();
     let diameter = 2.0 * bounds.radius;
-    let mut storage = Storage::new(params.precision, params.count, params.texels());
+    let texels = params.texels();
+    let mut storage = Storage::new(params.precision, params.count, texels);
+    let normal_bits = normals.as_ref().map_or(0, |n| n.bits);
+    let mut normal_rows: Vec<Option<&mut [[u16; 2]]>> = match normals {
+        Some(n) => n.data.chunks_mut(texels).map(Some).collect(),
+        None => (0..params.count).map(|_| None).collect(),
+    };
     let start = Instant::now();
     storage
         .map_slots()
         .into_par_iter()
+        .zip(normal_rows.par_iter_mut())
         .enumerate()
         .for_each_init(
-            || vec![1.0f32; params.texels()],
-            |row, (m, mut slot)| {
+            || vec![1.0f32; texels],
+            |row, (m, (mut slot, normal_row))| {
                 let origin = bounds.center + bounds.radius * points.point(m);
                 let frame = frames[m];
                 for &(t, local) in &texel_dirs {
                     let dir = frame.to_world(local);
-                    row[t] = match tracer.closest_hit(origin, dir, 0.0, diameter) {
-                        Some(hit) => (hit.t / diameter).clamp(0.0, 1.0),
+                    let hit = tracer.closest_hit(origin, dir, 0.0, diameter);
+                    row[t] = match hit {
+                        Some(h) => (h.t / diameter).clamp(0.0, 1.0),
                         None => 1.0,
                     };
+                    if let Some(nr) = normal_row.as_deref_mut() {
+                        let n = hit.map_or(-dir, |h| h.normal);
+                        let [a, b] = pack_normal(n, normal_bits);
+                        nr[t] = [a as u16, b as u16];
+                    }
                 }
                 slot.store(row);
                 if let Some(pb) = opts.progress {

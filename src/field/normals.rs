@@ -61,6 +61,40 @@ impl NormalField {
     }
 }
 
+/// The approximate hit of a ray through a field and its normal field: the 2010 paper's
+/// reflection query (§4.2), nearest selection. Returns (t, point, unit normal) in model space.
+pub fn hit_with_normal(
+    field: &super::VisibilityField,
+    normals: &NormalField,
+    origin: Vec3,
+    dir: Vec3,
+    tmin: f32,
+    tmax: f32,
+) -> Option<(f32, Vec3, Vec3)> {
+    use super::lookup::{entry_point_relative, ray_sphere};
+    let (c, r) = (field.bounds.center, field.bounds.radius);
+    let (t0, t1) = ray_sphere(origin, dir, c, r)?;
+    let diameter = 2.0 * r;
+    let (u, query_dir, outside) = if t0 >= 0.0 {
+        let q = entry_point_relative(origin, dir, c, r)?;
+        ((q / r as f64).as_vec3(), dir, true)
+    } else {
+        (((origin - c) + t1 * dir).normalize_or_zero(), -dir, false)
+    };
+    let m = field.points.nearest(u);
+    let texel = field.layout.to_texel(field.frames[m].to_local(query_dir)) as usize;
+    let d = field.storage.get(m, texel);
+    if d >= 1.0 {
+        return None;
+    }
+    let t = if outside {
+        t0 + diameter * d
+    } else {
+        t1 - diameter * d
+    };
+    (t >= tmin && t <= tmax).then(|| (t, origin + t * dir, normals.get(m, texel)))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
