@@ -418,3 +418,21 @@ fn paper_ratios_are_normalised_to_the_reference_cell() {
     // No 4226 row: ours left empty.
     assert_eq!((pv[2].cell.as_str(), pv[2].ours_bake_s), ("", None));
 }
+
+#[test]
+fn a_gpu_backend_is_refused_before_any_bake() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = tiny(ONE_FIELD, "").replace(
+        r#""reference": {"#,
+        r#""backends": ["cpu", "gpu"], "reference": {"#,
+    );
+    let ls = loaded(dir.path(), &text);
+    let mut o = options(dir.path().join("out"));
+    o.dry_run = true;
+    let plan = run(&ls, &o).unwrap().plan_text;
+    assert!(plan.contains("GPU device: yes"), "{plan}");
+    o.dry_run = false;
+    let e = run(&ls, &o).unwrap_err();
+    assert!(e.contains("backend \"gpu\""), "{e}");
+    assert!(!dir.path().join("out/table.csv").exists());
+}

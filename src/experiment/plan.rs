@@ -360,7 +360,7 @@ impl Plan {
     }
 
     /// The plan as text (`--dry-run`): one line per step with its rays and bytes, and totals.
-    /// `cached` tells whether a bake would be read from the cache.
+    /// `cached` tells how a bake would be served (from the cache or not), shown as a note.
     pub fn describe(
         &self,
         spec_name: &str,
@@ -391,11 +391,15 @@ impl Plan {
         }
         let _ = writeln!(
             out,
-            "  {:>4}  {:<62} {:>14} {:>12}",
+            "  {:>4}  {:<66} {:>12} {:>11}  note",
             "step", "what", "rays", "bytes"
         );
         let (mut total_rays, mut bake_rays) = (0u64, 0u64);
         for (i, step) in self.steps.iter().enumerate() {
+            let note = match step {
+                Step::Bake { mesh, params, .. } => cached(*mesh, params),
+                _ => "",
+            };
             let (what, rays, bytes) = match step {
                 Step::Primary { scene, pixels } => {
                     (format!("primary visibility {}", sc(*scene)), *pixels, None)
@@ -434,14 +438,13 @@ impl Plan {
                     bake_rays += rays;
                     (
                         format!(
-                            "bake {} {} {} × {}² {} {} [{}]",
+                            "bake {} {} {} × {}² {} {}",
                             scenes.meshes[*mesh].label,
                             params.sphere.name(),
                             params.count,
                             params.res,
                             params.layout.name(),
                             params.precision.name(),
-                            cached(*mesh, params)
                         ),
                         *rays,
                         Some(*bytes),
@@ -480,14 +483,8 @@ impl Plan {
             } else {
                 rays.to_string()
             };
-            let _ = writeln!(
-                out,
-                "  {:>4}  {:<62} {:>14} {:>12}",
-                i + 1,
-                what,
-                rays,
-                bytes
-            );
+            let line = format!("  {:>4}  {what:<66} {rays:>12} {bytes:>11}  {note}", i + 1);
+            let _ = writeln!(out, "{}", line.trim_end());
         }
         let _ = writeln!(
             out,

@@ -75,7 +75,9 @@ fn default_backends() -> Vec<Backend> {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Backend {
+    /// rayon over points, through the `Visibility` interface.
     Cpu,
+    /// wgpu (not in this build: refused before any work).
     Gpu,
 }
 
@@ -341,18 +343,25 @@ pub struct PaperNumbers {
 pub struct PaperCell {
     /// Row label in `paper_vs_ours.csv`.
     pub label: String,
+    /// Our scene (by name).
     #[serde(default)]
     pub scene: Option<String>,
+    /// Our positional sample set.
     #[serde(default)]
     pub sphere: Option<SphereKind>,
+    /// Positional samples (maps).
     #[serde(default)]
     pub positional_samples: Option<usize>,
+    /// Directional resolution (res × res).
     #[serde(default)]
     pub directional_res: Option<u32>,
+    /// Directional layout.
     #[serde(default)]
     pub layout: Option<LayoutKind>,
+    /// Stored precision.
     #[serde(default)]
     pub precision: Option<Precision>,
+    /// Map selection.
     #[serde(default)]
     pub selection: Option<Selection>,
     /// When set, the paper's RMS is between this cell and the same cell at this precision (the
@@ -386,20 +395,28 @@ pub struct PaperCell {
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Threshold {
+    /// Scene name.
     #[serde(default)]
     pub scene: Option<String>,
+    /// Positional sample set.
     #[serde(default)]
     pub sphere: Option<SphereKind>,
+    /// Positional samples (maps).
     #[serde(default)]
     pub positional_samples: Option<usize>,
+    /// Directional resolution (res × res).
     #[serde(default)]
     pub directional_res: Option<u32>,
+    /// Directional layout.
     #[serde(default)]
     pub layout: Option<LayoutKind>,
+    /// Stored precision.
     #[serde(default)]
     pub precision: Option<Precision>,
+    /// Map selection.
     #[serde(default)]
     pub selection: Option<Selection>,
+    /// Backend.
     #[serde(default)]
     pub backend: Option<Backend>,
     /// Largest allowed per-vertex RMS (0–255).
