@@ -1,10 +1,21 @@
 //! The `experiment` command line.
 
-use clap::{Parser, Subcommand};
+use super::discover;
+use super::fields::FieldSupply;
+use super::run::{LoadedSpec, RunOptions};
+use clap::{Args, Parser, Subcommand};
+use std::path::{Path, PathBuf};
 
 /// visfield experiments: reproduce and extend the presampled-visibility papers.
 #[derive(Parser, Debug)]
-#[command(name = "experiment", version, about, long_about = None)]
+#[command(
+    name = "experiment",
+    version,
+    about,
+    long_about = None,
+    after_help = "Run a spec by name: `experiment NAME [--quick] [--out DIR] [--dry-run]` runs \
+                  experiments/NAME.json (see `experiment list`; `experiment NAME --help`)."
+)]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Command,
@@ -24,22 +35,262 @@ pub enum Command {
         #[arg(long, default_value = "results/sampling")]
         out: std::path::PathBuf,
     },
+    /// List the experiment specs and the figure or table each reproduces.
+    List,
+    /// Run a spec file from any path.
+    Run {
+        /// The spec (JSON).
+        spec: PathBuf,
+        #[command(flatten)]
+        opts: RunArgs,
+    },
+    /// Run specs and fail, naming the cells, where an RMS passes its threshold.
+    Check {
+        /// Specs by name or path (default: every spec).
+        names: Vec<String>,
+        #[command(flatten)]
+        opts: RunArgs,
+    },
+    /// Regenerate every result (results/NAME, or results/quick/NAME with --quick).
+    All {
+        #[command(flatten)]
+        opts: RunArgs,
+    },
+    /// Redraw the plots of finished runs from their CSV files and images.
+    Plots {
+        /// Specs by name (default: every spec with results).
+        names: Vec<String>,
+        /// The quick runs' results (results/quick/NAME).
+        #[arg(long)]
+        quick: bool,
+        /// A run's output folder (instead of names).
+        #[arg(long)]
+        dir: Option<PathBuf>,
+    },
+    /// `experiment NAME ...`: runs experiments/NAME.json.
+    #[command(external_subcommand)]
+    Named(Vec<String>),
+}
+
+/// Options of a run.
+#[derive(Args, Debug, Clone)]
+pub struct RunArgs {
+    /// The quick profile (smaller axes; under a minute on 2 cores).
+    #[arg(long)]
+    pub quick: bool,
+    /// Output folder (default results/NAME, or results/quick/NAME with --quick). For `all` and
+    /// `check`: the parent folder, one subfolder per spec.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Print the plan (steps with their rays and bytes) and stop.
+    #[arg(long)]
+    pub dry_run: bool,
+    /// Field cache folder (default $VISFIELD_CACHE, else cache/ at the crate root).
+    #[arg(long)]
+    pub cache: Option<PathBuf>,
+    /// Do not read or write the field cache.
+    #[arg(long)]
+    pub no_cache: bool,
+    /// Cache only fields up to this many MiB.
+    #[arg(long, default_value_t = 256)]
+    pub cache_limit_mib: u64,
+    /// Refuse fields larger than this many MiB (default: half the machine's memory).
+    #[arg(long)]
+    pub max_memory_mib: Option<u64>,
+}
+
+/// Runs the spec experiments/NAME.json (see `experiment list`).
+#[derive(Parser, Debug)]
+struct NamedRun {
+    #[command(flatten)]
+    opts: RunArgs,
+}
+
+impl RunArgs {
+    /// Options for the spec called `name`; `parent` replaces `results` (for `all`/`check`).
+    fn options(&self, name: &str, parent: Option<&Path>) -> RunOptions {
+        let default_root = if self.quick {
+            PathBuf::from("results/quick")
+        } else {
+            PathBuf::from("results")
+        };
+        let out = match (parent, &self.out) {
+            (Some(p), _) => p.join(name),
+            (None, Some(o)) => o.clone(),
+            (None, None) => default_root.join(name),
+        };
+        let mut o = RunOptions::new(out);
+        o.quick = self.quick;
+        o.dry_run = self.dry_run;
+        o.supply = FieldSupply {
+            cache: if self.no_cache {
+                None
+            } else {
+                Some(
+                    self.cache
+                        .clone()
+                        .unwrap_or_else(super::fields::default_cache_dir),
+                )
+            },
+            cache_limit: self.cache_limit_mib << 20,
+            memory_limit: self
+                .max_memory_mib
+                .map_or_else(crate::field::default_memory_limit, |m| m << 20),
+        };
+        o
+    }
+}
+
+/// Runs one spec file; prints the plan on a dry run.
+fn run_one(
+    path: &Path,
+    args: &RunArgs,
+    parent: Option<&Path>,
+) -> Result<super::run::RunReport, String> {
+    let ls = LoadedSpec::load(path).map_err(|e| e.to_string())?;
+    let report = super::run::run(&ls, &args.options(&ls.name, parent))?;
+    if args.dry_run {
+        print!("{}", report.plan_text);
+    }
+    Ok(report)
+}
+
+fn list() -> i32 {
+    let paths = match discover::spec_paths() {
+        Ok(p) => p,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return 1;
+        }
+    };
+    let mut code = 0;
+    for p in paths {
+        match LoadedSpec::load(&p) {
+            Ok(ls) => println!("{:<12} {}", ls.name, ls.spec.reproduces),
+            Err(e) => {
+                println!("{:<12} INVALID: {e}", discover::name_of(&p));
+                code = 1;
+            }
+        }
+    }
+    code
+}
+
+fn check(names: &[String], args: &RunArgs) -> i32 {
+    let paths: Result<Vec<PathBuf>, String> = if names.is_empty() {
+        discover::spec_paths()
+    } else {
+        names.iter().map(|n| discover::find(n)).collect()
+    };
+    let paths = match paths {
+        Ok(p) => p,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return 1;
+        }
+    };
+    let parent = args.out.clone().unwrap_or_else(|| {
+        std::env::temp_dir().join(if args.quick {
+            "visfield-check-quick"
+        } else {
+            "visfield-check"
+        })
+    });
+    let mut failed = Vec::new();
+    for p in &paths {
+        let name = discover::name_of(p);
+        match run_one(p, args, Some(&parent)) {
+            Ok(report) => {
+                let f = super::check::check_rows(&report.thresholds, &report.rows);
+                println!(
+                    "{name}: {} cell(s), {} threshold(s), {} failure(s) ({:.1} s)",
+                    report.rows.len(),
+                    report.thresholds.len(),
+                    f.len(),
+                    report.seconds
+                );
+                failed.extend(f.into_iter().map(|f| format!("{name}: {f}")));
+            }
+            Err(e) => failed.push(format!("{name}: error: {e}")),
+        }
+    }
+    for f in &failed {
+        println!("FAIL {f}");
+    }
+    i32::from(!failed.is_empty())
+}
+
+fn plots(names: &[String], quick: bool, dir: Option<&Path>) -> Result<(), String> {
+    let root = PathBuf::from(if quick { "results/quick" } else { "results" });
+    let dirs: Vec<PathBuf> = match (dir, names.is_empty()) {
+        (Some(d), _) => vec![d.to_path_buf()],
+        (None, false) => names.iter().map(|n| root.join(n)).collect(),
+        (None, true) => discover::spec_paths()?
+            .iter()
+            .map(|p| root.join(discover::name_of(p)))
+            .filter(|d| d.join("table.csv").exists())
+            .collect(),
+    };
+    for d in dirs {
+        let run: serde_json::Value = std::fs::read(d.join("run.json"))
+            .ok()
+            .and_then(|b| serde_json::from_slice(&b).ok())
+            .unwrap_or_default();
+        let title = format!(
+            "{}{}",
+            run["spec"].as_str().unwrap_or(&discover::name_of(&d)),
+            if run["profile"] == "quick" {
+                " (quick)"
+            } else {
+                ""
+            }
+        );
+        super::figures::draw_all(&d, &title)?;
+        println!("redrew the plots in {}", d.display());
+    }
+    Ok(())
+}
+
+fn report(r: Result<(), String>) -> i32 {
+    match r {
+        Ok(()) => 0,
+        Err(e) => {
+            eprintln!("error: {e}");
+            1
+        }
+    }
 }
 
 pub fn main() {
     let cli = Cli::parse();
-    match cli.command {
-        Command::Quickstart { out } => {
-            if let Err(e) = super::quickstart::run(&out) {
-                eprintln!("error: {e}");
-                std::process::exit(1);
+    let code = match cli.command {
+        Command::Quickstart { out } => report(super::quickstart::run(&out)),
+        Command::List => list(),
+        Command::Run { spec, opts } => report(run_one(&spec, &opts, None).map(|_| ())),
+        Command::Check { names, opts } => check(&names, &opts),
+        Command::All { opts } => report((|| {
+            for p in discover::spec_paths()? {
+                let parent = opts.out.clone();
+                run_one(&p, &opts, parent.as_deref())?;
             }
+            Ok(())
+        })()),
+        Command::Plots { names, quick, dir } => report(plots(&names, quick, dir.as_deref())),
+        Command::Named(args) => {
+            let name = args.first().cloned().unwrap_or_default();
+            let parsed = NamedRun::try_parse_from(
+                std::iter::once(format!("experiment {name}")).chain(args.into_iter().skip(1)),
+            )
+            .unwrap_or_else(|e| e.exit());
+            report(discover::find(&name).and_then(|p| run_one(&p, &parsed.opts, None).map(|_| ())))
         }
-        Command::Sampling { out } => {
-            if let Err(e) = crate::sampling::report::run(&out) {
+        Command::Sampling { out } => match crate::sampling::report::run(&out) {
+            Ok(()) => 0,
+            Err(e) => {
                 eprintln!("sampling: {e}");
-                std::process::exit(1);
+                1
             }
-        }
-    }
+        },
+    };
+    std::process::exit(code);
 }

@@ -1,7 +1,25 @@
 //! The experiment harness: specs, planner, runner, metrics, outputs and the CLI.
+//!
+//! `experiments/NAME.json` ([`spec`]) → built scenes ([`scenes`]) → a [`plan`] of steps (each
+//! field baked once, the reference once per scene and ray set, fields released as soon as their
+//! cells are done) → the runner ([`run`]) with fields from the cache or the bake ([`fields`]) on
+//! a backend ([`backend`]) → metrics ([`metrics`]), tables ([`outputs`]), plots ([`figures`]) and
+//! thresholds ([`check`]).
 
+pub mod backend;
+pub mod check;
 pub mod cli;
+pub mod discover;
+pub mod fields;
+pub mod figures;
 pub mod meta;
+pub mod metrics;
+pub mod outputs;
+pub mod plan;
 pub mod plot;
 pub mod progress;
 pub mod quickstart;
+pub mod run;
+pub mod scenes;
+pub mod spec;
+pub mod validate;

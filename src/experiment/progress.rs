@@ -50,3 +50,33 @@ pub fn stage_best_of<T>(msg: &str, repeats: usize, mut f: impl FnMut() -> T) -> 
     eprintln!("  {msg:<40} {best:>9.3} s (best of {})", repeats.max(1));
     (value.expect("ran at least once"), best)
 }
+
+/// Times `f` as [`stage_best_of`] does when it is short: the first run decides; if it took less
+/// than `short_s` seconds, `f` runs `repeats − 1` more times and the fastest run is reported
+/// (noise on a shared machine matters most for short stages); a long first run is reported as
+/// is. Returns the last value, the time, and the number of runs.
+pub fn stage_adaptive<T, E>(
+    msg: &str,
+    short_s: f64,
+    repeats: usize,
+    mut f: impl FnMut() -> Result<T, E>,
+) -> Result<(T, f64, usize), E> {
+    let pb = ProgressBar::new_spinner();
+    pb.set_message(msg.to_string());
+    pb.enable_steady_tick(Duration::from_millis(120));
+    let t = Instant::now();
+    let mut value = f()?;
+    let mut best = t.elapsed().as_secs_f64();
+    let mut runs = 1;
+    if best < short_s {
+        for _ in 1..repeats.max(1) {
+            let t = Instant::now();
+            value = f()?;
+            best = best.min(t.elapsed().as_secs_f64());
+            runs += 1;
+        }
+    }
+    pb.finish_and_clear();
+    eprintln!("  {msg:<40} {best:>9.3} s (best of {runs})");
+    Ok((value, best, runs))
+}

@@ -1,8 +1,13 @@
-//! Experiment specs: `experiments/*.json`, one per figure or table. Plain structs, a doc comment
-//! per field, unknown keys rejected; an error names the file, the field path and what was
-//! expected.
+//! Experiment specs: `experiments/*.json`, one per figure or table of a paper. Plain structs, a
+//! doc comment per field, unknown keys rejected; every error names the file, the field path and
+//! what was expected ([`SpecError`]). Validation lives in [`super::validate`].
+//!
+//! A spec's name is its file stem (`experiments/figure6.json` is `figure6`). Its cells are
+//! scenes × field settings × backends: each entry of `fields` is a cross product of its axes, and
+//! the cells are the union of the entries (duplicates dropped), so that a figure comparing, say,
+//! 1122 lat-long maps with 1090 Slater maps lists two entries.
 
-use crate::field::{Precision, Selection};
+use crate::field::{FieldParams, Precision, Selection};
 use crate::render::camera::Camera;
 use crate::sampling::{LayoutKind, SphereKind};
 use glam::Vec3;
@@ -12,19 +17,19 @@ use std::path::{Path, PathBuf};
 /// A spec error, naming the file and the field.
 #[derive(Debug, thiserror::Error)]
 pub enum SpecError {
-    #[error("{file}: {source}")]
+    #[error("{}: {source}", file.display())]
     Io {
         file: PathBuf,
         #[source]
         source: std::io::Error,
     },
-    #[error("{file}: at `{path}`: {message}")]
+    #[error("{}: at `{path}`: {message}", file.display())]
     Parse {
         file: PathBuf,
         path: String,
         message: String,
     },
-    #[error("{file}: field `{field}`: {message}")]
+    #[error("{}: field `{field}`: {message}", file.display())]
     Invalid {
         file: PathBuf,
         field: String,
@@ -32,21 +37,19 @@ pub enum SpecError {
     },
 }
 
-/// One experiment: a scene, the field axes to sweep, what to render, how to measure.
+/// One experiment: scenes, the field axes to sweep, what to render, how to measure.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Spec {
-    /// Short name; the results go to `results/<name>/`.
-    pub name: String,
     /// The figure or table reproduced, with its paper (e.g. "Gaitatzes et al. 2008, Figure 6").
     pub reproduces: String,
-    /// One paragraph on what the experiment shows.
+    /// What the experiment shows, and where it deviates from the paper.
     #[serde(default)]
     pub description: String,
-    /// The scene: instances of models or procedural meshes.
-    pub scene: SceneSpec,
-    /// The field axes; every combination is one cell.
-    pub field: FieldAxes,
+    /// The scenes; every field setting is evaluated on each.
+    pub scenes: Vec<SceneSpec>,
+    /// The field axes: each entry is a cross product; the cells are the union of the entries.
+    pub fields: Vec<FieldAxes>,
     /// What is rendered and how.
     pub render: RenderSpec,
     /// Where the AO is computed: "cpu" and/or "gpu".
@@ -57,12 +60,11 @@ pub struct Spec {
     /// The paper's own numbers for the cells reproduced.
     #[serde(default)]
     pub paper: Option<PaperNumbers>,
-    /// RMS thresholds for `experiment check`.
+    /// RMS thresholds for `experiment check` (full profile).
     #[serde(default)]
     pub thresholds: Vec<Threshold>,
-    /// Smaller axes for CI and regression checks (`--quick`): replaces the fields it names.
-    #[serde(default)]
-    pub quick: Option<QuickProfile>,
+    /// The `--quick` profile (smaller axes, for CI and regression checks).
+    pub quick: QuickProfile,
 }
 
 fn default_backends() -> Vec<Backend> {
@@ -70,30 +72,44 @@ fn default_backends() -> Vec<Backend> {
 }
 
 /// A compute backend.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Backend {
+    /// rayon over points, through the `Visibility` interface.
     Cpu,
+    /// wgpu (not in this build: refused before any work).
     Gpu,
 }
 
-/// The scene.
-#[derive(Clone, Debug, Serialize, Deserialize)]
+impl Backend {
+    pub fn name(self) -> &'static str {
+        match self {
+            Backend::Cpu => "cpu",
+            Backend::Gpu => "gpu",
+        }
+    }
+}
+
+/// A named scene.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SceneSpec {
+    /// Short name used in tables and file names (letters, digits, `_`, `-`).
+    pub name: String,
+    /// The meshes placed in the scene.
     pub instances: Vec<InstanceSpec>,
 }
 
 /// A mesh placed in the scene.
-#[derive(Clone, Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct InstanceSpec {
     /// A real mesh by name (see `data/models.json`), or a procedural mesh.
     pub mesh: MeshSource,
-    /// Casts occlusion (gets a field).
+    /// Casts occlusion: it gets a field, and the reference traces its triangles.
     #[serde(default)]
     pub caster: bool,
-    /// Receives occlusion (AO evaluated at its vertices).
+    /// Receives occlusion: AO is evaluated at its vertices (or pixels).
     #[serde(default)]
     pub receiver: bool,
     /// Placement.
@@ -102,38 +118,57 @@ pub struct InstanceSpec {
 }
 
 /// Where a mesh comes from.
-#[derive(Clone, Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case", deny_unknown_fields)]
 pub enum MeshSource {
-    /// A model from the registry, by name.
+    /// A model from the registry, by name (`{"model": "stanford-bunny_39k"}`).
     Model(String),
-    /// The 2008 paper's corner receiver with n×n vertices per face.
-    Corner { n: u32 },
+    /// The 2008 paper's corner receiver: three unit squares, n × n vertices each.
+    Corner { n: usize },
     /// A closed cube of side `size` with a square through-hole of side `hole`.
     CubeWithHole { size: f32, hole: f32 },
-    /// A Gielis supershape with about this many triangles.
+    /// The default Gielis supershape with about this many triangles.
     Supershape { triangles: usize },
     /// A UV sphere.
     Sphere {
         radius: f32,
-        stacks: u32,
-        slices: u32,
+        stacks: usize,
+        slices: usize,
     },
-    /// A square plane of side `size` with n×n vertices.
-    Plane { size: f32, n: u32 },
+    /// A square plane of side `size`, n × n vertices, facing +y.
+    Plane { size: f32, n: usize },
 }
 
-/// A rigid placement: the mesh is first fitted (optional), then rotated, scaled, translated.
-#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+impl MeshSource {
+    /// A short label for tables ("stanford-bunny_39k", "corner33", ...).
+    pub fn label(&self) -> String {
+        match self {
+            MeshSource::Model(m) => m.clone(),
+            MeshSource::Corner { n } => format!("corner{n}"),
+            MeshSource::CubeWithHole { size, hole } => format!("cube_with_hole{size}x{hole}"),
+            MeshSource::Supershape { triangles } => format!("supershape{triangles}"),
+            MeshSource::Sphere { stacks, slices, .. } => format!("sphere{stacks}x{slices}"),
+            MeshSource::Plane { n, .. } => format!("plane{n}"),
+        }
+    }
+}
+
+/// A similarity placement. Without `fit`: world = translate + scale · R · p. With `fit`, the
+/// mesh's minimal bounding sphere (c, r) is first mapped onto the fit sphere (C, ρ):
+/// world = translate + scale · (C + ρ/r · R · (p − c)), i.e. the rotation turns the mesh about
+/// its own sphere centre (this is `geometry::procedural::over_corner` with C = (0.5, 0.45, 0.5),
+/// ρ = 0.35).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TransformSpec {
-    /// Fit the mesh's bounding sphere to this centre and radius before the rest.
+    /// Fit the mesh's minimal bounding sphere to this sphere.
     #[serde(default)]
     pub fit: Option<FitSpec>,
-    /// Rotation, Euler angles in degrees, applied in x, y, z order.
+    /// Rotation: angles in degrees about x, y and z, composed as R = R_y · R_x · R_z (glam's
+    /// `EulerRot::YXZ`: yaw, then pitch, then roll).
     #[serde(default)]
     pub rotate_deg: Option<Vec3>,
-    /// Uniform scale.
+    /// Uniform scale (positive).
     #[serde(default)]
     pub scale: Option<f32>,
     /// Translation.
@@ -141,32 +176,34 @@ pub struct TransformSpec {
     pub translate: Option<Vec3>,
 }
 
-/// Fit a mesh's minimal bounding sphere to a given sphere.
-#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+/// A target sphere for [`TransformSpec::fit`].
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FitSpec {
+    /// World centre.
     pub center: Vec3,
+    /// World radius (positive).
     pub radius: f32,
 }
 
-/// The field axes.
-#[derive(Clone, Debug, Serialize, Deserialize)]
+/// One cross product of field axes.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FieldAxes {
-    /// Positional sample sets.
+    /// Positional sample sets: "slater" (the paper), "lat_long", "fibonacci".
     #[serde(default = "default_spheres")]
     pub spheres: Vec<SphereKind>,
-    /// Positional sample counts (maps per field).
+    /// Positional sample counts (maps per field); each must be a valid count of every sphere.
     pub counts: Vec<usize>,
-    /// Directional layouts.
+    /// Directional layouts: "concentric" (the paper), "polar", "rejection".
     #[serde(default = "default_layouts")]
     pub layouts: Vec<LayoutKind>,
-    /// Directional resolutions (res × res texels).
+    /// Directional resolutions (res × res texels per map).
     pub resolutions: Vec<u32>,
-    /// Stored precisions.
+    /// Stored precisions: "u8" (the paper), "u16", "f32", "bit1".
     #[serde(default = "default_precisions")]
     pub precisions: Vec<Precision>,
-    /// Map selection at lookup.
+    /// Map selection at lookup: "nearest" (the paper) or "interpolated".
     #[serde(default = "default_selections")]
     pub selections: Vec<Selection>,
 }
@@ -184,102 +221,239 @@ fn default_selections() -> Vec<Selection> {
     vec![Selection::Nearest]
 }
 
-/// What is rendered.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct RenderSpec {
-    /// Receiver rays per point: k² with k = sqrt (must be a perfect square; the papers use 256).
-    pub rays_per_point: u32,
-    /// Per-vertex AO at the receivers (2008).
-    #[serde(default = "yes")]
-    pub vertex_ao: bool,
-    /// An image of the scene with AO (PNG/EXR), if given.
-    #[serde(default)]
-    pub image: Option<ImageSpec>,
-    /// AO radius: occluders further than this do not count (none: unlimited).
-    #[serde(default)]
-    pub max_distance: Option<f32>,
+impl FieldAxes {
+    /// Every (field parameters, selection) of the cross product, in axis order.
+    pub fn settings(&self) -> Vec<(FieldParams, Selection)> {
+        let mut out = Vec::new();
+        for &sphere in &self.spheres {
+            for &count in &self.counts {
+                for &layout in &self.layouts {
+                    for &res in &self.resolutions {
+                        for &precision in &self.precisions {
+                            for &selection in &self.selections {
+                                let params = FieldParams {
+                                    sphere,
+                                    count,
+                                    layout,
+                                    res,
+                                    precision,
+                                };
+                                out.push((params, selection));
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        out
+    }
 }
 
-fn yes() -> bool {
-    true
+/// What a render computes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RenderKind {
+    /// AO at the receivers' vertices, shown Gouraud-interpolated in the image (2008).
+    #[default]
+    VertexAo,
+    /// AO at the surface point of every receiver pixel (2010's image-space AO); needs `image`.
+    ImageAo,
+    /// Soft shadows (2010 §4.1): not in this build yet, rejected with a message.
+    Shadows,
+    /// Glossy reflections with normal fields (2010 §4.2): not in this build yet, rejected.
+    Reflections,
+}
+
+/// What is rendered.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RenderSpec {
+    /// "vertex_ao" (2008, default) or "image_ao" (2010).
+    #[serde(default)]
+    pub what: RenderKind,
+    /// Receiver rays per point, k² stratified cosine directions (a perfect square; the papers
+    /// use 256).
+    pub rays_per_point: u32,
+    /// The image (PNG and EXR, and the per-pixel RMS); none: per-vertex numbers only.
+    #[serde(default)]
+    pub image: Option<ImageSpec>,
+    /// AO radius in world units: farther hits do not occlude (none: unlimited, the papers).
+    #[serde(default)]
+    pub max_distance: Option<f32>,
+    /// Tolerance of the intra-object test (receivers that are casters), as a fraction of 2R
+    /// (none: the lookup's default, 0.01; see `field::lookup`).
+    #[serde(default)]
+    pub intra_bias: Option<f32>,
 }
 
 /// An image.
-#[derive(Clone, Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ImageSpec {
+    /// Width in pixels.
     pub width: u32,
+    /// Height in pixels.
     pub height: u32,
-    pub camera: Camera,
+    /// The camera; none: the corner scenes' camera (`quickstart::corner_camera`).
+    #[serde(default)]
+    pub camera: Option<Camera>,
 }
 
 /// The ray-cast reference.
-#[derive(Clone, Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ReferenceSpec {
-    /// Rays per point of the reference (the same rays as the field lookup when equal).
+    /// Rays per point of the reference (a perfect square). Equal to `render.rays_per_point`, the
+    /// reference and the field lookup trace exactly the same rays.
     pub rays_per_point: u32,
-    /// Seed of the per-point ray rotation.
+    /// Seed of the per-point ray rotation (shared by the reference and the lookup).
     #[serde(default = "default_seed")]
     pub seed: u64,
-    /// Ray-cast AO at these ray counts too, for the error-against-time plot.
-    #[serde(default)]
+    /// Ray-cast AO with these ray counts too (perfect squares), for the error-against-time
+    /// plot. Default 16, 36, 64, 144, 256: the k² stratified sets nearest the papers' 16, 32,
+    /// 64, 128, 256.
+    #[serde(default = "default_sweep")]
     pub raycast_sweep: Vec<u32>,
 }
 
 fn default_seed() -> u64 {
     1
 }
+fn default_sweep() -> Vec<u32> {
+    vec![16, 36, 64, 144, 256]
+}
 
 /// The paper's numbers for the cells reproduced.
-#[derive(Clone, Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PaperNumbers {
     /// Where they come from (e.g. "../shared/paper/2008_figure6.csv").
     pub source: String,
+    /// The label of the cell that ratios are normalised to (default: the first cell).
+    #[serde(default)]
+    pub reference_cell: Option<String>,
+    /// The cells.
     pub cells: Vec<PaperCell>,
 }
 
-/// One cell of a paper's table.
-#[derive(Clone, Debug, Serialize, Deserialize)]
+/// One cell of a paper's table, and which of our cells it corresponds to (an axis left out
+/// matches any value; the first matching row on the first backend is used).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PaperCell {
-    pub positional_samples: Option<usize>,
-    pub directional_res: Option<u32>,
+    /// Row label in `paper_vs_ours.csv`.
+    pub label: String,
+    /// Our scene (by name).
     #[serde(default)]
-    pub label: Option<String>,
+    pub scene: Option<String>,
+    /// Our positional sample set.
+    #[serde(default)]
+    pub sphere: Option<SphereKind>,
+    /// Positional samples (maps).
+    #[serde(default)]
+    pub positional_samples: Option<usize>,
+    /// Directional resolution (res × res).
+    #[serde(default)]
+    pub directional_res: Option<u32>,
+    /// Directional layout.
+    #[serde(default)]
+    pub layout: Option<LayoutKind>,
+    /// Stored precision.
+    #[serde(default)]
+    pub precision: Option<Precision>,
+    /// Map selection.
+    #[serde(default)]
+    pub selection: Option<Selection>,
+    /// When set, the paper's RMS is between this cell and the same cell at this precision (the
+    /// slides' 8 vs 16 bit), not against the reference.
+    #[serde(default)]
+    pub versus_precision: Option<Precision>,
+    /// Triangles of the paper's model.
+    #[serde(default)]
+    pub triangles: Option<u64>,
+    /// Rays the paper cast (receiver points × rays per point).
+    #[serde(default)]
+    pub rays_cast: Option<u64>,
+    /// The paper's ray-cast time, seconds.
+    #[serde(default)]
+    pub raycast_s: Option<f64>,
+    /// The paper's preprocessing (bake) time, seconds.
+    #[serde(default)]
     pub preprocess_s: Option<f64>,
+    /// The paper's AO time through the field, seconds.
+    #[serde(default)]
     pub ao_s: Option<f64>,
+    /// The paper's RMS (0–255, on images).
+    #[serde(default)]
     pub rms: Option<f64>,
+    /// Remarks (uncertain cells, machines).
+    #[serde(default)]
+    pub note: Option<String>,
 }
 
-/// An RMS threshold for `experiment check`, for the cells matching its axes (all when unset).
-#[derive(Clone, Debug, Serialize, Deserialize)]
+/// An RMS threshold for `experiment check`, over the cells matching its axes (all when unset).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Threshold {
+    /// Scene name.
+    #[serde(default)]
+    pub scene: Option<String>,
+    /// Positional sample set.
+    #[serde(default)]
+    pub sphere: Option<SphereKind>,
+    /// Positional samples (maps).
+    #[serde(default)]
     pub positional_samples: Option<usize>,
+    /// Directional resolution (res × res).
+    #[serde(default)]
     pub directional_res: Option<u32>,
+    /// Directional layout.
+    #[serde(default)]
+    pub layout: Option<LayoutKind>,
+    /// Stored precision.
+    #[serde(default)]
     pub precision: Option<Precision>,
-    /// Maximum per-vertex RMS (0–255 scale).
+    /// Map selection.
+    #[serde(default)]
+    pub selection: Option<Selection>,
+    /// Backend.
+    #[serde(default)]
+    pub backend: Option<Backend>,
+    /// Largest allowed per-vertex RMS (0–255).
+    #[serde(default)]
     pub rms_vertex_max: Option<f64>,
-    /// Maximum per-pixel RMS (0–255 scale).
+    /// Largest allowed per-pixel RMS (0–255).
+    #[serde(default)]
     pub rms_image_max: Option<f64>,
 }
 
-/// The `--quick` profile: each field given replaces the spec's.
-#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+/// The `--quick` profile: each field given replaces the spec's; `thresholds` always replace the
+/// full profile's (absent: none), since the full profile's cells are not the quick ones.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct QuickProfile {
-    pub field: Option<FieldAxes>,
+    /// Replaces `scenes`.
+    #[serde(default)]
+    pub scenes: Option<Vec<SceneSpec>>,
+    /// Replaces `fields`.
+    #[serde(default)]
+    pub fields: Option<Vec<FieldAxes>>,
+    /// Replaces both `render.rays_per_point` and `reference.rays_per_point`.
+    #[serde(default)]
     pub rays_per_point: Option<u32>,
+    /// Replaces `render.image`.
+    #[serde(default)]
     pub image: Option<ImageSpec>,
+    /// Replaces `reference.raycast_sweep`.
+    #[serde(default)]
     pub raycast_sweep: Option<Vec<u32>>,
-    pub scene: Option<SceneSpec>,
+    /// The quick profile's thresholds.
+    #[serde(default)]
+    pub thresholds: Vec<Threshold>,
 }
 
 impl Spec {
-    /// Parses and validates a spec file.
+    /// Reads, parses and validates a spec file.
     pub fn load(path: &Path) -> Result<Spec, SpecError> {
         let text = std::fs::read_to_string(path).map_err(|source| SpecError::Io {
             file: path.to_path_buf(),
@@ -288,7 +462,7 @@ impl Spec {
         Self::parse(&text, path)
     }
 
-    /// Parses and validates spec text; `file` is used in messages.
+    /// Parses and validates spec text; `file` names it in errors.
     pub fn parse(text: &str, file: &Path) -> Result<Spec, SpecError> {
         let de = &mut serde_json::Deserializer::from_str(text);
         let spec: Spec = serde_path_to_error::deserialize(de).map_err(|e| {
@@ -299,114 +473,46 @@ impl Spec {
                 message: e.into_inner().to_string(),
             }
         })?;
-        spec.validate(file)?;
+        super::validate::validate(&spec, file)?;
         Ok(spec)
     }
 
-    /// The spec with its quick profile applied.
+    /// The spec with its quick profile applied (its `quick` left as is).
     pub fn quick(&self) -> Spec {
         let mut s = self.clone();
-        if let Some(q) = &self.quick {
-            if let Some(f) = &q.field {
-                s.field = f.clone();
-            }
-            if let Some(r) = q.rays_per_point {
-                s.render.rays_per_point = r;
-                s.reference.rays_per_point = r;
-            }
-            if let Some(i) = &q.image {
-                s.render.image = Some(i.clone());
-            }
-            if let Some(sw) = &q.raycast_sweep {
-                s.reference.raycast_sweep = sw.clone();
-            }
-            if let Some(sc) = &q.scene {
-                s.scene = sc.clone();
-            }
+        let q = &self.quick;
+        if let Some(sc) = &q.scenes {
+            s.scenes = sc.clone();
         }
-        s.quick = None;
+        if let Some(f) = &q.fields {
+            s.fields = f.clone();
+        }
+        if let Some(r) = q.rays_per_point {
+            s.render.rays_per_point = r;
+            s.reference.rays_per_point = r;
+        }
+        if let Some(i) = &q.image {
+            s.render.image = Some(i.clone());
+        }
+        if let Some(sw) = &q.raycast_sweep {
+            s.reference.raycast_sweep = sw.clone();
+        }
+        s.thresholds = q.thresholds.clone();
         s
     }
 
-    fn validate(&self, file: &Path) -> Result<(), SpecError> {
-        let err = |field: &str, message: String| SpecError::Invalid {
-            file: file.to_path_buf(),
-            field: field.to_string(),
-            message,
-        };
-        let check = |s: &Spec, prefix: &str| -> Result<(), SpecError> {
-            let f = &s.field;
-            for (name, empty) in [
-                ("field.spheres", f.spheres.is_empty()),
-                ("field.counts", f.counts.is_empty()),
-                ("field.layouts", f.layouts.is_empty()),
-                ("field.resolutions", f.resolutions.is_empty()),
-                ("field.precisions", f.precisions.is_empty()),
-                ("field.selections", f.selections.is_empty()),
-            ] {
-                if empty {
-                    return Err(err(&format!("{prefix}{name}"), "must not be empty".into()));
-                }
-            }
-            for (i, &c) in f.counts.iter().enumerate() {
-                for &k in &f.spheres {
-                    if let Err(e) = crate::sampling::SpherePoints::validate_count(k, c) {
-                        return Err(err(&format!("{prefix}field.counts[{i}]"), e.to_string()));
-                    }
-                }
-            }
-            for (i, &r) in f.resolutions.iter().enumerate() {
-                if !(2..=4096).contains(&r) {
-                    return Err(err(
-                        &format!("{prefix}field.resolutions[{i}]"),
-                        format!("{r} is outside 2..=4096"),
-                    ));
-                }
-            }
-            for (name, n) in [
-                ("render.rays_per_point", s.render.rays_per_point),
-                ("reference.rays_per_point", s.reference.rays_per_point),
-            ] {
-                let k = (n as f64).sqrt().round() as u32;
-                if n == 0 || k * k != n {
-                    return Err(err(
-                        &format!("{prefix}{name}"),
-                        format!("{n} is not a positive perfect square (k² stratified rays)"),
-                    ));
-                }
-            }
-            if let Some(d) = s.render.max_distance {
-                if !(d > 0.0 && d.is_finite()) {
-                    return Err(err(
-                        &format!("{prefix}render.max_distance"),
-                        format!("{d} must be positive and finite"),
-                    ));
-                }
-            }
-            if s.scene.instances.is_empty() {
-                return Err(err(&format!("{prefix}scene.instances"), "no instances".into()));
-            }
-            if !s.scene.instances.iter().any(|i| i.receiver) {
-                return Err(err(&format!("{prefix}scene.instances"), "no receiver".into()));
-            }
-            if !s.scene.instances.iter().any(|i| i.caster) {
-                return Err(err(&format!("{prefix}scene.instances"), "no caster".into()));
-            }
-            for (i, inst) in s.scene.instances.iter().enumerate() {
-                if let MeshSource::Model(name) = &inst.mesh {
-                    if let Err(e) = crate::geometry::models::ModelRegistry::embedded().entry(name)
-                    {
-                        return Err(err(
-                            &format!("{prefix}scene.instances[{i}].mesh.model"),
-                            e.to_string(),
-                        ));
-                    }
-                }
-            }
-            Ok(())
-        };
-        check(self, "")?;
-        check(&self.quick(), "quick.")?;
-        Ok(())
+    /// The profile asked for: [`Self::quick`] when `quick`, else a copy.
+    pub fn profile(&self, quick: bool) -> Spec {
+        if quick {
+            self.quick()
+        } else {
+            self.clone()
+        }
     }
+}
+
+/// The square root of a perfect square, `None` otherwise (and for 0).
+pub fn exact_sqrt(n: u32) -> Option<u32> {
+    let k = (n as f64).sqrt().round() as u32;
+    (n > 0 && k.checked_mul(k) == Some(n)).then_some(k)
 }

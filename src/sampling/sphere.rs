@@ -164,6 +164,23 @@ impl SpherePoints {
         }
     }
 
+    /// Whether [`Self::new`] accepts `count` for `kind`, without building the set; the error
+    /// is the one `new` gives.
+    pub fn check_count(kind: SphereKind, count: usize) -> Result<(), SamplingError> {
+        let ok = match kind {
+            SphereKind::Slater => {
+                (1..=MAX_SLATER_N).any(|n| 2 * slater_hemisphere_count(n) == count as u64)
+            }
+            SphereKind::LatLong => (2..=MAX_LAT_LONG_ROWS).any(|r| r * (r + 1) == count as u64),
+            SphereKind::Fibonacci => (MIN_FIBONACCI..=MAX_FIBONACCI).contains(&count),
+        };
+        if ok {
+            Ok(())
+        } else {
+            Err(invalid_count(kind, count))
+        }
+    }
+
     pub fn len(&self) -> usize {
         self.points.len()
     }

@@ -1,0 +1,59 @@
+//! Finding specs by name: `experiments/NAME.json`, in `$VISFIELD_EXPERIMENTS`, else
+//! `experiments/` under the current folder, else under the crate root.
+
+use std::path::{Path, PathBuf};
+
+/// The environment variable naming the spec folder.
+pub const EXPERIMENTS_ENV: &str = "VISFIELD_EXPERIMENTS";
+
+/// The spec folder.
+pub fn experiments_dir() -> PathBuf {
+    if let Some(d) = std::env::var_os(EXPERIMENTS_ENV).filter(|d| !d.is_empty()) {
+        return PathBuf::from(d);
+    }
+    let local = Path::new("experiments");
+    if local.is_dir() {
+        return local.to_path_buf();
+    }
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments")
+}
+
+/// Every `*.json` in the spec folder, sorted by name.
+pub fn spec_paths() -> Result<Vec<PathBuf>, String> {
+    let dir = experiments_dir();
+    let entries = std::fs::read_dir(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let mut v: Vec<PathBuf> = entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "json"))
+        .collect();
+    v.sort();
+    Ok(v)
+}
+
+/// The name of a spec file (its stem).
+pub fn name_of(path: &Path) -> String {
+    path.file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default()
+}
+
+/// The spec called `name`, or a path given as such (anything ending in `.json`); an unknown
+/// name lists the known ones.
+pub fn find(name: &str) -> Result<PathBuf, String> {
+    if name.ends_with(".json") {
+        return Ok(PathBuf::from(name));
+    }
+    let all = spec_paths()?;
+    all.iter()
+        .find(|p| name_of(p) == name)
+        .cloned()
+        .ok_or_else(|| {
+            let known: Vec<String> = all.iter().map(|p| name_of(p)).collect();
+            format!(
+                "unknown experiment `{name}` (no {}/{name}.json); known: {}; commands: list, \
+                 run, check, all, plots, quickstart",
+                experiments_dir().display(),
+                known.join(", ")
+            )
+        })
+}

@@ -1,0 +1,214 @@
+//! Field supply for a run: bake, or read from the on-disk cache, and derive precisions.
+//!
+//! The cache ([`crate::field::cache`]) holds only fields up to a size limit (default 256 MiB;
+//! the large cells of Figure 6 would fill a disk), in `$VISFIELD_CACHE`, else `cache/` at the
+//! crate root. Beside each cached field a `.bake.json` records what its bake cost, so a cache hit
+//! still reports the bake time it saved.
+
+use super::progress;
+use super::scenes::LoadedMesh;
+use crate::field::bake::{bake, BakeOptions, BakeStats};
+use crate::field::cache::{self, CacheKey};
+use crate::field::{FieldParams, Precision, Storage, VisibilityField};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Instant;
+
+/// The environment variable naming the cache folder.
+pub const CACHE_ENV: &str = "VISFIELD_CACHE";
+
+/// The default cache folder: `$VISFIELD_CACHE`, else `cache/` at the crate root.
+pub fn default_cache_dir() -> PathBuf {
+    match std::env::var_os(CACHE_ENV).filter(|v| !v.is_empty()) {
+        Some(d) => PathBuf::from(d),
+        None => PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("cache"),
+    }
+}
+
+/// A field ready for lookups, with what it cost.
+#[derive(Clone, Debug)]
+pub struct Supplied {
+    pub field: Arc<VisibilityField>,
+    /// Bake wall time (BVH build included), seconds; for a derived precision, the f32 bake plus
+    /// the requantisation. `None` when read from a cache entry without a bake record.
+    pub bake_s: Option<f64>,
+    /// Rays the bake traced.
+    pub rays: u64,
+    /// Read from the cache.
+    pub cached: bool,
+}
+
+/// What a cached bake cost, stored beside the field.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct BakeRecord {
+    seconds: f64,
+    bvh_seconds: f64,
+    rays: u64,
+    threads: usize,
+    date: String,
+}
+
+/// Where fields come from.
+#[derive(Clone, Debug)]
+pub struct FieldSupply {
+    /// Cache folder; `None`: no cache.
+    pub cache: Option<PathBuf>,
+    /// Fields larger than this are never cached (bytes).
+    pub cache_limit: u64,
+    /// Fields larger than this are refused (bytes).
+    pub memory_limit: u64,
+}
+
+impl FieldSupply {
+    fn cache_path(&self, mesh: &LoadedMesh, params: &FieldParams) -> Option<(PathBuf, CacheKey)> {
+        let dir = self.cache.as_ref()?;
+        if params.storage_bytes() > self.cache_limit {
+            return None;
+        }
+        let key = CacheKey::new(&mesh.sha256, *params);
+        Some((dir.join(key.file_name()), key))
+    }
+
+    /// How a bake would be served, for the plan: "cached", "bake, cache", "bake".
+    pub fn state(&self, mesh: &LoadedMesh, params: &FieldParams) -> &'static str {
+        match self.cache_path(mesh, params) {
+            Some((p, _)) if p.exists() => "cached",
+            Some(_) => "bake, cache",
+            None => "bake",
+        }
+    }
+
+    /// The field of `mesh` with `params`: from the cache when a valid entry exists, else baked
+    /// (with a progress bar) and cached when small enough.
+    pub fn obtain(&self, mesh: &LoadedMesh, params: FieldParams) -> Result<Supplied, String> {
+        let label = format!(
+            "bake {} {} × {}² {}",
+            mesh.label,
+            params.count,
+            params.res,
+            params.precision.name()
+        );
+        let entry = self.cache_path(mesh, &params);
+        if let Some((path, key)) = &entry {
+            if path.exists() {
+                match cache::load(path, key) {
+                    Ok(field) => {
+                        let record: Option<BakeRecord> = std::fs::read(record_path(path))
+                            .ok()
+                            .and_then(|b| serde_json::from_slice(&b).ok());
+                        eprintln!("  {label:<40} cached ({})", path.display());
+                        return Ok(Supplied {
+                            bake_s: record.as_ref().map(|r| r.seconds + r.bvh_seconds),
+                            rays: record.map_or(0, |r| r.rays),
+                            field: Arc::new(field),
+                            cached: true,
+                        });
+                    }
+                    Err(e) => eprintln!("  cache entry rejected, rebaking: {e}"),
+                }
+            }
+        }
+        let pb = progress::bar(params.count as u64, &label);
+        let opts = BakeOptions {
+            memory_limit: self.memory_limit,
+            progress: Some(&pb),
+        };
+        let (field, stats) = bake(&mesh.mesh, params, &opts).map_err(|e| e.to_string())?;
+        pb.finish_and_clear();
+        let seconds = stats.seconds + stats.bvh_seconds;
+        eprintln!(
+            "  {label:<40} {seconds:>9.3} s  ({:.2} Mrays/s)",
+            stats.mrays_per_second()
+        );
+        if let Some((path, key)) = &entry {
+            save(path, key, &field, &stats)
+                .unwrap_or_else(|e| eprintln!("  warning: not cached: {e}"));
+        }
+        Ok(Supplied {
+            field: Arc::new(field),
+            bake_s: Some(seconds),
+            rays: stats.rays,
+            cached: false,
+        })
+    }
+}
+
+fn record_path(path: &std::path::Path) -> PathBuf {
+    let mut p = path.as_os_str().to_owned();
+    p.push(".bake.json");
+    PathBuf::from(p)
+}
+
+fn save(
+    path: &std::path::Path,
+    key: &CacheKey,
+    field: &VisibilityField,
+    stats: &BakeStats,
+) -> Result<(), String> {
+    cache::save(path, key, field).map_err(|e| e.to_string())?;
+    let record = BakeRecord {
+        seconds: stats.seconds,
+        bvh_seconds: stats.bvh_seconds,
+        rays: stats.rays,
+        threads: rayon::current_num_threads(),
+        date: super::meta::utc_now_iso8601(),
+    };
+    let rp = record_path(path);
+    let json = serde_json::to_vec_pretty(&record).expect("record serialises");
+    crate::io::write_atomic(&rp, &json).map_err(|e| format!("{}: {e}", rp.display()))
+}
+
+/// The field `f32` stored at precision `to`. Bit-identical to baking at `to`: the bake stores
+/// each map from its f32 row of distances, and an f32 field holds exactly those rows.
+///
+/// # Panics
+/// If `f32` is not stored at f32 precision.
+pub fn requantize(f32_field: &VisibilityField, to: Precision) -> VisibilityField {
+    assert_eq!(
+        f32_field.params.precision,
+        Precision::F32,
+        "requantize needs an f32 field"
+    );
+    let params = FieldParams {
+        precision: to,
+        ..f32_field.params
+    };
+    let texels = params.texels();
+    let mut storage = Storage::new(to, params.count, texels);
+    storage
+        .map_slots()
+        .into_par_iter()
+        .enumerate()
+        .for_each_init(
+            || vec![1.0f32; texels],
+            |row, (m, mut slot)| {
+                for (t, v) in row.iter_mut().enumerate() {
+                    *v = f32_field.storage.get(m, t);
+                }
+                slot.store(row);
+            },
+        );
+    VisibilityField {
+        params,
+        bounds: f32_field.bounds,
+        points: f32_field.points.clone(),
+        layout: f32_field.layout,
+        frames: f32_field.frames.clone(),
+        storage,
+    }
+}
+
+/// A derived field and the time the derivation took.
+pub fn derive(source: &Supplied, to: Precision) -> Supplied {
+    let t = Instant::now();
+    let field = requantize(&source.field, to);
+    let s = t.elapsed().as_secs_f64();
+    Supplied {
+        field: Arc::new(field),
+        bake_s: source.bake_s.map(|b| b + s),
+        rays: source.rays,
+        cached: source.cached,
+    }
+}

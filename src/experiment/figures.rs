@@ -1,0 +1,332 @@
+//! The plots of a run, drawn from its CSV files and PNG images only (so `experiment plots`
+//! redraws them without recomputing anything):
+//!
+//! - `images.png`: the figure's image grid with its numbers under each image, as in the paper
+//!   (bake time, AO time, RMS); the reference image opens each scene's first row;
+//! - `differences.png`: the same grid of |field − reference| × 5 images;
+//! - `rms_vs_positional.png`: RMS against positional samples, one series per directional
+//!   resolution (and per other axis the spec varies);
+//! - `pareto.png`: RMS against AO time for every field setting and for ray casting at several
+//!   ray counts, so that at equal time one sees which wins;
+//! - `times.png` (several scenes): ray-cast, bake and AO time against caster triangles (2008
+//!   Figure 8).
+//!
+//! The RMS shown is per image pixel when the run has images (the papers' figure), else per
+//! vertex.
+
+use super::outputs::{read_csv, Row, SweepRow};
+use super::plan::selection_name;
+use super::plot::{image_grid, xy_plot, Axes, Series};
+use crate::render::image::GrayImage;
+use std::path::Path;
+
+/// The RMS to plot and its axis label.
+fn metric(rows: &[Row]) -> (fn(&Row) -> Option<f64>, &'static str) {
+    if !rows.is_empty() && rows.iter().all(|r| r.rms_image.is_some()) {
+        (|r| r.rms_image, "RMS per image pixel vs reference (0–255)")
+    } else {
+        (|r| r.rms_vertex, "RMS per vertex vs reference (0–255)")
+    }
+}
+
+/// The values of one axis of a row, as text.
+type AxisFn = fn(&Row) -> String;
+
+const AXES: [(&str, AxisFn); 7] = [
+    ("scene", |r| r.scene.clone()),
+    ("sphere", |r| r.sphere.name().to_string()),
+    ("res", |r| format!("{}²", r.directional_res)),
+    ("layout", |r| r.layout.name().to_string()),
+    ("precision", |r| r.precision.name().to_string()),
+    ("selection", |r| selection_name(r.selection).to_string()),
+    ("backend", |r| r.backend.name().to_string()),
+];
+
+/// A label made of the axes (other than `skip`) that vary among `rows`.
+fn key(rows: &[Row], r: &Row, skip: &[&str]) -> String {
+    let mut parts = Vec::new();
+    for (name, f) in AXES {
+        if skip.contains(&name) {
+            continue;
+        }
+        let first = f(&rows[0]);
+        if rows.iter().any(|o| f(o) != first) {
+            parts.push(f(r));
+        }
+    }
+    if parts.is_empty() {
+        "field".into()
+    } else {
+        parts.join(" ")
+    }
+}
+
+/// Redraws every plot of the run in `out`.
+pub fn draw_all(out: &Path, title: &str) -> Result<(), String> {
+    let rows: Vec<Row> = read_csv(&out.join("table.csv"))?;
+    if rows.is_empty() {
+        return Ok(());
+    }
+    let sweep_path = out.join("raycast_sweep.csv");
+    let sweep: Vec<SweepRow> = if sweep_path.exists() {
+        read_csv(&sweep_path)?
+    } else {
+        Vec::new()
+    };
+    let (m, m_label) = metric(&rows);
+    grids(out, title, &rows, &sweep, m)?;
+
+    // RMS against positional samples.
+    let mut series: Vec<Series> = Vec::new();
+    for r in &rows {
+        let label = key(&rows, r, &[]);
+        let Some(y) = m(r) else { continue };
+        match series.iter_mut().find(|s| s.label == label) {
+            Some(s) => s.points.push((r.positional_samples as f64, y)),
+            None => series.push(Series {
+                label,
+                points: vec![(r.positional_samples as f64, y)],
+                line: true,
+            }),
+        }
+    }
+    let axes = Axes {
+        title: format!("{title}: error against positional samples"),
+        x_label: "positional samples (maps)".into(),
+        y_label: m_label.into(),
+        log_x: true,
+        log_y: false,
+    };
+    xy_plot(&out.join("rms_vs_positional.png"), &axes, &series, &[])?;
+
+    // Error against time: every field setting, and ray casting at several ray counts.
+    let mut series: Vec<Series> = Vec::new();
+    for r in &rows {
+        let label = format!(
+            "field {}",
+            key(&rows, r, &["precision", "selection", "layout"])
+        );
+        let Some(y) = m(r) else { continue };
+        match series.iter_mut().find(|s| s.label == label) {
+            Some(s) => s.points.push((r.ao_s, y)),
+            None => series.push(Series {
+                label,
+                points: vec![(r.ao_s, y)],
+                line: false,
+            }),
+        }
+    }
+    let sm = |s: &SweepRow| {
+        if m_label.contains("pixel") {
+            s.rms_image
+        } else {
+            s.rms_vertex
+        }
+    };
+    let mut sweep = sweep.clone();
+    sweep.sort_by_key(|s| (s.rays_per_point, s.backend));
+    let mut scenes: Vec<&str> = Vec::new();
+    for s in &sweep {
+        if !scenes.contains(&s.scene.as_str()) {
+            scenes.push(&s.scene);
+        }
+    }
+    for sc in scenes {
+        let pts: Vec<_> = sweep
+            .iter()
+            .filter(|s| s.scene == sc)
+            .filter_map(|s| sm(s).map(|y| (s.ao_s, y)))
+            .collect();
+        let counts: Vec<String> = sweep
+            .iter()
+            .filter(|s| s.scene == sc)
+            .map(|s| s.rays_per_point.to_string())
+            .collect();
+        series.push(Series {
+            label: format!("ray cast {sc} ({} rays)", counts.join("/")),
+            points: pts,
+            line: true,
+        });
+    }
+    let rays = rows[0].rays_per_point;
+    let axes = Axes {
+        title: format!("{title}: error against AO time"),
+        x_label: format!("AO time, s (field: {rays} rays/point)"),
+        y_label: m_label.into(),
+        log_x: true,
+        log_y: false,
+    };
+    xy_plot(&out.join("pareto.png"), &axes, &series, &[])?;
+
+    // Times against caster triangles, when the spec has several scenes.
+    let mut names: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
+    names.dedup();
+    if names.len() > 1 {
+        let first: Vec<&Row> = names
+            .iter()
+            .filter_map(|n| rows.iter().find(|r| r.scene == *n))
+            .collect();
+        let pick = |f: fn(&Row) -> Option<f64>| -> Vec<(f64, f64)> {
+            first
+                .iter()
+                .filter_map(|r| f(r).map(|y| (r.caster_triangles as f64, y)))
+                .collect()
+        };
+        let s = vec![
+            Series {
+                label: "ray-cast AO".into(),
+                points: pick(|r| r.raycast_s),
+                line: false,
+            },
+            Series {
+                label: "bake (preprocess)".into(),
+                points: pick(|r| r.bake_s),
+                line: false,
+            },
+            Series {
+                label: "field-lookup AO".into(),
+                points: pick(|r| Some(r.ao_s)),
+                line: false,
+            },
+        ];
+        let axes = Axes {
+            title: format!("{title}: cost against caster triangles"),
+            x_label: "caster triangles".into(),
+            y_label: "seconds".into(),
+            log_x: true,
+            log_y: true,
+        };
+        xy_plot(&out.join("times.png"), &axes, &s, &[])?;
+    }
+    Ok(())
+}
+
+fn load_png(path: &Path) -> Result<GrayImage, String> {
+    let img = image::open(path)
+        .map_err(|e| format!("{}: {e}", path.display()))?
+        .to_luma8();
+    Ok(GrayImage {
+        width: img.width(),
+        height: img.height(),
+        data: img.pixels().map(|p| p.0[0] as f32 / 255.0).collect(),
+    })
+}
+
+/// The image grid and the difference grid: per scene, rows of cells sharing every axis but
+/// the one with the most values (the columns), the reference first.
+fn grids(
+    out: &Path,
+    title: &str,
+    rows: &[Row],
+    sweep: &[SweepRow],
+    m: fn(&Row) -> Option<f64>,
+) -> Result<(), String> {
+    let with_images: Vec<&Row> = rows.iter().filter(|r| !r.image.is_empty()).collect();
+    if with_images.is_empty() {
+        return Ok(());
+    }
+    let owned: Vec<Row> = with_images.iter().map(|r| (*r).clone()).collect();
+    // Reversed, so that ties go to the earlier axis (max_by_key keeps the last maximum).
+    let (col_name, col_fn) = AXES[2..]
+        .iter()
+        .rev()
+        .copied()
+        .max_by_key(|(_, f)| {
+            let mut v: Vec<String> = owned.iter().map(f).collect();
+            v.sort();
+            v.dedup();
+            v.len()
+        })
+        .expect("axes");
+    let mut columns: Vec<String> = Vec::new();
+    for r in &owned {
+        let v = col_fn(r);
+        if !columns.contains(&v) {
+            columns.push(v);
+        }
+    }
+    let first = load_png(&out.join(&owned[0].image))?;
+    let blank = GrayImage::new(first.width, first.height, 1.0);
+    let mut cells: Vec<(GrayImage, Vec<String>)> = Vec::new();
+    let mut diffs: Vec<(GrayImage, Vec<String>)> = Vec::new();
+    let mut scenes: Vec<&str> = owned.iter().map(|r| r.scene.as_str()).collect();
+    scenes.dedup();
+    for sc in scenes {
+        let in_scene: Vec<&Row> = owned.iter().filter(|r| r.scene == sc).collect();
+        let mut groups: Vec<String> = Vec::new();
+        for r in &in_scene {
+            let k = key(&owned, r, &[col_name]) + &r.positional_samples.to_string();
+            if !groups.contains(&k) {
+                groups.push(k);
+            }
+        }
+        for (gi, g) in groups.iter().enumerate() {
+            if gi == 0 {
+                let reference = load_png(&out.join(format!("images/{sc}-reference.png")))?;
+                let rc = sweep
+                    .iter()
+                    .filter(|s| s.scene == sc && s.rms_image == Some(0.0))
+                    .max_by_key(|s| s.rays_per_point);
+                let mut cap = vec![format!("{sc}: ray cast (reference)")];
+                if let Some(s) = rc {
+                    cap.push(format!("{} rays, {:.3} s", s.rays_per_point, s.ao_s));
+                }
+                cells.push((reference, cap));
+                diffs.push((blank.clone(), vec![format!("{sc}: differences × 5")]));
+            } else {
+                cells.push((blank.clone(), vec![]));
+                diffs.push((blank.clone(), vec![]));
+            }
+            for col in &columns {
+                let r = in_scene.iter().find(|r| {
+                    &(key(&owned, r, &[col_name]) + &r.positional_samples.to_string()) == g
+                        && &col_fn(r) == col
+                });
+                let Some(r) = r else {
+                    cells.push((blank.clone(), vec![]));
+                    diffs.push((blank.clone(), vec![]));
+                    continue;
+                };
+                let varying = key(&owned, r, &["scene", "res"]);
+                let name = if varying == "field" {
+                    format!("{} × {}²", r.positional_samples, r.directional_res)
+                } else {
+                    format!(
+                        "{} × {}² {varying}",
+                        r.positional_samples, r.directional_res
+                    )
+                };
+                let bake = r.bake_s.map_or("-".into(), |b| format!("{b:.2} s"));
+                let rms = m(r).map_or("-".into(), |v| format!("{v:.3}"));
+                cells.push((
+                    load_png(&out.join(&r.image))?,
+                    vec![
+                        name.clone(),
+                        format!("bake {bake}, AO {:.3} s", r.ao_s),
+                        format!("RMS {rms}"),
+                    ],
+                ));
+                let diff = out.join(r.image.replace(".png", "-diff_x5.png"));
+                let share = r.share_pixels_off_1.unwrap_or(0.0) * 100.0;
+                diffs.push((
+                    load_png(&diff)?,
+                    vec![
+                        name,
+                        format!("RMS {rms}, max {:.0}", r.max_error_image.unwrap_or(0.0)),
+                        format!("{share:.1}% off by > 1/255"),
+                    ],
+                ));
+            }
+        }
+    }
+    let ncol = columns.len() + 1;
+    let refs: Vec<(&GrayImage, Vec<String>)> = cells.iter().map(|(i, c)| (i, c.clone())).collect();
+    image_grid(&out.join("images.png"), title, &refs, ncol)?;
+    let refs: Vec<(&GrayImage, Vec<String>)> = diffs.iter().map(|(i, c)| (i, c.clone())).collect();
+    image_grid(
+        &out.join("differences.png"),
+        &format!("{title}: |field − reference| × 5"),
+        &refs,
+        ncol,
+    )
+}

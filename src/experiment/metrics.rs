@@ -1,0 +1,98 @@
+//! Error metrics on the 0–255 scale of 8-bit images (the papers' scale).
+//!
+//! - Per receiver vertex ([`vertex_errors`]): the AO values themselves, unquantised, times 255.
+//!   This is the error of the quantity the 2008 method computes (AO at the corner's vertices).
+//! - Per image pixel ([`image_errors`]): the images as written to 8-bit PNG (each value rounded
+//!   to 0..=255), over the pixels that show a receiver. This is the papers' RMS ("compared to the
+//!   Reference image"): their images show vertex AO interpolated across triangles, so the
+//!   per-pixel figure weighs vertices by their screen area and includes the 8-bit rounding.
+
+use crate::render::image::{rms_255, rms_vertex, GrayImage};
+
+/// RMS, largest error and the share of values off by more than one 8-bit level.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ErrorStats {
+    /// Root mean square difference (0–255).
+    pub rms: f64,
+    /// Largest absolute difference (0–255).
+    pub max: f64,
+    /// Share of values (vertices or pixels) whose difference exceeds 1/255.
+    pub share_off_1: f64,
+}
+
+/// Errors between per-vertex AO vectors, unquantised, on the 0–255 scale.
+///
+/// # Panics
+/// If the lengths differ.
+pub fn vertex_errors(ao: &[f32], reference: &[f32]) -> ErrorStats {
+    assert_eq!(ao.len(), reference.len(), "vertex_errors: lengths differ");
+    let d = ao
+        .iter()
+        .zip(reference)
+        .map(|(a, b)| 255.0 * (*a as f64 - *b as f64).abs());
+    let (max, off) = d.fold((0.0f64, 0usize), |(m, n), e| {
+        (m.max(e), n + (e > 1.0) as usize)
+    });
+    ErrorStats {
+        rms: rms_vertex(ao, reference),
+        max,
+        share_off_1: off as f64 / ao.len().max(1) as f64,
+    }
+}
+
+/// Errors between two images as 8-bit values, over the pixels where `mask` is true.
+///
+/// # Panics
+/// If the lengths differ.
+pub fn image_errors(a: &[f32], b: &[f32], mask: &[bool]) -> ErrorStats {
+    assert!(
+        a.len() == b.len() && a.len() == mask.len(),
+        "image_errors: sizes differ"
+    );
+    let (mut max, mut off, mut n) = (0.0f64, 0usize, 0usize);
+    for i in (0..a.len()).filter(|&i| mask[i]) {
+        let e = (GrayImage::to_u8(a[i]) as f64 - GrayImage::to_u8(b[i]) as f64).abs();
+        max = max.max(e);
+        off += (e > 1.0) as usize;
+        n += 1;
+    }
+    ErrorStats {
+        rms: rms_255(a, b, Some(mask)),
+        max,
+        share_off_1: off as f64 / n.max(1) as f64,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn vertex_errors_closed_form() {
+        // Differences 0, 2/255, 0.5/255, 1: on the 0–255 scale 0, 2, 0.5, 255.
+        // RMS = sqrt((0 + 4 + 0.25 + 65025) / 4); max 255; two of four exceed 1.
+        let a = [0.5, 2.0 / 255.0, 0.5 / 255.0, 1.0];
+        let b = [0.5, 0.0, 0.0, 0.0];
+        let e = vertex_errors(&a, &b);
+        let rms = ((4.0 + 0.25 + 65025.0) / 4.0f64).sqrt();
+        assert!((e.rms - rms).abs() < 1e-3, "{e:?}");
+        assert!((e.max - 255.0).abs() < 1e-4);
+        assert_eq!(e.share_off_1, 0.5);
+    }
+
+    #[test]
+    fn image_errors_quantise_and_respect_the_mask() {
+        // 8-bit levels: a = 10, 12, 0, 255; b = 10, 10, 1, 0. Masked out: the last pixel.
+        // Differences 0, 2, 1 → RMS sqrt(5/3), max 2, one of three exceeds 1.
+        let l = |v: f32| v / 255.0;
+        let a = [l(10.0), l(12.0), l(0.0), 1.0];
+        let b = [l(10.0), l(10.0), l(1.0), 0.0];
+        let e = image_errors(&a, &b, &[true, true, true, false]);
+        assert!((e.rms - (5.0f64 / 3.0).sqrt()).abs() < 1e-12, "{e:?}");
+        assert_eq!(e.max, 2.0);
+        assert!((e.share_off_1 - 1.0 / 3.0).abs() < 1e-12);
+        // Values within the same 8-bit level do not count.
+        let e = image_errors(&[l(3.0) + 1e-4], &[l(3.0)], &[true]);
+        assert_eq!((e.rms, e.max, e.share_off_1), (0.0, 0.0, 0.0));
+    }
+}

@@ -1,0 +1,233 @@
+//! The tables a run writes (CSV, atomically) and reads back for `experiment plots`:
+//!
+//! - `table.csv`: one [`Row`] per cell and backend;
+//! - `raycast_sweep.csv`: ray-cast AO at several ray counts ([`SweepRow`]), the ray-casting
+//!   curve of the error-against-time plot;
+//! - `pairs.csv`: RMS between cells that differ only in precision ([`PairRow`]; the slides'
+//!   8 vs 16 bit);
+//! - `paper_vs_ours.csv`: the paper's numbers beside ours ([`PaperRow`]), with times as ratios
+//!   to a reference cell, since 2008 seconds are not a target.
+
+use super::spec::{Backend, PaperCell, PaperNumbers};
+use crate::field::{Precision, Selection};
+use crate::sampling::{LayoutKind, SphereKind};
+use serde::{de::DeserializeOwned, Deserialize, Serialize};
+use std::path::Path;
+
+/// One cell on one backend. The first 13 columns are the table's contract; the rest add
+/// context. Times in seconds, RMS and errors on the 0–255 scale (see [`super::metrics`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Row {
+    pub positional_samples: usize,
+    pub directional_res: u32,
+    pub layout: LayoutKind,
+    pub precision: Precision,
+    pub selection: Selection,
+    pub backend: Backend,
+    /// The device that ran the AO (CPU model and threads, or GPU adapter).
+    pub adapter: String,
+    /// Preprocessing: the bake of every caster's field (BVH build included); for a derived
+    /// precision the f32 bake plus the requantisation; from the bake record on a cache hit.
+    pub bake_s: Option<f64>,
+    /// Field-lookup AO time (best of 3 when short).
+    pub ao_s: f64,
+    /// Ray-cast AO time on the same rays and backend.
+    pub raycast_s: Option<f64>,
+    /// Per receiver vertex RMS against the reference (none for image AO).
+    pub rms_vertex: Option<f64>,
+    /// Per image pixel RMS against the reference image (none without an image).
+    pub rms_image: Option<f64>,
+    /// Stored bytes of every caster's field.
+    pub field_bytes: u64,
+    pub scene: String,
+    pub sphere: SphereKind,
+    pub rays_per_point: u32,
+    /// AO points (receiver vertices, or receiver pixels for image AO).
+    pub receiver_points: usize,
+    pub caster_triangles: usize,
+    pub max_error_vertex: Option<f64>,
+    pub max_error_image: Option<f64>,
+    /// Share of receiver pixels whose 8-bit value differs from the reference by more than 1.
+    pub share_pixels_off_1: Option<f64>,
+    /// Rays the bakes traced.
+    pub bake_rays: u64,
+    /// Every field came from the cache.
+    pub bake_cached: bool,
+    /// The image, relative to the output folder (empty without an image).
+    pub image: String,
+    /// The cell id.
+    pub cell: String,
+}
+
+/// The columns `table.csv` starts with, in order.
+pub const TABLE_COLUMNS: [&str; 13] = [
+    "positional_samples",
+    "directional_res",
+    "layout",
+    "precision",
+    "selection",
+    "backend",
+    "adapter",
+    "bake_s",
+    "ao_s",
+    "raycast_s",
+    "rms_vertex",
+    "rms_image",
+    "field_bytes",
+];
+
+/// Ray-cast AO at one ray count, against the reference.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SweepRow {
+    pub scene: String,
+    pub backend: Backend,
+    pub rays_per_point: u32,
+    pub ao_s: f64,
+    pub rms_vertex: Option<f64>,
+    pub rms_image: Option<f64>,
+}
+
+/// RMS between two cells that differ only in precision.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PairRow {
+    pub scene: String,
+    pub sphere: SphereKind,
+    pub positional_samples: usize,
+    pub directional_res: u32,
+    pub layout: LayoutKind,
+    pub selection: Selection,
+    pub backend: Backend,
+    pub precision_a: Precision,
+    pub precision_b: Precision,
+    pub rms_vertex: Option<f64>,
+    pub rms_image: Option<f64>,
+}
+
+/// A paper cell beside ours. `*_rel` columns are ratios to the reference cell's value, the
+/// paper's to the paper's and ours to ours.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PaperRow {
+    pub label: String,
+    /// Our cell (empty when no cell of this run matches).
+    pub cell: String,
+    pub paper_triangles: Option<u64>,
+    pub ours_triangles: Option<u64>,
+    pub paper_rays_cast: Option<u64>,
+    pub ours_rays_cast: Option<u64>,
+    pub paper_raycast_s: Option<f64>,
+    pub ours_raycast_s: Option<f64>,
+    pub paper_preprocess_s: Option<f64>,
+    pub ours_bake_s: Option<f64>,
+    pub paper_ao_s: Option<f64>,
+    pub ours_ao_s: Option<f64>,
+    pub paper_rms: Option<f64>,
+    pub ours_rms_image: Option<f64>,
+    pub ours_rms_vertex: Option<f64>,
+    pub paper_raycast_rel: Option<f64>,
+    pub ours_raycast_rel: Option<f64>,
+    pub paper_preprocess_rel: Option<f64>,
+    pub ours_bake_rel: Option<f64>,
+    pub paper_ao_rel: Option<f64>,
+    pub ours_ao_rel: Option<f64>,
+    pub note: String,
+}
+
+/// Writes rows as CSV (header from the struct), atomically.
+pub fn write_csv<T: Serialize>(path: &Path, rows: &[T]) -> Result<(), String> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    for r in rows {
+        w.serialize(r)
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+    }
+    let bytes = w
+        .into_inner()
+        .map_err(|e| format!("{}: {e}", path.display()))?;
+    crate::io::write_atomic(path, &bytes).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// Reads rows written by [`write_csv`].
+pub fn read_csv<T: DeserializeOwned>(path: &Path) -> Result<Vec<T>, String> {
+    let mut r = csv::Reader::from_path(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    r.deserialize()
+        .collect::<Result<Vec<T>, _>>()
+        .map_err(|e| format!("{}: {e}", path.display()))
+}
+
+fn matches_row(c: &PaperCell, r: &Row) -> bool {
+    c.scene.as_ref().is_none_or(|s| *s == r.scene)
+        && c.sphere.is_none_or(|s| s == r.sphere)
+        && c.positional_samples
+            .is_none_or(|n| n == r.positional_samples)
+        && c.directional_res.is_none_or(|n| n == r.directional_res)
+        && c.layout.is_none_or(|l| l == r.layout)
+        && c.precision.is_none_or(|p| p == r.precision)
+        && c.selection.is_none_or(|s| s == r.selection)
+}
+
+/// The paper's cells beside ours. A cell with `versus_precision` takes its RMS from `pairs`.
+pub fn paper_vs_ours(paper: &PaperNumbers, rows: &[Row], pairs: &[PairRow]) -> Vec<PaperRow> {
+    let find = |c: &PaperCell| rows.iter().find(|r| matches_row(c, r));
+    let ref_cell = paper
+        .reference_cell
+        .as_ref()
+        .and_then(|l| paper.cells.iter().find(|c| &c.label == l))
+        .or(paper.cells.first());
+    let ref_row = ref_cell.and_then(find);
+    let ratio = |a: Option<f64>, b: Option<f64>| match (a, b) {
+        (Some(a), Some(b)) if b > 0.0 => Some(a / b),
+        _ => None,
+    };
+    paper
+        .cells
+        .iter()
+        .map(|c| {
+            let r = find(c);
+            let (mut rms_image, mut rms_vertex) =
+                (r.and_then(|r| r.rms_image), r.and_then(|r| r.rms_vertex));
+            if let (Some(v), Some(r)) = (c.versus_precision, r) {
+                let pair = pairs.iter().find(|p| {
+                    p.scene == r.scene
+                        && p.sphere == r.sphere
+                        && p.positional_samples == r.positional_samples
+                        && p.directional_res == r.directional_res
+                        && p.layout == r.layout
+                        && p.selection == r.selection
+                        && p.backend == r.backend
+                        && ((p.precision_a, p.precision_b) == (r.precision, v)
+                            || (p.precision_a, p.precision_b) == (v, r.precision))
+                });
+                rms_image = pair.and_then(|p| p.rms_image);
+                rms_vertex = pair.and_then(|p| p.rms_vertex);
+            }
+            let rays = r.map(|r| r.receiver_points as u64 * r.rays_per_point as u64);
+            let rc = ref_cell;
+            PaperRow {
+                label: c.label.clone(),
+                cell: r.map_or(String::new(), |r| r.cell.clone()),
+                paper_triangles: c.triangles,
+                ours_triangles: r.map(|r| r.caster_triangles as u64),
+                paper_rays_cast: c.rays_cast,
+                ours_rays_cast: rays,
+                paper_raycast_s: c.raycast_s,
+                ours_raycast_s: r.and_then(|r| r.raycast_s),
+                paper_preprocess_s: c.preprocess_s,
+                ours_bake_s: r.and_then(|r| r.bake_s),
+                paper_ao_s: c.ao_s,
+                ours_ao_s: r.map(|r| r.ao_s),
+                paper_rms: c.rms,
+                ours_rms_image: rms_image,
+                ours_rms_vertex: rms_vertex,
+                paper_raycast_rel: ratio(c.raycast_s, rc.and_then(|c| c.raycast_s)),
+                ours_raycast_rel: ratio(
+                    r.and_then(|r| r.raycast_s),
+                    ref_row.and_then(|r| r.raycast_s),
+                ),
+                paper_preprocess_rel: ratio(c.preprocess_s, rc.and_then(|c| c.preprocess_s)),
+                ours_bake_rel: ratio(r.and_then(|r| r.bake_s), ref_row.and_then(|r| r.bake_s)),
+                paper_ao_rel: ratio(c.ao_s, rc.and_then(|c| c.ao_s)),
+                ours_ao_rel: ratio(r.map(|r| r.ao_s), ref_row.map(|r| r.ao_s)),
+                note: c.note.clone().unwrap_or_default(),
+            }
+        })
+        .collect()
+}

@@ -1,0 +1,496 @@
+//! The planner: expands a spec's axes into cells, then lists the steps that build only what the
+//! cells need, in an order that keeps memory bounded (streaming):
+//!
+//! - per scene: the G-buffer (when an image is asked for), the ray-cast reference once per ray
+//!   set, the ray-cast sweep of the error-against-time plot;
+//! - per field geometry (positional set and count, layout, resolution; cells sharing it form a
+//!   group): every caster mesh's field baked once. Cells that differ only in selection or
+//!   backend share the bake. When a mesh needs several precisions and its f32 field fits the
+//!   memory limit, the f32 distances are baked once and the other precisions derived from them
+//!   (bit-identical to baking at that precision: the bake quantises the same f32 rows); else
+//!   each precision is baked on its own;
+//! - each precision's fields are released after its cells are evaluated, the group's f32
+//!   source after the group, so at most one group's fields are alive at a time.
+//!
+//! No normal field is planned (no render in this build reads one) and no GPU device is opened
+//! unless a cell's backend is "gpu".
+
+use super::scenes::Scenes;
+use super::spec::{exact_sqrt, Backend, Spec};
+use crate::field::{ByteSize, FieldParams, Precision, Selection};
+use crate::sampling::{HemisphereLayout, LayoutKind, SphereKind};
+use std::collections::HashSet;
+use std::fmt::Write as _;
+
+/// One evaluated setting: a field on a scene, read with a selection, on a backend.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Cell {
+    /// Index into the profile's scenes.
+    pub scene: usize,
+    pub params: FieldParams,
+    pub selection: Selection,
+    pub backend: Backend,
+}
+
+impl Cell {
+    /// A file-name-safe id: `scene-sphere-count-layout-res-precision-selection-backend`.
+    pub fn id(&self, scene_name: &str) -> String {
+        let p = &self.params;
+        format!(
+            "{scene_name}-{}-{}-{}-{}-{}-{}-{}",
+            p.sphere.name(),
+            p.count,
+            p.layout.name(),
+            p.res,
+            p.precision.name(),
+            selection_name(self.selection),
+            self.backend.name()
+        )
+    }
+
+    /// The field geometry (everything but the precision).
+    pub fn geometry(&self) -> Geometry {
+        Geometry::of(&self.params)
+    }
+}
+
+/// The snake-case name of a selection.
+pub fn selection_name(s: Selection) -> &'static str {
+    match s {
+        Selection::Nearest => "nearest",
+        Selection::Interpolated => "interpolated",
+    }
+}
+
+/// A field's parameters without its precision: what one bake of f32 distances determines.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Geometry {
+    pub sphere: SphereKind,
+    pub count: usize,
+    pub layout: LayoutKind,
+    pub res: u32,
+}
+
+impl Geometry {
+    pub fn of(p: &FieldParams) -> Geometry {
+        Geometry {
+            sphere: p.sphere,
+            count: p.count,
+            layout: p.layout,
+            res: p.res,
+        }
+    }
+
+    pub fn with(&self, precision: Precision) -> FieldParams {
+        FieldParams {
+            sphere: self.sphere,
+            count: self.count,
+            layout: self.layout,
+            res: self.res,
+            precision,
+        }
+    }
+}
+
+/// The cells of a spec profile: scenes × field settings × backends, duplicates dropped, in spec
+/// order.
+pub fn cells_of(spec: &Spec) -> Vec<Cell> {
+    let mut seen = HashSet::new();
+    let mut out = Vec::new();
+    for scene in 0..spec.scenes.len() {
+        for axes in &spec.fields {
+            for (params, selection) in axes.settings() {
+                for &backend in &spec.backends {
+                    let c = Cell {
+                        scene,
+                        params,
+                        selection,
+                        backend,
+                    };
+                    if seen.insert(c) {
+                        out.push(c);
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+/// One step of a plan.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Step {
+    /// Primary visibility of a scene's image (rays = pixels).
+    Primary { scene: usize, pixels: u64 },
+    /// The ray-cast reference of a scene (CPU, exact).
+    Reference { scene: usize, k: u32, rays: u64 },
+    /// Ray-cast AO with `k²` rays per point on the CPU (error-against-time sweep).
+    Sweep { scene: usize, k: u32, rays: u64 },
+    /// Ray-cast AO timing on a non-CPU backend with the render's rays.
+    Raycast {
+        scene: usize,
+        backend: Backend,
+        k: u32,
+        rays: u64,
+    },
+    /// Bake (or load from the cache) the field of `mesh`.
+    Bake {
+        mesh: usize,
+        params: FieldParams,
+        rays: u64,
+        bytes: u64,
+    },
+    /// Requantise the f32 field of `mesh` to `to`.
+    Derive {
+        mesh: usize,
+        geometry: Geometry,
+        to: Precision,
+        bytes: u64,
+    },
+    /// Field-lookup AO of cell `cell` (index into [`Plan::cells`]).
+    Lookup { cell: usize, rays: u64 },
+    /// Drop these fields.
+    Release {
+        fields: Vec<(usize, FieldParams)>,
+        bytes: u64,
+    },
+}
+
+/// Everything a run will do.
+#[derive(Clone, Debug)]
+pub struct Plan {
+    pub cells: Vec<Cell>,
+    pub steps: Vec<Step>,
+    /// Largest sum of live field bytes.
+    pub peak_field_bytes: u64,
+    pub needs_gpu: bool,
+    /// Always false in this build (no reflection render).
+    pub needs_normal_field: bool,
+    /// Receiver rays per point of the render (k).
+    pub render_k: u32,
+}
+
+/// Limits the planner respects.
+#[derive(Clone, Copy, Debug)]
+pub struct PlanLimits {
+    /// Largest field allowed (bytes).
+    pub memory_limit: u64,
+}
+
+/// Points at which a scene's AO is evaluated (receiver vertices, or receiver pixels for
+/// image AO, bounded by the image's pixel count).
+fn ao_points(spec: &Spec, scenes: &Scenes, scene: usize) -> u64 {
+    match (&spec.render.what, &spec.render.image) {
+        (super::spec::RenderKind::ImageAo, Some(img)) => img.width as u64 * img.height as u64,
+        _ => scenes.scenes[scene].receiver_vertices() as u64,
+    }
+}
+
+impl Plan {
+    /// Plans a spec profile over its built scenes.
+    pub fn new(spec: &Spec, scenes: &Scenes, limits: PlanLimits) -> Result<Plan, String> {
+        let cells = cells_of(spec);
+        let render_k = exact_sqrt(spec.render.rays_per_point).ok_or("render rays")?;
+        let ref_k = exact_sqrt(spec.reference.rays_per_point).ok_or("reference rays")?;
+        let mut steps = Vec::new();
+        for (s, _) in scenes.scenes.iter().enumerate() {
+            let pts = ao_points(spec, scenes, s);
+            if let Some(img) = &spec.render.image {
+                steps.push(Step::Primary {
+                    scene: s,
+                    pixels: img.width as u64 * img.height as u64,
+                });
+            }
+            let rays = |k: u32| pts * (k * k) as u64;
+            steps.push(Step::Reference {
+                scene: s,
+                k: ref_k,
+                rays: rays(ref_k),
+            });
+            let mut sweep: Vec<u32> = spec
+                .reference
+                .raycast_sweep
+                .iter()
+                .filter_map(|&n| exact_sqrt(n))
+                .collect();
+            sweep.push(render_k);
+            sweep.sort_unstable();
+            sweep.dedup();
+            for k in sweep.into_iter().filter(|&k| k != ref_k) {
+                steps.push(Step::Sweep {
+                    scene: s,
+                    k,
+                    rays: rays(k),
+                });
+            }
+            for &b in spec.backends.iter().filter(|&&b| b != Backend::Cpu) {
+                steps.push(Step::Raycast {
+                    scene: s,
+                    backend: b,
+                    k: render_k,
+                    rays: rays(render_k),
+                });
+            }
+        }
+
+        let mut groups: Vec<(Geometry, Vec<usize>)> = Vec::new();
+        for (i, c) in cells.iter().enumerate() {
+            match groups.iter_mut().find(|(g, _)| *g == c.geometry()) {
+                Some((_, v)) => v.push(i),
+                None => groups.push((c.geometry(), vec![i])),
+            }
+        }
+        let (mut live, mut peak) = (0u64, 0u64);
+        for (geometry, members) in &groups {
+            let used = HemisphereLayout::new(geometry.layout, geometry.res).used_count() as u64;
+            let bake_rays = used * geometry.count as u64;
+            // Per mesh: the precisions its cells need, in first-use order.
+            let mut needs: Vec<(usize, Vec<Precision>)> = Vec::new();
+            let mut precisions: Vec<Precision> = Vec::new();
+            for &ci in members {
+                let c = &cells[ci];
+                if !precisions.contains(&c.params.precision) {
+                    precisions.push(c.params.precision);
+                }
+                for m in scenes.scenes[c.scene].caster_meshes() {
+                    match needs.iter_mut().find(|(mm, _)| *mm == m) {
+                        Some((_, v)) if !v.contains(&c.params.precision) => {
+                            v.push(c.params.precision)
+                        }
+                        Some(_) => {}
+                        None => needs.push((m, vec![c.params.precision])),
+                    }
+                }
+            }
+            let f32_bytes = geometry.with(Precision::F32).storage_bytes();
+            let shared: Vec<usize> = needs
+                .iter()
+                .filter(|(_, p)| p.len() > 1 && f32_bytes <= limits.memory_limit)
+                .map(|(m, _)| *m)
+                .collect();
+            let mut group_fields = Vec::new();
+            for &m in &shared {
+                let params = geometry.with(Precision::F32);
+                steps.push(Step::Bake {
+                    mesh: m,
+                    params,
+                    rays: bake_rays,
+                    bytes: f32_bytes,
+                });
+                group_fields.push((m, params));
+                live += f32_bytes;
+            }
+            peak = peak.max(live);
+            for &p in &precisions {
+                let params = geometry.with(p);
+                let bytes = params.storage_bytes();
+                let mut stage_fields = Vec::new();
+                for (m, ps) in &needs {
+                    if !ps.contains(&p) {
+                        continue;
+                    }
+                    if shared.contains(m) {
+                        if p != Precision::F32 {
+                            steps.push(Step::Derive {
+                                mesh: *m,
+                                geometry: *geometry,
+                                to: p,
+                                bytes,
+                            });
+                            stage_fields.push((*m, params));
+                            live += bytes;
+                        }
+                    } else {
+                        params
+                            .check_memory(limits.memory_limit)
+                            .map_err(|e| e.to_string())?;
+                        steps.push(Step::Bake {
+                            mesh: *m,
+                            params,
+                            rays: bake_rays,
+                            bytes,
+                        });
+                        stage_fields.push((*m, params));
+                        live += bytes;
+                    }
+                }
+                peak = peak.max(live);
+                for &ci in members
+                    .iter()
+                    .filter(|&&ci| cells[ci].params.precision == p)
+                {
+                    let rays =
+                        ao_points(spec, scenes, cells[ci].scene) * (render_k * render_k) as u64;
+                    steps.push(Step::Lookup { cell: ci, rays });
+                }
+                if !stage_fields.is_empty() {
+                    let bytes = stage_fields.iter().map(|(_, p)| p.storage_bytes()).sum();
+                    live -= bytes;
+                    steps.push(Step::Release {
+                        fields: stage_fields,
+                        bytes,
+                    });
+                }
+            }
+            if !group_fields.is_empty() {
+                let bytes = group_fields.iter().map(|(_, p)| p.storage_bytes()).sum();
+                live -= bytes;
+                steps.push(Step::Release {
+                    fields: group_fields,
+                    bytes,
+                });
+            }
+        }
+        Ok(Plan {
+            needs_gpu: cells.iter().any(|c| c.backend == Backend::Gpu),
+            needs_normal_field: false,
+            cells,
+            steps,
+            peak_field_bytes: peak,
+            render_k,
+        })
+    }
+
+    /// Number of bake steps.
+    pub fn bakes(&self) -> usize {
+        self.steps
+            .iter()
+            .filter(|s| matches!(s, Step::Bake { .. }))
+            .count()
+    }
+
+    /// The plan as text (`--dry-run`): one line per step with its rays and bytes, and totals.
+    /// `cached` tells how a bake would be served (from the cache or not), shown as a note.
+    pub fn describe(
+        &self,
+        spec_name: &str,
+        scenes: &Scenes,
+        cached: &dyn Fn(usize, &FieldParams) -> &'static str,
+    ) -> String {
+        let sc = |s: usize| scenes.scenes[s].name.as_str();
+        let mut out = String::new();
+        let _ = writeln!(
+            out,
+            "plan for {spec_name}: {} scene(s), {} cell(s), {} bake(s); GPU device: {}; normal \
+             fields: {}",
+            scenes.scenes.len(),
+            self.cells.len(),
+            self.bakes(),
+            if self.needs_gpu { "yes" } else { "no" },
+            if self.needs_normal_field { "yes" } else { "no" },
+        );
+        for s in &scenes.scenes {
+            let _ = writeln!(
+                out,
+                "  scene {}: {} instance(s), {} receiver vertices, {} caster triangles",
+                s.name,
+                s.scene.instances.len(),
+                s.receiver_vertices(),
+                s.caster_triangles()
+            );
+        }
+        let _ = writeln!(
+            out,
+            "  {:>4}  {:<66} {:>12} {:>11}  note",
+            "step", "what", "rays", "bytes"
+        );
+        let (mut total_rays, mut bake_rays) = (0u64, 0u64);
+        for (i, step) in self.steps.iter().enumerate() {
+            let note = match step {
+                Step::Bake { mesh, params, .. } => cached(*mesh, params),
+                _ => "",
+            };
+            let (what, rays, bytes) = match step {
+                Step::Primary { scene, pixels } => {
+                    (format!("primary visibility {}", sc(*scene)), *pixels, None)
+                }
+                Step::Reference { scene, k, rays } => (
+                    format!("ray-cast reference {}, {} rays/point", sc(*scene), k * k),
+                    *rays,
+                    None,
+                ),
+                Step::Sweep { scene, k, rays } => (
+                    format!("ray-cast AO {}, {} rays/point (cpu)", sc(*scene), k * k),
+                    *rays,
+                    None,
+                ),
+                Step::Raycast {
+                    scene,
+                    backend,
+                    k,
+                    rays,
+                } => (
+                    format!(
+                        "ray-cast AO {}, {} rays/point ({})",
+                        sc(*scene),
+                        k * k,
+                        backend.name()
+                    ),
+                    *rays,
+                    None,
+                ),
+                Step::Bake {
+                    mesh,
+                    params,
+                    rays,
+                    bytes,
+                } => {
+                    bake_rays += rays;
+                    (
+                        format!(
+                            "bake {} {} {} × {}² {} {}",
+                            scenes.meshes[*mesh].label,
+                            params.sphere.name(),
+                            params.count,
+                            params.res,
+                            params.layout.name(),
+                            params.precision.name(),
+                        ),
+                        *rays,
+                        Some(*bytes),
+                    )
+                }
+                Step::Derive {
+                    mesh,
+                    geometry,
+                    to,
+                    bytes,
+                } => (
+                    format!(
+                        "derive {} {} × {}² f32 -> {}",
+                        scenes.meshes[*mesh].label,
+                        geometry.count,
+                        geometry.res,
+                        to.name()
+                    ),
+                    0,
+                    Some(*bytes),
+                ),
+                Step::Lookup { cell, rays } => {
+                    let c = &self.cells[*cell];
+                    (format!("lookup AO {}", c.id(sc(c.scene))), *rays, None)
+                }
+                Step::Release { fields, bytes } => (
+                    format!("release {} field(s)", fields.len()),
+                    0,
+                    Some(*bytes),
+                ),
+            };
+            total_rays += rays;
+            let bytes = bytes.map_or("-".to_string(), |b| ByteSize(b).to_string());
+            let rays = if rays == 0 {
+                "-".into()
+            } else {
+                rays.to_string()
+            };
+            let line = format!("  {:>4}  {what:<66} {rays:>12} {bytes:>11}  {note}", i + 1);
+            let _ = writeln!(out, "{}", line.trim_end());
+        }
+        let _ = writeln!(
+            out,
+            "  total: {total_rays} rays ({bake_rays} in bakes); peak field memory {}",
+            ByteSize(self.peak_field_bytes)
+        );
+        out
+    }
+}

@@ -1,0 +1,163 @@
+//! The runner: executes a [`Plan`] step by step, streaming fields (bake, evaluate the cells that
+//! read them, release), and writes the outputs of [`super::outputs`], the images, `run.json` and
+//! the plots of [`super::figures`].
+//!
+//! Every lookup uses the reference's rays: the same seeded k² set, the same points, the same
+//! offset; the lookup and the ray cast differ only in the [`crate::render::Visibility`] behind
+//! them. Stages shorter than `short_stage_s` are timed as the best of `repeats` runs.
+
+mod state;
+mod steps;
+mod write;
+
+use super::fields::FieldSupply;
+use super::outputs::Row;
+use super::plan::{Plan, PlanLimits};
+use super::progress::stage;
+use super::scenes::Scenes;
+use super::spec::{Spec, SpecError, Threshold};
+use std::path::{Path, PathBuf};
+use steps::Runner;
+
+/// A spec read from disk.
+#[derive(Clone, Debug)]
+pub struct LoadedSpec {
+    /// The file stem.
+    pub name: String,
+    pub path: PathBuf,
+    pub text: String,
+    pub spec: Spec,
+}
+
+impl LoadedSpec {
+    /// Reads, parses and validates `path`.
+    pub fn load(path: &Path) -> Result<LoadedSpec, SpecError> {
+        let text = std::fs::read_to_string(path).map_err(|source| SpecError::Io {
+            file: path.to_path_buf(),
+            source,
+        })?;
+        let spec = Spec::parse(&text, path)?;
+        let name = path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "spec".into());
+        Ok(LoadedSpec {
+            name,
+            path: path.to_path_buf(),
+            text,
+            spec,
+        })
+    }
+}
+
+/// How to run a spec.
+#[derive(Clone, Debug)]
+pub struct RunOptions {
+    /// Use the quick profile.
+    pub quick: bool,
+    /// Output folder.
+    pub out: PathBuf,
+    /// Fields served from and saved to the cache (see [`super::fields`]).
+    pub supply: FieldSupply,
+    /// Print the plan and stop.
+    pub dry_run: bool,
+    /// Stages faster than this (seconds) are repeated, the best run reported.
+    pub short_stage_s: f64,
+    /// Runs of a short stage.
+    pub repeats: usize,
+}
+
+impl RunOptions {
+    /// Defaults: full profile, the default cache (256 MiB per field at most), half the memory.
+    pub fn new(out: PathBuf) -> RunOptions {
+        RunOptions {
+            quick: false,
+            out,
+            supply: FieldSupply {
+                cache: Some(super::fields::default_cache_dir()),
+                cache_limit: 256 << 20,
+                memory_limit: crate::field::default_memory_limit(),
+            },
+            dry_run: false,
+            short_stage_s: 2.0,
+            repeats: 3,
+        }
+    }
+}
+
+/// What a run produced.
+#[derive(Clone, Debug)]
+pub struct RunReport {
+    pub name: String,
+    pub out: PathBuf,
+    pub rows: Vec<Row>,
+    /// The thresholds of the profile that ran.
+    pub thresholds: Vec<Threshold>,
+    /// The plan as printed by `--dry-run`.
+    pub plan_text: String,
+    pub seconds: f64,
+}
+
+/// Fails unless `dir` can be created and written to.
+pub fn ensure_writable(dir: &Path) -> Result<(), String> {
+    let fail = |e: std::io::Error| format!("output folder {} is not writable: {e}", dir.display());
+    std::fs::create_dir_all(dir).map_err(fail)?;
+    let probe = dir.join(format!(".write-probe-{}", std::process::id()));
+    std::fs::write(&probe, b"").map_err(fail)?;
+    std::fs::remove_file(&probe).map_err(fail)
+}
+
+/// Runs `ls` (or prints its plan with `dry_run`).
+pub fn run(ls: &LoadedSpec, opts: &RunOptions) -> Result<RunReport, String> {
+    let started = std::time::Instant::now();
+    let spec = ls.spec.profile(opts.quick);
+    let profile = if opts.quick { "quick" } else { "full" };
+    if !opts.dry_run {
+        ensure_writable(&opts.out)?;
+    }
+    let scenes_path = if opts.quick && ls.spec.quick.scenes.is_some() {
+        "quick.scenes"
+    } else {
+        "scenes"
+    };
+    eprintln!("{} ({profile}): {}", ls.name, spec.reproduces);
+    let (scenes, _) = stage("load scenes", || {
+        Scenes::build(&spec, &ls.path, scenes_path)
+    });
+    let scenes = scenes.map_err(|e| e.to_string())?;
+    let limits = PlanLimits {
+        memory_limit: opts.supply.memory_limit,
+    };
+    let plan =
+        Plan::new(&spec, &scenes, limits).map_err(|e| format!("{}: {e}", ls.path.display()))?;
+    let supply = &opts.supply;
+    let plan_text = plan.describe(&ls.name, &scenes, &|m, p| {
+        supply.state(&scenes.meshes[m], p)
+    });
+    let report = |rows: Vec<Row>| RunReport {
+        name: ls.name.clone(),
+        out: opts.out.clone(),
+        rows,
+        thresholds: spec.thresholds.clone(),
+        plan_text: plan_text.clone(),
+        seconds: started.elapsed().as_secs_f64(),
+    };
+    if opts.dry_run {
+        return Ok(report(Vec::new()));
+    }
+    eprint!("{plan_text}");
+    let mut runner = Runner::new(&spec, &plan, &scenes, opts)?;
+    for step in &plan.steps {
+        runner.step(step)?;
+    }
+    let rows = runner.finish(ls)?;
+    let r = report(rows);
+    eprintln!(
+        "{}: {} cells in {:.1} s -> {}",
+        ls.name,
+        r.rows.len(),
+        r.seconds,
+        opts.out.display()
+    );
+    Ok(r)
+}

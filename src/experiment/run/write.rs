@@ -1,0 +1,159 @@
+//! The end of a run: the pair table, the CSV files, the per-point AO, `run.json`, the spec copy
+//! and the plots.
+
+use super::state::io_err;
+use super::steps::Runner;
+use super::LoadedSpec;
+use crate::experiment::outputs::{self, PairRow, Row};
+use crate::experiment::spec::Backend;
+use crate::render::image::{rms_255, rms_vertex};
+
+impl Runner<'_> {
+    /// RMS between every two cells that differ only in precision.
+    fn pairs(&self) -> Vec<PairRow> {
+        let mut out = Vec::new();
+        for (i, a) in self.results.iter().enumerate() {
+            for b in &self.results[i + 1..] {
+                let (ca, cb) = (self.plan.cells[a.cell], self.plan.cells[b.cell]);
+                let same = ca.scene == cb.scene
+                    && ca.geometry() == cb.geometry()
+                    && ca.selection == cb.selection
+                    && ca.backend == cb.backend
+                    && ca.params.precision != cb.params.precision;
+                if !same {
+                    continue;
+                }
+                let st = self.states[ca.scene].as_ref().expect("scene state");
+                let rms_image = match (&a.image, &b.image, &st.ref_image) {
+                    (Some(x), Some(y), Some((_, mask))) => {
+                        Some(rms_255(&x.data, &y.data, Some(mask)))
+                    }
+                    _ => None,
+                };
+                out.push(PairRow {
+                    scene: self.scenes.scenes[ca.scene].name.clone(),
+                    sphere: ca.params.sphere,
+                    positional_samples: ca.params.count,
+                    directional_res: ca.params.res,
+                    layout: ca.params.layout,
+                    selection: ca.selection,
+                    backend: ca.backend,
+                    precision_a: ca.params.precision,
+                    precision_b: cb.params.precision,
+                    rms_vertex: st.receivers.as_ref().map(|_| rms_vertex(&a.ao, &b.ao)),
+                    rms_image,
+                });
+            }
+        }
+        out
+    }
+
+    /// Per-point AO of every vertex-AO scene: the reference and each cell, one column each.
+    fn write_point_ao(&self) -> Result<(), String> {
+        for (s, bs) in self.scenes.scenes.iter().enumerate() {
+            let Some(st) = self.states[s].as_ref().filter(|st| st.receivers.is_some()) else {
+                continue;
+            };
+            let cols: Vec<_> = self
+                .results
+                .iter()
+                .filter(|r| self.plan.cells[r.cell].scene == s)
+                .collect();
+            let mut text = String::from("point,x,y,z,reference");
+            for r in &cols {
+                text.push(',');
+                text.push_str(&self.plan.cells[r.cell].id(&bs.name));
+            }
+            text.push('\n');
+            for (i, p) in st.points.iter().enumerate() {
+                text.push_str(&format!("{i},{},{},{},{}", p.x, p.y, p.z, st.reference[i]));
+                for r in &cols {
+                    text.push_str(&format!(",{}", r.ao[i]));
+                }
+                text.push('\n');
+            }
+            let p = self.opts.out.join(format!("ao_{}.csv", bs.name));
+            crate::io::write_atomic(&p, text.as_bytes()).map_err(io_err(&p))?;
+        }
+        Ok(())
+    }
+
+    /// Writes every output and returns the table rows in cell order.
+    pub(super) fn finish(mut self, ls: &LoadedSpec) -> Result<Vec<Row>, String> {
+        self.rows.sort_by_key(|(c, _)| *c);
+        self.results.sort_by_key(|r| r.cell);
+        let rows: Vec<Row> = self.rows.iter().map(|(_, r)| r.clone()).collect();
+        let pairs = self.pairs();
+        let (spec, opts, out) = (self.spec, self.opts, &self.opts.out);
+        outputs::write_csv(&out.join("table.csv"), &rows)?;
+        outputs::write_csv(&out.join("raycast_sweep.csv"), &self.sweep)?;
+        if !pairs.is_empty() {
+            outputs::write_csv(&out.join("pairs.csv"), &pairs)?;
+        }
+        if let Some(paper) = &spec.paper {
+            let pv = outputs::paper_vs_ours(paper, &rows, &pairs);
+            outputs::write_csv(&out.join("paper_vs_ours.csv"), &pv)?;
+        }
+        self.write_point_ao()?;
+        let mut meta = crate::experiment::meta::RunMeta::collect(Some(&ls.text));
+        meta.gpu_adapter = self.backends.get(&Backend::Gpu).map(|be| be.adapter());
+        let scene_info: Vec<_> = self
+            .scenes
+            .scenes
+            .iter()
+            .zip(&self.states)
+            .map(|(bs, st)| {
+                let raycast: Option<Vec<_>> = st.as_ref().map(|st| {
+                    st.raycast_s
+                        .iter()
+                        .map(|((b, k), s)| {
+                            serde_json::json!({"backend": b, "rays_per_point": k * k, "seconds": s})
+                        })
+                        .collect()
+                });
+                serde_json::json!({
+                    "name": bs.name,
+                    "instances": bs.scene.instances.len(),
+                    "ao_points": st.as_ref().map(|st| st.points.len()),
+                    "caster_triangles": bs.caster_triangles(),
+                    "ray_offset": st.as_ref().map(|st| st.opts.offset),
+                    "raycast_s": raycast,
+                })
+            })
+            .collect();
+        let plan = self.plan;
+        let summary = serde_json::json!({
+            "spec": ls.name,
+            "spec_file": ls.path,
+            "reproduces": spec.reproduces,
+            "profile": if opts.quick { "quick" } else { "full" },
+            "meta": meta,
+            "rays_per_point": spec.render.rays_per_point,
+            "reference_rays_per_point": spec.reference.rays_per_point,
+            "seed": spec.reference.seed,
+            "timing": format!(
+                "stages under {} s: best of {} runs",
+                opts.short_stage_s, opts.repeats
+            ),
+            "cache": opts.supply.cache,
+            "cache_limit_bytes": opts.supply.cache_limit,
+            "plan": {
+                "cells": plan.cells.len(),
+                "bakes": plan.bakes(),
+                "peak_field_bytes": plan.peak_field_bytes,
+                "needs_gpu": plan.needs_gpu,
+                "needs_normal_field": plan.needs_normal_field,
+            },
+            "scenes": scene_info,
+            "effective_spec": spec,
+        });
+        let p = out.join("run.json");
+        let json = serde_json::to_string_pretty(&summary).expect("run summary serialises");
+        crate::io::write_atomic(&p, json.as_bytes()).map_err(io_err(&p))?;
+        let p = out.join("spec.json");
+        crate::io::write_atomic(&p, ls.text.as_bytes()).map_err(io_err(&p))?;
+        let title = format!("{}{}", ls.name, if opts.quick { " (quick)" } else { "" });
+        crate::experiment::figures::draw_all(out, &title)?;
+        Ok(rows)
+    }
+}

@@ -1,0 +1,184 @@
+//! Building a spec's scenes: meshes loaded (or generated) once each, placed by their transforms.
+//!
+//! The AO scene's roles follow the 2008 paper: a receiver gets AO at its vertices; occlusion
+//! comes from casters only (the reference traces the casters' triangles, the field lookup reads
+//! the casters' fields). The corner is a receiver only, so it never occludes itself. An instance
+//! that is both (the 2008 Figure 8 multiple-object scene) is occluded by its own field through
+//! the intra-object path of the lookup, and by its own triangles in the reference.
+
+use super::spec::{MeshSource, Spec, SpecError, TransformSpec};
+use crate::geometry::procedural::{self, Supershape};
+use crate::geometry::{models, Instance, Mesh, Scene, Similarity};
+use glam::{EulerRot, Quat, Vec3};
+use std::path::Path;
+use std::sync::Arc;
+
+/// A mesh used by the spec, with the hash that keys its cached fields.
+#[derive(Clone, Debug)]
+pub struct LoadedMesh {
+    /// Label in tables and the plan (model name or procedural description).
+    pub label: String,
+    pub mesh: Arc<Mesh>,
+    /// sha256 of the model-space positions and triangles (little-endian f32 / u32).
+    pub sha256: String,
+}
+
+/// One scene of the spec.
+#[derive(Clone, Debug)]
+pub struct BuiltScene {
+    pub name: String,
+    pub scene: Scene,
+    /// Per instance: its mesh's index in [`Scenes::meshes`].
+    pub mesh_of: Vec<usize>,
+}
+
+impl BuiltScene {
+    /// Indices of the distinct meshes of the casters, in first-use order.
+    pub fn caster_meshes(&self) -> Vec<usize> {
+        let mut out = Vec::new();
+        for (i, _) in self.scene.casters() {
+            if !out.contains(&self.mesh_of[i]) {
+                out.push(self.mesh_of[i]);
+            }
+        }
+        out
+    }
+
+    /// Receiver vertices (the vertex-AO points).
+    pub fn receiver_vertices(&self) -> usize {
+        self.scene
+            .receivers()
+            .map(|(_, i)| i.mesh.vertex_count())
+            .sum()
+    }
+
+    /// Triangles of every caster.
+    pub fn caster_triangles(&self) -> usize {
+        self.scene
+            .casters()
+            .map(|(_, i)| i.mesh.triangle_count())
+            .sum()
+    }
+
+    /// Radius of the minimal sphere around every instance (the scale of the ray offset).
+    pub fn radius(&self) -> f32 {
+        let pts: Vec<Vec3> = self
+            .scene
+            .instances
+            .iter()
+            .flat_map(|i| i.world_triangles().flatten())
+            .collect();
+        crate::geometry::minimal_bounding_sphere(&pts).radius
+    }
+}
+
+/// Every scene of a spec profile, with its meshes deduplicated.
+#[derive(Clone, Debug, Default)]
+pub struct Scenes {
+    pub meshes: Vec<LoadedMesh>,
+    pub scenes: Vec<BuiltScene>,
+}
+
+impl Scenes {
+    /// Loads and places the meshes of `spec`'s scenes; `path` is where the scenes live in the
+    /// file (`scenes` or `quick.scenes`), for error messages.
+    pub fn build(spec: &Spec, file: &Path, path: &str) -> Result<Scenes, SpecError> {
+        let mut out = Scenes::default();
+        let mut sources: Vec<MeshSource> = Vec::new();
+        for (si, sc) in spec.scenes.iter().enumerate() {
+            let mut instances = Vec::new();
+            let mut mesh_of = Vec::new();
+            for (ii, inst) in sc.instances.iter().enumerate() {
+                let at = format!("{path}[{si}].instances[{ii}].mesh");
+                let m = match sources.iter().position(|s| s == &inst.mesh) {
+                    Some(m) => m,
+                    None => {
+                        let mesh =
+                            build_mesh(&inst.mesh).map_err(|message| SpecError::Invalid {
+                                file: file.to_path_buf(),
+                                field: at.clone(),
+                                message,
+                            })?;
+                        sources.push(inst.mesh.clone());
+                        out.meshes.push(LoadedMesh {
+                            label: inst.mesh.label(),
+                            sha256: mesh_sha256(&mesh),
+                            mesh: Arc::new(mesh),
+                        });
+                        out.meshes.len() - 1
+                    }
+                };
+                let mesh = out.meshes[m].mesh.clone();
+                instances.push(Instance {
+                    transform: similarity(&inst.transform, &mesh),
+                    mesh,
+                    caster: inst.caster,
+                    receiver: inst.receiver,
+                });
+                mesh_of.push(m);
+            }
+            out.scenes.push(BuiltScene {
+                name: sc.name.clone(),
+                scene: Scene { instances },
+                mesh_of,
+            });
+        }
+        Ok(out)
+    }
+}
+
+/// Loads or generates a mesh.
+pub fn build_mesh(src: &MeshSource) -> Result<Mesh, String> {
+    let r = match src {
+        MeshSource::Model(name) => return models::load_model(name).map_err(|e| e.to_string()),
+        MeshSource::Corner { n } => procedural::corner(*n),
+        MeshSource::CubeWithHole { size, hole } => procedural::cube_with_hole(*size, *hole),
+        MeshSource::Supershape { triangles } => {
+            procedural::supershape(&Supershape::default(), *triangles)
+        }
+        MeshSource::Sphere {
+            radius,
+            stacks,
+            slices,
+        } => procedural::uv_sphere(*radius, *stacks, *slices),
+        MeshSource::Plane { size, n } => procedural::plane(*size, *n),
+    };
+    r.map_err(|e| e.to_string())
+}
+
+/// The placement of `mesh` described by `t` (see [`TransformSpec`]).
+pub fn similarity(t: &TransformSpec, mesh: &Mesh) -> Similarity {
+    let rotation = t
+        .rotate_deg
+        .map(|d| {
+            Quat::from_euler(
+                EulerRot::YXZ,
+                d.y.to_radians(),
+                d.x.to_radians(),
+                d.z.to_radians(),
+            )
+            .normalize()
+        })
+        .unwrap_or(Quat::IDENTITY);
+    let inner = match &t.fit {
+        Some(f) => {
+            let s = mesh.bounding_sphere();
+            let k = f.radius / s.radius;
+            Similarity::new(rotation, f.center - k * (rotation * s.center), k)
+        }
+        None => Similarity::new(rotation, Vec3::ZERO, 1.0),
+    };
+    let outer = Similarity::new(
+        Quat::IDENTITY,
+        t.translate.unwrap_or(Vec3::ZERO),
+        t.scale.unwrap_or(1.0),
+    );
+    outer.compose(&inner)
+}
+
+/// sha256 of a mesh's model-space positions and triangles.
+pub fn mesh_sha256(mesh: &Mesh) -> String {
+    let mut bytes: Vec<u8> = bytemuck::cast_slice(&mesh.positions).to_vec();
+    bytes.extend_from_slice(bytemuck::cast_slice(&mesh.triangles));
+    crate::io::sha256_hex(&bytes)
+}

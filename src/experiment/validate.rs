@@ -1,0 +1,365 @@
+//! Spec validation: everything a spec can get wrong that serde cannot see, each error naming the
+//! file and the field path (`fields[0].counts[2]`, `quick.thresholds[1]`), with what was
+//! expected. Both profiles are checked: the full one, and the quick one with the paths of the
+//! parts it replaces prefixed by `quick.`.
+
+use super::spec::{
+    exact_sqrt, FieldAxes, MeshSource, RenderKind, SceneSpec, Spec, SpecError, Threshold,
+};
+use crate::geometry::models::ModelRegistry;
+use crate::sampling::{HemisphereLayout, SphereKind, SpherePoints};
+use std::path::Path;
+
+/// Where each replaceable part of a profile lives in the file.
+struct Paths {
+    scenes: &'static str,
+    fields: &'static str,
+    render_rays: &'static str,
+    reference_rays: &'static str,
+    image: &'static str,
+    sweep: &'static str,
+    thresholds: &'static str,
+}
+
+/// Validates both profiles of `spec`.
+pub fn validate(spec: &Spec, file: &Path) -> Result<(), SpecError> {
+    let full = Paths {
+        scenes: "scenes",
+        fields: "fields",
+        render_rays: "render.rays_per_point",
+        reference_rays: "reference.rays_per_point",
+        image: "render.image",
+        sweep: "reference.raycast_sweep",
+        thresholds: "thresholds",
+    };
+    let q = &spec.quick;
+    let pick = |given: bool, quick: &'static str, full: &'static str| {
+        if given {
+            quick
+        } else {
+            full
+        }
+    };
+    let rays = q.rays_per_point.is_some();
+    let quick = Paths {
+        scenes: pick(q.scenes.is_some(), "quick.scenes", full.scenes),
+        fields: pick(q.fields.is_some(), "quick.fields", full.fields),
+        render_rays: pick(rays, "quick.rays_per_point", full.render_rays),
+        reference_rays: pick(rays, "quick.rays_per_point", full.reference_rays),
+        image: pick(q.image.is_some(), "quick.image", full.image),
+        sweep: pick(q.raycast_sweep.is_some(), "quick.raycast_sweep", full.sweep),
+        thresholds: "quick.thresholds",
+    };
+    let ctx = Ctx { file };
+    ctx.profile(spec, &full)?;
+    ctx.profile(&spec.quick(), &quick)?;
+    if spec.reproduces.trim().is_empty() {
+        return Err(ctx.err(
+            "reproduces",
+            "must name the figure or table reproduced".into(),
+        ));
+    }
+    Ok(())
+}
+
+struct Ctx<'a> {
+    file: &'a Path,
+}
+
+impl Ctx<'_> {
+    fn err(&self, field: &str, message: String) -> SpecError {
+        SpecError::Invalid {
+            file: self.file.to_path_buf(),
+            field: field.to_string(),
+            message,
+        }
+    }
+
+    fn profile(&self, s: &Spec, p: &Paths) -> Result<(), SpecError> {
+        self.scenes(&s.scenes, p.scenes)?;
+        if s.fields.is_empty() {
+            return Err(self.err(p.fields, "needs at least one entry".into()));
+        }
+        for (i, f) in s.fields.iter().enumerate() {
+            self.axes(f, &format!("{}[{i}]", p.fields))?;
+        }
+        self.square(s.render.rays_per_point, p.render_rays)?;
+        self.square(s.reference.rays_per_point, p.reference_rays)?;
+        for (i, &n) in s.reference.raycast_sweep.iter().enumerate() {
+            self.square(n, &format!("{}[{i}]", p.sweep))?;
+        }
+        if let Some(img) = &s.render.image {
+            for (name, v) in [("width", img.width), ("height", img.height)] {
+                if !(1..=8192).contains(&v) {
+                    return Err(self.err(
+                        &format!("{}.{name}", p.image),
+                        format!("{v} is outside 1..=8192 pixels"),
+                    ));
+                }
+            }
+        }
+        match s.render.what {
+            RenderKind::VertexAo => {}
+            RenderKind::ImageAo if s.render.image.is_none() => {
+                return Err(self.err(
+                    "render.image",
+                    "\"image_ao\" computes AO per pixel and needs an image".into(),
+                ))
+            }
+            RenderKind::ImageAo => {}
+            RenderKind::Shadows | RenderKind::Reflections => {
+                return Err(self.err(
+                    "render.what",
+                    "soft shadows and reflections (2010 §4) are not in this build yet; use \
+                     \"vertex_ao\" or \"image_ao\""
+                        .into(),
+                ))
+            }
+        }
+        if let Some(d) = s.render.max_distance {
+            if !(d > 0.0 && d.is_finite()) {
+                return Err(self.err(
+                    "render.max_distance",
+                    format!("{d} must be positive and finite"),
+                ));
+            }
+        }
+        if let Some(b) = s.render.intra_bias {
+            if !(0.0..1.0).contains(&b) {
+                return Err(self.err("render.intra_bias", format!("{b} is outside [0, 1)")));
+            }
+        }
+        if s.backends.is_empty() {
+            return Err(self.err("backends", "needs \"cpu\" and/or \"gpu\"".into()));
+        }
+        for (i, b) in s.backends.iter().enumerate() {
+            if s.backends[..i].contains(b) {
+                return Err(self.err(&format!("backends[{i}]"), format!("{b:?} twice")));
+            }
+        }
+        if let Some(paper) = &s.paper {
+            for (i, c) in paper.cells.iter().enumerate() {
+                if paper.cells[..i].iter().any(|d| d.label == c.label) {
+                    return Err(self.err(
+                        &format!("paper.cells[{i}].label"),
+                        format!("label `{}` is used twice", c.label),
+                    ));
+                }
+            }
+            if let Some(r) = &paper.reference_cell {
+                if !paper.cells.iter().any(|c| &c.label == r) {
+                    return Err(self.err(
+                        "paper.reference_cell",
+                        format!("no paper cell is labelled `{r}`"),
+                    ));
+                }
+            }
+        }
+        for (i, t) in s.thresholds.iter().enumerate() {
+            self.threshold(s, t, &format!("{}[{i}]", p.thresholds))?;
+        }
+        Ok(())
+    }
+
+    fn scenes(&self, scenes: &[SceneSpec], path: &str) -> Result<(), SpecError> {
+        if scenes.is_empty() {
+            return Err(self.err(path, "needs at least one scene".into()));
+        }
+        for (i, sc) in scenes.iter().enumerate() {
+            let here = format!("{path}[{i}]");
+            let ok = !sc.name.is_empty()
+                && sc
+                    .name
+                    .chars()
+                    .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-');
+            if !ok {
+                return Err(self.err(
+                    &format!("{here}.name"),
+                    format!(
+                        "`{}` must be non-empty letters, digits, `_` or `-`",
+                        sc.name
+                    ),
+                ));
+            }
+            if scenes[..i].iter().any(|o| o.name == sc.name) {
+                return Err(self.err(
+                    &format!("{here}.name"),
+                    format!("scene `{}` twice", sc.name),
+                ));
+            }
+            if !sc.instances.iter().any(|i| i.receiver) {
+                return Err(self.err(&here, "no instance is a receiver".into()));
+            }
+            if !sc.instances.iter().any(|i| i.caster) {
+                return Err(self.err(&here, "no instance is a caster".into()));
+            }
+            for (j, inst) in sc.instances.iter().enumerate() {
+                let at = format!("{here}.instances[{j}]");
+                self.mesh(&inst.mesh, &format!("{at}.mesh"))?;
+                let t = &inst.transform;
+                if let Some(f) = &t.fit {
+                    if !(f.radius > 0.0 && f.radius.is_finite() && f.center.is_finite()) {
+                        return Err(self.err(
+                            &format!("{at}.transform.fit"),
+                            "needs a finite centre and a positive finite radius".into(),
+                        ));
+                    }
+                }
+                if let Some(s) = t.scale {
+                    if !(s > 0.0 && s.is_finite()) {
+                        return Err(self.err(
+                            &format!("{at}.transform.scale"),
+                            format!("{s} must be positive and finite"),
+                        ));
+                    }
+                }
+                let finite = |v: Option<glam::Vec3>| v.is_none_or(|v| v.is_finite());
+                if !finite(t.rotate_deg) || !finite(t.translate) {
+                    return Err(self.err(
+                        &format!("{at}.transform"),
+                        "rotation and translation must be finite".into(),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn mesh(&self, m: &MeshSource, path: &str) -> Result<(), SpecError> {
+        let bad = |what: &str| Err(self.err(path, what.to_string()));
+        let pos = |x: f32| x > 0.0 && x.is_finite();
+        match m {
+            MeshSource::Model(name) => {
+                let entry = ModelRegistry::embedded()
+                    .get(name)
+                    .map_err(|e| self.err(&format!("{path}.model"), e.to_string()))?;
+                if !entry.loadable {
+                    return Err(self.err(
+                        &format!("{path}.model"),
+                        format!("model `{name}` is listed but not loadable"),
+                    ));
+                }
+                Ok(())
+            }
+            MeshSource::Corner { n } if *n < 2 => bad("corner: n must be at least 2"),
+            MeshSource::CubeWithHole { size, hole }
+                if !(pos(*size) && pos(*hole) && hole < size) =>
+            {
+                bad("cube_with_hole: needs 0 < hole < size")
+            }
+            MeshSource::Supershape { triangles } if *triangles < 8 => {
+                bad("supershape: needs at least 8 triangles")
+            }
+            MeshSource::Sphere {
+                radius,
+                stacks,
+                slices,
+            } if !(pos(*radius) && *stacks >= 2 && *slices >= 3) => {
+                bad("sphere: needs radius > 0, stacks >= 2, slices >= 3")
+            }
+            MeshSource::Plane { size, n } if !(pos(*size) && *n >= 2) => {
+                bad("plane: needs size > 0 and n >= 2")
+            }
+            _ => Ok(()),
+        }
+    }
+
+    fn axes(&self, f: &FieldAxes, path: &str) -> Result<(), SpecError> {
+        for (name, empty) in [
+            ("spheres", f.spheres.is_empty()),
+            ("counts", f.counts.is_empty()),
+            ("layouts", f.layouts.is_empty()),
+            ("resolutions", f.resolutions.is_empty()),
+            ("precisions", f.precisions.is_empty()),
+            ("selections", f.selections.is_empty()),
+        ] {
+            if empty {
+                return Err(self.err(&format!("{path}.{name}"), "must not be empty".into()));
+            }
+        }
+        for (i, &c) in f.counts.iter().enumerate() {
+            for &k in &f.spheres {
+                if let Err(e) = SpherePoints::check_count(k, c) {
+                    let near = nearest_valid_counts(k, c);
+                    return Err(self.err(
+                        &format!("{path}.counts[{i}]"),
+                        format!("{e}; nearest valid {} counts: {near:?}", k.name()),
+                    ));
+                }
+            }
+        }
+        for (i, &r) in f.resolutions.iter().enumerate() {
+            let at = format!("{path}.resolutions[{i}]");
+            if !(2..=4096).contains(&r) {
+                return Err(self.err(&at, format!("{r} is outside 2..=4096")));
+            }
+            for &l in &f.layouts {
+                HemisphereLayout::try_new(l, r).map_err(|e| self.err(&at, e.to_string()))?;
+            }
+        }
+        Ok(())
+    }
+
+    fn square(&self, n: u32, path: &str) -> Result<(), SpecError> {
+        if exact_sqrt(n).is_none() {
+            let k = (n as f64).sqrt().floor().max(1.0) as u32;
+            return Err(self.err(
+                path,
+                format!(
+                    "{n} rays is not a positive perfect square (rays are k × k stratified cells); \
+                     nearest: {} or {}",
+                    k * k,
+                    (k + 1) * (k + 1)
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    fn threshold(&self, s: &Spec, t: &Threshold, path: &str) -> Result<(), SpecError> {
+        if t.rms_vertex_max.is_none() && t.rms_image_max.is_none() {
+            return Err(self.err(path, "sets neither rms_vertex_max nor rms_image_max".into()));
+        }
+        for (name, v) in [
+            ("rms_vertex_max", t.rms_vertex_max),
+            ("rms_image_max", t.rms_image_max),
+        ] {
+            if v.is_some_and(|v| !(v >= 0.0 && v.is_finite())) {
+                return Err(self.err(
+                    &format!("{path}.{name}"),
+                    "must be finite and non-negative".into(),
+                ));
+            }
+        }
+        if t.rms_image_max.is_some() && s.render.image.is_none() {
+            return Err(self.err(
+                &format!("{path}.rms_image_max"),
+                "the spec renders no image".into(),
+            ));
+        }
+        if t.rms_vertex_max.is_some() && s.render.what == RenderKind::ImageAo {
+            return Err(self.err(
+                &format!("{path}.rms_vertex_max"),
+                "\"image_ao\" has no per-vertex AO".into(),
+            ));
+        }
+        let cells = super::plan::cells_of(s);
+        if !cells
+            .iter()
+            .any(|c| super::check::threshold_matches(t, &s.scenes[c.scene].name, c))
+        {
+            return Err(self.err(path, "matches no cell of the spec".into()));
+        }
+        Ok(())
+    }
+}
+
+/// Up to two valid counts of `kind` on either side of `count`.
+fn nearest_valid_counts(kind: SphereKind, count: usize) -> Vec<usize> {
+    if kind == SphereKind::Fibonacci {
+        return vec![count.clamp(4, 1 << 24)];
+    }
+    let all = SpherePoints::valid_counts(kind, 5000);
+    let i = all.partition_point(|&c| c < count);
+    all[i.saturating_sub(2)..(i + 2).min(all.len())].to_vec()
+}

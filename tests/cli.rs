@@ -1,0 +1,115 @@
+//! The `experiment` binary: help for every subcommand, errors naming the spec file, and `check`
+//! exit codes on a tiny spec.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn experiment(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_experiment"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .env_remove("VISFIELD_EXPERIMENTS")
+        .output()
+        .expect("the experiment binary runs")
+}
+
+fn text(o: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
+#[test]
+fn help_works_for_every_subcommand() {
+    for sub in [
+        "quickstart",
+        "list",
+        "run",
+        "check",
+        "all",
+        "plots",
+        "figure6",
+    ] {
+        let o = experiment(&[sub, "--help"]);
+        assert!(o.status.success(), "{sub} --help: {}", text(&o));
+        assert!(text(&o).contains("Usage"), "{sub} --help: {}", text(&o));
+    }
+    let o = experiment(&["figure6", "--help"]);
+    assert!(text(&o).contains("--quick") && text(&o).contains("--dry-run"));
+}
+
+#[test]
+fn list_names_the_specs_and_their_figures() {
+    let o = experiment(&["list"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    let line = out.lines().find(|l| l.starts_with("figure6 ")).expect(&out);
+    assert!(line.contains("Figure 6"), "{line}");
+}
+
+#[test]
+fn a_malformed_or_missing_spec_fails_naming_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let bad = dir.path().join("broken.json");
+    std::fs::write(&bad, "{ \"reproduces\": \"x\", \"scenes\": [ }").unwrap();
+    let o = experiment(&["run", bad.to_str().unwrap(), "--dry-run"]);
+    assert!(!o.status.success());
+    assert!(text(&o).contains("broken.json"), "{}", text(&o));
+
+    let missing = dir.path().join("missing.json");
+    let o = experiment(&["run", missing.to_str().unwrap()]);
+    assert!(!o.status.success());
+    assert!(text(&o).contains("missing.json"), "{}", text(&o));
+
+    let o = experiment(&["no-such-figure"]);
+    assert!(!o.status.success());
+    assert!(
+        text(&o).contains("unknown experiment `no-such-figure`") && text(&o).contains("figure6")
+    );
+}
+
+fn tiny_spec(dir: &Path, rms_image_max: f64) -> String {
+    let text = format!(
+        r#"{{
+  "reproduces": "test",
+  "scenes": [{{ "name": "tiny", "instances": [
+    {{ "mesh": {{ "corner": {{ "n": 9 }} }}, "receiver": true }},
+    {{ "mesh": {{ "sphere": {{ "radius": 0.3, "stacks": 8, "slices": 12 }} }}, "caster": true,
+       "transform": {{ "translate": [0.5, 0.45, 0.5] }} }} ] }}],
+  "fields": [{{ "counts": [50], "resolutions": [8] }}],
+  "render": {{ "rays_per_point": 16, "image": {{ "width": 24, "height": 24 }} }},
+  "reference": {{ "rays_per_point": 16, "raycast_sweep": [4] }},
+  "quick": {{ "thresholds": [{{ "rms_image_max": {rms_image_max} }}] }}
+}}"#
+    );
+    let p = dir.join(format!("tiny{}.json", (rms_image_max * 1000.0) as u64));
+    std::fs::write(&p, text).unwrap();
+    p.to_string_lossy().into_owned()
+}
+
+#[test]
+fn check_exits_non_zero_naming_the_cell_only_when_a_threshold_is_passed() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let out = out.to_str().unwrap();
+    // 50 maps of 8² texels are far from exact (measured: RMS ≈ 4.9 per pixel), so a zero
+    // threshold fails; a threshold of 255 (the whole scale) cannot fail.
+    let strict = tiny_spec(dir.path(), 0.0);
+    let o = experiment(&["check", &strict, "--quick", "--no-cache", "--out", out]);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(
+        t.contains("FAIL") && t.contains("tiny-slater-50-concentric-8-u8-nearest-cpu"),
+        "{t}"
+    );
+    let lax = tiny_spec(dir.path(), 255.0);
+    let o = experiment(&["check", &lax, "--quick", "--no-cache", "--out", out]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(
+        text(&o).contains("1 threshold(s), 0 failure(s)"),
+        "{}",
+        text(&o)
+    );
+}

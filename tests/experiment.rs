@@ -1,0 +1,438 @@
+//! The experiment harness: spec errors, the planner, an end-to-end run of a tiny spec, the
+//! threshold check, and every shipped spec.
+
+use glam::Quat;
+use std::path::{Path, PathBuf};
+use visfield::experiment::check::check_rows;
+use visfield::experiment::fields::{requantize, FieldSupply};
+use visfield::experiment::outputs::{paper_vs_ours, read_csv, Row, TABLE_COLUMNS};
+use visfield::experiment::plan::{Plan, PlanLimits, Step};
+use visfield::experiment::run::{run, LoadedSpec, RunOptions};
+use visfield::experiment::scenes::Scenes;
+use visfield::experiment::spec::{PaperCell, PaperNumbers, Spec, SpecError, Threshold};
+use visfield::field::bake::{bake, BakeOptions};
+use visfield::field::{FieldParams, Precision};
+use visfield::geometry::procedural;
+use visfield::sampling::{LayoutKind, SphereKind};
+
+/// A tiny procedural spec: a 2,000-triangle supershape fitted over a 9 × 9 corner, 290 Slater
+/// maps × 16² concentric texels, 16 rays per vertex, a 32 × 32 image. `fields` and
+/// `thresholds` are spliced in as JSON.
+fn tiny(fields: &str, thresholds: &str) -> String {
+    format!(
+        r#"{{
+  "reproduces": "test",
+  "scenes": [{{
+    "name": "tiny",
+    "instances": [
+      {{ "mesh": {{ "corner": {{ "n": 9 }} }}, "receiver": true }},
+      {{ "mesh": {{ "supershape": {{ "triangles": 2000 }} }}, "caster": true,
+         "transform": {{ "fit": {{ "center": [0.5, 0.45, 0.5], "radius": 0.35 }} }} }}
+    ]
+  }}],
+  "fields": [{fields}],
+  "render": {{ "rays_per_point": 16, "image": {{ "width": 32, "height": 32 }} }},
+  "reference": {{ "rays_per_point": 16, "raycast_sweep": [4, 16] }},
+  "thresholds": [{thresholds}],
+  "quick": {{}}
+}}"#
+    )
+}
+
+const ONE_FIELD: &str = r#"{ "counts": [290], "resolutions": [16] }"#;
+
+fn parse(text: &str) -> Result<Spec, SpecError> {
+    Spec::parse(text, Path::new("specs/bad.json"))
+}
+
+/// The error text, asserted to name the file.
+fn error_of(text: &str) -> String {
+    let e = parse(text)
+        .expect_err("the spec should be rejected")
+        .to_string();
+    assert!(e.starts_with("specs/bad.json: "), "{e}");
+    e
+}
+
+fn options(out: PathBuf) -> RunOptions {
+    let mut o = RunOptions::new(out);
+    o.supply = FieldSupply {
+        cache: None,
+        cache_limit: 0,
+        memory_limit: 1 << 30,
+    };
+    o.repeats = 1;
+    o
+}
+
+fn loaded(dir: &Path, text: &str) -> LoadedSpec {
+    let path = dir.join("tiny.json");
+    std::fs::write(&path, text).unwrap();
+    LoadedSpec::load(&path).unwrap()
+}
+
+#[test]
+fn spec_errors_name_the_file_the_field_and_what_was_expected() {
+    assert!(parse(&tiny(ONE_FIELD, "")).is_ok());
+
+    let e =
+        error_of(&tiny(ONE_FIELD, "").replace("\"reproduces\"", "\"colour\": 1, \"reproduces\""));
+    assert!(
+        e.contains("unknown field `colour`") && e.contains("`reproduces`"),
+        "{e}"
+    );
+
+    let e = error_of(&tiny(r#"{ "counts": ["many"], "resolutions": [16] }"#, ""));
+    assert!(
+        e.contains("at `fields[0].counts[0]`") && e.contains("invalid type"),
+        "{e}"
+    );
+
+    let e = error_of(&tiny(r#"{ "counts": [0], "resolutions": [16] }"#, ""));
+    assert!(e.contains("field `fields[0].counts[0]`"), "{e}");
+
+    // 300 is no Slater count 2(2n² + 2n + 1); its neighbours are 290 (n = 8) and 362 (n = 9).
+    let e = error_of(&tiny(
+        r#"{ "counts": [290, 300], "resolutions": [16] }"#,
+        "",
+    ));
+    assert!(e.contains("field `fields[0].counts[1]`"), "{e}");
+    assert!(e.contains("290") && e.contains("362"), "{e}");
+
+    let e = error_of(&tiny(ONE_FIELD, "").replace(
+        r#"{ "supershape": { "triangles": 2000 } }"#,
+        r#"{ "model": "teapot" }"#,
+    ));
+    assert!(e.contains("scenes[0].instances[1].mesh.model"), "{e}");
+    assert!(
+        e.contains("unknown model `teapot`") && e.contains("stanford-bunny_39k"),
+        "{e}"
+    );
+
+    // 200 rays is not k²: the nearest squares are 196 = 14² and 225 = 15².
+    let e = error_of(&tiny(ONE_FIELD, "").replace(
+        r#""rays_per_point": 16, "image""#,
+        r#""rays_per_point": 200, "image""#,
+    ));
+    assert!(e.contains("field `render.rays_per_point`"), "{e}");
+    assert!(e.contains("196") && e.contains("225"), "{e}");
+
+    // The quick profile is checked too, under its own path.
+    let e = error_of(
+        &tiny(ONE_FIELD, "").replace(r#""quick": {}"#, r#""quick": { "rays_per_point": 15 }"#),
+    );
+    assert!(e.contains("field `quick.rays_per_point`"), "{e}");
+
+    // A threshold that matches no cell is a typo.
+    let e = error_of(&tiny(
+        ONE_FIELD,
+        r#"{ "directional_res": 64, "rms_image_max": 1 }"#,
+    ));
+    assert!(
+        e.contains("field `thresholds[0]`") && e.contains("matches no cell"),
+        "{e}"
+    );
+}
+
+#[test]
+fn every_shipped_spec_parses_and_has_a_plan() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments");
+    let mut names = Vec::new();
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|x| x == "json") {
+            let ls = LoadedSpec::load(&path).unwrap_or_else(|e| panic!("{e}"));
+            assert!(!ls.spec.reproduces.is_empty());
+            assert!(!visfield::experiment::plan::cells_of(&ls.spec.quick()).is_empty());
+            names.push(ls.name);
+        }
+    }
+    names.sort();
+    for required in ["figure5", "figure6", "figure7", "figure8", "storage"] {
+        assert!(
+            names.iter().any(|n| n == required),
+            "{required} missing: {names:?}"
+        );
+    }
+}
+
+#[test]
+fn planner_bakes_each_field_once_and_derives_precisions() {
+    // Two selections share one bake; two precisions share one f32 bake and two derivations.
+    let fields = r#"{ "counts": [290], "resolutions": [16], "selections": ["nearest", "interpolated"],
+                      "precisions": ["u8", "bit1"] }"#;
+    let spec = parse(&tiny(fields, "")).unwrap();
+    let scenes = Scenes::build(&spec, Path::new("t.json"), "scenes").unwrap();
+    let plan = Plan::new(
+        &spec,
+        &scenes,
+        PlanLimits {
+            memory_limit: 1 << 30,
+        },
+    )
+    .unwrap();
+    assert_eq!(plan.cells.len(), 4);
+    assert_eq!(plan.bakes(), 1);
+    let derives: Vec<Precision> = plan
+        .steps
+        .iter()
+        .filter_map(|s| match s {
+            Step::Derive { to, .. } => Some(*to),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(derives, vec![Precision::U8, Precision::Bit1]);
+    let lookups = plan
+        .steps
+        .iter()
+        .filter(|s| matches!(s, Step::Lookup { .. }))
+        .count();
+    assert_eq!(lookups, 4);
+    // Peak: the f32 source (290 × 256 × 4 bytes) plus the u8 field (290 × 256 bytes).
+    assert_eq!(plan.peak_field_bytes, 290 * 256 * 5);
+    // The reference is planned once: 243 corner vertices × 16 rays.
+    let refs: Vec<u64> = plan
+        .steps
+        .iter()
+        .filter_map(|s| match s {
+            Step::Reference { rays, .. } => Some(*rays),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(refs, vec![243 * 16]);
+
+    // With the f32 field over the memory limit, each precision is baked on its own.
+    let small = PlanLimits {
+        memory_limit: 290 * 256 * 2,
+    };
+    let plan = Plan::new(&spec, &scenes, small).unwrap();
+    assert_eq!(plan.bakes(), 2);
+    assert!(!plan.steps.iter().any(|s| matches!(s, Step::Derive { .. })));
+}
+
+#[test]
+fn dry_run_lists_steps_with_rays_and_bytes() {
+    let dir = tempfile::tempdir().unwrap();
+    let ls = loaded(dir.path(), &tiny(ONE_FIELD, ""));
+    let mut o = options(dir.path().join("out"));
+    o.dry_run = true;
+    let report = run(&ls, &o).unwrap();
+    let t = &report.plan_text;
+    // Bake: 290 maps × 16² texels, all used by the concentric layout: 74,240 rays, 72.50 KiB.
+    let bake = t
+        .lines()
+        .find(|l| l.contains("bake supershape2000"))
+        .expect(t);
+    assert!(
+        bake.contains("74240") && bake.contains("72.50 KiB"),
+        "{bake}"
+    );
+    // Lookup and reference: 243 vertices × 16 rays.
+    let lookup = t
+        .lines()
+        .find(|l| l.contains("lookup AO tiny-slater-290"))
+        .expect(t);
+    assert!(lookup.contains("3888"), "{lookup}");
+    assert!(t.contains("ray-cast reference tiny, 16 rays/point"), "{t}");
+    assert!(t.contains("GPU device: no"), "{t}");
+    assert!(report.rows.is_empty());
+    assert!(!dir.path().join("out").exists(), "a dry run writes nothing");
+}
+
+#[test]
+fn tiny_spec_runs_end_to_end_and_check_uses_its_thresholds() {
+    let dir = tempfile::tempdir().unwrap();
+    let ls = loaded(dir.path(), &tiny(ONE_FIELD, ""));
+    let out = dir.path().join("out");
+    let report = run(&ls, &options(out.clone())).unwrap();
+    let header = std::fs::read_to_string(out.join("table.csv")).unwrap();
+    let columns: Vec<&str> = header.lines().next().unwrap().split(',').collect();
+    assert_eq!(&columns[..13], &TABLE_COLUMNS[..]);
+    let rows: Vec<Row> = read_csv(&out.join("table.csv")).unwrap();
+    assert_eq!(rows, report.rows);
+    assert_eq!(rows.len(), 1);
+    let r = &rows[0];
+    assert_eq!((r.positional_samples, r.directional_res), (290, 16));
+    assert_eq!(
+        (r.receiver_points, r.bake_rays, r.field_bytes),
+        (243, 74240, 74240)
+    );
+    let (rv, ri) = (r.rms_vertex.unwrap(), r.rms_image.unwrap());
+    assert!(rv.is_finite() && ri.is_finite() && rv >= 0.0 && ri >= 0.0);
+    let meta: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("run.json")).unwrap()).unwrap();
+    for key in ["commit", "cpu", "threads", "date", "spec_sha256"] {
+        assert!(!meta["meta"][key].is_null(), "run.json lacks meta.{key}");
+    }
+    assert_eq!(
+        meta["meta"]["spec_sha256"],
+        visfield::io::sha256_hex(ls.text.as_bytes())
+    );
+    for f in [
+        "raycast_sweep.csv",
+        "ao_tiny.csv",
+        "spec.json",
+        "images.png",
+        "differences.png",
+        "pareto.png",
+        "rms_vs_positional.png",
+        "images/tiny-reference.png",
+        "images/tiny-reference.exr",
+        &r.image,
+    ] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+
+    // A threshold below the measured RMS fails, naming the cell; one above passes.
+    let below = Threshold {
+        rms_image_max: Some(ri - 1e-6),
+        ..Threshold::default()
+    };
+    let failures = check_rows(&[below], &rows);
+    assert_eq!(failures.len(), 1);
+    assert_eq!(
+        failures[0].cell,
+        "tiny-slater-290-concentric-16-u8-nearest-cpu"
+    );
+    assert!(failures[0].to_string().contains(&failures[0].cell));
+    let above = Threshold {
+        rms_vertex_max: Some(rv + 1e-6),
+        rms_image_max: Some(ri + 1e-6),
+        positional_samples: Some(290),
+        ..Threshold::default()
+    };
+    assert!(check_rows(std::slice::from_ref(&above), &rows).is_empty());
+    // A threshold for other cells does not apply.
+    let other = Threshold {
+        directional_res: Some(32),
+        rms_image_max: Some(0.0),
+        ..Threshold::default()
+    };
+    assert!(check_rows(&[other, above], &rows).is_empty());
+}
+
+#[test]
+fn an_unwritable_output_folder_fails_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let ls = loaded(dir.path(), &tiny(ONE_FIELD, ""));
+    let file = dir.path().join("a-file");
+    std::fs::write(&file, b"").unwrap();
+    let t = std::time::Instant::now();
+    let e = run(&ls, &options(file.join("out"))).unwrap_err();
+    assert!(e.contains("not writable") && e.contains("a-file"), "{e}");
+    // Nothing was loaded or baked: the failure is immediate.
+    assert!(t.elapsed().as_secs_f64() < 1.0);
+}
+
+#[test]
+fn requantising_an_f32_field_equals_baking_at_that_precision() {
+    let mesh = procedural::supershape(&procedural::Supershape::default(), 600).unwrap();
+    let params = |precision| FieldParams {
+        sphere: SphereKind::Slater,
+        count: 50,
+        layout: LayoutKind::Rejection,
+        res: 8,
+        precision,
+    };
+    let opts = BakeOptions::default();
+    let (f32_field, _) = bake(&mesh, params(Precision::F32), &opts).unwrap();
+    for p in [Precision::U16, Precision::U8, Precision::Bit1] {
+        let (baked, _) = bake(&mesh, params(p), &opts).unwrap();
+        let derived = requantize(&f32_field, p);
+        assert_eq!(derived.params, baked.params);
+        assert_eq!(derived.storage, baked.storage, "{p:?}");
+    }
+}
+
+#[test]
+fn fit_transform_reproduces_over_corner() {
+    let spec = parse(&tiny(ONE_FIELD, "")).unwrap();
+    let scenes = Scenes::build(&spec, Path::new("t.json"), "scenes").unwrap();
+    let built = &scenes.scenes[0].scene.instances[1];
+    let expected = procedural::over_corner((*built.mesh).clone(), Quat::IDENTITY);
+    let (a, b) = (built.transform, expected.instances[1].transform);
+    assert!(
+        a.translation.distance(b.translation) < 1e-6,
+        "{a:?} vs {b:?}"
+    );
+    assert!((a.scale - b.scale).abs() < 1e-6 && a.rotation.angle_between(b.rotation) < 1e-6);
+    // One loaded mesh per distinct source.
+    assert_eq!(scenes.meshes.len(), 2);
+}
+
+#[test]
+fn paper_ratios_are_normalised_to_the_reference_cell() {
+    let row = |count: usize, bake: f64, ao: f64| Row {
+        positional_samples: count,
+        directional_res: 32,
+        layout: LayoutKind::Concentric,
+        precision: Precision::U8,
+        selection: visfield::field::Selection::Nearest,
+        backend: visfield::experiment::spec::Backend::Cpu,
+        adapter: String::new(),
+        bake_s: Some(bake),
+        ao_s: ao,
+        raycast_s: None,
+        rms_vertex: Some(1.0),
+        rms_image: Some(2.0),
+        field_bytes: 0,
+        scene: "s".into(),
+        sphere: SphereKind::Slater,
+        rays_per_point: 256,
+        receiver_points: 10,
+        caster_triangles: 5,
+        max_error_vertex: None,
+        max_error_image: None,
+        share_pixels_off_1: None,
+        bake_rays: 0,
+        bake_cached: false,
+        image: String::new(),
+        cell: format!("c{count}"),
+    };
+    let cell = |label: &str, count: usize, pre: f64| PaperCell {
+        label: label.into(),
+        positional_samples: Some(count),
+        preprocess_s: Some(pre),
+        ..PaperCell::default()
+    };
+    let paper = PaperNumbers {
+        source: "test".into(),
+        reference_cell: Some("small".into()),
+        cells: vec![
+            cell("big", 1090, 14.0),
+            cell("small", 290, 4.0),
+            cell("none", 4226, 1.0),
+        ],
+    };
+    let rows = [row(290, 2.0, 0.1), row(1090, 8.0, 0.3)];
+    let pv = paper_vs_ours(&paper, &rows, &[]);
+    // big: paper 14 / 4 = 3.5, ours 8 / 2 = 4; AO 0.3 / 0.1 = 3.
+    assert_eq!(pv[0].paper_preprocess_rel, Some(3.5));
+    assert_eq!(pv[0].ours_bake_rel, Some(4.0));
+    assert!((pv[0].ours_ao_rel.unwrap() - 3.0).abs() < 1e-12);
+    assert_eq!(
+        (pv[0].cell.as_str(), pv[0].ours_rms_image),
+        ("c1090", Some(2.0))
+    );
+    assert_eq!(pv[0].ours_rays_cast, Some(2560));
+    // No 4226 row: ours left empty.
+    assert_eq!((pv[2].cell.as_str(), pv[2].ours_bake_s), ("", None));
+}
+
+#[test]
+fn a_gpu_backend_is_refused_before_any_bake() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = tiny(ONE_FIELD, "").replace(
+        r#""reference": {"#,
+        r#""backends": ["cpu", "gpu"], "reference": {"#,
+    );
+    let ls = loaded(dir.path(), &text);
+    let mut o = options(dir.path().join("out"));
+    o.dry_run = true;
+    let plan = run(&ls, &o).unwrap().plan_text;
+    assert!(plan.contains("GPU device: yes"), "{plan}");
+    o.dry_run = false;
+    let e = run(&ls, &o).unwrap_err();
+    assert!(e.contains("backend \"gpu\""), "{e}");
+    assert!(!dir.path().join("out/table.csv").exists());
+}
