@@ -25,6 +25,10 @@ pub struct RunMeta {
     pub spec_sha256: Option<String>,
     /// The command line.
     pub command: String,
+    /// 1, 5 and 15 minute load averages when the run started (from /proc/loadavg): timings
+    /// taken on a loaded machine are slower and noisier.
+    #[serde(default)]
+    pub load_average: String,
 }
 
 impl RunMeta {
@@ -45,6 +49,9 @@ impl RunMeta {
             version: env!("CARGO_PKG_VERSION").to_string(),
             spec_sha256: spec_text.map(|t| crate::io::sha256_hex(t.as_bytes())),
             command: std::env::args().collect::<Vec<_>>().join(" "),
+            load_average: std::fs::read_to_string("/proc/loadavg")
+                .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
+                .unwrap_or_else(|_| "unknown".into()),
         }
     }
 

@@ -104,10 +104,8 @@ struct MeasureRow {
 
 /// Runs the report into `out` (created if missing).
 pub fn run(out: &Path) -> Result<(), ReportError> {
-    // Timings depend on what else runs on the machine; record the load they were taken under.
-    let load_average = std::fs::read_to_string("/proc/loadavg")
-        .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
-        .unwrap_or_else(|_| "unknown".into());
+    // Timings depend on what else runs on the machine: the metadata records the load average.
+    let meta = crate::experiment::meta::RunMeta::collect(None);
     let dirs: Vec<Vec3> = (0..CHECK_DIRECTIONS as u64)
         .map(|i| seeded_sphere_direction(i, SEED))
         .collect();
@@ -188,12 +186,7 @@ pub fn run(out: &Path) -> Result<(), ReportError> {
     }
 
     let run = serde_json::json!({
-        "command": "experiment sampling",
-        "date_utc": utc_now_iso8601(),
-        "cpu": cpu_model(),
-        "threads": rayon::current_num_threads(),
-        "load_average_at_start": load_average,
-        "git_commit": git_commit(),
+        "meta": meta,
         "check_directions": CHECK_DIRECTIONS,
         "timing": format!(
             "single thread, minimum over {TIMING_PASSES} passes of {TIMING_QUERIES} seeded queries"
@@ -283,68 +276,9 @@ fn write_csv<R: serde::Serialize>(path: &Path, rows: &[R]) -> Result<(), ReportE
     })
 }
 
-fn cpu_model() -> String {
-    std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split(':').nth(1))
-                .map(|m| m.trim().to_string())
-        })
-        .unwrap_or_else(|| "unknown".into())
-}
-
-fn git_commit() -> String {
-    std::process::Command::new("git")
-        .args(["rev-parse", "HEAD"])
-        .output()
-        .ok()
-        .filter(|o| o.status.success())
-        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
-        .unwrap_or_else(|| "unknown".into())
-}
-
-/// The current UTC time as `YYYY-MM-DDThh:mm:ssZ`.
-fn utc_now_iso8601() -> String {
-    let secs = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map(|d| d.as_secs())
-        .unwrap_or(0);
-    let (y, m, d) = civil_from_days((secs / 86_400) as i64);
-    let s = secs % 86_400;
-    format!(
-        "{y:04}-{m:02}-{d:02}T{:02}:{:02}:{:02}Z",
-        s / 3600,
-        s / 60 % 60,
-        s % 60
-    )
-}
-
-/// Proleptic Gregorian date of a day count since 1970-01-01 (H. Hinnant's `civil_from_days`).
-fn civil_from_days(z: i64) -> (i64, u32, u32) {
-    let z = z + 719_468;
-    let era = z.div_euclid(146_097);
-    let doe = z.rem_euclid(146_097);
-    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
-    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    let mp = (5 * doy + 2) / 153;
-    let d = (doy - (153 * mp + 2) / 5 + 1) as u32;
-    let m = if mp < 10 { mp + 3 } else { mp - 9 } as u32;
-    (yoe + era * 400 + (m <= 2) as i64, m, d)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn civil_dates() {
-        // 1970-01-01 is day 0; 2000-03-01 is day 11017; 2024-02-29 is day 19782.
-        assert_eq!(civil_from_days(0), (1970, 1, 1));
-        assert_eq!(civil_from_days(11_017), (2000, 3, 1));
-        assert_eq!(civil_from_days(19_782), (2024, 2, 29));
-    }
 
     #[test]
     fn csv_has_the_specified_header() {
