@@ -6,10 +6,12 @@
 //! `cargo bench --bench field`. Casters: stanford-bunny_39k (38,889 triangles), dragon
 //! (100,000) and a 261,120-triangle supershape (the 2010 paper's count). Real models are found
 //! as everywhere else (`$VISFIELD_MODELS`, `data/models/`, `../shared/models/`); a missing model
-//! is skipped with a note.
+//! is skipped with a note. Tracers and bakes are built on first use, so a filter
+//! (`cargo bench --bench field -- bunny`) skips the setup of the groups it leaves out.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use glam::Quat;
+use std::cell::OnceCell;
 use std::sync::Arc;
 use std::time::Duration;
 use visfield::field::bake::{bake, bake_with, BakeOptions};
@@ -43,7 +45,9 @@ fn ao_lookup_vs_raycast(c: &mut Criterion) {
         let scene = over_corner(mesh, Quat::IDENTITY);
         let recv = Receivers::of(&scene);
         let caster = &scene.instances[1];
-        let tracer = Tracer::new(&scene.caster_triangles());
+        // The tracer and the bakes are built on first use, so that a filtered-out benchmark
+        // costs nothing (criterion only runs the closures of the benchmarks it selects).
+        let tracer = OnceCell::new();
         let opts = AoOptions::for_scene_radius(0.9);
         let mut group = c.benchmark_group(format!("ao_256_rays/{name}"));
         group.sample_size(10);
@@ -53,7 +57,8 @@ fn ao_lookup_vs_raycast(c: &mut Criterion) {
             (recv.points.len() * rays.len()) as u64,
         ));
         group.bench_function("raycast_anyhit", |b| {
-            b.iter(|| ao_at_points(&tracer, &recv.points, &recv.normals, &rays, &opts))
+            let tracer = tracer.get_or_init(|| Tracer::new(&scene.caster_triangles()));
+            b.iter(|| ao_at_points(tracer, &recv.points, &recv.normals, &rays, &opts))
         });
         for precision in [
             Precision::U8,
@@ -68,21 +73,25 @@ fn ao_lookup_vs_raycast(c: &mut Criterion) {
                 res: 32,
                 precision,
             };
-            let (field, _) = bake(&caster.mesh, params, &BakeOptions::default()).expect("bake");
-            let field = Arc::new(field);
+            let field = OnceCell::new();
             for selection in [Selection::Nearest, Selection::Interpolated] {
-                let fs = FieldScene {
-                    instances: vec![FieldInstance::new(field.clone(), caster.transform)],
-                    options: LookupOptions {
-                        selection,
-                        ..LookupOptions::default()
-                    },
-                };
                 let id = BenchmarkId::new(
                     format!("field_{selection:?}").to_lowercase(),
                     precision.name(),
                 );
                 group.bench_function(id, |b| {
+                    let field = field.get_or_init(|| {
+                        let (f, _) =
+                            bake(&caster.mesh, params, &BakeOptions::default()).expect("bake");
+                        Arc::new(f)
+                    });
+                    let fs = FieldScene {
+                        instances: vec![FieldInstance::new(field.clone(), caster.transform)],
+                        options: LookupOptions {
+                            selection,
+                            ..LookupOptions::default()
+                        },
+                    };
                     b.iter(|| ao_at_points(&fs, &recv.points, &recv.normals, &rays, &opts))
                 });
             }
@@ -93,7 +102,10 @@ fn ao_lookup_vs_raycast(c: &mut Criterion) {
 
 /// Bake throughput against the tracer's raw closest-hit throughput on exactly the bake's rays.
 fn bake_vs_closest_hit(c: &mut Criterion) {
-    let mesh = casters().remove(0).1;
+    let Ok(mesh) = models::load_model("stanford-bunny_39k") else {
+        eprintln!("skipping bake_290x64: stanford-bunny_39k not found");
+        return;
+    };
     let tris: Vec<_> = (0..mesh.triangles.len())
         .map(|i| mesh.triangle(i))
         .collect();

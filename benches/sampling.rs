@@ -1,4 +1,5 @@
-//! Criterion benches of the sampling inverses: `SpherePoints::nearest` per set and count,
+//! Criterion benches of the sampling inverses: `SpherePoints::nearest` (cube-map grid) and
+//! `SpherePoints::nearest_analytic` per set and count,
 //! `SpherePoints::surrounding`, and `HemisphereLayout::to_texel` per layout. Inputs are seeded
 //! directions, so runs are comparable.
 
@@ -37,6 +38,18 @@ fn nearest(c: &mut Criterion) {
                     .sum::<usize>()
             })
         });
+        // The analytic query without the cube-map grid (ring bracketing, Keinert et al. plus
+        // certificate): the grid's construction oracle.
+        group.bench_function(
+            BenchmarkId::new(format!("{}_analytic", kind.name()), count),
+            |b| {
+                b.iter(|| {
+                    dirs.iter()
+                        .map(|&d| set.nearest_analytic(black_box(d)))
+                        .sum::<usize>()
+                })
+            },
+        );
         if kind == SphereKind::Fibonacci {
             group.bench_function(BenchmarkId::new("fibonacci_keinert", count), |b| {
                 b.iter(|| {

@@ -5,10 +5,13 @@ use super::lookup::{ray_sphere, LookupOptions};
 use super::VisibilityField;
 use crate::geometry::Similarity;
 use crate::render::Visibility;
-use glam::Vec3;
+use glam::{Quat, Vec3};
 use std::sync::Arc;
 
 /// A field placed in the world by a rigid transform (the same field serves every instance).
+///
+/// Built by [`FieldInstance::new`], which caches what every lookup needs from `transform`
+/// (change the transform through a new instance, not by assigning the field).
 #[derive(Clone, Debug)]
 pub struct FieldInstance {
     pub field: Arc<VisibilityField>,
@@ -16,12 +19,28 @@ pub struct FieldInstance {
     /// World-space bounding sphere (centre transformed, radius scaled).
     pub world_center: Vec3,
     pub world_radius: f32,
+    /// `transform.rotation.inverse()` (the same value `Similarity::to_local_point` computes).
+    inv_rotation: Quat,
+    /// The part of [`Self::may_meet`]'s margin that does not depend on the ray.
+    margin_base: f32,
 }
+
+/// Relative slack of [`FieldInstance::may_meet`]: ten times the f32 rounding (a few units of
+/// 6e-8 of the coordinates' magnitude) that separates its world-space test from the exact
+/// model-space one.
+const MAY_MEET_SLACK: f32 = 1e-5;
 
 impl FieldInstance {
     pub fn new(field: Arc<VisibilityField>, transform: Similarity) -> Self {
         let world = transform.to_world_sphere(&field.bounds);
+        let max_abs = |v: Vec3| v.abs().max_element();
         FieldInstance {
+            inv_rotation: transform.rotation.inverse(),
+            margin_base: MAY_MEET_SLACK
+                * (max_abs(world.center)
+                    + max_abs(transform.translation)
+                    + world.radius
+                    + transform.scale * max_abs(field.bounds.center)),
             field,
             transform,
             world_center: world.center,
@@ -29,7 +48,25 @@ impl FieldInstance {
         }
     }
 
+    /// A cheap f32 world-space test that is `false` only when [`Self::hit_distance`] is
+    /// certainly `None` for a unit `dir`: the ray's line passes farther than the sphere's radius
+    /// from its centre, or the whole sphere lies before `tmin`. Both are decided with a margin
+    /// of [`MAY_MEET_SLACK`] times the coordinates' magnitude, far above the rounding that
+    /// separates this test from the f64 model-space one, so a ray near the sphere's outline
+    /// always takes the exact path.
+    #[inline]
+    pub fn may_meet(&self, origin: Vec3, dir: Vec3, tmin: f32) -> bool {
+        let f = self.world_center - origin;
+        let b = f.dot(dir);
+        let l = f - b * dir;
+        let reach =
+            self.world_radius + self.margin_base + MAY_MEET_SLACK * origin.abs().max_element();
+        // Line misses: |l| > R. Sphere behind: every point of it has t ≤ b + R < tmin.
+        l.length_squared() <= reach * reach && b + reach >= tmin
+    }
+
     /// World-space hit distance through this instance's field.
+    #[inline]
     pub fn hit_distance(
         &self,
         origin: Vec3,
@@ -39,8 +76,9 @@ impl FieldInstance {
         opts: &LookupOptions,
     ) -> Option<f32> {
         let tr = &self.transform;
-        let o = tr.to_local_point(origin);
-        let d = tr.to_local_dir(dir).normalize();
+        // Bit-identical to `tr.to_local_point(origin)` and `tr.to_local_dir(dir)`.
+        let o = self.inv_rotation * ((origin - tr.translation) / tr.scale);
+        let d = (self.inv_rotation * dir).normalize();
         self.field
             .hit_distance(
                 o,
@@ -73,14 +111,19 @@ impl FieldScene {
         mut f: impl FnMut(f32, &FieldInstance) -> bool,
     ) {
         if let [only] = self.instances.as_slice() {
-            // One instance: its own lookup does the sphere test.
-            f(tmin, only);
+            // One instance: its own lookup does the exact sphere test, after a cheap rejection.
+            if only.may_meet(origin, dir, tmin) {
+                f(tmin, only);
+            }
             return;
         }
         let mut stack = [(0.0f32, 0usize); 16];
         let mut heap = Vec::new();
         let mut n = 0;
         for (i, inst) in self.instances.iter().enumerate() {
+            if !inst.may_meet(origin, dir, tmin) {
+                continue;
+            }
             if let Some((t0, t1)) = ray_sphere(origin, dir, inst.world_center, inst.world_radius) {
                 if t1 >= tmin && t0 <= tmax {
                     if n < stack.len() {
@@ -136,5 +179,83 @@ impl Visibility for FieldScene {
             true
         });
         best
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::field::{FieldParams, Precision, Storage};
+    use crate::geometry::Sphere;
+    use crate::sampling::rays::seeded_sphere_direction;
+    use crate::sampling::{LayoutKind, SphereKind};
+
+    /// A field whose every texel stores a hit halfway across: a ray entering the sphere from
+    /// outside always reports a hit, so `hit_distance` is `Some` for every ray that meets the
+    /// sphere ahead.
+    fn solid_field() -> Arc<VisibilityField> {
+        let params = FieldParams {
+            sphere: SphereKind::Slater,
+            count: 290,
+            layout: LayoutKind::Concentric,
+            res: 8,
+            precision: Precision::F32,
+        };
+        let storage = Storage::F32 {
+            texels: 64,
+            data: vec![0.5; 290 * 64],
+        };
+        let bounds = Sphere {
+            center: Vec3::new(0.1, -0.2, 0.3),
+            radius: 0.8,
+        };
+        Arc::new(VisibilityField::from_storage(params, bounds, storage).unwrap())
+    }
+
+    #[test]
+    fn may_meet_never_rejects_a_ray_that_hits() {
+        let field = solid_field();
+        let transforms = [
+            Similarity::default(),
+            Similarity::new(
+                Quat::from_euler(glam::EulerRot::YXZ, 0.7, -0.3, 1.1),
+                Vec3::new(1e3, -2e3, 5e2),
+                0.01,
+            ),
+            Similarity::new(Quat::from_rotation_z(2.0), Vec3::new(0.5, 0.5, 0.5), 3.0),
+        ];
+        for tr in transforms {
+            let inst = FieldInstance::new(field.clone(), tr);
+            let (c, r) = (inst.world_center, inst.world_radius);
+            let (mut hits, mut rejected, mut total) = (0, 0, 0);
+            for i in 0..100_000u64 {
+                // Origins from 1.01 R to 10⁴ R away; targets across the sphere's outline
+                // (radii 1 ± 1e-4 in steps of 1e-6), inside it, or anywhere.
+                let dist = r * 10f32.powf(4.0 * (i % 1000) as f32 / 1000.0) * 1.01;
+                let origin = c + dist * seeded_sphere_direction(i, 31);
+                let toward = (c - origin).normalize();
+                let side = seeded_sphere_direction(i, 32).reject_from_normalized(toward);
+                let side = side.normalize_or(toward.any_orthonormal_vector());
+                let target = match i % 3 {
+                    0 => c + r * (1.0 + 1e-6 * ((i / 3 % 201) as f32 - 100.0)) * side,
+                    1 => c + 0.9 * r * seeded_sphere_direction(i, 33),
+                    _ => origin + seeded_sphere_direction(i, 34),
+                };
+                let dir = (target - origin).normalize();
+                let hit = inst
+                    .hit_distance(origin, dir, 0.0, f32::INFINITY, &LookupOptions::default())
+                    .is_some();
+                let meet = inst.may_meet(origin, dir, 0.0);
+                assert!(meet || !hit, "{tr:?}: rejected a hit, {origin} {dir}");
+                hits += hit as u32;
+                rejected += !meet as u32;
+                total += 1;
+            }
+            // Both sides are exercised: many hits, and most of the clear misses rejected.
+            assert!(
+                hits > total / 4 && rejected > total / 5,
+                "{hits} {rejected}"
+            );
+        }
     }
 }

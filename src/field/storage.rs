@@ -75,6 +75,17 @@ pub fn decode_unorm(q: u32, levels: u32) -> f32 {
     q as f32 / levels as f32
 }
 
+/// [`decode_unorm`] of every u8 code, evaluated at compile time (the same IEEE division).
+const U8_DECODE: [f32; 256] = {
+    let mut table = [0.0f32; 256];
+    let mut q = 0;
+    while q < 256 {
+        table[q] = q as f32 / u8::MAX as f32;
+        q += 1;
+    }
+    table
+};
+
 /// The stored distances of every map, row-major: index = map · texels + texel.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Storage {
@@ -158,9 +169,7 @@ impl Storage {
             Storage::U16 { texels, data } => {
                 decode_unorm(data[map * texels + texel] as u32, u16::MAX as u32)
             }
-            Storage::U8 { texels, data } => {
-                decode_unorm(data[map * texels + texel] as u32, u8::MAX as u32)
-            }
+            Storage::U8 { texels, data } => U8_DECODE[data[map * texels + texel] as usize],
             Storage::Bit1 { texels, bits, mean } => {
                 let w = map * words_per_map(*texels) + texel / 64;
                 if (bits[w] >> (texel % 64)) & 1 == 1 {
@@ -269,6 +278,13 @@ mod tests {
                 let ulp = f32::EPSILON * d.max(f32::MIN_POSITIVE);
                 assert!(e <= half + ulp, "d {d} levels {levels} error {e}");
             }
+        }
+    }
+
+    #[test]
+    fn u8_table_equals_the_decoder() {
+        for q in 0..=255u32 {
+            assert_eq!(U8_DECODE[q as usize], decode_unorm(q, 255));
         }
     }
 

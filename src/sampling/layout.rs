@@ -24,6 +24,7 @@
 //! slivers of unused cells ([`HemisphereLayout::rim_solid_angle`]) are what `to_texel` hands to
 //! neighbouring used texels.
 
+use super::layout_fast;
 use super::texel_measure::{concentric_rect_solid_angle, disk_rect_area, malley_rect_solid_angle};
 use super::warp::{
     concentric_disk_to_square, disk_to_hemisphere, hemisphere_to_disk, polar_hemisphere_to_square,
@@ -155,9 +156,21 @@ impl HemisphereLayout {
     }
 
     /// The square coordinates [0, 1]² of local direction `d` (unit; z < 0 clamped to the
-    /// horizon): the exact inverse of the layout's square → hemisphere map.
+    /// horizon): the inverse of the layout's square → hemisphere map. Polar and concentric use a
+    /// polynomial atan ([`super::layout_fast`]) within 4e-6 of [`Self::to_square_libm`].
     #[inline]
     pub fn to_square(&self, d: Vec3) -> Vec2 {
+        let fast = match self.kind {
+            LayoutKind::Polar => layout_fast::polar_square(d),
+            LayoutKind::Rejection => None,
+            LayoutKind::Concentric => layout_fast::concentric_square(d),
+        };
+        fast.unwrap_or_else(|| self.to_square_libm(d))
+    }
+
+    /// [`Self::to_square`] through the libm inverses of [`super::warp`] (the reference that
+    /// [`Self::to_cell`] and [`Self::to_texel`] reproduce exactly).
+    pub fn to_square_libm(&self, d: Vec3) -> Vec2 {
         match self.kind {
             LayoutKind::Polar => polar_hemisphere_to_square(d),
             LayoutKind::Rejection => {
@@ -181,11 +194,28 @@ impl HemisphereLayout {
         self.to_square(d) * self.res as f32
     }
 
-    /// The texel whose cell contains `d`'s square point (for the rejection layout this may be an
-    /// unused texel near the rim; see [`Self::to_texel`]).
+    /// The texel whose cell contains `d`'s square point through the libm inverse (for the
+    /// rejection layout this may be an unused texel near the rim; see [`Self::to_texel`]). The
+    /// fast coordinates decide it whenever they lie clearly inside a cell
+    /// ([`super::layout_fast::certified_cell`]), so the answer is always the libm one.
     #[inline]
     pub fn to_cell(&self, d: Vec3) -> u32 {
-        let p = self.to_texel_continuous(d);
+        let fast = match self.kind {
+            LayoutKind::Polar => layout_fast::polar_square(d),
+            LayoutKind::Rejection => None,
+            LayoutKind::Concentric => layout_fast::concentric_square(d),
+        };
+        if let Some((c, r)) =
+            fast.and_then(|q| layout_fast::certified_cell(q * self.res as f32, self.res))
+        {
+            return r * self.res + c;
+        }
+        self.cell_of(self.to_square_libm(d) * self.res as f32)
+    }
+
+    /// The cell of continuous texel coordinates `p`, clamped to the map.
+    #[inline]
+    fn cell_of(&self, p: Vec2) -> u32 {
         let last = self.res - 1;
         let c = (p.x.max(0.0) as u32).min(last);
         let r = (p.y.max(0.0) as u32).min(last);

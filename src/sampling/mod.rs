@@ -5,20 +5,26 @@
 //! Sources (stratified sets, seeded sequences) live apart from mappings; each mapping has its
 //! forward map, inverse and density side by side.
 //!
-//! Files: `sphere` (the public point-set type) over `rings` (Slater and lat-long: ring sets with
-//! an exact O(1) nearest query) and `fibonacci` (Keinert et al.'s inverse plus a certificate);
-//! `mesh` (spherical triangulations: interpolation triangles, Delaunay spacing); `layout` with
-//! `texel_measure` (closed-form texel solid angles); `warp` (square/disk/hemisphere maps);
-//! `frame`; `rays`; `approx` (cheap atan2/floor with stated error bounds); `report` and
-//! `report_plots` (`experiment sampling`).
+//! Files: `sphere` (the public point-set type) over `cube_grid` (a cube-map grid of per-cell
+//! candidate points and triangles: the query path of `nearest` and `surrounding`), `rings`
+//! (Slater and lat-long: ring sets with an exact O(1) analytic nearest query) and `fibonacci`
+//! (Keinert et al.'s inverse plus a certificate), which build the grid; `mesh` (spherical
+//! triangulations: interpolation triangles, Delaunay spacing); `layout` with `layout_fast`
+//! (libm-free square coordinates with a certificate) and `texel_measure` (closed-form texel
+//! solid angles); `warp` (square/disk/hemisphere maps); `frame`; `rays`; `approx` (cheap
+//! atan/floor with stated error bounds); `report` and `report_plots` (`experiment sampling`).
 //!
-//! Every `nearest` is exact — equal to a brute-force search over f64 dot products up to exact
-//! ties — and every used layout texel round-trips exactly: `to_texel(to_direction(t)) == t`.
+//! Every `nearest` is exact — the grid's answer is the brute-force search's index itself, the
+//! analytic queries equal it up to exact ties — and every used layout texel round-trips
+//! exactly: `to_texel(to_direction(t)) == t`; `to_texel` equals the libm inverse's texel for
+//! every direction.
 
 mod approx;
+mod cube_grid;
 mod fibonacci;
 mod frame;
 mod layout;
+mod layout_fast;
 mod mesh;
 pub mod rays;
 pub mod report;

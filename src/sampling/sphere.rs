@@ -1,5 +1,6 @@
 //! Point sets on the unit sphere: where a field's positional samples (maps) sit.
 
+use super::cube_grid::CubeGrid;
 use super::fibonacci::{self, FibonacciIndex};
 use super::mesh::SphereMesh;
 use super::rings::{slater_hemisphere_count, RingSet};
@@ -85,6 +86,7 @@ pub struct SpherePoints {
     points: Vec<Vec3>,
     index: Index,
     mesh: SphereMesh,
+    grid: CubeGrid,
 }
 
 /// Spacing of a point set, in radians.
@@ -141,11 +143,16 @@ impl SpherePoints {
         }
         let mesh = SphereMesh::new(&points, tris).map_err(broken)?;
         mesh.validate(&points, 1e-6).map_err(broken)?;
+        let g = CubeGrid::resolution_for(points.len(), GRID_CELLS_PER_POINT);
+        let grid = CubeGrid::new(&points, mesh.triangles(), g, |d| {
+            analytic_nearest(&index, &points, d)
+        });
         Ok(SpherePoints {
             kind,
             points,
             index,
             mesh,
+            grid,
         })
     }
 
@@ -200,12 +207,19 @@ impl SpherePoints {
     }
 
     /// Index of the point nearest to unit direction `d` (largest dot product). Exact and
-    /// constant-time; `d` need not be normalised.
+    /// constant-time; `d` need not be normalised. Answered from a cube-map grid of candidate
+    /// lists ([`super::cube_grid`]): the first largest f64 dot product, the same index as
+    /// [`Self::nearest_brute_force`].
+    #[inline]
     pub fn nearest(&self, d: Vec3) -> usize {
-        match &self.index {
-            Index::Rings(r) => r.nearest(&self.points, d),
-            Index::Fibonacci(f) => f.nearest(&self.points, d),
-        }
+        self.grid.nearest(&self.points, d)
+    }
+
+    /// The analytic nearest-point query of the set (Slater and lat-long rings, Keinert et al.
+    /// plus a certificate for Fibonacci): exact up to ties within 1e-12, constant-time, without
+    /// the grid; it builds the grid and serves as a second oracle in tests.
+    pub fn nearest_analytic(&self, d: Vec3) -> usize {
+        analytic_nearest(&self.index, &self.points, d)
     }
 
     /// Keinert et al.'s published four-candidate inverse for Fibonacci sets, without our
@@ -235,12 +249,21 @@ impl SpherePoints {
     /// 1e-12 in f64 dot product (exact ties are not mismatches). Parallel; a vectorised f32
     /// pre-pass skips the exact f64 scan unless another point comes within 1e-5 in dot product.
     pub fn nearest_mismatches(&self, dirs: &[Vec3]) -> usize {
+        self.mismatches_of(dirs, |d| self.nearest(d))
+    }
+
+    /// [`Self::nearest_mismatches`] of [`Self::nearest_analytic`].
+    pub fn nearest_analytic_mismatches(&self, dirs: &[Vec3]) -> usize {
+        self.mismatches_of(dirs, |d| self.nearest_analytic(d))
+    }
+
+    fn mismatches_of(&self, dirs: &[Vec3], query: impl Fn(Vec3) -> usize + Sync) -> usize {
         let xs: Vec<f32> = self.points.iter().map(|p| p.x).collect();
         let ys: Vec<f32> = self.points.iter().map(|p| p.y).collect();
         let zs: Vec<f32> = self.points.iter().map(|p| p.z).collect();
         dirs.par_iter()
             .filter(|&&d| {
-                let ours = self.nearest(d);
+                let ours = query(d);
                 let dd = d.as_dvec3();
                 let ours_dot = dd.dot(self.points[ours].as_dvec3());
                 // f32 dots of unit vectors are within 1e-6 of the f64 ones.
@@ -265,10 +288,14 @@ impl SpherePoints {
     /// lat-long: grid quads split in two, fans at the polar caps; Fibonacci: Delaunay), found by
     /// walking from the nearest point. The weights are the planar barycentrics of the point where
     /// the ray along `d` meets the triangle's plane, so Σ wᵢ pᵢ is parallel to `d`.
+    #[inline]
     pub fn surrounding(&self, d: Vec3) -> ([usize; 3], [f32; 3]) {
-        let start = self.nearest(d);
-        let (t, w) = self.mesh.locate(&self.points, d.as_dvec3(), start);
-        let tri = self.mesh.triangles()[t];
+        let tris = self.mesh.triangles();
+        let (t, w) = self.grid.locate(&self.points, tris, d).unwrap_or_else(|| {
+            self.mesh
+                .locate(&self.points, d.as_dvec3(), self.nearest(d))
+        });
+        let tri = tris[t];
         (tri.map(|v| v as usize), w.map(|x| x as f32))
     }
 
@@ -297,6 +324,21 @@ impl SpherePoints {
     #[cfg(test)]
     pub(crate) fn mesh(&self) -> &SphereMesh {
         &self.mesh
+    }
+
+    #[cfg(test)]
+    pub(crate) fn grid(&self) -> &CubeGrid {
+        &self.grid
+    }
+}
+
+/// Cube-map grid cells per point: a candidate list holds two points on average.
+const GRID_CELLS_PER_POINT: f64 = 4.0;
+
+fn analytic_nearest(index: &Index, points: &[Vec3], d: Vec3) -> usize {
+    match index {
+        Index::Rings(r) => r.nearest(points, d),
+        Index::Fibonacci(f) => f.nearest(points, d),
     }
 }
 

@@ -59,6 +59,10 @@ fn check_nearest(kind: SphereKind, count: usize, random: usize) {
         "{} {count}: {bad} of {random} random directions",
         kind.name()
     );
+    // The analytic query (the grid's construction oracle) stays exact on its own.
+    let some = &dirs[..dirs.len().min(100_000)];
+    let bad = set.nearest_analytic_mismatches(some);
+    assert_eq!(bad, 0, "{} {count}: analytic, {bad} random", kind.name());
     // ~10⁸ brute-force dot products per set at most.
     let adv = adversarial_subset(&set, (100_000_000 / count).min(50_000));
     let bad = set.nearest_mismatches(&adv);
@@ -68,6 +72,13 @@ fn check_nearest(kind: SphereKind, count: usize, random: usize) {
         "{} {count}: {bad} of {} adversarial directions",
         kind.name(),
         adv.len()
+    );
+    let bad = set.nearest_analytic_mismatches(&adv);
+    assert_eq!(
+        bad,
+        0,
+        "{} {count}: analytic, {bad} adversarial",
+        kind.name()
     );
 }
 
