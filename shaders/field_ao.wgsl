@@ -13,7 +13,8 @@ struct Params {
     counts: vec4<u32>,
     // Selection (0 nearest, 1 interpolated), unused x3.
     mode: vec4<u32>,
-    // Origin offset along the normal, tmax, intra-object bias (fraction of 2R), unused.
+    // Origin offset along the normal, tmax, intra-object bias (a fraction of 2R, or the scale of
+    // the field's own tolerance), 1 when the bias is such a scale (`IntraBias::Auto`).
     ray: vec4<f32>,
 }
 
@@ -55,7 +56,7 @@ fn ao_main(@builtin(global_invocation_id) gid: vec3<u32>) {
         let dir = frame_to_world(frame, local);
         var blocked = false;
         for (var k = 0u; k < params.counts.z; k++) {
-            if instance_occludes(instances[k], origin, dir, 0.0, tmax, params.mode.x, params.ray.z) {
+            if instance_occludes(instances[k], origin, dir, 0.0, tmax, params.mode.x, params.ray.z, params.ray.w != 0.0) {
                 blocked = true;
                 break;
             }

@@ -25,6 +25,8 @@ struct Instance {
     tables: vec4<u32>,
     // Tiles per slice (texture layout), unused.
     extra: vec4<u32>,
+    // Intra-object tolerance: positional part (model units), directional part (radians), unused.
+    intra: vec4<f32>,
 }
 
 // glam's `Quat::mul_vec3a`: v (w^2 - b.b) + b 2(v.b) + (b x v) 2w.
@@ -109,7 +111,7 @@ fn field_sample(inst: Instance, u: vec3<f32>, dir: vec3<f32>, selection: u32) ->
 
 // Whether instance `inst` blocks the world segment origin + t dir, t in [tmin, tmax].
 fn instance_occludes(inst: Instance, origin: vec3<f32>, dir: vec3<f32>, tmin: f32, tmax: f32,
-                     selection: u32, intra_bias: f32) -> bool {
+                     selection: u32, intra_bias: f32, intra_auto: bool) -> bool {
     // World-space sphere test first (src/field/scene.rs).
     let ws = ray_sphere(origin, dir, inst.world_sphere.xyz, inst.world_sphere.w);
     if ws.z == 0.0 || !(ws.y >= tmin && ws.x <= tmax) {
@@ -164,5 +166,10 @@ fn instance_occludes(inst: Instance, origin: vec3<f32>, dir: vec3<f32>, tmin: f3
         return false;
     }
     let t = t1 - diameter * dd;
-    return t > lmin + intra_bias * diameter && t <= lmax;
+    // `IntraBias::model_units` (src/field/lookup.rs): Auto scales the field's own tolerance.
+    var tol = intra_bias * diameter;
+    if intra_auto {
+        tol = intra_bias * (inst.intra.x + inst.intra.y * t1);
+    }
+    return t > lmin + tol && t <= lmax;
 }

@@ -3,7 +3,7 @@
 use glam::{Quat, Vec3};
 use std::sync::Arc;
 use visfield::field::bake::{bake, BakeOptions};
-use visfield::field::lookup::LookupOptions;
+use visfield::field::lookup::{IntraBias, LookupOptions};
 use visfield::field::scene::{FieldInstance, FieldScene};
 use visfield::field::{FieldParams, Precision, Selection};
 use visfield::geometry::{procedural, Mesh, Similarity};
@@ -218,6 +218,59 @@ fn intra_object_hole_is_occluded_sideways_and_free_along_its_axis() {
             "toward {side}: {t:?}"
         );
     }
+}
+
+/// A convex caster never occludes itself: rays leaving a box's faces into the outer hemisphere
+/// must all be free through the intra-object test. The field's own tolerance
+/// (`IntraBias::Auto`) lets at most 1% of them be falsely occluded at 1090 × 32² (u8), where
+/// the fixed 1%-of-2R tolerance it replaced fails the same check (the negative control).
+#[test]
+fn convex_caster_does_not_occlude_itself() {
+    let half = Vec3::new(0.5, 0.3, 0.2);
+    let mesh = box_mesh(half);
+    let (field, _) = bake(&mesh, params(1090, 32, Precision::U8), &BakeOptions::default()).unwrap();
+    let field = Arc::new(field);
+    // 12 × 12 points on each face, inset from the edges, with the face's outward normal.
+    let (mut points, mut normals) = (Vec::new(), Vec::new());
+    for axis in 0..3 {
+        for sign in [-1.0f32, 1.0] {
+            let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+            for i in 0..12 {
+                for j in 0..12 {
+                    let mut p = Vec3::ZERO;
+                    p[axis] = sign * half[axis];
+                    p[u] = half[u] * (-0.9 + 1.8 * i as f32 / 11.0);
+                    p[v] = half[v] * (-0.9 + 1.8 * j as f32 / 11.0);
+                    let mut n = Vec3::ZERO;
+                    n[axis] = sign;
+                    points.push(p);
+                    normals.push(n);
+                }
+            }
+        }
+    }
+    let rays = RaySet::new(8, 3);
+    let opts = AoOptions::for_scene_radius(field.bounds.radius);
+    let false_share = |intra_bias| {
+        let scene = FieldScene {
+            instances: vec![FieldInstance::new(field.clone(), Similarity::default())],
+            options: LookupOptions {
+                intra_bias,
+                ..LookupOptions::default()
+            },
+        };
+        let ao = ao_at_points(&scene, &points, &normals, &rays, &opts);
+        ao.iter().map(|a| 1.0 - *a as f64).sum::<f64>() / ao.len() as f64
+    };
+    let auto = false_share(IntraBias::default());
+    let fixed = false_share(IntraBias::Fixed(0.01));
+    assert!(auto <= 0.01, "auto tolerance: {:.2}% of rays falsely occluded", 100.0 * auto);
+    assert!(fixed > 0.01, "fixed 1% tolerance: {:.2}% falsely occluded", 100.0 * fixed);
+    eprintln!(
+        "convex box, 1090 x 32² u8: falsely occluded rays: auto {:.3}%, fixed 0.01: {:.2}%",
+        100.0 * auto,
+        100.0 * fixed
+    );
 }
 
 /// The same field under a translated and uniformly scaled instance gives the same AO as a field

@@ -197,6 +197,7 @@ pub fn requantize(f32_field: &VisibilityField, to: Precision) -> VisibilityField
         layout: f32_field.layout,
         frames: f32_field.frames.clone(),
         storage,
+        intra: f32_field.intra.with_precision(to, f32_field.bounds.radius),
     }
 }
 

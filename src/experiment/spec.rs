@@ -280,8 +280,9 @@ pub struct RenderSpec {
     /// AO radius in world units: farther hits do not occlude (none: unlimited, the papers).
     #[serde(default)]
     pub max_distance: Option<f32>,
-    /// Tolerance of the intra-object test (receivers that are casters), as a fraction of 2R
-    /// (none: the lookup's default, 0.01; see `field::lookup`).
+    /// A fixed tolerance of the intra-object test (receivers that are casters), as a fraction
+    /// of 2R (none: the field's own resolution-derived tolerance, `IntraBias::Auto`; see
+    /// `field::lookup`).
     #[serde(default)]
     pub intra_bias: Option<f32>,
 }

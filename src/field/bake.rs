@@ -166,6 +166,7 @@ fn bake_maps(
         seconds: start.elapsed().as_secs_f64(),
         bvh_seconds: 0.0,
     };
+    let intra = super::IntraTolerance::of(&points, &layout, params.precision, bounds.radius)?;
     let field = VisibilityField {
         params,
         bounds,
@@ -173,6 +174,7 @@ fn bake_maps(
         layout,
         frames,
         storage,
+        intra,
     };
     Ok((field, stats))
 }

@@ -9,8 +9,9 @@
 //!   the sphere at p1 (t_exit = d1); the map at p1 is read in direction p1→p0 (−d), giving d2 = 2R·D,
 //!   the distance from p1 back to the surface nearest p1. The origin is occluded when d1 > d2, i.e.
 //!   a surface lies between the origin and p1, at distance d1 − d2 from the origin.
-//!   Deviation from the paper: the test is d1 − d2 > tmin + bias, with `bias` (default 1% of 2R)
-//!   absorbing the discretisation error of the self-hit for origins on the object; the paper gives
+//!   Deviation from the paper: the test is d1 − d2 > tmin + tolerance, the tolerance absorbing the
+//!   discretisation error of the self-hit for origins on the object (by default the field's own
+//!   [`IntraTolerance`](super::IntraTolerance), growing with d1; [`IntraBias`]); the paper gives
 //!   no tolerance. For origins inside the sphere the hit found is the one nearest p1, not the
 //!   nearest to the origin, which matters only for distance-limited queries.
 
@@ -87,21 +88,43 @@ pub fn entry_point_relative(origin: Vec3, dir: Vec3, center: Vec3, radius: f32) 
     sphere_crossing(origin, dir, center, radius).map(|c| c.entry)
 }
 
-/// Options of a lookup.
+/// Tolerance of the intra-object test: how far beyond the origin (along the ray) the surface
+/// read from the field must lie to count as an occluder.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct LookupOptions {
-    pub selection: Selection,
-    /// Tolerance of the intra-object test, as a fraction of 2R.
-    pub intra_bias: f32,
+pub enum IntraBias {
+    /// `scale` × the field's [`IntraTolerance`](super::IntraTolerance): its positional part plus
+    /// its directional part × d1 (the distance to the exit point). `scale = 1` is the default;
+    /// `examples/intra_bias.rs` shows the error minimum near it at every resolution.
+    Auto { scale: f32 },
+    /// A fixed fraction of 2R, whatever the field's resolution (the tolerance before the
+    /// per-field one; kept for comparison).
+    Fixed(f32),
 }
 
-impl Default for LookupOptions {
-    fn default() -> Self {
-        LookupOptions {
-            selection: Selection::Nearest,
-            intra_bias: 0.01,
+impl IntraBias {
+    /// The tolerance, in model units, for a field with tolerance `tol`, sphere diameter
+    /// `diameter` and a ray leaving the sphere at distance `d1`.
+    #[inline]
+    pub fn model_units(self, tol: &super::IntraTolerance, diameter: f32, d1: f32) -> f32 {
+        match self {
+            IntraBias::Auto { scale } => scale * (tol.positional() + tol.directional * d1),
+            IntraBias::Fixed(f) => f * diameter,
         }
     }
+}
+
+impl Default for IntraBias {
+    fn default() -> Self {
+        IntraBias::Auto { scale: 1.0 }
+    }
+}
+
+/// Options of a lookup.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct LookupOptions {
+    pub selection: Selection,
+    /// Tolerance of the intra-object test.
+    pub intra_bias: IntraBias,
 }
 
 impl VisibilityField {
@@ -187,7 +210,8 @@ impl VisibilityField {
                 return None;
             }
             let t = t1 - diameter * d;
-            (t > tmin + opts.intra_bias * diameter && t <= tmax).then_some(t)
+            let tol = opts.intra_bias.model_units(&self.intra, diameter, t1);
+            (t > tmin + tol && t <= tmax).then_some(t)
         }
     }
 }

@@ -66,11 +66,14 @@ impl std::fmt::Display for ByteSize {
 }
 
 /// How maps are chosen at lookup time.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum Selection {
     /// The map of the nearest positional sample and the texel containing the direction (the
     /// papers' method).
+    #[default]
     Nearest,
     /// Beyond the papers: the three surrounding maps blended with barycentric weights, each read
     /// bilinearly.
@@ -146,6 +149,70 @@ pub struct VisibilityField {
     /// Per map: frame whose z is the inward normal −point(i).
     pub frames: Vec<Frame>,
     pub storage: Storage,
+    /// The discretisation scales of the intra-object test's tolerance
+    /// ([`IntraTolerance`]), derived from the sphere set and the layout.
+    pub intra: IntraTolerance,
+}
+
+/// How far a self-hit read from the field can land from the surface the origin lies on, per
+/// field: the intra-object test (2010 Figure 2) accepts an occluder only beyond
+/// `positional + directional · d1` from the origin (model units; `d1` = distance from the origin
+/// to the exit point p1), scaled by the lookup's
+/// [`IntraBias::Auto`](lookup::IntraBias::Auto) factor.
+///
+/// The stored d2 is measured from the map's sample point, up to the set's covering radius away
+/// from p1 (a lateral error of `positional` = covering angle × R), along the texel's central
+/// direction, up to half a texel away from p1→p0 (a lateral error growing with the distance
+/// travelled, `directional` = half the mean texel width in radians), plus half a storage step.
+/// Deviation from the paper: the 2010 paper compares d1 > d2 without a tolerance; on the objects
+/// of figure8 that test marks most self-rays occluded. `examples/intra_bias.rs` measures the
+/// error against the tolerance.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct IntraTolerance {
+    /// Model units: the sphere set's covering angle × R.
+    pub covering: f32,
+    /// Radians: half the mean texel width, √(2π / used texels) / 2.
+    pub directional: f32,
+    /// Model units: half a storage step of 2R (0 for f32 and 1 bit).
+    pub quantisation: f32,
+}
+
+impl IntraTolerance {
+    /// The tolerance of a field with these parts.
+    pub fn of(
+        points: &SpherePoints,
+        layout: &HemisphereLayout,
+        precision: storage::Precision,
+        radius: f32,
+    ) -> Result<Self, FieldError> {
+        let gap = points.spacing()?.max_gap;
+        let texel = (2.0 * std::f64::consts::PI / layout.used_count() as f64).sqrt();
+        Ok(IntraTolerance {
+            covering: (gap * radius as f64) as f32,
+            directional: (0.5 * texel) as f32,
+            quantisation: 0.0,
+        }
+        .with_precision(precision, radius))
+    }
+
+    /// The same tolerance for the field stored at `precision`.
+    pub fn with_precision(self, precision: storage::Precision, radius: f32) -> Self {
+        let half_step = match precision {
+            storage::Precision::U8 => 0.5 / 255.0,
+            storage::Precision::U16 => 0.5 / 65535.0,
+            storage::Precision::F32 | storage::Precision::Bit1 => 0.0,
+        };
+        IntraTolerance {
+            quantisation: (half_step * 2.0 * radius as f64) as f32,
+            ..self
+        }
+    }
+
+    /// The positional part in model units (covering + quantisation).
+    #[inline]
+    pub fn positional(&self) -> f32 {
+        self.covering + self.quantisation
+    }
 }
 
 impl VisibilityField {
@@ -167,6 +234,7 @@ impl VisibilityField {
             )));
         }
         let frames = frames_for(&points);
+        let intra = IntraTolerance::of(&points, &layout, params.precision, bounds.radius)?;
         Ok(VisibilityField {
             params,
             bounds,
@@ -174,6 +242,7 @@ impl VisibilityField {
             layout,
             frames,
             storage,
+            intra,
         })
     }
 

@@ -20,7 +20,7 @@ use super::field_data::{field_words, PackedFields};
 use super::rays::{base_directions, receivers, ReceiverGpu};
 use super::texture::FieldTexture;
 use super::{GpuError, GpuTiming};
-use crate::field::lookup::LookupOptions;
+use crate::field::lookup::{IntraBias, LookupOptions};
 use crate::field::scene::FieldInstance;
 use crate::field::Selection;
 use crate::render::ao::AoOptions;
@@ -75,7 +75,8 @@ struct AoParamsGpu {
     counts: [u32; 4],
     /// Selection (0 nearest, 1 interpolated), unused ×3.
     mode: [u32; 4],
-    /// Origin offset, tmax, intra-object bias, unused.
+    /// Origin offset, tmax, intra-object bias, 1.0 when the bias scales the field's own
+    /// tolerance ([`IntraBias::Auto`]) else 0.0.
     ray: [f32; 4],
 }
 const _: () = assert!(std::mem::size_of::<AoParamsGpu>() == 48);
@@ -278,7 +279,13 @@ impl<'a> FieldAoKernel<'a> {
                 0,
             ],
             mode: [selection_code(self.lookup.selection), 0, 0, 0],
-            ray: [opts.offset, tmax, self.lookup.intra_bias, 0.0],
+            ray: {
+                let (bias, auto) = match self.lookup.intra_bias {
+                    IntraBias::Auto { scale } => (scale, 1.0),
+                    IntraBias::Fixed(f) => (f, 0.0),
+                };
+                [opts.offset, tmax, bias, auto]
+            },
         };
         let (words, kernel, upload) = self.run(&self.ao, params, &recv, 1)?;
         let ao = words.into_iter().map(f32::from_bits).collect();

@@ -29,8 +29,11 @@ pub struct FieldInstanceGpu {
     pub tables: [u32; 4],
     /// Tiles per slice (texture layout), unused ×3.
     pub extra: [u32; 4],
+    /// The intra-object tolerance ([`crate::field::IntraTolerance`]): positional part (model
+    /// units), directional part (radians), unused ×2.
+    pub intra: [f32; 4],
 }
-const _: () = assert!(std::mem::size_of::<FieldInstanceGpu>() == 128);
+const _: () = assert!(std::mem::size_of::<FieldInstanceGpu>() == 144);
 
 /// Precision code shared with the shaders.
 pub(crate) fn precision_code(s: &Storage) -> u32 {
@@ -153,6 +156,12 @@ impl PackedFields {
                     data,
                     tables: tabs,
                     extra: [0; 4],
+                    intra: [
+                        inst.field.intra.positional(),
+                        inst.field.intra.directional,
+                        0.0,
+                        0.0,
+                    ],
                 }
             })
             .collect();

@@ -11,7 +11,7 @@ use crate::experiment::plan::{Plan, Step};
 use crate::experiment::progress::stage_adaptive;
 use crate::experiment::scenes::Scenes;
 use crate::experiment::spec::{Backend, Spec};
-use crate::field::lookup::LookupOptions;
+use crate::field::lookup::{IntraBias, LookupOptions};
 use crate::field::scene::{FieldInstance, FieldScene};
 use crate::field::{FieldParams, Precision};
 use crate::sampling::rays::RaySet;
@@ -213,7 +213,11 @@ impl<'a> Runner<'a> {
             instances,
             options: LookupOptions {
                 selection: c.selection,
-                intra_bias: spec.render.intra_bias.unwrap_or(default.intra_bias),
+                intra_bias: spec
+                    .render
+                    .intra_bias
+                    .map(IntraBias::Fixed)
+                    .unwrap_or(default.intra_bias),
             },
         };
         let be = self.backends[&c.backend].as_ref();
