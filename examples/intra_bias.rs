@@ -20,7 +20,9 @@ use visfield::sampling::{LayoutKind, SphereKind};
 fn main() {
     let mut names: Vec<String> = std::env::args().skip(1).collect();
     if names.is_empty() {
-        names = ["igea_67k", "stanford-bunny_39k", "Tree_3"].map(String::from).to_vec();
+        names = ["igea_67k", "stanford-bunny_39k", "Tree_3"]
+            .map(String::from)
+            .to_vec();
     }
     let mut csv = String::from(
         "model,points,positional_samples,directional_res,selection,tolerance,scale,\
@@ -43,13 +45,18 @@ fn study(name: &str, csv: &mut String) {
     let pts: Vec<_> = mesh.positions.iter().step_by(step).copied().collect();
     let nrm: Vec<_> = mesh.normals.iter().step_by(step).copied().collect();
     let bounds = mesh.bounding_sphere();
-    let tris: Vec<_> = (0..mesh.triangles.len()).map(|i| mesh.triangle(i)).collect();
+    let tris: Vec<_> = (0..mesh.triangles.len())
+        .map(|i| mesh.triangle(i))
+        .collect();
     let tracer = visfield::trace::Tracer::new(&tris);
     let rays = RaySet::new(16, 1);
     let opts = AoOptions::for_scene_radius(bounds.radius);
     let reference = ao_at_points(&tracer, &pts, &nrm, &rays, &opts);
     let mean_ref = reference.iter().sum::<f32>() / reference.len() as f32;
-    println!("{name}: {} points, mean reference AO {mean_ref:.3}", pts.len());
+    println!(
+        "{name}: {} points, mean reference AO {mean_ref:.3}",
+        pts.len()
+    );
     for count in [1090, 4226] {
         for res in [32, 64] {
             let params = FieldParams {
@@ -74,7 +81,10 @@ fn study(name: &str, csv: &mut String) {
                 for bias in biases.clone() {
                     let fs = FieldScene {
                         instances: vec![FieldInstance::new(field.clone(), Similarity::default())],
-                        options: LookupOptions { selection: sel, intra_bias: bias },
+                        options: LookupOptions {
+                            selection: sel,
+                            intra_bias: bias,
+                        },
                     };
                     let ao = ao_at_points(&fs, &pts, &nrm, &rays, &opts);
                     let mean = ao.iter().sum::<f32>() / ao.len() as f32;
