@@ -77,7 +77,8 @@ fn default_backends() -> Vec<Backend> {
 pub enum Backend {
     /// rayon over points, through the `Visibility` interface.
     Cpu,
-    /// wgpu (not in this build: refused before any work).
+    /// wgpu compute kernels (Vulkan; a hardware adapter where there is one, else lavapipe):
+    /// field lookup and CWBVH ray casting on the same rays (`experiment::backend_gpu`).
     Gpu,
 }
 

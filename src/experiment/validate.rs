@@ -4,7 +4,7 @@
 //! parts it replaces prefixed by `quick.`.
 
 use super::spec::{
-    exact_sqrt, FieldAxes, MeshSource, RenderKind, SceneSpec, Spec, SpecError, Threshold,
+    exact_sqrt, Backend, FieldAxes, MeshSource, RenderKind, SceneSpec, Spec, SpecError, Threshold,
 };
 use crate::geometry::models::ModelRegistry;
 use crate::sampling::{HemisphereLayout, SphereKind, SpherePoints};
@@ -135,6 +135,19 @@ impl Ctx<'_> {
         for (i, b) in s.backends.iter().enumerate() {
             if s.backends[..i].contains(b) {
                 return Err(self.err(&format!("backends[{i}]"), format!("{b:?} twice")));
+            }
+        }
+        if s.backends.contains(&Backend::Gpu) {
+            // The GPU kernels answer the nearest map of Slater and lat-long sets only.
+            for (i, f) in s.fields.iter().enumerate() {
+                if let Some(j) = f.spheres.iter().position(|&k| k == SphereKind::Fibonacci) {
+                    return Err(self.err(
+                        &format!("{}[{i}].spheres[{j}]", p.fields),
+                        "\"fibonacci\" has no nearest-map query on the \"gpu\" backend; use \
+                         \"slater\" or \"lat_long\", or drop \"gpu\" from backends"
+                            .into(),
+                    ));
+                }
             }
         }
         if let Some(paper) = &s.paper {
