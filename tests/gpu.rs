@@ -394,7 +394,14 @@ fn image_space_field_ao_matches_the_cpu_for_every_precision() {
                 options: lookup,
             };
             let cpu_ao = ao_at_points(&fs, &p, &n, &rays, &opts);
-            assert_occlusion_is_nontrivial(&cpu_ao);
+            // Not agreeing on nothing: most pixels occluded, some of them strongly.
+            let strong = cpu_ao.iter().filter(|&&a| a < 0.5).count();
+            let open = cpu_ao.iter().filter(|&&a| a == 1.0).count();
+            assert!(
+                open * 2 < cpu_ao.len() && strong * 100 > cpu_ao.len(),
+                "{open} open pixels, {strong} below 0.5 of {}",
+                cpu_ao.len()
+            );
             kernel.lookup = lookup;
             let (gpu_ao, _) = kernel.vertex_ao(&p, &n, &rays, &opts).expect("gpu ao");
             let image = |ao: &[f32]| {
