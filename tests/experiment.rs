@@ -502,7 +502,10 @@ fn an_unknown_gpu_adapter_is_an_error_naming_the_adapters() {
     let mut o = options(dir.path().join("out"));
     o.adapter = AdapterPreference::parse("no-such-adapter-xyz");
     let e = run(&ls, &o).unwrap_err();
-    assert!(e.contains("backend \"gpu\"") && e.contains("no-such-adapter-xyz"), "{e}");
+    assert!(
+        e.contains("backend \"gpu\"") && e.contains("no-such-adapter-xyz"),
+        "{e}"
+    );
     assert!(e.contains("available: "), "{e}");
     assert!(!dir.path().join("out/table.csv").exists());
 }
@@ -520,5 +523,23 @@ fn a_gpu_backend_with_a_fibonacci_set_is_refused_naming_the_field() {
         r#""reference": {"#,
         r#""backends": ["cpu", "gpu"], "reference": {"#,
     ));
-    assert!(e.contains("fields[0].spheres[1]") && e.contains("\"gpu\""), "{e}");
+    assert!(
+        e.contains("fields[0].spheres[1]") && e.contains("\"gpu\""),
+        "{e}"
+    );
+}
+
+#[test]
+fn the_quick_profile_may_replace_the_backends() {
+    use visfield::experiment::spec::Backend;
+    let both = tiny(ONE_FIELD, "").replace(
+        r#""reference": {"#,
+        r#""backends": ["cpu", "gpu"], "reference": {"#,
+    );
+    let spec = parse(&both.replace(r#""quick": {}"#, r#""quick": {"backends": ["cpu"]}"#)).unwrap();
+    assert_eq!(spec.backends, [Backend::Cpu, Backend::Gpu]);
+    assert_eq!(spec.quick().backends, [Backend::Cpu]);
+    assert_eq!(spec.profile(false).backends, [Backend::Cpu, Backend::Gpu]);
+    let e = error_of(&both.replace(r#""quick": {}"#, r#""quick": {"backends": ["gpu", "gpu"]}"#));
+    assert!(e.contains("quick.backends[1]"), "{e}");
 }

@@ -381,9 +381,8 @@ fn image_space_field_ao_matches_the_cpu_for_every_precision() {
             }
         }
         assert!(px.len() * 4 > (w * h) as usize, "{} AO pixels", px.len());
-        let mut kernel =
-            FieldAoKernel::new(ctx, std::slice::from_ref(&inst), &Default::default())
-                .expect("field kernel");
+        let mut kernel = FieldAoKernel::new(ctx, std::slice::from_ref(&inst), &Default::default())
+            .expect("field kernel");
         for selection in [Selection::Nearest, Selection::Interpolated] {
             let lookup = LookupOptions {
                 selection,

@@ -295,7 +295,9 @@ fn grids(
                 let reference = load_png(&out.join(format!("images/{sc}-reference.png")))?;
                 let rc = sweep
                     .iter()
-                    .filter(|s| s.scene == sc && s.rms_image == Some(0.0))
+                    .filter(|s| {
+                        s.scene == sc && s.backend == Backend::Cpu && s.rms_image == Some(0.0)
+                    })
                     .max_by_key(|s| s.rays_per_point);
                 let mut cap = vec![format!("{sc}: ray cast (reference)")];
                 if let Some(s) = rc {

@@ -19,6 +19,7 @@ struct Paths {
     image: &'static str,
     sweep: &'static str,
     thresholds: &'static str,
+    backends: &'static str,
 }
 
 /// Validates both profiles of `spec`.
@@ -31,6 +32,7 @@ pub fn validate(spec: &Spec, file: &Path) -> Result<(), SpecError> {
         image: "render.image",
         sweep: "reference.raycast_sweep",
         thresholds: "thresholds",
+        backends: "backends",
     };
     let q = &spec.quick;
     let pick = |given: bool, quick: &'static str, full: &'static str| {
@@ -49,6 +51,7 @@ pub fn validate(spec: &Spec, file: &Path) -> Result<(), SpecError> {
         image: pick(q.image.is_some(), "quick.image", full.image),
         sweep: pick(q.raycast_sweep.is_some(), "quick.raycast_sweep", full.sweep),
         thresholds: "quick.thresholds",
+        backends: pick(q.backends.is_some(), "quick.backends", full.backends),
     };
     let ctx = Ctx { file };
     ctx.profile(spec, &full)?;
@@ -130,11 +133,11 @@ impl Ctx<'_> {
             }
         }
         if s.backends.is_empty() {
-            return Err(self.err("backends", "needs \"cpu\" and/or \"gpu\"".into()));
+            return Err(self.err(p.backends, "needs \"cpu\" and/or \"gpu\"".into()));
         }
         for (i, b) in s.backends.iter().enumerate() {
             if s.backends[..i].contains(b) {
-                return Err(self.err(&format!("backends[{i}]"), format!("{b:?} twice")));
+                return Err(self.err(&format!("{}[{i}]", p.backends), format!("{b:?} twice")));
             }
         }
         if s.backends.contains(&Backend::Gpu) {
