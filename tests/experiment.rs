@@ -388,6 +388,9 @@ fn paper_ratios_are_normalised_to_the_reference_cell() {
         bake_cached: false,
         image: String::new(),
         cell: format!("c{count}"),
+        ao_kernel_s: None,
+        raycast_kernel_s: None,
+        setup_s: None,
     };
     let cell = |label: &str, count: usize, pre: f64| PaperCell {
         label: label.into(),
@@ -419,8 +422,24 @@ fn paper_ratios_are_normalised_to_the_reference_cell() {
     assert_eq!((pv[2].cell.as_str(), pv[2].ours_bake_s), ("", None));
 }
 
+/// The spec's `backends: ["cpu", "gpu"]` yields one row per backend and cell in `table.csv`,
+/// the GPU row naming its adapter, with the CPU row's errors (the same field and rays:
+/// parity), wall and kernel times in their own columns, and a GPU ray-cast time on the same
+/// rays. Skipped only where no Vulkan driver is installed.
 #[test]
-fn a_gpu_backend_is_refused_before_any_bake() {
+fn cpu_and_gpu_backends_give_one_row_each_with_the_adapter_named() {
+    use visfield::gpu::{AdapterPreference, GpuContext, GpuError};
+    let ctx = match GpuContext::new(AdapterPreference::from_env()) {
+        Ok(c) => c,
+        Err(GpuError::NoAdapter) => {
+            eprintln!("skipped: no Vulkan adapter (install mesa-vulkan-drivers)");
+            return;
+        }
+        Err(e) => panic!("GPU context: {e}"),
+    };
+    let label = ctx.adapter_label();
+    let timestamps = ctx.has_timestamps();
+    drop(ctx);
     let dir = tempfile::tempdir().unwrap();
     let text = tiny(ONE_FIELD, "").replace(
         r#""reference": {"#,
@@ -432,7 +451,95 @@ fn a_gpu_backend_is_refused_before_any_bake() {
     let plan = run(&ls, &o).unwrap().plan_text;
     assert!(plan.contains("GPU device: yes"), "{plan}");
     o.dry_run = false;
+    let report = run(&ls, &o).unwrap();
+    let rows: Vec<Row> = read_csv(&dir.path().join("out/table.csv")).unwrap();
+    assert_eq!(rows, report.rows);
+    assert_eq!(rows.len(), 2, "one cell on two backends");
+    let (cpu, gpu) = (&rows[0], &rows[1]);
+    assert_eq!(cpu.backend.name(), "cpu");
+    assert_eq!(gpu.backend.name(), "gpu");
+    assert_eq!(gpu.adapter, label);
+    assert_ne!(cpu.adapter, gpu.adapter);
+    assert!(gpu.cell.ends_with("-gpu") && cpu.cell.ends_with("-cpu"));
+    // The same field and rays on both backends: the errors against the reference agree
+    // within the parity tolerance (the kernels reproduce the CPU lookup; see tests/gpu.rs).
+    for (c, g) in [
+        (cpu.rms_vertex, gpu.rms_vertex),
+        (cpu.rms_image, gpu.rms_image),
+    ] {
+        let (c, g) = (c.unwrap(), g.unwrap());
+        assert!((c - g).abs() <= 0.5, "cpu {c} gpu {g}");
+    }
+    // Wall times everywhere; kernel times and setup only on the GPU row.
+    assert!(gpu.ao_s > 0.0 && gpu.raycast_s.unwrap() > 0.0);
+    assert_eq!(gpu.ao_kernel_s.is_some(), timestamps);
+    assert_eq!(gpu.raycast_kernel_s.is_some(), timestamps);
+    assert!(gpu.setup_s.unwrap() > 0.0);
+    assert_eq!(
+        (cpu.ao_kernel_s, cpu.raycast_kernel_s, cpu.setup_s),
+        (None, None, None)
+    );
+    // The GPU ray-cast time sits in the sweep too, on the render's rays.
+    let sweep = std::fs::read_to_string(dir.path().join("out/raycast_sweep.csv")).unwrap();
+    assert!(sweep.lines().any(|l| l.contains(",gpu,16,")), "{sweep}");
+    let meta = std::fs::read_to_string(dir.path().join("out/run.json")).unwrap();
+    assert!(meta.contains(&label.replace('\\', "\\\\")), "{meta}");
+}
+
+#[test]
+fn an_unknown_gpu_adapter_is_an_error_naming_the_adapters() {
+    use visfield::gpu::{AdapterPreference, GpuContext, GpuError};
+    if let Err(GpuError::NoAdapter) = GpuContext::new(AdapterPreference::Auto) {
+        eprintln!("skipped: no Vulkan adapter (install mesa-vulkan-drivers)");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let text = tiny(ONE_FIELD, "").replace(
+        r#""reference": {"#,
+        r#""backends": ["cpu", "gpu"], "reference": {"#,
+    );
+    let ls = loaded(dir.path(), &text);
+    let mut o = options(dir.path().join("out"));
+    o.adapter = AdapterPreference::parse("no-such-adapter-xyz");
     let e = run(&ls, &o).unwrap_err();
-    assert!(e.contains("backend \"gpu\""), "{e}");
+    assert!(
+        e.contains("backend \"gpu\"") && e.contains("no-such-adapter-xyz"),
+        "{e}"
+    );
+    assert!(e.contains("available: "), "{e}");
     assert!(!dir.path().join("out/table.csv").exists());
+}
+
+#[test]
+fn a_gpu_backend_with_a_fibonacci_set_is_refused_naming_the_field() {
+    let text = tiny(
+        r#"{ "spheres": ["slater", "fibonacci"], "counts": [290], "resolutions": [16] }"#,
+        "",
+    );
+    // Fine on the CPU (290 is a valid count of both sets)...
+    assert!(parse(&text).is_ok());
+    // ...refused with "gpu", naming the entry.
+    let e = error_of(&text.replace(
+        r#""reference": {"#,
+        r#""backends": ["cpu", "gpu"], "reference": {"#,
+    ));
+    assert!(
+        e.contains("fields[0].spheres[1]") && e.contains("\"gpu\""),
+        "{e}"
+    );
+}
+
+#[test]
+fn the_quick_profile_may_replace_the_backends() {
+    use visfield::experiment::spec::Backend;
+    let both = tiny(ONE_FIELD, "").replace(
+        r#""reference": {"#,
+        r#""backends": ["cpu", "gpu"], "reference": {"#,
+    );
+    let spec = parse(&both.replace(r#""quick": {}"#, r#""quick": {"backends": ["cpu"]}"#)).unwrap();
+    assert_eq!(spec.backends, [Backend::Cpu, Backend::Gpu]);
+    assert_eq!(spec.quick().backends, [Backend::Cpu]);
+    assert_eq!(spec.profile(false).backends, [Backend::Cpu, Backend::Gpu]);
+    let e = error_of(&both.replace(r#""quick": {}"#, r#""quick": {"backends": ["gpu", "gpu"]}"#));
+    assert!(e.contains("quick.backends[1]"), "{e}");
 }

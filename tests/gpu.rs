@@ -2,8 +2,9 @@
 //! in CI; on whatever `VISFIELD_ADAPTER` selects elsewhere).
 //!
 //! Only a missing Vulkan driver skips these tests; every other GPU failure fails them. On a
-//! parity failure the actual / expected / difference values are written as CSV to a temporary
-//! folder whose path is printed.
+//! parity failure the actual / expected / difference values are written to a temporary folder
+//! whose path is printed: as CSV for vertex AO and rays, as PNG images (actual, expected,
+//! difference × 5) for image-space AO.
 
 use glam::{Quat, Vec3};
 use std::path::PathBuf;
@@ -327,6 +328,115 @@ fn field_ao_matches_the_cpu_for_every_precision_layout_and_selection() {
     assert!(
         failures.is_empty(),
         "parity failures:\n{}",
+        failures.join("\n")
+    );
+}
+
+/// Image-space AO by field lookup (the 2010 paper's deferred pass): at every pixel of a
+/// G-buffer (corner pixels: inter-object lookups; caster pixels: intra-object), CPU and GPU
+/// field AO from the same field and rays, compared as 8-bit images over the AO pixels: RMS at
+/// most 0.5 on the 0–255 scale for every precision and both selections. On failure the
+/// actual (GPU), expected (CPU) and difference (×5) images are written and their folder named.
+#[test]
+fn image_space_field_ao_matches_the_cpu_for_every_precision() {
+    use visfield::experiment::quickstart::corner_camera;
+    use visfield::geometry::{Instance, Scene};
+    use visfield::render::image::{rms_255, GrayImage};
+    use visfield::render::primary::{gbuffer, PrimaryScene};
+    let Some(ctx) = context() else { return };
+    let (w, h) = (96u32, 96u32);
+    let rays = RaySet::new(8, 21);
+    let opts = AoOptions::for_scene_radius(1.0);
+    let mut failures = Vec::new();
+    for precision in [
+        Precision::F32,
+        Precision::U16,
+        Precision::U8,
+        Precision::Bit1,
+    ] {
+        let field = baked(params(290, 16, precision, LayoutKind::Concentric));
+        let inst = placed(&field);
+        let scene = Scene {
+            instances: vec![
+                Instance {
+                    mesh: Arc::new(procedural::corner(17).unwrap()),
+                    transform: Default::default(),
+                    caster: false,
+                    receiver: true,
+                },
+                Instance {
+                    mesh: Arc::new(caster().clone()),
+                    transform: inst.transform,
+                    caster: true,
+                    receiver: true,
+                },
+            ],
+        };
+        let g = gbuffer(&PrimaryScene::new(&scene), &corner_camera(), w, h);
+        let (mut p, mut n, mut px) = (Vec::new(), Vec::new(), Vec::new());
+        for (i, hit) in g.iter().enumerate() {
+            if let Some(hit) = hit {
+                p.push(hit.position);
+                n.push(hit.normal);
+                px.push(i);
+            }
+        }
+        assert!(px.len() * 4 > (w * h) as usize, "{} AO pixels", px.len());
+        let mut kernel = FieldAoKernel::new(ctx, std::slice::from_ref(&inst), &Default::default())
+            .expect("field kernel");
+        for selection in [Selection::Nearest, Selection::Interpolated] {
+            let lookup = LookupOptions {
+                selection,
+                ..Default::default()
+            };
+            let fs = FieldScene {
+                instances: vec![inst.clone()],
+                options: lookup,
+            };
+            let cpu_ao = ao_at_points(&fs, &p, &n, &rays, &opts);
+            // Not agreeing on nothing: most pixels occluded, some of them strongly.
+            let strong = cpu_ao.iter().filter(|&&a| a < 0.5).count();
+            let open = cpu_ao.iter().filter(|&&a| a == 1.0).count();
+            assert!(
+                open * 2 < cpu_ao.len() && strong * 100 > cpu_ao.len(),
+                "{open} open pixels, {strong} below 0.5 of {}",
+                cpu_ao.len()
+            );
+            kernel.lookup = lookup;
+            let (gpu_ao, _) = kernel.vertex_ao(&p, &n, &rays, &opts).expect("gpu ao");
+            let image = |ao: &[f32]| {
+                let mut img = GrayImage::new(w, h, 1.0);
+                for (&i, &a) in px.iter().zip(ao) {
+                    img.data[i] = a;
+                }
+                img
+            };
+            let (actual, expected) = (image(&gpu_ao), image(&cpu_ao));
+            let mut mask = vec![false; (w * h) as usize];
+            px.iter().for_each(|&i| mask[i] = true);
+            let rms = rms_255(&actual.data, &expected.data, Some(&mask));
+            let label = format!("{precision:?} {selection:?}");
+            eprintln!("image AO {label}: {} pixels, RMS {rms:.4}/255", px.len());
+            if rms > 0.5 {
+                let dir = std::env::temp_dir().join(format!(
+                    "visfield-gpu-{}/image-{}",
+                    std::process::id(),
+                    label.replace(' ', "_")
+                ));
+                std::fs::create_dir_all(&dir).unwrap();
+                actual.save_png(&dir.join("actual.png")).unwrap();
+                expected.save_png(&dir.join("expected.png")).unwrap();
+                actual
+                    .difference(&expected, 5.0)
+                    .save_png(&dir.join("difference_x5.png"))
+                    .unwrap();
+                failures.push(format!("{label}: RMS {rms:.4}; see {}", dir.display()));
+            }
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "image parity failures:\n{}",
         failures.join("\n")
     );
 }

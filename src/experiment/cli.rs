@@ -97,6 +97,10 @@ pub struct RunArgs {
     /// Refuse fields larger than this many MiB (default: half the machine's memory).
     #[arg(long)]
     pub max_memory_mib: Option<u64>,
+    /// The adapter of the "gpu" backend: auto, lavapipe, hardware, or part of its name
+    /// (default: $VISFIELD_ADAPTER, else auto = hardware where there is one, else lavapipe).
+    #[arg(long)]
+    pub adapter: Option<String>,
 }
 
 /// Runs the spec experiments/NAME.json (see `experiment list`).
@@ -122,6 +126,9 @@ impl RunArgs {
         let mut o = RunOptions::new(out);
         o.quick = self.quick;
         o.dry_run = self.dry_run;
+        if let Some(a) = &self.adapter {
+            o.adapter = crate::gpu::AdapterPreference::parse(a);
+        }
         o.supply = FieldSupply {
             cache: if self.no_cache {
                 None

@@ -9,7 +9,10 @@
 //! - `pareto.png`: RMS against AO time for every field setting and for ray casting at several
 //!   ray counts, so that at equal time one sees which wins;
 //! - `times.png` (several scenes): ray-cast, bake and AO time against caster triangles (2008
-//!   Figure 8).
+//!   Figure 8), ray-cast and AO time once per backend.
+//!
+//! Every series is labelled with the backend as soon as a run has more than one (CPU and GPU
+//! rows of the same field are different points, never one series).
 //!
 //! The RMS shown is per image pixel when the run has images (the papers' figure), else per
 //! vertex.
@@ -17,6 +20,7 @@
 use super::outputs::{read_csv, Row, SweepRow};
 use super::plan::selection_name;
 use super::plot::{image_grid, xy_plot, Axes, Series};
+use super::spec::Backend;
 use crate::render::image::GrayImage;
 use std::path::Path;
 
@@ -131,22 +135,37 @@ pub fn draw_all(out: &Path, title: &str) -> Result<(), String> {
             scenes.push(&s.scene);
         }
     }
+    let mut backends: Vec<Backend> = sweep.iter().map(|s| s.backend).collect();
+    backends.sort();
+    backends.dedup();
     for sc in scenes {
-        let pts: Vec<_> = sweep
-            .iter()
-            .filter(|s| s.scene == sc)
-            .filter_map(|s| sm(s).map(|y| (s.ao_s, y)))
-            .collect();
-        let counts: Vec<String> = sweep
-            .iter()
-            .filter(|s| s.scene == sc)
-            .map(|s| s.rays_per_point.to_string())
-            .collect();
-        series.push(Series {
-            label: format!("ray cast {sc} ({} rays)", counts.join("/")),
-            points: pts,
-            line: true,
-        });
+        for &b in &backends {
+            let of = |s: &&SweepRow| s.scene == sc && s.backend == b;
+            let pts: Vec<_> = sweep
+                .iter()
+                .filter(of)
+                .filter_map(|s| sm(s).map(|y| (s.ao_s, y)))
+                .collect();
+            let counts: Vec<String> = sweep
+                .iter()
+                .filter(of)
+                .map(|s| s.rays_per_point.to_string())
+                .collect();
+            if counts.is_empty() {
+                continue;
+            }
+            // The backend is named as soon as the run has more than one.
+            let on = if backends.len() > 1 {
+                format!(" {}", b.name())
+            } else {
+                String::new()
+            };
+            series.push(Series {
+                label: format!("ray cast {sc}{on} ({} rays)", counts.join("/")),
+                points: pts,
+                line: true,
+            });
+        }
     }
     let rays = rows[0].rays_per_point;
     let axes = Axes {
@@ -162,33 +181,44 @@ pub fn draw_all(out: &Path, title: &str) -> Result<(), String> {
     let mut names: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
     names.dedup();
     if names.len() > 1 {
-        let first: Vec<&Row> = names
-            .iter()
-            .filter_map(|n| rows.iter().find(|r| r.scene == *n))
-            .collect();
-        let pick = |f: fn(&Row) -> Option<f64>| -> Vec<(f64, f64)> {
-            first
+        let mut backends: Vec<Backend> = rows.iter().map(|r| r.backend).collect();
+        backends.sort();
+        backends.dedup();
+        // Per backend, the first row of each scene.
+        let first = |b: Backend| -> Vec<&Row> {
+            names
                 .iter()
+                .filter_map(|n| rows.iter().find(|r| r.scene == *n && r.backend == b))
+                .collect()
+        };
+        let pick = |rs: &[&Row], f: fn(&Row) -> Option<f64>| -> Vec<(f64, f64)> {
+            rs.iter()
                 .filter_map(|r| f(r).map(|y| (r.caster_triangles as f64, y)))
                 .collect()
         };
-        let s = vec![
-            Series {
-                label: "ray-cast AO".into(),
-                points: pick(|r| r.raycast_s),
+        let mut s = vec![Series {
+            label: "bake (preprocess)".into(),
+            points: pick(&first(backends[0]), |r| r.bake_s),
+            line: false,
+        }];
+        for &b in &backends {
+            let rs = first(b);
+            let on = if backends.len() > 1 {
+                format!(" ({})", b.name())
+            } else {
+                String::new()
+            };
+            s.push(Series {
+                label: format!("ray-cast AO{on}"),
+                points: pick(&rs, |r| r.raycast_s),
                 line: false,
-            },
-            Series {
-                label: "bake (preprocess)".into(),
-                points: pick(|r| r.bake_s),
+            });
+            s.push(Series {
+                label: format!("field-lookup AO{on}"),
+                points: pick(&rs, |r| Some(r.ao_s)),
                 line: false,
-            },
-            Series {
-                label: "field-lookup AO".into(),
-                points: pick(|r| Some(r.ao_s)),
-                line: false,
-            },
-        ];
+            });
+        }
         let axes = Axes {
             title: format!("{title}: cost against caster triangles"),
             x_label: "caster triangles".into(),
@@ -265,7 +295,9 @@ fn grids(
                 let reference = load_png(&out.join(format!("images/{sc}-reference.png")))?;
                 let rc = sweep
                     .iter()
-                    .filter(|s| s.scene == sc && s.rms_image == Some(0.0))
+                    .filter(|s| {
+                        s.scene == sc && s.backend == Backend::Cpu && s.rms_image == Some(0.0)
+                    })
                     .max_by_key(|s| s.rays_per_point);
                 let mut cap = vec![format!("{sc}: ray cast (reference)")];
                 if let Some(s) = rc {

@@ -7,6 +7,7 @@
 //! thresholds ([`check`]).
 
 pub mod backend;
+pub mod backend_gpu;
 pub mod check;
 pub mod cli;
 pub mod discover;

@@ -57,6 +57,18 @@ pub struct Row {
     pub image: String,
     /// The cell id.
     pub cell: String,
+    /// Field-lookup kernel time from GPU timestamps (best over the timed runs); empty on the
+    /// CPU and on adapters without timestamp queries. `ao_s` is the call's wall time
+    /// (upload of the receivers, dispatch, wait, read-back).
+    #[serde(default)]
+    pub ao_kernel_s: Option<f64>,
+    /// Ray-cast kernel time from GPU timestamps on the same rays; `raycast_s` is its wall time.
+    #[serde(default)]
+    pub raycast_kernel_s: Option<f64>,
+    /// GPU only: packing and uploading the fields and compiling the kernel, once per cell
+    /// (not in `ao_s`); empty on the CPU, which reads the fields in place.
+    #[serde(default)]
+    pub setup_s: Option<f64>,
 }
 
 /// The columns `table.csv` starts with, in order.
@@ -85,6 +97,9 @@ pub struct SweepRow {
     pub ao_s: f64,
     pub rms_vertex: Option<f64>,
     pub rms_image: Option<f64>,
+    /// Kernel time from GPU timestamps (`ao_s` is the wall time); empty on the CPU.
+    #[serde(default)]
+    pub kernel_s: Option<f64>,
 }
 
 /// RMS between two cells that differ only in precision.

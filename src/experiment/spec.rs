@@ -77,7 +77,8 @@ fn default_backends() -> Vec<Backend> {
 pub enum Backend {
     /// rayon over points, through the `Visibility` interface.
     Cpu,
-    /// wgpu (not in this build: refused before any work).
+    /// wgpu compute kernels (Vulkan; a hardware adapter where there is one, else lavapipe):
+    /// field lookup and CWBVH ray casting on the same rays (`experiment::backend_gpu`).
     Gpu,
 }
 
@@ -448,6 +449,9 @@ pub struct QuickProfile {
     /// Replaces `reference.raycast_sweep`.
     #[serde(default)]
     pub raycast_sweep: Option<Vec<u32>>,
+    /// Replaces `backends` (e.g. a GPU run too slow for the quick profile on lavapipe).
+    #[serde(default)]
+    pub backends: Option<Vec<Backend>>,
     /// The quick profile's thresholds.
     #[serde(default)]
     pub thresholds: Vec<Threshold>,
@@ -497,6 +501,9 @@ impl Spec {
         }
         if let Some(sw) = &q.raycast_sweep {
             s.reference.raycast_sweep = sw.clone();
+        }
+        if let Some(b) = &q.backends {
+            s.backends = b.clone();
         }
         s.thresholds = q.thresholds.clone();
         s

@@ -4,7 +4,7 @@
 //! parts it replaces prefixed by `quick.`.
 
 use super::spec::{
-    exact_sqrt, FieldAxes, MeshSource, RenderKind, SceneSpec, Spec, SpecError, Threshold,
+    exact_sqrt, Backend, FieldAxes, MeshSource, RenderKind, SceneSpec, Spec, SpecError, Threshold,
 };
 use crate::geometry::models::ModelRegistry;
 use crate::sampling::{HemisphereLayout, SphereKind, SpherePoints};
@@ -19,6 +19,7 @@ struct Paths {
     image: &'static str,
     sweep: &'static str,
     thresholds: &'static str,
+    backends: &'static str,
 }
 
 /// Validates both profiles of `spec`.
@@ -31,6 +32,7 @@ pub fn validate(spec: &Spec, file: &Path) -> Result<(), SpecError> {
         image: "render.image",
         sweep: "reference.raycast_sweep",
         thresholds: "thresholds",
+        backends: "backends",
     };
     let q = &spec.quick;
     let pick = |given: bool, quick: &'static str, full: &'static str| {
@@ -49,6 +51,7 @@ pub fn validate(spec: &Spec, file: &Path) -> Result<(), SpecError> {
         image: pick(q.image.is_some(), "quick.image", full.image),
         sweep: pick(q.raycast_sweep.is_some(), "quick.raycast_sweep", full.sweep),
         thresholds: "quick.thresholds",
+        backends: pick(q.backends.is_some(), "quick.backends", full.backends),
     };
     let ctx = Ctx { file };
     ctx.profile(spec, &full)?;
@@ -130,11 +133,24 @@ impl Ctx<'_> {
             }
         }
         if s.backends.is_empty() {
-            return Err(self.err("backends", "needs \"cpu\" and/or \"gpu\"".into()));
+            return Err(self.err(p.backends, "needs \"cpu\" and/or \"gpu\"".into()));
         }
         for (i, b) in s.backends.iter().enumerate() {
             if s.backends[..i].contains(b) {
-                return Err(self.err(&format!("backends[{i}]"), format!("{b:?} twice")));
+                return Err(self.err(&format!("{}[{i}]", p.backends), format!("{b:?} twice")));
+            }
+        }
+        if s.backends.contains(&Backend::Gpu) {
+            // The GPU kernels answer the nearest map of Slater and lat-long sets only.
+            for (i, f) in s.fields.iter().enumerate() {
+                if let Some(j) = f.spheres.iter().position(|&k| k == SphereKind::Fibonacci) {
+                    return Err(self.err(
+                        &format!("{}[{i}].spheres[{j}]", p.fields),
+                        "\"fibonacci\" has no nearest-map query on the \"gpu\" backend; use \
+                         \"slater\" or \"lat_long\", or drop \"gpu\" from backends"
+                            .into(),
+                    ));
+                }
             }
         }
         if let Some(paper) = &s.paper {

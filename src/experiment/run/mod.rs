@@ -16,6 +16,7 @@ use super::plan::{Plan, PlanLimits};
 use super::progress::stage;
 use super::scenes::Scenes;
 use super::spec::{Spec, SpecError, Threshold};
+use crate::gpu::AdapterPreference;
 use std::path::{Path, PathBuf};
 use steps::Runner;
 
@@ -65,6 +66,9 @@ pub struct RunOptions {
     pub short_stage_s: f64,
     /// Runs of a short stage.
     pub repeats: usize,
+    /// The adapter of the "gpu" backend (default: `VISFIELD_ADAPTER`, else hardware where
+    /// there is one, else lavapipe); unused unless a spec asks for "gpu".
+    pub adapter: AdapterPreference,
 }
 
 impl RunOptions {
@@ -81,6 +85,7 @@ impl RunOptions {
             dry_run: false,
             short_stage_s: 2.0,
             repeats: 3,
+            adapter: AdapterPreference::from_env(),
         }
     }
 }

@@ -29,6 +29,8 @@ pub(super) struct SceneState {
     pub(super) ref_image: Option<(GrayImage, Vec<bool>)>,
     /// Ray-cast AO time per (backend, k).
     pub(super) raycast_s: HashMap<(Backend, u32), f64>,
+    /// Ray-cast kernel time from GPU timestamps per (backend, k), where there are any.
+    pub(super) raycast_kernel_s: HashMap<(Backend, u32), f64>,
 }
 
 impl SceneState {
@@ -81,6 +83,7 @@ impl SceneState {
             reference: Vec::new(),
             ref_image: None,
             raycast_s: HashMap::new(),
+            raycast_kernel_s: HashMap::new(),
         }
     }
 

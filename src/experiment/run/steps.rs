@@ -44,7 +44,7 @@ impl<'a> Runner<'a> {
     ) -> Result<Runner<'a>, String> {
         let mut backends = HashMap::new();
         for &b in &spec.backends {
-            backends.insert(b, backend::open(b)?);
+            backends.insert(b, backend::open(b, &opts.adapter)?);
         }
         Ok(Runner {
             spec,
@@ -143,6 +143,7 @@ impl<'a> Runner<'a> {
             ao_s: s,
             rms_vertex: st.receivers.as_ref().map(|_| 0.0),
             rms_image: st.ref_image.as_ref().map(|_| 0.0),
+            kernel_s: None,
         };
         self.sweep.push(row);
         Ok(())
@@ -166,10 +167,17 @@ impl<'a> Runner<'a> {
             tracer: &st.tracer,
         };
         let msg = format!("{}: ray-cast AO, {} rays ({})", bs.name, k * k, b.name());
+        let eval = be.casters(&casters)?;
+        let mut kernel_s = None;
         let (ao, s, _) = stage_adaptive(&msg, short, reps, || {
-            be.raycast_ao(&casters, &st.at(), &rays, &st.opts)
+            let o = eval.ao(&st.at(), &rays, &st.opts)?;
+            kernel_s = min_time(kernel_s, o.kernel_s);
+            Ok::<_, String>(o.ao)
         })?;
         st.raycast_s.insert((b, k), s);
+        if let Some(ks) = kernel_s {
+            st.raycast_kernel_s.insert((b, k), ks);
+        }
         let (rms_vertex, rms_image) = st.errors(bs, &ao);
         self.sweep.push(SweepRow {
             scene: bs.name.clone(),
@@ -178,6 +186,7 @@ impl<'a> Runner<'a> {
             ao_s: s,
             rms_vertex,
             rms_image,
+            kernel_s,
         });
         Ok(())
     }
@@ -224,9 +233,15 @@ impl<'a> Runner<'a> {
         let rays = RaySet::new(plan.render_k, spec.reference.seed);
         let msg = format!("[{}/{}] lookup {id}", self.done, self.lookups);
         let (short, reps) = (self.opts.short_stage_s, self.opts.repeats);
+        let eval = be.fields(&fs)?;
+        let mut ao_kernel_s = None;
         let (ao, ao_s, _) = stage_adaptive(&msg, short, reps, || {
-            be.field_ao(&fs, &st.at(), &rays, &st.opts)
+            let o = eval.ao(&st.at(), &rays, &st.opts)?;
+            ao_kernel_s = min_time(ao_kernel_s, o.kernel_s);
+            Ok::<_, String>(o.ao)
         })?;
+        let setup_s = eval.setup_s();
+        drop(eval);
         let ve = st
             .receivers
             .as_ref()
@@ -273,6 +288,12 @@ impl<'a> Runner<'a> {
             bake_cached: cached,
             image,
             cell: id,
+            ao_kernel_s,
+            raycast_kernel_s: st
+                .raycast_kernel_s
+                .get(&(c.backend, plan.render_k))
+                .copied(),
+            setup_s,
         };
         self.rows.push((cell, row));
         self.results.push(CellResult {
@@ -281,5 +302,13 @@ impl<'a> Runner<'a> {
             image: img.map(|(i, _)| i),
         });
         Ok(())
+    }
+}
+
+/// The smaller of two optional times (a kernel time is the best over the timed runs).
+fn min_time(a: Option<f64>, b: Option<f64>) -> Option<f64> {
+    match (a, b) {
+        (Some(a), Some(b)) => Some(a.min(b)),
+        (a, b) => a.or(b),
     }
 }
