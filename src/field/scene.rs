@@ -59,13 +59,18 @@ impl FieldInstance {
     /// always takes the exact path.
     #[inline]
     pub fn may_meet(&self, origin: Vec3, dir: Vec3, tmin: f32) -> bool {
-        let f = self.world_center - origin;
-        let b = f.dot(dir);
-        let l = f - b * dir;
-        let reach =
-            self.world_radius + self.margin_base + MAY_MEET_SLACK * origin.abs().max_element();
-        // Line misses: |l| > R. Sphere behind: every point of it has t ≤ b + R < tmin.
-        l.length_squared() <= reach * reach && b + reach >= tmin
+        self.may_meet_from(origin).test(dir, tmin)
+    }
+
+    /// The terms of [`Self::may_meet`] that depend only on the origin.
+    #[inline]
+    fn may_meet_from(&self, origin: Vec3) -> MayMeetFrom {
+        MayMeetFrom {
+            f: self.world_center - origin,
+            reach: self.world_radius
+                + self.margin_base
+                + MAY_MEET_SLACK * origin.abs().max_element(),
+        }
     }
 
     /// World-space hit distance through this instance's field.
@@ -179,6 +184,26 @@ impl FieldInstance {
     }
 }
 
+/// [`FieldInstance::may_meet`] for rays from one origin.
+#[derive(Clone, Copy, Debug)]
+struct MayMeetFrom {
+    /// Sphere centre − origin.
+    f: Vec3,
+    /// The sphere's radius plus the rounding margin.
+    reach: f32,
+}
+
+impl MayMeetFrom {
+    #[inline]
+    fn test(&self, dir: Vec3, tmin: f32) -> bool {
+        let (f, reach) = (self.f, self.reach);
+        let b = f.dot(dir);
+        let l = f - b * dir;
+        // Line misses: |l| > R. Sphere behind: every point of it has t ≤ b + R < tmin.
+        l.length_squared() <= reach * reach && b + reach >= tmin
+    }
+}
+
 /// Every caster's field; a ray tests the instances whose spheres it meets, nearest entry first,
 /// and stops at the first occlusion.
 #[derive(Clone, Debug, Default)]
@@ -263,8 +288,9 @@ impl Visibility for FieldScene {
         out.fill(false);
         let several = self.instances.len() > 1;
         for inst in &self.instances {
+            let meet = inst.may_meet_from(origin);
             let candidate = |dir: Vec3| {
-                inst.may_meet(origin, dir, tmin)
+                meet.test(dir, tmin)
                     && (!several || inst.meets_segment(origin, dir, tmin, tmax).is_some())
             };
             inst.occluded_many(origin, dirs, tmin, tmax, &self.options, candidate, out);
