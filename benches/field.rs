@@ -1,7 +1,9 @@
 //! Field lookup against obvhs ray casting on the same AO rays (2008 paper's setting: 256
 //! stratified cosine rays at each of the corner's 3 × 33 × 33 vertices), for casters of growing
 //! triangle count, every precision and both map selections; and bake throughput against the
-//! tracer's raw closest-hit throughput on the same rays.
+//! tracer's raw closest-hit throughput on the same rays. Field rows go through
+//! `ao_at_points`, which batches each vertex's rays (`Visibility::occluded_many`); the
+//! `*_per_ray` rows run the same lookups one ray at a time (`PerRay`).
 //!
 //! `cargo bench --bench field`. Casters: stanford-bunny_39k (38,889 triangles), dragon
 //! (100,000) and a 261,120-triangle supershape (the 2010 paper's count). Real models are found
@@ -22,6 +24,7 @@ use visfield::geometry::procedural::{over_corner, supershape, Supershape};
 use visfield::geometry::{models, Mesh};
 use visfield::render::ao::{ao_at_points, AoOptions};
 use visfield::render::receivers::Receivers;
+use visfield::render::PerRay;
 use visfield::sampling::rays::RaySet;
 use visfield::sampling::{Frame, HemisphereLayout, LayoutKind, SphereKind, SpherePoints};
 use visfield::trace::Tracer;
@@ -93,6 +96,30 @@ fn ao_lookup_vs_raycast(c: &mut Criterion) {
                         },
                     };
                     b.iter(|| ao_at_points(&fs, &recv.points, &recv.normals, &rays, &opts))
+                });
+                if precision != Precision::U8 {
+                    continue;
+                }
+                // The same lookups one ray at a time (no shared origin work, no prefetch).
+                let id = BenchmarkId::new(
+                    format!("field_{selection:?}_per_ray").to_lowercase(),
+                    precision.name(),
+                );
+                group.bench_function(id, |b| {
+                    let field = field.get_or_init(|| {
+                        let (f, _) =
+                            bake(&caster.mesh, params, &BakeOptions::default()).expect("bake");
+                        Arc::new(f)
+                    });
+                    let fs = FieldScene {
+                        instances: vec![FieldInstance::new(field.clone(), caster.transform)],
+                        options: LookupOptions {
+                            selection,
+                            ..LookupOptions::default()
+                        },
+                    };
+                    let per_ray = PerRay(&fs);
+                    b.iter(|| ao_at_points(&per_ray, &recv.points, &recv.normals, &rays, &opts))
                 });
             }
         }

@@ -47,33 +47,62 @@ pub fn sphere_crossing(
     center: Vec3,
     radius: f32,
 ) -> Option<SphereCrossing> {
-    let f = origin.as_dvec3() - center.as_dvec3();
-    let d = dir.as_dvec3();
-    let a = d.length_squared();
-    let d = if (a - 1.0).abs() < 1e-6 {
-        d * (1.5 - 0.5 * a)
-    } else {
-        d / a.sqrt()
-    };
-    let r = radius as f64;
-    let b = -f.dot(d);
-    let l = f + b * d; // component of f perpendicular to d
-                       // r² − |l|² (Haines' form; in f64 its cancellation near tangency costs at most
-                       // √(2⁻⁵²) r ≈ 1.5e-8 r in √disc).
-    let disc = r * r - l.length_squared();
-    if disc.is_nan() || disc < 0.0 {
-        return None;
+    SphereOrigin::new(origin, center, radius).crossing(dir)
+}
+
+/// The part of [`sphere_crossing`] that depends only on the origin, for rays that share one:
+/// `SphereOrigin::new(o, c, r).crossing(d)` is `sphere_crossing(o, d, c, r)`, bit for bit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SphereOrigin {
+    /// origin − centre, in f64.
+    f: DVec3,
+    /// The radius, in f64.
+    r: f64,
+    /// |f|² − r².
+    c: f64,
+}
+
+impl SphereOrigin {
+    #[inline]
+    pub fn new(origin: Vec3, center: Vec3, radius: f32) -> Self {
+        let f = origin.as_dvec3() - center.as_dvec3();
+        let r = radius as f64;
+        SphereOrigin {
+            f,
+            r,
+            c: f.length_squared() - r * r,
+        }
     }
-    let c = f.length_squared() - r * r;
-    let s = disc.sqrt();
-    let q = if b >= 0.0 { b + s } else { b - s };
-    let (t0, t1) = if q == 0.0 { (0.0, 0.0) } else { (c / q, q) };
-    let (t0, t1) = if t0 <= t1 { (t0, t1) } else { (t1, t0) };
-    Some(SphereCrossing {
-        t0: t0 as f32,
-        t1: t1 as f32,
-        entry: l - s * d,
-    })
+
+    /// [`sphere_crossing`] of the ray from this origin along `dir`.
+    #[inline]
+    pub fn crossing(&self, dir: Vec3) -> Option<SphereCrossing> {
+        let (f, r, c) = (self.f, self.r, self.c);
+        let d = dir.as_dvec3();
+        let a = d.length_squared();
+        let d = if (a - 1.0).abs() < 1e-6 {
+            d * (1.5 - 0.5 * a)
+        } else {
+            d / a.sqrt()
+        };
+        let b = -f.dot(d);
+        let l = f + b * d; // component of f perpendicular to d
+                           // r² − |l|² (Haines' form; in f64 its cancellation near tangency costs at
+                           // most √(2⁻⁵²) r ≈ 1.5e-8 r in √disc).
+        let disc = r * r - l.length_squared();
+        if disc.is_nan() || disc < 0.0 {
+            return None;
+        }
+        let s = disc.sqrt();
+        let q = if b >= 0.0 { b + s } else { b - s };
+        let (t0, t1) = if q == 0.0 { (0.0, 0.0) } else { (c / q, q) };
+        let (t0, t1) = if t0 <= t1 { (t0, t1) } else { (t1, t0) };
+        Some(SphereCrossing {
+            t0: t0 as f32,
+            t1: t1 as f32,
+            entry: l - s * d,
+        })
+    }
 }
 
 /// Near and far roots of a unit-direction ray against a sphere, or `None` if it misses
@@ -127,17 +156,138 @@ pub struct LookupOptions {
     pub intra_bias: IntraBias,
 }
 
+/// The texels a lookup reads, computed apart from reading them so that batched lookups can
+/// prefetch the storage: [`NearestRead`] (the papers' method) or [`BlendReads`] (interpolated).
+pub trait Reads: Copy {
+    /// The texels read for a ray crossing the sphere at unit position `u` with model-space
+    /// direction `dir` pointing into the sphere.
+    fn of(field: &VisibilityField, u: Vec3, dir: Vec3) -> Self;
+    /// Asks the CPU to fetch the storage these reads touch (a hint; no effect on results).
+    fn prefetch(&self, field: &VisibilityField);
+    /// The normalised distance D of these reads.
+    fn read(&self, field: &VisibilityField) -> f32;
+}
+
+/// [`Selection::Nearest`]: the map of the nearest positional sample and the texel containing
+/// the direction.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct NearestRead {
+    pub map: u32,
+    pub texel: u32,
+}
+
+impl Reads for NearestRead {
+    #[inline]
+    fn of(field: &VisibilityField, u: Vec3, dir: Vec3) -> Self {
+        let m = field.points.nearest(u);
+        let local = field.frames[m].to_local(dir);
+        NearestRead {
+            map: m as u32,
+            texel: field.layout.to_texel(local),
+        }
+    }
+
+    #[inline]
+    fn prefetch(&self, field: &VisibilityField) {
+        field
+            .storage
+            .prefetch(self.map as usize, self.texel as usize);
+    }
+
+    #[inline]
+    fn read(&self, field: &VisibilityField) -> f32 {
+        field.storage.get(self.map as usize, self.texel as usize)
+    }
+}
+
+/// [`Selection::Interpolated`]: up to three maps × four texels, weight = map weight × bilinear
+/// weight, blended as an occupancy ([`VisibilityField::sample_interpolated`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BlendReads {
+    /// (map, texel, weight); the first `n` are used.
+    items: [(u32, u32, f32); 12],
+    n: u8,
+}
+
+impl BlendReads {
+    /// The (map, texel, weight) triples read.
+    pub fn items(&self) -> &[(u32, u32, f32)] {
+        &self.items[..self.n as usize]
+    }
+}
+
+impl Reads for BlendReads {
+    #[inline]
+    fn of(field: &VisibilityField, u: Vec3, dir: Vec3) -> Self {
+        let mut r = BlendReads {
+            items: [(0, 0, 0.0); 12],
+            n: 0,
+        };
+        let (maps, weights) = field.points.surrounding(u);
+        for (&m, &w) in maps.iter().zip(&weights) {
+            if w <= 0.0 {
+                continue;
+            }
+            let local = field.frames[m].to_local(dir);
+            let (texels, n) = bilinear_texels(&field.layout, local);
+            for &(t, tw) in &texels[..n] {
+                r.items[r.n as usize] = (m as u32, t, w * tw);
+                r.n += 1;
+            }
+        }
+        r
+    }
+
+    #[inline]
+    fn prefetch(&self, field: &VisibilityField) {
+        for &(m, t, _) in self.items() {
+            field.storage.prefetch(m as usize, t as usize);
+        }
+    }
+
+    #[inline]
+    fn read(&self, field: &VisibilityField) -> f32 {
+        let (mut occ, mut dist) = (0.0f32, 0.0f32);
+        for &(m, t, w) in self.items() {
+            let d = field.storage.get(m as usize, t as usize);
+            if d < 1.0 {
+                occ += w;
+                dist += w * d;
+            }
+        }
+        if occ >= 0.5 {
+            dist / occ
+        } else {
+            1.0
+        }
+    }
+}
+
+/// One ray's field lookup up to its storage reads ([`VisibilityField::probe`]); finished by
+/// [`VisibilityField::finish`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Probe<R> {
+    /// t0 (origin outside the sphere: the hit lies at t0 + 2R·D) or t1 (inside: the hit lies at
+    /// t1 − 2R·D), in model units.
+    t: f32,
+    inside: bool,
+    reads: R,
+}
+
+impl<R> Probe<R> {
+    /// The texels this probe reads.
+    pub fn reads(&self) -> &R {
+        &self.reads
+    }
+}
+
 impl VisibilityField {
     /// Normalised distance D stored for a ray crossing the sphere at unit position `u` (relative
     /// to the centre) with model-space direction `dir` pointing into the sphere.
     #[inline]
     pub fn sample(&self, u: Vec3, dir: Vec3, selection: Selection) -> f32 {
         match selection {
-            Selection::Nearest => {
-                let m = self.points.nearest(u);
-                let local = self.frames[m].to_local(dir);
-                self.storage.get(m, self.layout.to_texel(local) as usize)
-            }
+            Selection::Nearest => NearestRead::of(self, u, dir).read(self),
             Selection::Interpolated => self.sample_interpolated(u, dir),
         }
     }
@@ -148,27 +298,7 @@ impl VisibilityField {
     /// weighted mean distance of the hitting samples (averaging a miss's 1 into a hit distance
     /// would invent surfaces).
     pub fn sample_interpolated(&self, u: Vec3, dir: Vec3) -> f32 {
-        let (maps, weights) = self.points.surrounding(u);
-        let (mut occ, mut dist) = (0.0f32, 0.0f32);
-        for (&m, &w) in maps.iter().zip(&weights) {
-            if w <= 0.0 {
-                continue;
-            }
-            let local = self.frames[m].to_local(dir);
-            let (texels, n) = bilinear_texels(&self.layout, local);
-            for &(t, tw) in &texels[..n] {
-                let d = self.storage.get(m, t as usize);
-                if d < 1.0 {
-                    occ += w * tw;
-                    dist += w * tw * d;
-                }
-            }
-        }
-        if occ >= 0.5 {
-            dist / occ
-        } else {
-            1.0
-        }
+        BlendReads::of(self, u, dir).read(self)
     }
 
     /// Distance from `origin` to the approximate surface along unit `dir`, if it lies within
@@ -181,11 +311,35 @@ impl VisibilityField {
         tmax: f32,
         opts: &LookupOptions,
     ) -> Option<f32> {
+        let from = SphereOrigin::new(origin, self.bounds.center, self.bounds.radius);
+        match opts.selection {
+            Selection::Nearest => {
+                let probe = self.probe::<NearestRead>(&from, origin, dir, tmin, tmax)?;
+                self.finish(&probe, tmin, tmax, opts)
+            }
+            Selection::Interpolated => {
+                let probe = self.probe::<BlendReads>(&from, origin, dir, tmin, tmax)?;
+                self.finish(&probe, tmin, tmax, opts)
+            }
+        }
+    }
+
+    /// The first half of [`Self::hit_distance`]: the sphere crossing and the texels to read
+    /// (`R` gives the selection); `None` when the ray cannot hit. `from` is
+    /// `SphereOrigin::new(origin, bounds.center, bounds.radius)`, shared by rays from one origin.
+    #[inline]
+    pub fn probe<R: Reads>(
+        &self,
+        from: &SphereOrigin,
+        origin: Vec3,
+        dir: Vec3,
+        tmin: f32,
+        tmax: f32,
+    ) -> Option<Probe<R>> {
         let c = self.bounds.center;
         let r = self.bounds.radius;
-        let hit = sphere_crossing(origin, dir, c, r)?;
+        let hit = from.crossing(dir)?;
         let (t0, t1) = (hit.t0, hit.t1);
-        let diameter = 2.0 * r;
         if t1 < tmin {
             return None; // sphere behind the ray
         }
@@ -195,22 +349,44 @@ impl VisibilityField {
                 return None;
             }
             let u = (hit.entry / r as f64).as_vec3();
-            let d = self.sample(u, dir, opts.selection);
-            if d >= 1.0 {
-                return None;
-            }
-            let t = t0 + diameter * d;
-            (t >= tmin && t <= tmax).then_some(t)
+            Some(Probe {
+                t: t0,
+                inside: false,
+                reads: R::of(self, u, dir),
+            })
         } else {
             // Inside: intra-object test from the exit point back towards the origin.
             let p1 = (origin - c) + t1 * dir;
             let u = p1.normalize_or_zero();
-            let d = self.sample(u, -dir, opts.selection);
-            if d >= 1.0 {
-                return None;
-            }
-            let t = t1 - diameter * d;
-            let tol = opts.intra_bias.model_units(&self.intra, diameter, t1);
+            Some(Probe {
+                t: t1,
+                inside: true,
+                reads: R::of(self, u, -dir),
+            })
+        }
+    }
+
+    /// The second half of [`Self::hit_distance`]: reads the probe's texels and tests the hit
+    /// against [tmin, tmax] (the same bounds as given to [`Self::probe`]).
+    #[inline]
+    pub fn finish<R: Reads>(
+        &self,
+        probe: &Probe<R>,
+        tmin: f32,
+        tmax: f32,
+        opts: &LookupOptions,
+    ) -> Option<f32> {
+        let diameter = 2.0 * self.bounds.radius;
+        let d = probe.reads.read(self);
+        if d >= 1.0 {
+            return None;
+        }
+        if !probe.inside {
+            let t = probe.t + diameter * d;
+            (t >= tmin && t <= tmax).then_some(t)
+        } else {
+            let t = probe.t - diameter * d;
+            let tol = opts.intra_bias.model_units(&self.intra, diameter, probe.t);
             (t > tmin + tol && t <= tmax).then_some(t)
         }
     }

@@ -1,7 +1,10 @@
 //! Several instanced fields answering one [`Visibility`] query (2008 Algorithm 2 over all
 //! occluders; 2010 §3.2).
 
-use super::lookup::{ray_sphere, LookupOptions};
+use super::lookup::{
+    ray_sphere, BlendReads, LookupOptions, NearestRead, Probe, Reads, SphereOrigin,
+};
+use super::Selection;
 use super::VisibilityField;
 use crate::geometry::Similarity;
 use crate::render::Visibility;
@@ -56,13 +59,18 @@ impl FieldInstance {
     /// always takes the exact path.
     #[inline]
     pub fn may_meet(&self, origin: Vec3, dir: Vec3, tmin: f32) -> bool {
-        let f = self.world_center - origin;
-        let b = f.dot(dir);
-        let l = f - b * dir;
-        let reach =
-            self.world_radius + self.margin_base + MAY_MEET_SLACK * origin.abs().max_element();
-        // Line misses: |l| > R. Sphere behind: every point of it has t ≤ b + R < tmin.
-        l.length_squared() <= reach * reach && b + reach >= tmin
+        self.may_meet_from(origin).test(dir, tmin)
+    }
+
+    /// The terms of [`Self::may_meet`] that depend only on the origin.
+    #[inline]
+    fn may_meet_from(&self, origin: Vec3) -> MayMeetFrom {
+        MayMeetFrom {
+            f: self.world_center - origin,
+            reach: self.world_radius
+                + self.margin_base
+                + MAY_MEET_SLACK * origin.abs().max_element(),
+        }
     }
 
     /// World-space hit distance through this instance's field.
@@ -76,18 +84,123 @@ impl FieldInstance {
         opts: &LookupOptions,
     ) -> Option<f32> {
         let tr = &self.transform;
-        // Bit-identical to `tr.to_local_point(origin)` and `tr.to_local_dir(dir)`.
-        let o = self.inv_rotation * ((origin - tr.translation) / tr.scale);
-        let d = (self.inv_rotation * dir).normalize();
         self.field
             .hit_distance(
-                o,
-                d,
+                self.local_origin(origin),
+                self.local_dir(dir),
                 tr.to_local_distance(tmin),
                 tr.to_local_distance(tmax),
                 opts,
             )
             .map(|t| t * tr.scale)
+    }
+
+    /// Bit-identical to `transform.to_local_point(origin)`.
+    #[inline]
+    fn local_origin(&self, origin: Vec3) -> Vec3 {
+        let tr = &self.transform;
+        self.inv_rotation * ((origin - tr.translation) / tr.scale)
+    }
+
+    /// `transform.to_local_dir(dir)` (bit-identical), renormalised.
+    #[inline]
+    fn local_dir(&self, dir: Vec3) -> Vec3 {
+        (self.inv_rotation * dir).normalize()
+    }
+
+    /// Whether the segment meets the world sphere (the f32 test that orders several instances).
+    #[inline]
+    fn meets_segment(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<f32> {
+        let (t0, t1) = ray_sphere(origin, dir, self.world_center, self.world_radius)?;
+        (t1 >= tmin && t0 <= tmax).then_some(t0)
+    }
+
+    /// [`Self::hit_distance`]`(..).is_some()` of every ray from `origin` along `dirs[i]` whose
+    /// `candidate(dirs[i])` holds, ORed into `out[i]`; rays already marked in `out` are skipped.
+    ///
+    /// The direction-independent work (model-space origin, the sphere crossing's origin terms)
+    /// is done once; each block of rays computes its texel addresses and prefetches them before
+    /// any is read, so that the storage's cache misses overlap instead of adding up.
+    #[allow(clippy::too_many_arguments)]
+    fn occluded_many(
+        &self,
+        origin: Vec3,
+        dirs: &[Vec3],
+        tmin: f32,
+        tmax: f32,
+        opts: &LookupOptions,
+        candidate: impl Fn(Vec3) -> bool,
+        out: &mut [bool],
+    ) {
+        match opts.selection {
+            Selection::Nearest => self
+                .occluded_many_with::<NearestRead>(origin, dirs, tmin, tmax, opts, candidate, out),
+            Selection::Interpolated => self
+                .occluded_many_with::<BlendReads>(origin, dirs, tmin, tmax, opts, candidate, out),
+        }
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    fn occluded_many_with<R: Reads>(
+        &self,
+        origin: Vec3,
+        dirs: &[Vec3],
+        tmin: f32,
+        tmax: f32,
+        opts: &LookupOptions,
+        candidate: impl Fn(Vec3) -> bool,
+        out: &mut [bool],
+    ) {
+        const BLOCK: usize = 16;
+        let tr = &self.transform;
+        let field = &*self.field;
+        let o = self.local_origin(origin);
+        let from = SphereOrigin::new(o, field.bounds.center, field.bounds.radius);
+        let (lmin, lmax) = (tr.to_local_distance(tmin), tr.to_local_distance(tmax));
+        let mut pending: [Option<(usize, Probe<R>)>; BLOCK] = [None; BLOCK];
+        let mut n = 0;
+        let resolve = |pending: &[Option<(usize, Probe<R>)>], out: &mut [bool]| {
+            for (i, p) in pending.iter().flatten() {
+                out[*i] |= field.finish(p, lmin, lmax, opts).is_some();
+            }
+        };
+        for (i, &dir) in dirs.iter().enumerate() {
+            if out[i] || !candidate(dir) {
+                continue;
+            }
+            let Some(probe) = field.probe::<R>(&from, o, self.local_dir(dir), lmin, lmax) else {
+                continue;
+            };
+            probe.reads().prefetch(field);
+            pending[n] = Some((i, probe));
+            n += 1;
+            if n == BLOCK {
+                resolve(&pending, out);
+                n = 0;
+            }
+        }
+        resolve(&pending[..n], out);
+    }
+}
+
+/// [`FieldInstance::may_meet`] for rays from one origin.
+#[derive(Clone, Copy, Debug)]
+struct MayMeetFrom {
+    /// Sphere centre − origin.
+    f: Vec3,
+    /// The sphere's radius plus the rounding margin.
+    reach: f32,
+}
+
+impl MayMeetFrom {
+    #[inline]
+    fn test(&self, dir: Vec3, tmin: f32) -> bool {
+        let (f, reach) = (self.f, self.reach);
+        let b = f.dot(dir);
+        let l = f - b * dir;
+        // Line misses: |l| > R. Sphere behind: every point of it has t ≤ b + R < tmin.
+        l.length_squared() <= reach * reach && b + reach >= tmin
     }
 }
 
@@ -124,18 +237,16 @@ impl FieldScene {
             if !inst.may_meet(origin, dir, tmin) {
                 continue;
             }
-            if let Some((t0, t1)) = ray_sphere(origin, dir, inst.world_center, inst.world_radius) {
-                if t1 >= tmin && t0 <= tmax {
-                    if n < stack.len() {
-                        stack[n] = (t0.max(tmin), i);
-                    } else {
-                        if heap.is_empty() {
-                            heap.extend_from_slice(&stack);
-                        }
-                        heap.push((t0.max(tmin), i));
+            if let Some(t0) = inst.meets_segment(origin, dir, tmin, tmax) {
+                if n < stack.len() {
+                    stack[n] = (t0.max(tmin), i);
+                } else {
+                    if heap.is_empty() {
+                        heap.extend_from_slice(&stack);
                     }
-                    n += 1;
+                    heap.push((t0.max(tmin), i));
                 }
+                n += 1;
             }
         }
         let order = if heap.is_empty() {
@@ -162,6 +273,28 @@ impl Visibility for FieldScene {
             !hit
         });
         hit
+    }
+
+    /// Bit-identical to [`Self::occluded`] per ray: a ray is occluded when any instance that
+    /// `occluded` would consider (its `may_meet`, and with several instances the world sphere
+    /// test) reports a hit, which does not depend on the order instances are tried in. So the
+    /// instances are taken one at a time, each over all rays not yet occluded.
+    fn occluded_many(&self, origin: Vec3, dirs: &[Vec3], tmin: f32, tmax: f32, out: &mut [bool]) {
+        assert_eq!(
+            dirs.len(),
+            out.len(),
+            "occluded_many: dirs and out differ in length"
+        );
+        out.fill(false);
+        let several = self.instances.len() > 1;
+        for inst in &self.instances {
+            let meet = inst.may_meet_from(origin);
+            let candidate = |dir: Vec3| {
+                meet.test(dir, tmin)
+                    && (!several || inst.meets_segment(origin, dir, tmin, tmax).is_some())
+            };
+            inst.occluded_many(origin, dirs, tmin, tmax, &self.options, candidate, out);
+        }
     }
 
     fn hit_distance(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<f32> {

@@ -49,7 +49,8 @@ impl AoOptions {
 /// Ambient occlusion at one receiver point: the fraction of the `rays.len()` directions of
 /// point `point_index` (in the frame of the unit normal `normal`) that leave
 /// `point + offset·normal` without hitting anything within `max_distance`.
-/// `scratch` holds the local directions (reused between calls). An empty ray set gives 1.
+/// `scratch` holds the directions (reused between calls). An empty ray set gives 1. The rays
+/// go to [`Visibility::occluded_many`] in blocks of 256.
 pub fn ao_at_point<V: Visibility + ?Sized>(
     vis: &V,
     point_index: u32,
@@ -70,10 +71,17 @@ pub fn ao_at_point<V: Visibility + ?Sized>(
     let frame = Frame::from_normal(normal);
     let origin = point + opts.offset * normal;
     let tmax = opts.max_distance.unwrap_or(f32::INFINITY);
-    let free = scratch
-        .iter()
-        .filter(|&&local| !vis.occluded(origin, frame.to_world(local), 0.0, tmax))
-        .count();
+    for d in scratch.iter_mut() {
+        *d = frame.to_world(*d);
+    }
+    // All rays share the origin: one batched query per block of directions.
+    let mut blocked = [false; 256];
+    let mut free = 0;
+    for dirs in scratch.chunks(blocked.len()) {
+        let out = &mut blocked[..dirs.len()];
+        vis.occluded_many(origin, dirs, 0.0, tmax, out);
+        free += out.iter().filter(|&&b| !b).count();
+    }
     free as f32 / scratch.len() as f32
 }
 

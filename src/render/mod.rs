@@ -19,6 +19,40 @@ pub trait Visibility: Sync {
     /// Distance `t` to the first blocker on the segment, `None` when it is free.
     /// `occluded(..) == hit_distance(..).is_some()`.
     fn hit_distance(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<f32>;
+
+    /// [`Self::occluded`] of every unit direction in `dirs` from one `origin`:
+    /// `out[i] = occluded(origin, dirs[i], tmin, tmax)`, bit for bit. Backends override it to
+    /// share work between rays with a common origin (receiver rays in AO).
+    ///
+    /// # Panics
+    /// If `dirs` and `out` differ in length.
+    fn occluded_many(&self, origin: Vec3, dirs: &[Vec3], tmin: f32, tmax: f32, out: &mut [bool]) {
+        assert_eq!(
+            dirs.len(),
+            out.len(),
+            "occluded_many: dirs and out differ in length"
+        );
+        for (o, &d) in out.iter_mut().zip(dirs) {
+            *o = self.occluded(origin, d, tmin, tmax);
+        }
+    }
+}
+
+/// A [`Visibility`] that forwards only the per-ray queries of another, so that
+/// [`Visibility::occluded_many`] takes the trait's per-ray default: the reference that batched
+/// implementations are tested and benchmarked against.
+pub struct PerRay<'a, V: ?Sized>(pub &'a V);
+
+impl<V: Visibility + ?Sized> Visibility for PerRay<'_, V> {
+    #[inline]
+    fn occluded(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> bool {
+        self.0.occluded(origin, dir, tmin, tmax)
+    }
+
+    #[inline]
+    fn hit_distance(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<f32> {
+        self.0.hit_distance(origin, dir, tmin, tmax)
+    }
 }
 
 /// The ray-cast backend: exact watertight ray casting against the scene's triangles.
