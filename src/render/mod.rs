@@ -35,6 +35,8 @@ impl Visibility for Tracer {
 }
 
 pub mod camera;
+pub mod contact;
 pub mod image;
 pub mod primary;
 pub mod receivers;
+pub mod truth;
