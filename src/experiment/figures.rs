@@ -240,10 +240,10 @@ fn pareto_vs_truth(
         let Some(y) = r.rms_vs_truth else { continue };
         let more: Vec<&FieldSweepRow> = field_sweep.iter().filter(|f| f.cell == r.cell).collect();
         if more.is_empty() {
-            let label = format!(
-                "field {}",
-                key(rows, r, &["precision", "selection", "layout"])
-            );
+            let label = match key(rows, r, &[]) {
+                k if k == "field" => k,
+                k => format!("field {k}"),
+            };
             match series.iter_mut().find(|s| s.label == label) {
                 Some(s) => s.points.push((r.ao_s, y)),
                 None => series.push(Series {
