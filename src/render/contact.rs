@@ -18,6 +18,10 @@
 //!   move it: the point is enclosed, and the render's offset along n puts the origin inside the
 //!   contact, where every ray is blocked (AO 0, the limit from the contact patch).
 //!
+//! A surface's front is its winding normal, so meshes are expected to be consistently (outward)
+//! oriented; a touching triangle of another object wound the same way as the point's own
+//! surface counts as the point's own surface (a limitation: such contacts go unreported).
+//!
 //! `offset` and `tolerance` scale with the scene (the experiments use
 //! [`super::ao::scene_epsilon`] for both). Crease points are reported apart from interior points
 //! in the experiment tables.

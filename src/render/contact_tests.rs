@@ -131,10 +131,19 @@ fn a_caster_resting_on_the_floor_encloses_the_points_under_it() {
         [0, 2, 6, 4],
         [1, 5, 7, 3],
     ];
+    // Outward winding (the convention's "front"): flip any triangle facing the box's centre.
+    let centre = 0.5 * (lo + hi);
     let mut box_tris = Vec::new();
     for q in quads {
-        box_tris.push([v(q[0]), v(q[1]), v(q[2])]);
-        box_tris.push([v(q[0]), v(q[2]), v(q[3])]);
+        for t in [[v(q[0]), v(q[1]), v(q[2])], [v(q[0]), v(q[2]), v(q[3])]] {
+            let m = (t[1] - t[0]).cross(t[2] - t[0]);
+            let c = (t[0] + t[1] + t[2]) / 3.0;
+            box_tris.push(if m.dot(c - centre) < 0.0 {
+                [t[0], t[2], t[1]]
+            } else {
+                t
+            });
+        }
     }
     let mut all = box_tris.clone();
     all.extend(
