@@ -239,7 +239,7 @@ mod tests {
         let truth = converged_ao(
             &tracer,
             &points,
-            &vec![Vec3::Z; 5],
+            &[Vec3::Z; 5],
             &AoOptions::for_scene_radius(10.0),
             &TruthOptions::default(),
         );
