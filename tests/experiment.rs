@@ -32,7 +32,7 @@ fn tiny(fields: &str, thresholds: &str) -> String {
   }}],
   "fields": [{fields}],
   "render": {{ "rays_per_point": 16, "image": {{ "width": 32, "height": 32 }} }},
-  "reference": {{ "rays_per_point": 16, "raycast_sweep": [4, 16] }},
+  "reference": {{ "rays_per_point": 16, "raycast_sweep": [4, 16], "field_rays_sweep": [16, 64] }},
   "thresholds": [{thresholds}],
   "quick": {{}}
 }}"#
@@ -122,6 +122,25 @@ fn spec_errors_name_the_file_the_field_and_what_was_expected() {
         &tiny(ONE_FIELD, "").replace(r#""quick": {}"#, r#""quick": { "rays_per_point": 15 }"#),
     );
     assert!(e.contains("field `quick.rays_per_point`"), "{e}");
+
+    // The converged reference: at least two batches (their spread is the error estimate), and
+    // swept ray counts are k².
+    let e = error_of(&tiny(ONE_FIELD, "").replace(
+        r#""raycast_sweep": [4, 16]"#,
+        r#""raycast_sweep": [4, 16], "truth": { "batches": 1 }"#,
+    ));
+    assert!(e.contains("field `reference.truth.batches`"), "{e}");
+    let e = error_of(&tiny(ONE_FIELD, "").replace(
+        r#""field_rays_sweep": [16, 64]"#,
+        r#""field_rays_sweep": [16, 60]"#,
+    ));
+    assert!(e.contains("field `reference.field_rays_sweep[1]`"), "{e}");
+    assert!(e.contains("49") && e.contains("64"), "{e}");
+    let e = error_of(&tiny(ONE_FIELD, "").replace(
+        r#""raycast_sweep": [4, 16]"#,
+        r#""raycast_sweep": [4, 16], "truth": { "colour": 1 }"#,
+    ));
+    assert!(e.contains("unknown field `colour`"), "{e}");
 
     // A threshold that matches no cell is a typo.
     let e = error_of(&tiny(
@@ -234,6 +253,10 @@ fn dry_run_lists_steps_with_rays_and_bytes() {
         .expect(t);
     assert!(lookup.contains("3888"), "{lookup}");
     assert!(t.contains("ray-cast reference tiny, 16 rays/point"), "{t}");
+    assert!(
+        t.contains("converged reference tiny, at most 16384 rays/point"),
+        "{t}"
+    );
     assert!(t.contains("GPU device: no"), "{t}");
     assert!(report.rows.is_empty());
     assert!(!dir.path().join("out").exists(), "a dry run writes nothing");
@@ -247,7 +270,7 @@ fn tiny_spec_runs_end_to_end_and_check_uses_its_thresholds() {
     let report = run(&ls, &options(out.clone())).unwrap();
     let header = std::fs::read_to_string(out.join("table.csv")).unwrap();
     let columns: Vec<&str> = header.lines().next().unwrap().split(',').collect();
-    assert_eq!(&columns[..13], &TABLE_COLUMNS[..]);
+    assert_eq!(&columns[..15], &TABLE_COLUMNS[..]);
     let rows: Vec<Row> = read_csv(&out.join("table.csv")).unwrap();
     assert_eq!(rows, report.rows);
     assert_eq!(rows.len(), 1);
@@ -259,6 +282,57 @@ fn tiny_spec_runs_end_to_end_and_check_uses_its_thresholds() {
     );
     let (rv, ri) = (r.rms_vertex.unwrap(), r.rms_image.unwrap());
     assert!(rv.is_finite() && ri.is_finite() && rv >= 0.0 && ri >= 0.0);
+    // Against the converged reference: present, finite, and its noise floor below what a
+    // 16-ray ray cast misses by (a 16-ray AO is far noisier than the converged one).
+    assert_eq!(r.seeds, 3);
+    assert!(r.rms_vertex_sd.unwrap().is_finite() && r.rms_image_sd.unwrap().is_finite());
+    let (t, ts) = (r.rms_vs_truth.unwrap(), r.truth_stderr.unwrap());
+    assert!(
+        t.is_finite() && t > 0.0 && ts.is_finite() && ts >= 0.0,
+        "{t} {ts}"
+    );
+    assert!(r.rms_vs_truth_sd.unwrap().is_finite());
+    let rc = r.raycast_rms_vs_truth.unwrap();
+    assert!(
+        rc.is_finite() && rc > ts,
+        "ray cast {rc} vs noise floor {ts}"
+    );
+    // The truth doubles k from 4 × 8² rays: 256 · 4^i, at most 16,384.
+    let tr = r.truth_rays.unwrap();
+    assert!((0..4).any(|i| tr == 256 << (2 * i)), "{tr}");
+    assert!(ts <= 0.25 || tr == 16_384, "{ts} at {tr} rays");
+    // The 9 × 9 corner's creases: 2·9 − 1 vertices per face, reported apart.
+    assert_eq!(r.crease_points, 3 * 17);
+    let (c, i) = (
+        r.rms_vs_truth_crease.unwrap(),
+        r.rms_vs_truth_interior.unwrap(),
+    );
+    assert!(c.is_finite() && i.is_finite());
+    // Both subsets together give the whole: n·rms² adds up (per seed, so only roughly for
+    // the means): within 10%.
+    let whole = ((51.0 * c * c + 192.0 * i * i) / 243.0).sqrt();
+    assert!((whole - t).abs() < 0.1 * t, "{whole} vs {t}");
+    let header = std::fs::read_to_string(out.join("table.csv")).unwrap();
+    for col in [
+        "rms_vs_truth",
+        "truth_stderr",
+        "rms_vs_truth_crease",
+        "seeds",
+    ] {
+        assert!(
+            header.lines().next().unwrap().split(',').any(|c| c == col),
+            "{col}"
+        );
+    }
+    // More rays through the field: closer to the truth (16 → 64 rays halves the ray noise).
+    let fs: Vec<visfield::experiment::outputs::FieldSweepRow> =
+        read_csv(&out.join("field_sweep.csv")).unwrap();
+    assert_eq!(
+        fs.iter().map(|f| f.rays_per_point).collect::<Vec<_>>(),
+        vec![16, 64]
+    );
+    let (f16, f64_) = (fs[0].rms_vs_truth.unwrap(), fs[1].rms_vs_truth.unwrap());
+    assert!(f64_ < f16, "64 rays {f64_} vs 16 rays {f16}");
     let meta: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("run.json")).unwrap()).unwrap();
     for key in ["commit", "cpu", "threads", "date", "spec_sha256"] {
@@ -391,6 +465,17 @@ fn paper_ratios_are_normalised_to_the_reference_cell() {
         ao_kernel_s: None,
         raycast_kernel_s: None,
         setup_s: None,
+        rms_vs_truth: None,
+        truth_stderr: None,
+        seeds: 1,
+        rms_vertex_sd: None,
+        rms_image_sd: None,
+        rms_vs_truth_sd: None,
+        raycast_rms_vs_truth: None,
+        truth_rays: None,
+        crease_points: 0,
+        rms_vs_truth_crease: None,
+        rms_vs_truth_interior: None,
     };
     let cell = |label: &str, count: usize, pre: f64| PaperCell {
         label: label.into(),

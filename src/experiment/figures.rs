@@ -6,8 +6,11 @@
 //! - `differences.png`: the same grid of |field − reference| × 5 images;
 //! - `rms_vs_positional.png`: RMS against positional samples, one series per directional
 //!   resolution (and per other axis the spec varies);
-//! - `pareto.png`: RMS against AO time for every field setting and for ray casting at several
-//!   ray counts, so that at equal time one sees which wins;
+//! - `pareto.png`: RMS against AO time for every field setting (and, with `field_sweep.csv`,
+//!   each field at more rays per point) and for ray casting at several ray counts, so that at
+//!   equal time one sees which wins. When the run has a converged reference, every method's RMS
+//!   is `rms_vs_truth` (per point, against the converged reference, log scale) and the
+//!   reference's own noise floor is drawn as a dashed line; otherwise the same-ray RMS;
 //! - `times.png` (several scenes): ray-cast, bake and AO time against caster triangles (2008
 //!   Figure 8), ray-cast and AO time once per backend.
 //!
@@ -17,9 +20,9 @@
 //! The RMS shown is per image pixel when the run has images (the papers' figure), else per
 //! vertex.
 
-use super::outputs::{read_csv, Row, SweepRow};
+use super::outputs::{read_csv, FieldSweepRow, Row, SweepRow};
 use super::plan::selection_name;
-use super::plot::{image_grid, xy_plot, Axes, Series};
+use super::plot::{image_grid, xy_plot, Axes, HLine, Series};
 use super::spec::Backend;
 use crate::render::image::GrayImage;
 use std::path::Path;
@@ -104,78 +107,11 @@ pub fn draw_all(out: &Path, title: &str) -> Result<(), String> {
     xy_plot(&out.join("rms_vs_positional.png"), &axes, &series, &[])?;
 
     // Error against time: every field setting, and ray casting at several ray counts.
-    let mut series: Vec<Series> = Vec::new();
-    for r in &rows {
-        let label = format!(
-            "field {}",
-            key(&rows, r, &["precision", "selection", "layout"])
-        );
-        let Some(y) = m(r) else { continue };
-        match series.iter_mut().find(|s| s.label == label) {
-            Some(s) => s.points.push((r.ao_s, y)),
-            None => series.push(Series {
-                label,
-                points: vec![(r.ao_s, y)],
-                line: false,
-            }),
-        }
+    if rows.iter().all(|r| r.rms_vs_truth.is_some()) {
+        pareto_vs_truth(out, title, &rows, &sweep)?;
+    } else {
+        pareto_same_rays(out, title, &rows, &sweep, m, m_label)?;
     }
-    let sm = |s: &SweepRow| {
-        if m_label.contains("pixel") {
-            s.rms_image
-        } else {
-            s.rms_vertex
-        }
-    };
-    let mut sweep = sweep.clone();
-    sweep.sort_by_key(|s| (s.rays_per_point, s.backend));
-    let mut scenes: Vec<&str> = Vec::new();
-    for s in &sweep {
-        if !scenes.contains(&s.scene.as_str()) {
-            scenes.push(&s.scene);
-        }
-    }
-    let mut backends: Vec<Backend> = sweep.iter().map(|s| s.backend).collect();
-    backends.sort();
-    backends.dedup();
-    for sc in scenes {
-        for &b in &backends {
-            let of = |s: &&SweepRow| s.scene == sc && s.backend == b;
-            let pts: Vec<_> = sweep
-                .iter()
-                .filter(of)
-                .filter_map(|s| sm(s).map(|y| (s.ao_s, y)))
-                .collect();
-            let counts: Vec<String> = sweep
-                .iter()
-                .filter(of)
-                .map(|s| s.rays_per_point.to_string())
-                .collect();
-            if counts.is_empty() {
-                continue;
-            }
-            // The backend is named as soon as the run has more than one.
-            let on = if backends.len() > 1 {
-                format!(" {}", b.name())
-            } else {
-                String::new()
-            };
-            series.push(Series {
-                label: format!("ray cast {sc}{on} ({} rays)", counts.join("/")),
-                points: pts,
-                line: true,
-            });
-        }
-    }
-    let rays = rows[0].rays_per_point;
-    let axes = Axes {
-        title: format!("{title}: error against AO time"),
-        x_label: format!("AO time, s (field: {rays} rays/point)"),
-        y_label: m_label.into(),
-        log_x: true,
-        log_y: false,
-    };
-    xy_plot(&out.join("pareto.png"), &axes, &series, &[])?;
 
     // Times against caster triangles, when the spec has several scenes.
     let mut names: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
@@ -229,6 +165,177 @@ pub fn draw_all(out: &Path, title: &str) -> Result<(), String> {
         xy_plot(&out.join("times.png"), &axes, &s, &[])?;
     }
     Ok(())
+}
+
+/// The error-against-time plot against the same-ray reference (runs without a truth).
+fn pareto_same_rays(
+    out: &Path,
+    title: &str,
+    rows: &[Row],
+    sweep: &[SweepRow],
+    m: fn(&Row) -> Option<f64>,
+    m_label: &str,
+) -> Result<(), String> {
+    let mut series: Vec<Series> = Vec::new();
+    for r in rows {
+        let label = format!(
+            "field {}",
+            key(rows, r, &["precision", "selection", "layout"])
+        );
+        let Some(y) = m(r) else { continue };
+        match series.iter_mut().find(|s| s.label == label) {
+            Some(s) => s.points.push((r.ao_s, y)),
+            None => series.push(Series {
+                label,
+                points: vec![(r.ao_s, y)],
+                line: false,
+            }),
+        }
+    }
+    let sm = |s: &SweepRow| {
+        if m_label.contains("pixel") {
+            s.rms_image
+        } else {
+            s.rms_vertex
+        }
+    };
+    series.extend(raycast_series(sweep, sm));
+    let rays = rows[0].rays_per_point;
+    let axes = Axes {
+        title: format!("{title}: error against AO time"),
+        x_label: format!("AO time, s (field: {rays} rays/point)"),
+        y_label: m_label.into(),
+        log_x: true,
+        log_y: false,
+    };
+    xy_plot(&out.join("pareto.png"), &axes, &series, &[])
+}
+
+/// The error-against-time plot against the converged reference: every field setting (with
+/// more rays per point where `field_sweep.csv` has them), ray casting at every swept ray count,
+/// and the reference's own noise floor.
+fn pareto_vs_truth(
+    out: &Path,
+    title: &str,
+    rows: &[Row],
+    sweep: &[SweepRow],
+) -> Result<(), String> {
+    let fs_path = out.join("field_sweep.csv");
+    let field_sweep: Vec<FieldSweepRow> = if fs_path.exists() {
+        read_csv(&fs_path)?
+    } else {
+        Vec::new()
+    };
+    let mut series: Vec<Series> = Vec::new();
+    for r in rows {
+        let Some(y) = r.rms_vs_truth else { continue };
+        let more: Vec<&FieldSweepRow> = field_sweep.iter().filter(|f| f.cell == r.cell).collect();
+        if more.is_empty() {
+            let label = match key(rows, r, &[]) {
+                k if k == "field" => k,
+                k => format!("field {k}"),
+            };
+            match series.iter_mut().find(|s| s.label == label) {
+                Some(s) => s.points.push((r.ao_s, y)),
+                None => series.push(Series {
+                    label,
+                    points: vec![(r.ao_s, y)],
+                    line: false,
+                }),
+            }
+            continue;
+        }
+        let mut pts: Vec<(f64, f64)> = vec![(r.ao_s, y)];
+        let mut counts = vec![r.rays_per_point];
+        for f in more {
+            if f.rays_per_point != r.rays_per_point {
+                pts.extend(f.rms_vs_truth.map(|y| (f.ao_s, y)));
+                counts.push(f.rays_per_point);
+            }
+        }
+        counts.sort_unstable();
+        let counts: Vec<String> = counts.iter().map(|c| c.to_string()).collect();
+        let varying = key(rows, r, &["res"]);
+        let extra = if varying == "field" {
+            String::new()
+        } else {
+            format!(" {varying}")
+        };
+        series.push(Series {
+            label: format!(
+                "field {}×{}²{extra} ({} rays)",
+                r.positional_samples,
+                r.directional_res,
+                counts.join("/")
+            ),
+            points: pts,
+            line: true,
+        });
+    }
+    series.extend(raycast_series(sweep, |s| s.rms_vs_truth));
+    let floor = rows
+        .iter()
+        .filter_map(|r| r.truth_stderr)
+        .fold(0.0f64, f64::max);
+    let rays = rows[0].truth_rays.unwrap_or(0);
+    let hlines: Vec<HLine> = (floor > 0.0)
+        .then(|| HLine {
+            label: format!("converged reference's noise (RMS std. error, {rays} rays)"),
+            y: floor,
+        })
+        .into_iter()
+        .collect();
+    let axes = Axes {
+        title: format!("{title}: error against AO time, vs the converged reference"),
+        x_label: "AO time, s".into(),
+        y_label: "RMS per point vs converged reference (0–255)".into(),
+        log_x: true,
+        log_y: true,
+    };
+    xy_plot(&out.join("pareto.png"), &axes, &series, &hlines)
+}
+
+/// One series per scene and backend of ray casting at the swept ray counts, with `y` as the
+/// error (the backend is named as soon as the sweep has more than one).
+fn raycast_series(sweep: &[SweepRow], y: impl Fn(&SweepRow) -> Option<f64>) -> Vec<Series> {
+    let mut sweep = sweep.to_vec();
+    sweep.sort_by_key(|s| (s.rays_per_point, s.backend));
+    let mut scenes: Vec<&str> = Vec::new();
+    for s in &sweep {
+        if !scenes.contains(&s.scene.as_str()) {
+            scenes.push(&s.scene);
+        }
+    }
+    let mut backends: Vec<Backend> = sweep.iter().map(|s| s.backend).collect();
+    backends.sort();
+    backends.dedup();
+    let mut series = Vec::new();
+    for sc in scenes {
+        for &b in &backends {
+            let these: Vec<&SweepRow> = sweep
+                .iter()
+                .filter(|s| s.scene == sc && s.backend == b)
+                .collect();
+            if these.is_empty() {
+                continue;
+            }
+            let counts: Vec<String> = these.iter().map(|s| s.rays_per_point.to_string()).collect();
+            let on = if backends.len() > 1 {
+                format!(" {}", b.name())
+            } else {
+                String::new()
+            };
+            series.push(Series {
+                label: format!("ray cast {sc}{on} ({} rays)", counts.join("/")),
+                points: these
+                    .iter()
+                    .filter_map(|s| y(s).map(|v| (s.ao_s, v)))
+                    .collect(),
+                line: true,
+            });
+        }
+    }
+    series
 }
 
 fn load_png(path: &Path) -> Result<GrayImage, String> {

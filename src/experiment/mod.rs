@@ -23,4 +23,5 @@ pub mod quickstart;
 pub mod run;
 pub mod scenes;
 pub mod spec;
+pub mod truth;
 pub mod validate;

@@ -3,6 +3,8 @@
 //! - `table.csv`: one [`Row`] per cell and backend;
 //! - `raycast_sweep.csv`: ray-cast AO at several ray counts ([`SweepRow`]), the ray-casting
 //!   curve of the error-against-time plot;
+//! - `field_sweep.csv`: field lookup of every cell at more ray counts ([`FieldSweepRow`]),
+//!   against the converged reference;
 //! - `pairs.csv`: RMS between cells that differ only in precision ([`PairRow`]; the slides'
 //!   8 vs 16 bit);
 //! - `paper_vs_ours.csv`: the paper's numbers beside ours ([`PaperRow`]), with times as ratios
@@ -14,7 +16,7 @@ use crate::sampling::{LayoutKind, SphereKind};
 use serde::{de::DeserializeOwned, Deserialize, Serialize};
 use std::path::Path;
 
-/// One cell on one backend. The first 13 columns are the table's contract; the rest add
+/// One cell on one backend. The first 15 columns are the table's contract; the rest add
 /// context. Times in seconds, RMS and errors on the 0–255 scale (see [`super::metrics`]).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Row {
@@ -39,6 +41,14 @@ pub struct Row {
     pub rms_image: Option<f64>,
     /// Stored bytes of every caster's field.
     pub field_bytes: u64,
+    /// RMS over the AO points (receiver vertices, or pixels for image AO), unquantised, 0–255,
+    /// of the field's AO against the converged reference (see [`super::truth`]); mean over
+    /// seeds. It includes the reference's own noise: E[rms²] = error² + `truth_stderr`².
+    #[serde(default)]
+    pub rms_vs_truth: Option<f64>,
+    /// RMS over points of the converged reference's standard error (0–255): its noise floor.
+    #[serde(default)]
+    pub truth_stderr: Option<f64>,
     pub scene: String,
     pub sphere: SphereKind,
     pub rays_per_point: u32,
@@ -69,10 +79,38 @@ pub struct Row {
     /// (not in `ao_s`); empty on the CPU, which reads the fields in place.
     #[serde(default)]
     pub setup_s: Option<f64>,
+    /// Seeds (per-point ray rotations) the RMS columns are averaged over.
+    #[serde(default)]
+    pub seeds: u32,
+    /// Standard deviation over seeds of `rms_vertex`.
+    #[serde(default)]
+    pub rms_vertex_sd: Option<f64>,
+    /// Standard deviation over seeds of `rms_image`.
+    #[serde(default)]
+    pub rms_image_sd: Option<f64>,
+    /// Standard deviation over seeds of `rms_vs_truth`.
+    #[serde(default)]
+    pub rms_vs_truth_sd: Option<f64>,
+    /// The same-ray ray-cast reference against the converged one (mean over seeds): the
+    /// error a ray cast with the cell's rays makes.
+    #[serde(default)]
+    pub raycast_rms_vs_truth: Option<f64>,
+    /// Rays per point of the converged reference.
+    #[serde(default)]
+    pub truth_rays: Option<u32>,
+    /// AO points that touch another surface (see `render::contact`).
+    #[serde(default)]
+    pub crease_points: usize,
+    /// `rms_vs_truth` over the crease points only (none without crease points).
+    #[serde(default)]
+    pub rms_vs_truth_crease: Option<f64>,
+    /// `rms_vs_truth` over the other points.
+    #[serde(default)]
+    pub rms_vs_truth_interior: Option<f64>,
 }
 
 /// The columns `table.csv` starts with, in order.
-pub const TABLE_COLUMNS: [&str; 13] = [
+pub const TABLE_COLUMNS: [&str; 15] = [
     "positional_samples",
     "directional_res",
     "layout",
@@ -86,6 +124,8 @@ pub const TABLE_COLUMNS: [&str; 13] = [
     "rms_vertex",
     "rms_image",
     "field_bytes",
+    "rms_vs_truth",
+    "truth_stderr",
 ];
 
 /// Ray-cast AO at one ray count, against the reference.
@@ -100,6 +140,32 @@ pub struct SweepRow {
     /// Kernel time from GPU timestamps (`ao_s` is the wall time); empty on the CPU.
     #[serde(default)]
     pub kernel_s: Option<f64>,
+    /// RMS over points against the converged reference (0–255), mean over seeds.
+    #[serde(default)]
+    pub rms_vs_truth: Option<f64>,
+    /// Its standard deviation over seeds.
+    #[serde(default)]
+    pub rms_vs_truth_sd: Option<f64>,
+    /// The converged reference's RMS standard error (0–255).
+    #[serde(default)]
+    pub truth_stderr: Option<f64>,
+}
+
+/// Field lookup of one cell with another ray count, against the converged reference only.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FieldSweepRow {
+    pub scene: String,
+    pub cell: String,
+    pub positional_samples: usize,
+    pub directional_res: u32,
+    pub precision: Precision,
+    pub selection: Selection,
+    pub backend: Backend,
+    pub rays_per_point: u32,
+    pub ao_s: f64,
+    /// RMS over points against the converged reference (0–255), first seed.
+    pub rms_vs_truth: Option<f64>,
+    pub truth_stderr: Option<f64>,
 }
 
 /// RMS between two cells that differ only in precision.

@@ -122,7 +122,14 @@ pub fn cells_of(spec: &Spec) -> Vec<Cell> {
 pub enum Step {
     /// Primary visibility of a scene's image (rays = pixels).
     Primary { scene: usize, pixels: u64 },
-    /// The ray-cast reference of a scene (CPU, exact).
+    /// The converged reference of a scene (CPU, from the cache when there): at most
+    /// `max_rays` per point; `rays` is that bound times the points.
+    Truth {
+        scene: usize,
+        max_rays: u32,
+        rays: u64,
+    },
+    /// The ray-cast reference of a scene (CPU, exact), on every seed.
     Reference { scene: usize, k: u32, rays: u64 },
     /// Ray-cast AO with `k²` rays per point on the CPU (error-against-time sweep).
     Sweep { scene: usize, k: u32, rays: u64 },
@@ -202,6 +209,12 @@ impl Plan {
                 });
             }
             let rays = |k: u32| pts * (k * k) as u64;
+            let max_rays = spec.reference.truth.max_rays;
+            steps.push(Step::Truth {
+                scene: s,
+                max_rays,
+                rays: pts * max_rays as u64,
+            });
             steps.push(Step::Reference {
                 scene: s,
                 k: ref_k,
@@ -404,6 +417,18 @@ impl Plan {
                 Step::Primary { scene, pixels } => {
                     (format!("primary visibility {}", sc(*scene)), *pixels, None)
                 }
+                Step::Truth {
+                    scene,
+                    max_rays,
+                    rays,
+                } => (
+                    format!(
+                        "converged reference {}, at most {max_rays} rays/point",
+                        sc(*scene)
+                    ),
+                    *rays,
+                    None,
+                ),
                 Step::Reference { scene, k, rays } => (
                     format!("ray-cast reference {}, {} rays/point", sc(*scene), k * k),
                     *rays,

@@ -281,6 +281,11 @@ pub struct RenderSpec {
     /// AO radius in world units: farther hits do not occlude (none: unlimited, the papers).
     #[serde(default)]
     pub max_distance: Option<f32>,
+    /// How a hit within `max_distance` occludes: "step" (binary, the papers' V; default) or
+    /// "linear" (a hit at t occludes by 1 − t/max_distance; needs `max_distance`). Applied
+    /// identically to the ray cast, the field lookup and the converged reference.
+    #[serde(default)]
+    pub falloff: crate::render::ao::Falloff,
     /// A fixed tolerance of the intra-object test (receivers that are casters), as a fraction
     /// of 2R (none: the field's own resolution-derived tolerance, `IntraBias::Auto`; see
     /// `field::lookup`).
@@ -316,6 +321,57 @@ pub struct ReferenceSpec {
     /// 64, 128, 256.
     #[serde(default = "default_sweep")]
     pub raycast_sweep: Vec<u32>,
+    /// Seeds per cell: the cell (and its same-ray reference) is evaluated with the per-point
+    /// rotations of seeds `seed`, `seed + 1`, …; RMS columns are the mean over seeds, with
+    /// their standard deviation beside them, and thresholds apply to the mean. Default 3.
+    #[serde(default = "default_seeds")]
+    pub seeds: u32,
+    /// The converged reference every RMS `_vs_truth` is measured against.
+    #[serde(default)]
+    pub truth: TruthSpec,
+    /// Field lookup with these ray counts too (perfect squares), against the converged
+    /// reference only, for the error-against-time plot (a field makes extra rays cheap).
+    #[serde(default)]
+    pub field_rays_sweep: Vec<u32>,
+}
+
+/// The converged reference (see `render::truth`): jittered stratified rays in independent
+/// batches, k doubled until the RMS standard error is below the target or the cap is reached.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TruthSpec {
+    /// Target RMS over points of the per-point standard error, 0–255 scale. Default 0.25.
+    #[serde(default = "default_truth_target")]
+    pub target_stderr: f64,
+    /// Most rays per point, all batches together. Default 16,384.
+    #[serde(default = "default_truth_max_rays")]
+    pub max_rays: u32,
+    /// Independent batches per point (≥ 2; their spread is the error estimate). Default 4.
+    #[serde(default = "default_truth_batches")]
+    pub batches: u32,
+}
+
+impl Default for TruthSpec {
+    fn default() -> Self {
+        TruthSpec {
+            target_stderr: default_truth_target(),
+            max_rays: default_truth_max_rays(),
+            batches: default_truth_batches(),
+        }
+    }
+}
+
+fn default_seeds() -> u32 {
+    3
+}
+fn default_truth_target() -> f64 {
+    0.25
+}
+fn default_truth_max_rays() -> u32 {
+    16_384
+}
+fn default_truth_batches() -> u32 {
+    4
 }
 
 fn default_seed() -> u64 {
@@ -452,6 +508,12 @@ pub struct QuickProfile {
     /// Replaces `backends` (e.g. a GPU run too slow for the quick profile on lavapipe).
     #[serde(default)]
     pub backends: Option<Vec<Backend>>,
+    /// Replaces `reference.field_rays_sweep`.
+    #[serde(default)]
+    pub field_rays_sweep: Option<Vec<u32>>,
+    /// Replaces `reference.truth.max_rays`.
+    #[serde(default)]
+    pub truth_max_rays: Option<u32>,
     /// The quick profile's thresholds.
     #[serde(default)]
     pub thresholds: Vec<Threshold>,
@@ -504,6 +566,12 @@ impl Spec {
         }
         if let Some(b) = &q.backends {
             s.backends = b.clone();
+        }
+        if let Some(sw) = &q.field_rays_sweep {
+            s.reference.field_rays_sweep = sw.clone();
+        }
+        if let Some(m) = q.truth_max_rays {
+            s.reference.truth.max_rays = m;
         }
         s.thresholds = q.thresholds.clone();
         s

@@ -18,6 +18,8 @@ struct Paths {
     reference_rays: &'static str,
     image: &'static str,
     sweep: &'static str,
+    field_sweep: &'static str,
+    truth_max_rays: &'static str,
     thresholds: &'static str,
     backends: &'static str,
 }
@@ -31,6 +33,8 @@ pub fn validate(spec: &Spec, file: &Path) -> Result<(), SpecError> {
         reference_rays: "reference.rays_per_point",
         image: "render.image",
         sweep: "reference.raycast_sweep",
+        field_sweep: "reference.field_rays_sweep",
+        truth_max_rays: "reference.truth.max_rays",
         thresholds: "thresholds",
         backends: "backends",
     };
@@ -50,6 +54,16 @@ pub fn validate(spec: &Spec, file: &Path) -> Result<(), SpecError> {
         reference_rays: pick(rays, "quick.rays_per_point", full.reference_rays),
         image: pick(q.image.is_some(), "quick.image", full.image),
         sweep: pick(q.raycast_sweep.is_some(), "quick.raycast_sweep", full.sweep),
+        field_sweep: pick(
+            q.field_rays_sweep.is_some(),
+            "quick.field_rays_sweep",
+            full.field_sweep,
+        ),
+        truth_max_rays: pick(
+            q.truth_max_rays.is_some(),
+            "quick.truth_max_rays",
+            full.truth_max_rays,
+        ),
         thresholds: "quick.thresholds",
         backends: pick(q.backends.is_some(), "quick.backends", full.backends),
     };
@@ -91,6 +105,38 @@ impl Ctx<'_> {
         for (i, &n) in s.reference.raycast_sweep.iter().enumerate() {
             self.square(n, &format!("{}[{i}]", p.sweep))?;
         }
+        for (i, &n) in s.reference.field_rays_sweep.iter().enumerate() {
+            self.square(n, &format!("{}[{i}]", p.field_sweep))?;
+        }
+        let t = &s.reference.truth;
+        if !(t.target_stderr > 0.0 && t.target_stderr.is_finite()) {
+            return Err(self.err(
+                "reference.truth.target_stderr",
+                format!("{} must be positive and finite", t.target_stderr),
+            ));
+        }
+        if t.batches < 2 {
+            return Err(self.err(
+                "reference.truth.batches",
+                format!(
+                    "{} batches: needs at least 2 (their spread is the error)",
+                    t.batches
+                ),
+            ));
+        }
+        if (t.max_rays as u64) < 64 * t.batches as u64 {
+            return Err(self.err(
+                p.truth_max_rays,
+                format!(
+                    "{} rays: the first round already traces {} (batches × 8²)",
+                    t.max_rays,
+                    64 * t.batches
+                ),
+            ));
+        }
+        if s.reference.seeds == 0 {
+            return Err(self.err("reference.seeds", "needs at least 1 seed".into()));
+        }
         if let Some(img) = &s.render.image {
             for (name, v) in [("width", img.width), ("height", img.height)] {
                 if !(1..=8192).contains(&v) {
@@ -124,6 +170,20 @@ impl Ctx<'_> {
                 return Err(self.err(
                     "render.max_distance",
                     format!("{d} must be positive and finite"),
+                ));
+            }
+        }
+        if s.render.falloff != crate::render::ao::Falloff::Step {
+            if s.render.max_distance.is_none() {
+                return Err(self.err(
+                    "render.falloff",
+                    "a distance falloff needs `render.max_distance`".into(),
+                ));
+            }
+            if s.backends.contains(&super::spec::Backend::Gpu) {
+                return Err(self.err(
+                    "render.falloff",
+                    "the GPU path has binary visibility only; use \"step\" or \"cpu\"".into(),
                 ));
             }
         }

@@ -122,11 +122,47 @@ fn max_distance_under_a_plane_matches_the_closed_form() {
         let opts = AoOptions {
             max_distance: Some(h / c),
             offset: scene_epsilon(1.0),
+            falloff: Falloff::Step,
         };
         let ao = ao_at_points(&tracer, &[Vec3::ZERO; 2], &[Vec3::Z; 2], &rays, &opts);
         for a in ao {
             assert!((a - c * c).abs() < 1e-3, "s {s}: {a} vs {}", c * c);
         }
+    }
+}
+
+#[test]
+fn linear_falloff_under_a_plane_matches_the_closed_form() {
+    // Under a plane at height h with AO radius d and V = t/d for a hit at t ≤ d: a ray at
+    // μ = cos θ ≥ c = h/d hits at t = h/μ and occludes by 1 − c/μ. Under the cosine density
+    // 2μ dμ the occlusion is ∫_c^1 (1 − c/μ) 2μ dμ = (1 − c²) − 2c(1 − c) = (1 − c)², so
+    // AO = 1 − (1 − c)². The converged estimate must agree within its error bars, and the
+    // step falloff on the same scene gives c².
+    let h = 0.5f32;
+    let tracer = Tracer::new(&square(1000.0, h));
+    let n = 50;
+    let points: Vec<Vec3> = (0..n)
+        .map(|i| Vec3::new(0.1 * i as f32, 0.0, 0.0))
+        .collect();
+    let normals = vec![Vec3::Z; n];
+    for (falloff, exact) in [(Falloff::Linear, 0.75f64), (Falloff::Step, 0.25)] {
+        let opts = AoOptions {
+            max_distance: Some(1.0),
+            offset: 1e-6,
+            falloff,
+        };
+        let t = crate::render::truth::TruthOptions {
+            max_rays: 4096,
+            ..Default::default()
+        };
+        let truth = crate::render::truth::converged_ao(&tracer, &points, &normals, &opts, &t);
+        let mean = truth.ao.iter().map(|&a| a as f64).sum::<f64>() / n as f64;
+        // The mean of 50 points: its standard error is the RMS stderr / √50.
+        let se = truth.rms_stderr_255() / 255.0 / (n as f64).sqrt();
+        assert!(
+            (mean - exact).abs() < 4.0 * se + 1e-4,
+            "{falloff:?}: {mean} vs {exact} (stderr {se})"
+        );
     }
 }
 

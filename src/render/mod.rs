@@ -69,6 +69,8 @@ impl Visibility for Tracer {
 }
 
 pub mod camera;
+pub mod contact;
 pub mod image;
 pub mod primary;
 pub mod receivers;
+pub mod truth;

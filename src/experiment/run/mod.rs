@@ -8,6 +8,7 @@
 
 mod state;
 mod steps;
+mod truth;
 mod write;
 
 use super::fields::FieldSupply;

@@ -6,9 +6,11 @@ use super::super::progress::stage;
 use super::super::scenes::BuiltScene;
 use super::super::spec::{Backend, RenderKind, Spec};
 use crate::render::ao::AoOptions;
+use crate::render::contact::separate_contacts;
 use crate::render::image::{rms_255, rms_vertex, GrayImage};
 use crate::render::primary::{gbuffer, shade_vertex_ao, PixelHit, PrimaryScene};
 use crate::render::receivers::Receivers;
+use crate::render::truth::Truth;
 use crate::trace::Tracer;
 use glam::Vec3;
 use std::collections::HashMap;
@@ -27,6 +29,16 @@ pub(super) struct SceneState {
     pub(super) gbuf: Option<(Vec<Option<PixelHit>>, u32, u32)>,
     pub(super) reference: Vec<f32>,
     pub(super) ref_image: Option<(GrayImage, Vec<bool>)>,
+    /// Whether each AO point touches another surface (`render::contact`).
+    pub(super) crease: Vec<bool>,
+    /// The converged reference.
+    pub(super) truth: Option<Truth>,
+    /// Where the truth came from (cache file, or computed and how long it took).
+    pub(super) truth_source: String,
+    /// The same-ray reference on the seeds after the first: AO and image.
+    pub(super) seed_refs: Vec<(Vec<f32>, Option<GrayImage>)>,
+    /// RMS over points of the same-ray references against the truth, per seed.
+    pub(super) reference_vs_truth: Vec<f64>,
     /// Ray-cast AO time per (backend, k).
     pub(super) raycast_s: HashMap<(Backend, u32), f64>,
     /// Ray-cast kernel time from GPU timestamps per (backend, k), where there are any.
@@ -42,6 +54,7 @@ impl SceneState {
         });
         let mut opts = AoOptions::for_scene_radius(bs.radius());
         opts.max_distance = spec.render.max_distance;
+        opts.falloff = spec.render.falloff;
         let gbuf = spec.render.image.as_ref().map(|img| {
             let cam = img
                 .camera
@@ -71,7 +84,21 @@ impl SceneState {
                 receivers = Some(r);
             }
         }
+        // The contact convention: points on another surface are moved in front of it.
+        let all: Vec<[Vec3; 3]> = bs
+            .scene
+            .instances
+            .iter()
+            .flat_map(|i| i.world_triangles())
+            .collect();
+        let contacts = separate_contacts(&points, &normals, &all, opts.offset, opts.offset);
+        let points = contacts.points;
         SceneState {
+            crease: contacts.crease,
+            truth: None,
+            truth_source: String::new(),
+            seed_refs: Vec::new(),
+            reference_vs_truth: Vec::new(),
             points,
             normals,
             receivers,
@@ -123,6 +150,45 @@ impl SceneState {
         };
         (v, i)
     }
+}
+
+/// RMS over points of `ao` against the truth, 0–255: over all points, the crease points and
+/// the other points (`None` for an empty subset).
+pub(super) struct TruthErrors {
+    pub(super) all: f64,
+    pub(super) crease: Option<f64>,
+    pub(super) interior: Option<f64>,
+}
+
+impl SceneState {
+    /// [`TruthErrors`] of `ao`, `None` before the truth is known.
+    pub(super) fn truth_errors(&self, ao: &[f32]) -> Option<TruthErrors> {
+        let t = self.truth.as_ref()?;
+        let rms = |want: Option<bool>| {
+            let (mut sum, mut n) = (0.0f64, 0usize);
+            for (i, (a, b)) in ao.iter().zip(&t.ao).enumerate() {
+                if want.is_none_or(|w| self.crease[i] == w) {
+                    sum += (255.0 * (*a as f64 - *b as f64)).powi(2);
+                    n += 1;
+                }
+            }
+            (n > 0).then(|| (sum / n as f64).sqrt())
+        };
+        Some(TruthErrors {
+            all: rms(None).unwrap_or(0.0),
+            crease: rms(Some(true)),
+            interior: rms(Some(false)),
+        })
+    }
+}
+
+/// Mean and sample standard deviation (`None` for one value).
+pub(super) fn mean_sd(v: &[f64]) -> (f64, Option<f64>) {
+    let n = v.len().max(1) as f64;
+    let mean = v.iter().sum::<f64>() / n;
+    let sd = (v.len() > 1)
+        .then(|| (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (v.len() - 1) as f64).sqrt());
+    (mean, sd)
 }
 
 /// One evaluated cell, kept for the pair table and the per-vertex CSV.

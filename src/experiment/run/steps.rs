@@ -1,16 +1,17 @@
 //! The runner's steps: ray-cast reference and sweep, bakes and derivations, field-lookup AO per
 //! cell with its metrics and images.
 
-use super::state::{io_err, CellResult, SceneState};
+use super::state::{io_err, mean_sd, CellResult, SceneState};
+use super::truth::{raycast_truth_errors, seed_errors};
 use super::RunOptions;
 use crate::experiment::backend::{self, AoBackend, Casters, CpuBackend};
 use crate::experiment::fields::{derive, Supplied};
 use crate::experiment::metrics::{image_errors, vertex_errors};
-use crate::experiment::outputs::{Row, SweepRow};
+use crate::experiment::outputs::{FieldSweepRow, Row, SweepRow};
 use crate::experiment::plan::{Plan, Step};
 use crate::experiment::progress::stage_adaptive;
 use crate::experiment::scenes::Scenes;
-use crate::experiment::spec::{Backend, Spec};
+use crate::experiment::spec::{exact_sqrt, Backend, Spec};
 use crate::field::lookup::{IntraBias, LookupOptions};
 use crate::field::scene::{FieldInstance, FieldScene};
 use crate::field::{FieldParams, Precision};
@@ -23,12 +24,13 @@ pub(super) struct Runner<'a> {
     pub(super) plan: &'a Plan,
     pub(super) scenes: &'a Scenes,
     pub(super) opts: &'a RunOptions,
-    cpu: CpuBackend,
+    pub(super) cpu: CpuBackend,
     pub(super) backends: HashMap<Backend, Box<dyn AoBackend>>,
     pub(super) states: Vec<Option<SceneState>>,
     live: HashMap<(usize, FieldParams), Supplied>,
     pub(super) rows: Vec<(usize, Row)>,
     pub(super) sweep: Vec<SweepRow>,
+    pub(super) field_sweep: Vec<FieldSweepRow>,
     pub(super) results: Vec<CellResult>,
     lookups: usize,
     done: usize,
@@ -57,6 +59,7 @@ impl<'a> Runner<'a> {
             live: HashMap::new(),
             rows: Vec::new(),
             sweep: Vec::new(),
+            field_sweep: Vec::new(),
             results: Vec::new(),
             lookups: plan
                 .steps
@@ -68,7 +71,7 @@ impl<'a> Runner<'a> {
     }
 
     /// The state of scene `s`, built on first use.
-    fn scene(&mut self, s: usize) -> &mut SceneState {
+    pub(super) fn scene(&mut self, s: usize) -> &mut SceneState {
         let (spec, scenes) = (self.spec, self.scenes);
         self.states[s].get_or_insert_with(|| SceneState::new(spec, &scenes.scenes[s]))
     }
@@ -79,6 +82,7 @@ impl<'a> Runner<'a> {
             Step::Primary { scene, .. } => {
                 self.scene(*scene);
             }
+            Step::Truth { scene, .. } => self.truth(*scene)?,
             Step::Reference { scene, k, .. } => self.reference(*scene, *k)?,
             Step::Sweep { scene, k, .. } => self.raycast(*scene, *k, Backend::Cpu)?,
             Step::Raycast {
@@ -136,14 +140,25 @@ impl<'a> Runner<'a> {
             let p = out.join(format!("images/{}-reference.exr", bs.name));
             img.save_exr(&p).map_err(io_err(&p))?;
         }
+        let (rms_vertex, rms_image) = (
+            st.receivers.as_ref().map(|_| 0.0),
+            st.ref_image.as_ref().map(|_| 0.0),
+        );
+        let name = bs.name.clone();
+        self.seed_references(scene, k)?;
+        let st = self.states[scene].as_ref().expect("scene state");
+        let (t, t_sd) = mean_sd(&st.reference_vs_truth);
         let row = SweepRow {
-            scene: bs.name.clone(),
+            scene: name,
             backend: Backend::Cpu,
             rays_per_point: k * k,
             ao_s: s,
-            rms_vertex: st.receivers.as_ref().map(|_| 0.0),
-            rms_image: st.ref_image.as_ref().map(|_| 0.0),
+            rms_vertex,
+            rms_image,
             kernel_s: None,
+            rms_vs_truth: st.truth.as_ref().map(|_| t),
+            rms_vs_truth_sd: st.truth.as_ref().and(t_sd),
+            truth_stderr: st.truth.as_ref().map(|t| t.rms_stderr_255()),
         };
         self.sweep.push(row);
         Ok(())
@@ -153,6 +168,7 @@ impl<'a> Runner<'a> {
     fn raycast(&mut self, scene: usize, k: u32, b: Backend) -> Result<(), String> {
         let (short, reps) = (self.opts.short_stage_s, self.opts.repeats);
         let seed = self.spec.reference.seed;
+        let seeds = self.seeds();
         let scenes = self.scenes;
         let bs = &scenes.scenes[scene];
         self.scene(scene);
@@ -179,6 +195,8 @@ impl<'a> Runner<'a> {
             st.raycast_kernel_s.insert((b, k), ks);
         }
         let (rms_vertex, rms_image) = st.errors(bs, &ao);
+        let vs = raycast_truth_errors(be, st, k, &seeds, &ao)?;
+        let (t, t_sd) = mean_sd(&vs);
         self.sweep.push(SweepRow {
             scene: bs.name.clone(),
             backend: b,
@@ -187,6 +205,9 @@ impl<'a> Runner<'a> {
             rms_vertex,
             rms_image,
             kernel_s,
+            rms_vs_truth: (!vs.is_empty()).then_some(t),
+            rms_vs_truth_sd: t_sd,
+            truth_stderr: st.truth.as_ref().map(|t| t.rms_stderr_255()),
         });
         Ok(())
     }
@@ -251,6 +272,44 @@ impl<'a> Runner<'a> {
             (Some((a, _)), Some((r, mask))) => Some(image_errors(&a.data, &r.data, mask)),
             _ => None,
         };
+        // The other seeds (untimed), and every seed's errors.
+        let mut aos = vec![ao];
+        for &sd in &self.seeds()[1..] {
+            let rays = RaySet::new(plan.render_k, sd);
+            aos.push(be.field_ao(&fs, &st.at(), &rays, &st.opts)?);
+        }
+        let se = seed_errors(st, bs, &aos, img.as_ref().map(|(i, _)| i));
+        let seeds = aos.len() as u32;
+        let ao = aos.swap_remove(0);
+        // The same field with more rays per point, against the truth only.
+        let mut field_sweep = Vec::new();
+        for &n in &spec.reference.field_rays_sweep {
+            let k = exact_sqrt(n).ok_or("field_rays_sweep: not a square")?;
+            let (ao_k, s) = if k == plan.render_k {
+                (None, ao_s)
+            } else {
+                let rays = RaySet::new(k, spec.reference.seed);
+                let msg = format!("  lookup {id}, {n} rays");
+                let (a, s, _) = stage_adaptive(&msg, short, reps, || {
+                    be.field_ao(&fs, &st.at(), &rays, &st.opts)
+                })?;
+                (Some(a), s)
+            };
+            let e = st.truth_errors(ao_k.as_deref().unwrap_or(&ao));
+            field_sweep.push(FieldSweepRow {
+                scene: bs.name.clone(),
+                cell: id.clone(),
+                positional_samples: c.params.count,
+                directional_res: c.params.res,
+                precision: c.params.precision,
+                selection: c.selection,
+                backend: c.backend,
+                rays_per_point: n,
+                ao_s: s,
+                rms_vs_truth: e.map(|e| e.all),
+                truth_stderr: st.truth.as_ref().map(|t| t.rms_stderr_255()),
+            });
+        }
         let mut image = String::new();
         if let (Some((a, _)), Some((r, _))) = (&img, &st.ref_image) {
             let out = &self.opts.out;
@@ -273,9 +332,11 @@ impl<'a> Runner<'a> {
             bake_s,
             ao_s,
             raycast_s: st.raycast_s.get(&(c.backend, plan.render_k)).copied(),
-            rms_vertex: ve.map(|e| e.rms),
-            rms_image: ie.map(|e| e.rms),
+            rms_vertex: se.vertex.map(|m| m.0),
+            rms_image: se.image.map(|m| m.0),
             field_bytes: bytes,
+            rms_vs_truth: se.truth.map(|m| m.0),
+            truth_stderr: st.truth.as_ref().map(|t| t.rms_stderr_255()),
             scene: bs.name.clone(),
             sphere: c.params.sphere,
             rays_per_point: spec.render.rays_per_point,
@@ -294,8 +355,19 @@ impl<'a> Runner<'a> {
                 .get(&(c.backend, plan.render_k))
                 .copied(),
             setup_s,
+            seeds,
+            rms_vertex_sd: se.vertex.and_then(|m| m.1),
+            rms_image_sd: se.image.and_then(|m| m.1),
+            rms_vs_truth_sd: se.truth.and_then(|m| m.1),
+            raycast_rms_vs_truth: (!st.reference_vs_truth.is_empty())
+                .then(|| mean_sd(&st.reference_vs_truth).0),
+            truth_rays: st.truth.as_ref().map(|t| t.rays_per_point),
+            crease_points: st.crease.iter().filter(|&&c| c).count(),
+            rms_vs_truth_crease: se.crease,
+            rms_vs_truth_interior: se.interior,
         };
         self.rows.push((cell, row));
+        self.field_sweep.extend(field_sweep);
         self.results.push(CellResult {
             cell,
             ao,

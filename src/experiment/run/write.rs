@@ -59,14 +59,24 @@ impl Runner<'_> {
                 .iter()
                 .filter(|r| self.plan.cells[r.cell].scene == s)
                 .collect();
-            let mut text = String::from("point,x,y,z,reference");
+            let mut text = String::from("point,x,y,z,crease,reference");
+            if st.truth.is_some() {
+                text.push_str(",truth,truth_stderr");
+            }
             for r in &cols {
                 text.push(',');
                 text.push_str(&self.plan.cells[r.cell].id(&bs.name));
             }
             text.push('\n');
             for (i, p) in st.points.iter().enumerate() {
-                text.push_str(&format!("{i},{},{},{},{}", p.x, p.y, p.z, st.reference[i]));
+                let crease = st.crease[i] as u8;
+                text.push_str(&format!(
+                    "{i},{},{},{},{crease},{}",
+                    p.x, p.y, p.z, st.reference[i]
+                ));
+                if let Some(t) = &st.truth {
+                    text.push_str(&format!(",{},{}", t.ao[i], t.stderr[i]));
+                }
                 for r in &cols {
                     text.push_str(&format!(",{}", r.ao[i]));
                 }
@@ -87,6 +97,9 @@ impl Runner<'_> {
         let (spec, opts, out) = (self.spec, self.opts, &self.opts.out);
         outputs::write_csv(&out.join("table.csv"), &rows)?;
         outputs::write_csv(&out.join("raycast_sweep.csv"), &self.sweep)?;
+        if !self.field_sweep.is_empty() {
+            outputs::write_csv(&out.join("field_sweep.csv"), &self.field_sweep)?;
+        }
         if !pairs.is_empty() {
             outputs::write_csv(&out.join("pairs.csv"), &pairs)?;
         }
@@ -117,6 +130,15 @@ impl Runner<'_> {
                     "ao_points": st.as_ref().map(|st| st.points.len()),
                     "caster_triangles": bs.caster_triangles(),
                     "ray_offset": st.as_ref().map(|st| st.opts.offset),
+                    "crease_points": st.as_ref().map(|st| st.crease.iter().filter(|&&c| c).count()),
+                    "truth": st.as_ref().and_then(|st| st.truth.as_ref().map(|t| serde_json::json!({
+                        "rays_per_point": t.rays_per_point,
+                        "batches": t.batches,
+                        "rms_stderr_255": t.rms_stderr_255(),
+                        "max_stderr_255": t.max_stderr_255(),
+                        "rounds": t.rounds,
+                        "source": st.truth_source,
+                    }))),
                     "raycast_s": raycast,
                 })
             })
@@ -131,6 +153,8 @@ impl Runner<'_> {
             "rays_per_point": spec.render.rays_per_point,
             "reference_rays_per_point": spec.reference.rays_per_point,
             "seed": spec.reference.seed,
+            "seeds": spec.reference.seeds,
+            "truth": spec.reference.truth,
             "timing": format!(
                 "stages under {} s: best of {} runs",
                 opts.short_stage_s, opts.repeats

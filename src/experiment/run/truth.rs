@@ -1,0 +1,188 @@
+//! The runner's ground truth: the converged reference of each scene (cached like fields), the
+//! same-ray references on every seed, and the errors of a cell across seeds.
+
+use super::state::{mean_sd, SceneState};
+use super::steps::Runner;
+use crate::experiment::backend::{AoBackend, Casters};
+use crate::experiment::progress::stage;
+use crate::experiment::truth::{load_or_compute, TruthOutcome};
+use crate::render::image::{rms_255, rms_vertex, GrayImage};
+use crate::render::truth::TruthOptions;
+use crate::sampling::rays::RaySet;
+
+/// A cell's RMS columns over its seeds: (mean, standard deviation) each.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct SeedErrors {
+    pub(super) vertex: Option<(f64, Option<f64>)>,
+    pub(super) image: Option<(f64, Option<f64>)>,
+    pub(super) truth: Option<(f64, Option<f64>)>,
+    /// Mean over seeds of the RMS against the truth at crease and at interior points.
+    pub(super) crease: Option<f64>,
+    pub(super) interior: Option<f64>,
+}
+
+impl Runner<'_> {
+    /// The seeds of every cell: `seed`, `seed + 1`, … (`reference.seeds` of them).
+    pub(super) fn seeds(&self) -> Vec<u64> {
+        let r = &self.spec.reference;
+        (0..r.seeds as u64)
+            .map(|i| r.seed.wrapping_add(i))
+            .collect()
+    }
+
+    /// The converged reference of scene `scene`, from the cache or computed.
+    pub(super) fn truth(&mut self, scene: usize) -> Result<(), String> {
+        let t = &self.spec.reference.truth;
+        let topts = TruthOptions {
+            target_stderr_255: t.target_stderr,
+            max_rays: t.max_rays,
+            batches: t.batches,
+            ..TruthOptions::default()
+        };
+        let cache = self.opts.supply.cache.clone();
+        let scenes = self.scenes;
+        let bs = &scenes.scenes[scene];
+        let st = self.scene(scene);
+        let msg = format!(
+            "{}: converged reference (≤ {} rays/point)",
+            bs.name, topts.max_rays
+        );
+        let (res, s) = stage(&msg, || {
+            load_or_compute(
+                cache.as_deref(),
+                &bs.name,
+                &st.tracer,
+                &st.triangles,
+                &st.points,
+                &st.normals,
+                &st.opts,
+                &topts,
+            )
+        });
+        let (truth, outcome) = res?;
+        let source = match &outcome {
+            TruthOutcome::Hit(p) => format!("cache {}", p.display()),
+            TruthOutcome::Computed { rejected, .. } => {
+                if let Some(r) = rejected {
+                    eprintln!("  truth cache file rejected ({r}); recomputed");
+                }
+                format!("computed in {s:.1} s")
+            }
+        };
+        eprintln!(
+            "  {}: truth {} rays/point, RMS stderr {:.3}, max {:.3} (0–255){}; {source}",
+            bs.name,
+            truth.rays_per_point,
+            truth.rms_stderr_255(),
+            truth.max_stderr_255(),
+            if truth.converged(&topts) {
+                ""
+            } else {
+                " (cap reached before the target)"
+            }
+        );
+        st.truth_source = source;
+        st.truth = Some(truth);
+        Ok(())
+    }
+
+    /// The same-ray reference on the seeds after the first, and every seed's reference against
+    /// the truth.
+    pub(super) fn seed_references(&mut self, scene: usize, k: u32) -> Result<(), String> {
+        let seeds = self.seeds();
+        let bs = &self.scenes.scenes[scene];
+        let st = self.states[scene].as_mut().expect("scene state");
+        let casters = Casters {
+            triangles: &st.triangles,
+            tracer: &st.tracer,
+        };
+        let mut refs = Vec::new();
+        for &sd in &seeds[1..] {
+            let ao = self
+                .cpu
+                .raycast_ao(&casters, &st.at(), &RaySet::new(k, sd), &st.opts)?;
+            let img = st.image(bs, &ao).map(|(i, _)| i);
+            refs.push((ao, img));
+        }
+        st.seed_refs = refs;
+        let mut vs = Vec::new();
+        for ao in std::iter::once(&st.reference).chain(st.seed_refs.iter().map(|(a, _)| a)) {
+            if let Some(e) = st.truth_errors(ao) {
+                vs.push(e.all);
+            }
+        }
+        st.reference_vs_truth = vs;
+        Ok(())
+    }
+}
+
+/// Ray-cast AO of `k²` rays on every seed after the first (untimed), against the truth: the
+/// RMS per seed, `first` (the timed seed's AO) included.
+pub(super) fn raycast_truth_errors(
+    be: &dyn AoBackend,
+    st: &SceneState,
+    k: u32,
+    seeds: &[u64],
+    first: &[f32],
+) -> Result<Vec<f64>, String> {
+    let Some(e) = st.truth_errors(first) else {
+        return Ok(Vec::new());
+    };
+    let mut out = vec![e.all];
+    let casters = Casters {
+        triangles: &st.triangles,
+        tracer: &st.tracer,
+    };
+    for &sd in &seeds[1..] {
+        let ao = be.raycast_ao(&casters, &st.at(), &RaySet::new(k, sd), &st.opts)?;
+        out.extend(st.truth_errors(&ao).map(|e| e.all));
+    }
+    Ok(out)
+}
+
+/// The errors of a cell's AO on every seed (`aos[j]` on seed j, `first_image` the image of
+/// seed 0's AO), against the same-ray reference of that seed and against the truth.
+pub(super) fn seed_errors(
+    st: &SceneState,
+    bs: &crate::experiment::scenes::BuiltScene,
+    aos: &[Vec<f32>],
+    first_image: Option<&GrayImage>,
+) -> SeedErrors {
+    let (mut v, mut im, mut t, mut c, mut i) = (vec![], vec![], vec![], vec![], vec![]);
+    for (j, ao) in aos.iter().enumerate() {
+        let (reference, ref_img) = if j == 0 {
+            (&st.reference, st.ref_image.as_ref().map(|(r, _)| r))
+        } else {
+            let (a, img) = &st.seed_refs[j - 1];
+            (a, img.as_ref())
+        };
+        if st.receivers.is_some() {
+            v.push(rms_vertex(ao, reference));
+        }
+        if let (Some(r), Some((_, mask))) = (ref_img, &st.ref_image) {
+            let own;
+            let img = if j == 0 {
+                first_image
+            } else {
+                own = st.image(bs, ao).map(|(x, _)| x);
+                own.as_ref()
+            };
+            if let Some(img) = img {
+                im.push(rms_255(&img.data, &r.data, Some(mask)));
+            }
+        }
+        if let Some(e) = st.truth_errors(ao) {
+            t.push(e.all);
+            c.extend(e.crease);
+            i.extend(e.interior);
+        }
+    }
+    let ms = |x: &[f64]| (!x.is_empty()).then(|| mean_sd(x));
+    SeedErrors {
+        vertex: ms(&v),
+        image: ms(&im),
+        truth: ms(&t),
+        crease: ms(&c).map(|m| m.0),
+        interior: ms(&i).map(|m| m.0),
+    }
+}
