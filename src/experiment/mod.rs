@@ -22,4 +22,5 @@ pub mod quickstart;
 pub mod run;
 pub mod scenes;
 pub mod spec;
+pub mod stability;
 pub mod validate;
