@@ -10,7 +10,7 @@
 //! - [`layouts`]: frames at the poles and axes; layout texels for directions on texel
 //!   boundaries, the concentric map's centre and diagonals, the last row and column, the
 //!   horizon; quantisation of distances 0, just under 1 and 1 and the 1-bit threshold.
-//! - [`scale`]: one scene scaled by 1e-3 … 1e4 and translated by 1e4 gives the same AO.
+//! - [`scale`]: one scene scaled by 1e-3 … 1e4, or translated by 1e4, gives the same AO.
 //! - [`hard`]: receivers touching the caster, thin sheets, casters 1000× larger and smaller,
 //!   concave casters, overlapping bounding spheres, a receiver inside a caster's sphere.
 //! - [`determinism`]: 1 and 2 threads give bit-identical fields and images.
@@ -64,7 +64,8 @@ pub const CASES: &[Case] = &[
     ("frames_at_poles_and_axes", layouts::frames),
     ("layout_singular_directions", layouts::texels),
     ("quantisation_edges", layouts::quantisation),
-    ("scale_and_position", scale::scale_and_position),
+    ("scale", scale::scale),
+    ("position", scale::position),
     ("receiver_touching_caster", hard::touching),
     ("thin_sheet", hard::thin_sheet),
     ("caster_1000x_larger_and_smaller", hard::extreme_sizes),

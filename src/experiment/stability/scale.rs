@@ -8,7 +8,9 @@
 //! coordinates (1e-3 at 1e4), shows as self-occlusion. 256 rays per point: one ray changing its
 //! answer moves AO by 1/256, inside the tolerance; two do not.
 
-use super::scene_ao::{bake_field, field_ao, field_ao_with, flattened, raycast_ao, scene, Placed};
+use super::scene_ao::{
+    bake_field, field_ao, field_ao_with, flattened, raycast_ao, raycast_ao_with, scene, Placed,
+};
 use super::Row;
 use crate::geometry::{procedural, Similarity};
 use glam::{Quat, Vec3};
@@ -35,14 +37,44 @@ pub fn unit_scene() -> Vec<Placed> {
     ]
 }
 
-/// The placements compared with the unit scene: (label, scale, translation).
-pub fn placements() -> Vec<(&'static str, f32, f32)> {
+/// The scaled placements compared with the unit scene: (label, scale, translation).
+pub fn scaled() -> Vec<(&'static str, f32, f32)> {
     vec![
         ("scaled 1e-3", 1e-3, 0.0),
         ("scaled 1e3", 1e3, 0.0),
         ("scaled 1e4", 1e4, 0.0),
-        ("translated 1e4", 1.0, 1e4),
     ]
+}
+
+/// The translated placement.
+pub fn translated() -> Vec<(&'static str, f32, f32)> {
+    vec![("translated 1e4", 1.0, 1e4)]
+}
+
+/// The scale case: [`scaled`].
+pub fn scale() -> Vec<Row> {
+    compare("scale", scaled())
+}
+
+/// The position case: [`translated`].
+pub fn position() -> Vec<Row> {
+    compare("position", translated())
+}
+
+/// Ray-cast AO of the unit scene translated by 1e4 against itself moved back, both with the
+/// ray-origin offset `offset` (model units): the self-intersection check of the offset.
+pub fn translated_raycast_difference(offset: f32) -> f64 {
+    let sc = scene(
+        &unit_scene(),
+        Similarity::new(Quat::IDENTITY, Vec3::splat(1e4), 1.0),
+    );
+    let opts = crate::render::ao::AoOptions {
+        max_distance: None,
+        offset,
+    };
+    let here = raycast_ao_with(&flattened(&sc, Vec3::ZERO), 16, &opts);
+    let back = raycast_ao_with(&flattened(&sc, Vec3::splat(-1e4)), 16, &opts);
+    super::scene_ao::max_diff(&here, &back)
 }
 
 /// The case: ray-cast and field AO of each placement against the unit scene's.
@@ -52,8 +84,7 @@ pub fn placements() -> Vec<(&'static str, f32, f32)> {
 /// 1e-3, which moves the caster's outline and changes AO by a few rays of 256 whatever the
 /// tracer does; moving back is exact (Sterbenz), so the comparison isolates the effect of
 /// position on tracing and offsets from that of the input's own rounding.
-pub fn scale_and_position() -> Vec<Row> {
-    let case = "scale_and_position";
+fn compare(case: &str, placements: Vec<(&'static str, f32, f32)>) -> Vec<Row> {
     let placed = unit_scene();
     let k = 16;
     let unit = scene(&placed, Similarity::default());
@@ -69,7 +100,7 @@ pub fn scale_and_position() -> Vec<Row> {
             .collect()
     };
     let mut rows = Vec::new();
-    for (label, s, t) in placements() {
+    for (label, s, t) in placements {
         let outer = Similarity::new(Quat::IDENTITY, Vec3::splat(t), s);
         let sc = scene(&placed, outer);
         let (ray, ray_ref, field, field_ref) = if t == 0.0 {

@@ -48,6 +48,11 @@ pub fn options(scene: &Scene) -> AoOptions {
 
 /// Ray-cast vertex AO at the receivers with `k²` rays per point (seed 1).
 pub fn raycast_ao(scene: &Scene, k: u32) -> Vec<f32> {
+    raycast_ao_with(scene, k, &options(scene))
+}
+
+/// [`raycast_ao`] with the given options.
+pub fn raycast_ao_with(scene: &Scene, k: u32, opts: &AoOptions) -> Vec<f32> {
     let recv = Receivers::of(scene);
     let tracer = Tracer::new(&scene.caster_triangles());
     ao_at_points(
@@ -55,7 +60,7 @@ pub fn raycast_ao(scene: &Scene, k: u32) -> Vec<f32> {
         &recv.points,
         &recv.normals,
         &RaySet::new(k, 1),
-        &options(scene),
+        opts,
     )
 }
 
