@@ -25,6 +25,7 @@ fn text(o: &Output) -> String {
 fn help_works_for_every_subcommand() {
     for sub in [
         "quickstart",
+        "stability",
         "list",
         "run",
         "check",
@@ -112,4 +113,46 @@ fn check_exits_non_zero_naming_the_cell_only_when_a_threshold_is_passed() {
         "{}",
         text(&o)
     );
+}
+
+/// A field over `--max-memory-mib` is refused with its size before anything is baked, and an
+/// output folder that cannot be written fails before any work: both through the command line.
+#[test]
+fn resource_errors_come_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let spec = tiny_spec(dir.path(), 255.0);
+    let out = dir.path().join("out");
+    // 50 maps × 8² texels × 1 byte = 3,200 bytes = 3.12 KiB, over a limit of 0 MiB.
+    let o = experiment(&[
+        "run",
+        &spec,
+        "--no-cache",
+        "--max-memory-mib",
+        "0",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let t = text(&o);
+    assert!(!o.status.success(), "{t}");
+    assert!(t.contains("3.12 KiB") && t.contains("memory limit"), "{t}");
+    assert!(!t.contains("bake "), "nothing may be baked: {t}");
+
+    let file = dir.path().join("a-file");
+    std::fs::write(&file, b"").unwrap();
+    let o = experiment(&[
+        "run",
+        &spec,
+        "--no-cache",
+        "--out",
+        file.join("out").to_str().unwrap(),
+    ]);
+    let t = text(&o);
+    assert!(!o.status.success(), "{t}");
+    assert!(t.contains("not writable") && t.contains("a-file"), "{t}");
+    assert!(!t.contains("load scenes"), "no work may start: {t}");
+
+    let o = experiment(&["stability", "--out", file.join("out").to_str().unwrap()]);
+    let t = text(&o);
+    assert!(!o.status.success(), "{t}");
+    assert!(t.contains("not writable") && t.contains("a-file"), "{t}");
 }

@@ -153,6 +153,38 @@ fn spec_errors_name_the_file_the_field_and_what_was_expected() {
     );
 }
 
+/// Negative and zero counts, resolutions and sizes are rejected naming the field.
+#[test]
+fn negative_or_zero_counts_are_rejected_naming_the_field() {
+    // Negative numbers where counts are expected are type errors at the exact path.
+    let e = error_of(&tiny(r#"{ "counts": [-290], "resolutions": [16] }"#, ""));
+    assert!(
+        e.contains("at `fields[0].counts[0]`") && e.contains("-290"),
+        "{e}"
+    );
+    let e = error_of(&tiny(r#"{ "counts": [290], "resolutions": [-16] }"#, ""));
+    assert!(e.contains("at `fields[0].resolutions[0]`"), "{e}");
+    let e = error_of(&tiny(r#"{ "counts": [290], "resolutions": [0] }"#, ""));
+    assert!(e.contains("field `fields[0].resolutions[0]`"), "{e}");
+    let e = error_of(&tiny(ONE_FIELD, "").replace(
+        r#""rays_per_point": 16, "image""#,
+        r#""rays_per_point": -16, "image""#,
+    ));
+    assert!(e.contains("at `render.rays_per_point`"), "{e}");
+    let e = error_of(&tiny(ONE_FIELD, "").replace(
+        r#""rays_per_point": 16, "image""#,
+        r#""rays_per_point": 0, "image""#,
+    ));
+    assert!(e.contains("field `render.rays_per_point`"), "{e}");
+    let e = error_of(&tiny(ONE_FIELD, "").replace(
+        r#""width": 32, "height": 32"#,
+        r#""width": 0, "height": 32"#,
+    ));
+    assert!(e.contains("field `render.image.width`"), "{e}");
+    let e = error_of(&tiny(r#"{ "counts": [], "resolutions": [16] }"#, ""));
+    assert!(e.contains("field `fields[0].counts`"), "{e}");
+}
+
 #[test]
 fn every_shipped_spec_parses_and_has_a_plan() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments");

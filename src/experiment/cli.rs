@@ -35,6 +35,12 @@ pub enum Command {
         #[arg(long, default_value = "results/sampling")]
         out: std::path::PathBuf,
     },
+    /// Stiff and extreme cases against f64 or closed-form answers (exit 1 naming any failure).
+    Stability {
+        /// Output folder.
+        #[arg(long, default_value = "results/stability")]
+        out: std::path::PathBuf,
+    },
     /// List the experiment specs and the figure or table each reproduces.
     List,
     /// Run a spec file from any path.
@@ -273,6 +279,7 @@ pub fn main() {
     let code = match cli.command {
         Command::Quickstart { out } => report(super::quickstart::run(&out)),
         Command::List => list(),
+        Command::Stability { out } => report(super::stability::run(&out).map(|_| ())),
         Command::Run { spec, opts } => report(run_one(&spec, &opts, None).map(|_| ())),
         Command::Check { names, opts } => check(&names, &opts),
         Command::All { opts } => report((|| {

@@ -24,4 +24,5 @@ pub mod run;
 pub mod scenes;
 pub mod spec;
 pub mod truth;
+pub mod stability;
 pub mod validate;

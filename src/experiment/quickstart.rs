@@ -46,15 +46,14 @@ pub fn run(out: &Path) -> Result<(), String> {
     let scene = procedural::default_scene();
     let recv = Receivers::of(&scene);
     let casters = scene.caster_triangles();
-    let scene_radius = crate::geometry::minimal_bounding_sphere(
+    let scene_bounds = crate::geometry::minimal_bounding_sphere(
         &scene
             .instances
             .iter()
             .flat_map(|i| i.world_triangles().flatten())
             .collect::<Vec<_>>(),
-    )
-    .radius;
-    let opts = AoOptions::for_scene_radius(scene_radius);
+    );
+    let opts = AoOptions::for_scene(scene_bounds);
     let seed = 1;
     let rays = RaySet::new(16, seed); // 256 rays per vertex, as in the papers
 

@@ -62,13 +62,18 @@ impl BuiltScene {
 
     /// Radius of the minimal sphere around every instance (the scale of the ray offset).
     pub fn radius(&self) -> f32 {
+        self.bounds().radius
+    }
+
+    /// The minimal bounding sphere of every instance's world vertices.
+    pub fn bounds(&self) -> crate::geometry::Sphere {
         let pts: Vec<Vec3> = self
             .scene
             .instances
             .iter()
             .flat_map(|i| i.world_triangles().flatten())
             .collect();
-        crate::geometry::minimal_bounding_sphere(&pts).radius
+        crate::geometry::minimal_bounding_sphere(&pts)
     }
 }
 

@@ -34,7 +34,18 @@ pub(crate) enum PartsError {
     NonFinite { vertex: usize, position: Vec3 },
     IndexOutOfRange { triangle: usize, index: u32 },
     NoTriangles { given: usize, dropped: usize },
+    OutOfBounds { vertex: usize, position: Vec3 },
+    SinglePoint { position: Vec3 },
+    TooSmall { extent: f64 },
 }
+
+/// Largest coordinate magnitude a mesh may have: squared distances stay far inside f32
+/// (1e30 ≪ 3.4e38), so f32 geometry (bounds, frames, lookups) cannot overflow.
+pub const MAX_COORDINATE: f32 = 1e15;
+
+/// Smallest extent (bounding-box diagonal) a mesh may have: squared distances stay normal f32
+/// numbers (1e-30 ≫ 1.2e-38), so ray offsets and normalisations do not underflow.
+pub const MIN_EXTENT: f64 = 1e-15;
 
 impl std::fmt::Display for PartsError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -51,6 +62,18 @@ impl std::fmt::Display for PartsError {
             PartsError::NoTriangles { given, dropped } => write!(
                 f,
                 "no triangles left ({given} given, {dropped} dropped as zero-area)"
+            ),
+            PartsError::OutOfBounds { vertex, position } => write!(
+                f,
+                "vertex {vertex} at {position} is outside ±{MAX_COORDINATE:e} (rescale the model)"
+            ),
+            PartsError::SinglePoint { position } => write!(
+                f,
+                "every vertex is the same point {position}: the bounding sphere has radius 0"
+            ),
+            PartsError::TooSmall { extent } => write!(
+                f,
+                "the vertices span {extent:e}, below {MIN_EXTENT:e} (rescale the model)"
             ),
         }
     }
@@ -81,8 +104,10 @@ pub struct Mesh {
 impl Mesh {
     /// Validates and builds a mesh; computes area-weighted vertex normals.
     ///
-    /// Errors (naming the mesh): a non-finite coordinate (with the vertex index), an index out of
-    /// range (with the triangle index), or no triangle left after dropping zero-area ones. A
+    /// Errors (naming the mesh): a non-finite coordinate (with the vertex index), a coordinate
+    /// beyond ±[`MAX_COORDINATE`], every vertex at one point (a zero-radius bounding sphere),
+    /// vertices spanning less than [`MIN_EXTENT`], an index out of range (with the triangle
+    /// index), or no triangle left after dropping zero-area ones. A
     /// triangle is zero-area when `|e1 × e2| <= 1e-12 · (|e1|² + |e2|²)` (computed in f64), which
     /// also catches repeated indices and collinear corners.
     pub fn from_parts(
@@ -103,6 +128,25 @@ impl Mesh {
             positions.iter().enumerate().find(|(_, p)| !p.is_finite())
         {
             return Err(PartsError::NonFinite { vertex, position });
+        }
+        if let Some((vertex, &position)) = positions
+            .iter()
+            .enumerate()
+            .find(|(_, p)| p.abs().max_element() > MAX_COORDINATE)
+        {
+            return Err(PartsError::OutOfBounds { vertex, position });
+        }
+        if let Some(&first) = positions.first() {
+            let (lo, hi) = positions
+                .iter()
+                .fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+            let extent = (hi.as_dvec3() - lo.as_dvec3()).length();
+            if extent == 0.0 {
+                return Err(PartsError::SinglePoint { position: first });
+            }
+            if extent < MIN_EXTENT {
+                return Err(PartsError::TooSmall { extent });
+            }
         }
         let n = positions.len();
         for (t, tri) in triangles.iter().enumerate() {
@@ -329,10 +373,51 @@ mod tests {
         assert_eq!(m.dropped_degenerate, 2);
         // Vertex 4 is unused now: it gets the documented +Y.
         assert_eq!(m.normals[4], Vec3::Y);
-        let e = Mesh::from_parts("flat", vec![Vec3::ZERO; 3], vec![[0, 1, 2]])
+        let line = vec![Vec3::ZERO, Vec3::X, 2.0 * Vec3::X];
+        let e = Mesh::from_parts("flat", line, vec![[0, 1, 2]])
             .unwrap_err()
             .to_string();
         assert!(e.contains("flat") && e.contains("no triangles"), "{e}");
+    }
+
+    #[test]
+    fn rejects_empty_single_point_and_out_of_range_scales() {
+        let e = Mesh::from_parts("empty", vec![], vec![])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("empty") && e.contains("no triangles left (0 given"),
+            "{e}"
+        );
+        let (p, _) = quad();
+        let e = Mesh::from_parts("no-faces", p, vec![])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("no-faces") && e.contains("no triangles left (0 given"),
+            "{e}"
+        );
+        // A single point, alone or repeated: a zero-radius bounding sphere.
+        for p in [vec![Vec3::ONE], vec![Vec3::ONE; 3]] {
+            let e = Mesh::from_parts("point", p, vec![[0, 0, 0]])
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("point") && e.contains("radius 0"), "{e}");
+        }
+        let (mut p, t) = quad();
+        p[1].z = -2e15;
+        let e = Mesh::from_parts("huge", p, t).unwrap_err().to_string();
+        assert!(e.contains("vertex 1") && e.contains("outside ±1e15"), "{e}");
+        let (p, t) = quad();
+        let p = p.into_iter().map(|v| v * 1e-20).collect();
+        let e = Mesh::from_parts("tiny", p, t).unwrap_err().to_string();
+        assert!(e.contains("tiny") && e.contains("below 1e-15"), "{e}");
+        // Small and large but representable scales are fine.
+        for s in [1e-12f32, 1e12] {
+            let (p, t) = quad();
+            let m = Mesh::from_parts("ok", p.into_iter().map(|v| v * s).collect(), t).unwrap();
+            assert!(m.bounding_sphere().radius > 0.0);
+        }
     }
 
     #[test]

@@ -264,4 +264,51 @@ mod tests {
         let e = Mesh::load_obj(&p).unwrap_err().to_string();
         assert!(e.contains("flat.obj") && e.contains("no triangles"), "{e}");
     }
+
+    #[test]
+    fn file_without_faces_or_with_a_single_point_is_an_error() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = write(dir.path(), "nofaces.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n");
+        let e = Mesh::load_obj(&p).unwrap_err().to_string();
+        assert!(
+            e.contains("nofaces.obj") && e.contains("no triangles left (0 given"),
+            "{e}"
+        );
+        let p = write(dir.path(), "empty.obj", "");
+        let e = Mesh::load_obj(&p).unwrap_err().to_string();
+        assert!(e.contains("empty.obj") && e.contains("no triangles"), "{e}");
+        let p = write(
+            dir.path(),
+            "point.obj",
+            "v 1 2 3\nv 1 2 3\nv 1 2 3\nf 1 2 3\n",
+        );
+        let e = Mesh::load_obj(&p).unwrap_err().to_string();
+        assert!(e.contains("point.obj") && e.contains("radius 0"), "{e}");
+    }
+
+    /// A file cut short inside a vertex or face line is an error naming the file, never a mesh
+    /// with a silently missing or half-read triangle.
+    #[test]
+    fn truncated_file_is_an_error_or_drops_nothing_silently() {
+        let dir = tempfile::tempdir().unwrap();
+        let whole = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\n";
+        let full = Mesh::load_obj(&write(dir.path(), "whole.obj", whole)).unwrap();
+        assert_eq!(full.triangle_count(), 2);
+        for cut in 1..whole.len() {
+            let p = write(dir.path(), "cut.obj", &whole[..cut]);
+            match Mesh::load_obj(&p) {
+                Err(e) => {
+                    let e = e.to_string();
+                    assert!(e.contains("cut.obj"), "cut at {cut}: {e}");
+                }
+                // A cut that still parses keeps only whole faces over whole vertices.
+                Ok(m) => {
+                    assert!(m.triangle_count() <= 2, "cut at {cut}");
+                    for t in 0..m.triangle_count() {
+                        assert!(m.triangle(t).iter().all(|v| full.positions.contains(v)));
+                    }
+                }
+            }
+        }
+    }
 }

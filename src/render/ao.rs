@@ -44,6 +44,18 @@ pub enum Falloff {
     Linear,
 }
 
+/// The ray-origin offset for a scene bounded by `bounds`: the larger of [`scene_epsilon`]`(R)`
+/// and `2⁻²¹ · M`, where `M = |c|∞ + R` bounds the magnitude of every coordinate.
+///
+/// `2⁻²¹ · M` is 4 f32 ulps of the largest coordinate: a scene far from the origin (translated
+/// by 1e4 with R ≈ 1, where an ulp is 1e-3 R) would otherwise see `point + 1e-4 R · normal` round
+/// back onto the surface and hit itself. Near the origin (`M` within 200 R) the first term rules
+/// and the offset is that of [`scene_epsilon`].
+pub fn scene_epsilon_for(bounds: crate::geometry::Sphere) -> f32 {
+    let magnitude = bounds.center.abs().max_element() + bounds.radius;
+    scene_epsilon(bounds.radius).max(magnitude * 2f32.powi(-21))
+}
+
 /// Options of [`ao_at_points`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AoOptions {
@@ -56,7 +68,18 @@ pub struct AoOptions {
 }
 
 impl AoOptions {
-    /// Unbounded rays, origin offset [`scene_epsilon`]`(scene_radius)`, binary visibility.
+    /// Unbounded rays, origin offset [`scene_epsilon_for`]`(bounds)` (scale and position
+    /// aware: use this for scenes read from user input), binary visibility.
+    pub fn for_scene(bounds: crate::geometry::Sphere) -> AoOptions {
+        AoOptions {
+            max_distance: None,
+            offset: scene_epsilon_for(bounds),
+            falloff: Falloff::Step,
+        }
+    }
+
+    /// Unbounded rays, origin offset [`scene_epsilon`]`(scene_radius)` (for scenes near the
+    /// origin), binary visibility.
     pub fn for_scene_radius(scene_radius: f32) -> AoOptions {
         AoOptions {
             max_distance: None,

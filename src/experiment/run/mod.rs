@@ -6,6 +6,7 @@
 //! offset; the lookup and the ray cast differ only in the [`crate::render::Visibility`] behind
 //! them. Stages shorter than `short_stage_s` are timed as the best of `repeats` runs.
 
+mod staging;
 mod state;
 mod steps;
 mod truth;
@@ -152,11 +153,26 @@ pub fn run(ls: &LoadedSpec, opts: &RunOptions) -> Result<RunReport, String> {
         return Ok(report(Vec::new()));
     }
     eprint!("{plan_text}");
-    let mut runner = Runner::new(&spec, &plan, &scenes, opts)?;
-    for step in &plan.steps {
-        runner.step(step)?;
-    }
-    let rows = runner.finish(ls)?;
+    // Outputs go to a staging folder, published only once the run has finished.
+    let staged = RunOptions {
+        out: staging::create(&opts.out)?,
+        ..opts.clone()
+    };
+    let rows = (|| {
+        let mut runner = Runner::new(&spec, &plan, &scenes, &staged)?;
+        for step in &plan.steps {
+            runner.step(step)?;
+        }
+        runner.finish(ls)
+    })();
+    let rows = match rows {
+        Ok(r) => r,
+        Err(e) => {
+            let _ = std::fs::remove_dir_all(&staged.out);
+            return Err(e);
+        }
+    };
+    staging::publish(&staged.out, &opts.out)?;
     let r = report(rows);
     eprintln!(
         "{}: {} cells in {:.1} s -> {}",

@@ -52,7 +52,7 @@ impl SceneState {
             let tracer = Tracer::new(&t);
             (t, tracer)
         });
-        let mut opts = AoOptions::for_scene_radius(bs.radius());
+        let mut opts = AoOptions::for_scene(bs.bounds());
         opts.max_distance = spec.render.max_distance;
         opts.falloff = spec.render.falloff;
         let gbuf = spec.render.image.as_ref().map(|img| {

@@ -1,0 +1,135 @@
+//! `experiment stability`: stiff and extreme cases, each compared against an f64 or closed-form
+//! answer.
+//!
+//! Every case is a function returning [`Row`]s (`case, quantity, max_error, tolerance, pass`);
+//! [`CASES`] lists them, [`run`] runs them all and writes `cases.csv` and `run.json`, and
+//! `tests/stability.rs` runs each case as a test. The cases:
+//!
+//! - [`sphere`]: ray–sphere crossings from origins 1e-3 R to 1e6 R away, grazing rays (tangent
+//!   ± 1 ulp), origins on and just inside the sphere, against an f64 Newton-refined reference.
+//! - [`layouts`]: frames at the poles and axes; layout texels for directions on texel
+//!   boundaries, the concentric map's centre and diagonals, the last row and column, the
+//!   horizon; quantisation of distances 0, just under 1 and 1 and the 1-bit threshold.
+//! - [`scale`]: one scene scaled by 1e-3 … 1e4, or translated by 1e4, gives the same AO.
+//! - [`hard`]: receivers touching the caster, thin sheets, casters 1000× larger and smaller,
+//!   concave casters, overlapping bounding spheres, a receiver inside a caster's sphere.
+//! - [`determinism`]: 1 and 2 threads give bit-identical fields and images.
+
+pub mod determinism;
+pub mod hard;
+pub mod layouts;
+pub mod scale;
+pub mod scene_ao;
+pub mod sphere;
+
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// One measured quantity of a case.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Row {
+    /// The case (a function in [`CASES`]).
+    pub case: String,
+    /// What was measured, with its unit.
+    pub quantity: String,
+    /// The largest error over the case's inputs (same unit as `tolerance`).
+    pub max_error: f64,
+    /// The error allowed.
+    pub tolerance: f64,
+    /// `max_error <= tolerance` (and finite).
+    pub pass: bool,
+}
+
+impl Row {
+    /// A row; `pass` is `max_error <= tolerance` with a NaN error failing.
+    pub fn new(case: &str, quantity: impl Into<String>, max_error: f64, tolerance: f64) -> Row {
+        Row {
+            case: case.to_string(),
+            quantity: quantity.into(),
+            max_error,
+            tolerance,
+            pass: max_error <= tolerance,
+        }
+    }
+}
+
+/// A case: its name and the function that measures it.
+pub type Case = (&'static str, fn() -> Vec<Row>);
+
+/// Every case of `experiment stability`, in output order.
+pub const CASES: &[Case] = &[
+    ("ray_sphere_far_and_near", sphere::far_and_near),
+    ("ray_sphere_grazing", sphere::grazing),
+    ("ray_sphere_on_and_inside", sphere::on_and_inside),
+    ("frames_at_poles_and_axes", layouts::frames),
+    ("layout_singular_directions", layouts::texels),
+    ("quantisation_edges", layouts::quantisation),
+    ("scale", scale::scale),
+    ("position", scale::position),
+    ("receiver_touching_caster", hard::touching),
+    ("thin_sheet", hard::thin_sheet),
+    ("caster_1000x_larger_and_smaller", hard::extreme_sizes),
+    ("concave_caster", hard::concave),
+    ("overlapping_spheres", hard::overlapping_spheres),
+    ("receiver_inside_caster_sphere", hard::inside_sphere),
+    ("thread_determinism", determinism::threads),
+];
+
+/// Runs every case and writes `out/cases.csv` and `out/run.json` (atomically). Returns the
+/// rows; the error names the failing rows when any case fails (the files are written first).
+pub fn run(out: &Path) -> Result<Vec<Row>, String> {
+    crate::experiment::run::ensure_writable(out)?;
+    let meta = crate::experiment::meta::RunMeta::collect(None);
+    let mut rows = Vec::new();
+    for (name, case) in CASES {
+        let t = std::time::Instant::now();
+        let r = case();
+        eprintln!(
+            "stability: {name}: {} row(s), {} failing ({:.2} s)",
+            r.len(),
+            r.iter().filter(|r| !r.pass).count(),
+            t.elapsed().as_secs_f64()
+        );
+        rows.extend(r);
+    }
+    crate::experiment::outputs::write_csv(&out.join("cases.csv"), &rows)?;
+    crate::io::write_atomic(&out.join("run.json"), meta.to_json().as_bytes())
+        .map_err(|e| format!("{}: {e}", out.join("run.json").display()))?;
+    let failed: Vec<String> = rows
+        .iter()
+        .filter(|r| !r.pass)
+        .map(|r| {
+            format!(
+                "{} / {}: {:e} > {:e}",
+                r.case, r.quantity, r.max_error, r.tolerance
+            )
+        })
+        .collect();
+    println!(
+        "stability: {} row(s), {} failing -> {}",
+        rows.len(),
+        failed.len(),
+        out.join("cases.csv").display()
+    );
+    if failed.is_empty() {
+        Ok(rows)
+    } else {
+        Err(format!("failing cases:\n  {}", failed.join("\n  ")))
+    }
+}
+
+/// The largest of `values` (0 for none; NaN propagates as a failure).
+pub fn max_of(values: impl IntoIterator<Item = f64>) -> f64 {
+    values.into_iter().fold(0.0, |m, v| {
+        if v.is_nan() || m.is_nan() {
+            f64::NAN
+        } else {
+            m.max(v)
+        }
+    })
+}
+
+/// [`max_of`] for the tests: a NaN anywhere gives NaN.
+pub fn max_of_for_tests(values: &[f64]) -> f64 {
+    max_of(values.iter().copied())
+}
