@@ -139,18 +139,10 @@ impl AoBackend for CpuBackend {
 }
 
 /// Opens a backend; "gpu" opens the adapter `adapter` selects ([`AdapterPreference::Auto`]:
-/// hardware where there is one, else lavapipe), with room for `max_rays` rays per point.
-pub fn open(
-    kind: Backend,
-    adapter: &AdapterPreference,
-    max_rays: usize,
-) -> Result<Box<dyn AoBackend>, String> {
+/// hardware where there is one, else lavapipe).
+pub fn open(kind: Backend, adapter: &AdapterPreference) -> Result<Box<dyn AoBackend>, String> {
     match kind {
         Backend::Cpu => Ok(Box::new(CpuBackend::new())),
-        Backend::Gpu => {
-            let mut gpu = GpuBackend::open(adapter.clone())?;
-            gpu.ray_capacity = max_rays.max(1);
-            Ok(Box::new(gpu))
-        }
+        Backend::Gpu => Ok(Box::new(GpuBackend::open(adapter.clone())?)),
     }
 }

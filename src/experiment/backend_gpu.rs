@@ -25,9 +25,6 @@ pub struct GpuBackend {
     /// How the fields are bound (the faster on our measurements is the default, see
     /// [`FieldGpuOptions::default`]).
     pub layout: FieldLayout,
-    /// Most rays per point a field-lookup call may use (the kernel reserves a table entry
-    /// per direction).
-    pub ray_capacity: usize,
 }
 
 impl GpuBackend {
@@ -37,7 +34,6 @@ impl GpuBackend {
         Ok(GpuBackend {
             ctx,
             layout: FieldGpuOptions::default().layout,
-            ray_capacity: FieldGpuOptions::default().ray_capacity,
         })
     }
 
@@ -104,7 +100,6 @@ impl AoBackend for GpuBackend {
         let opts = FieldGpuOptions {
             lookup: fields.options,
             layout: self.layout,
-            ray_capacity: self.ray_capacity,
             ..Default::default()
         };
         let kernel = FieldAoKernel::new(&self.ctx, &fields.instances, &opts).map_err(gpu_err)?;

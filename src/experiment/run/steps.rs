@@ -45,15 +45,8 @@ impl<'a> Runner<'a> {
         opts: &'a RunOptions,
     ) -> Result<Runner<'a>, String> {
         let mut backends = HashMap::new();
-        // The most rays per point any AO call of this spec uses.
-        let max_rays = std::iter::once(spec.render.rays_per_point)
-            .chain(std::iter::once(spec.reference.rays_per_point))
-            .chain(spec.reference.raycast_sweep.iter().copied())
-            .chain(spec.reference.field_rays_sweep.iter().copied())
-            .max()
-            .unwrap_or(1) as usize;
         for &b in &spec.backends {
-            backends.insert(b, backend::open(b, &opts.adapter, max_rays)?);
+            backends.insert(b, backend::open(b, &opts.adapter)?);
         }
         Ok(Runner {
             spec,
