@@ -227,7 +227,10 @@ fn pareto_vs_truth(
         Vec::new()
     };
     let mut series: Vec<Series> = Vec::new();
-    for r in rows {
+    // One backend's fields (the first, the CPU when it ran): the others give the same errors
+    // (GPU parity) at other times, and one series per cell and backend would not fit a legend.
+    let first = rows[0].backend;
+    for r in rows.iter().filter(|r| r.backend == first) {
         let Some(y) = r.rms_vs_truth else { continue };
         let more: Vec<&FieldSweepRow> = field_sweep.iter().filter(|f| f.cell == r.cell).collect();
         if more.is_empty() {
