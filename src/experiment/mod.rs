@@ -23,6 +23,6 @@ pub mod quickstart;
 pub mod run;
 pub mod scenes;
 pub mod spec;
-pub mod truth;
 pub mod stability;
+pub mod truth;
 pub mod validate;
