@@ -139,12 +139,7 @@ pub fn save(path: &Path, key: &CacheKey, field: &VisibilityField) -> Result<(), 
         payload_sha256: crate::io::sha256_hex(&payload),
     };
     let h = serde_json::to_vec(&header).expect("header serialises");
-    let mut out = Vec::with_capacity(16 + h.len() + payload.len());
-    out.extend_from_slice(MAGIC);
-    out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
-    out.extend_from_slice(&(h.len() as u32).to_le_bytes());
-    out.extend_from_slice(&h);
-    out.extend_from_slice(&payload);
+    let out = crate::io::framed(MAGIC, FORMAT_VERSION, &h, &payload);
     crate::io::write_atomic(path, &out).map_err(|source| CacheError::Io {
         path: path.to_path_buf(),
         source,
