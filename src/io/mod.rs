@@ -37,6 +37,18 @@ pub fn sha256_hex(bytes: &[u8]) -> String {
     digest.iter().map(|b| format!("{b:02x}")).collect()
 }
 
+/// The container of the on-disk caches: `magic` (8 bytes), `version` (u32 LE), the header's
+/// length (u32 LE), the header, the payload.
+pub fn framed(magic: &[u8; 8], version: u32, header: &[u8], payload: &[u8]) -> Vec<u8> {
+    let mut out = Vec::with_capacity(16 + header.len() + payload.len());
+    out.extend_from_slice(magic);
+    out.extend_from_slice(&version.to_le_bytes());
+    out.extend_from_slice(&(header.len() as u32).to_le_bytes());
+    out.extend_from_slice(header);
+    out.extend_from_slice(payload);
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -60,16 +72,4 @@ mod tests {
         let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
         assert_eq!(names.len(), 1, "a temporary file was left behind");
     }
-}
-
-/// The container of the on-disk caches: `magic` (8 bytes), `version` (u32 LE), the header's
-/// length (u32 LE), the header, the payload.
-pub fn framed(magic: &[u8; 8], version: u32, header: &[u8], payload: &[u8]) -> Vec<u8> {
-    let mut out = Vec::with_capacity(16 + header.len() + payload.len());
-    out.extend_from_slice(magic);
-    out.extend_from_slice(&version.to_le_bytes());
-    out.extend_from_slice(&(header.len() as u32).to_le_bytes());
-    out.extend_from_slice(header);
-    out.extend_from_slice(payload);
-    out
 }
