@@ -1,17 +1,8 @@
 use super::*;
-use crate::trace::test_scenes::{disk_fan, icosphere, random_point, random_soup, random_unit};
+use crate::trace::test_scenes::{
+    disk_fan, icosphere, random_point, random_soup, random_unit, square,
+};
 use crate::trace::Tracer;
-
-/// A square of side 2·half in the plane z = h, as two triangles.
-fn square(half: f32, h: f32) -> Vec<[Vec3; 3]> {
-    let (a, b, c, d) = (
-        Vec3::new(-half, -half, h),
-        Vec3::new(half, -half, h),
-        Vec3::new(half, half, h),
-        Vec3::new(-half, half, h),
-    );
-    vec![[a, b, c], [a, c, d]]
-}
 
 /// Unoccluded ray fraction predicted for a point on the axis of a disk whose edge is seen at
 /// sin θ₀ = s, with `RaySet::new(k, _)` (centred strata): the concentric map sends the square's

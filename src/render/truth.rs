@@ -168,18 +168,8 @@ pub fn converged_ao<V: Visibility + ?Sized>(
 mod tests {
     use super::*;
     use crate::render::ao::Falloff;
+    use crate::trace::test_scenes::square;
     use crate::trace::Tracer;
-
-    /// A square of side 2·half in the plane z = h, as two triangles.
-    fn square(half: f32, h: f32) -> Vec<[Vec3; 3]> {
-        let (a, b, c, d) = (
-            Vec3::new(-half, -half, h),
-            Vec3::new(half, -half, h),
-            Vec3::new(half, half, h),
-            Vec3::new(-half, half, h),
-        );
-        vec![[a, b, c], [a, c, d]]
-    }
 
     #[test]
     fn ceiling_within_the_ao_radius_has_closed_form_ao_and_honest_error_bars() {

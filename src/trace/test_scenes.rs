@@ -41,6 +41,17 @@ pub fn map_vertices(tris: &[[Vec3; 3]], f: impl Fn(Vec3) -> Vec3) -> Vec<[Vec3; 
     tris.iter().map(|t| [f(t[0]), f(t[1]), f(t[2])]).collect()
 }
 
+/// A square of side 2·half in the plane z = h, as two triangles.
+pub fn square(half: f32, h: f32) -> Vec<[Vec3; 3]> {
+    let (a, b, c, d) = (
+        Vec3::new(-half, -half, h),
+        Vec3::new(half, -half, h),
+        Vec3::new(half, half, h),
+        Vec3::new(-half, half, h),
+    );
+    vec![[a, b, c], [a, c, d]]
+}
+
 /// A horizontal disk fan of `segments` triangles at height `h` around the z axis whose polygon
 /// contains the disk of radius `r`: the rim vertices sit on the circumscribed circle
 /// `r / cos(π/segments)`, so the polygon lies between radii `r` and `r / cos(π/segments)`.
