@@ -77,24 +77,27 @@ fn ao_lookup_vs_raycast(c: &mut Criterion) {
                 precision,
             };
             let field = OnceCell::new();
+            // The field is baked on first use, so a filter that skips these rows skips the bake.
+            let scene = |selection| {
+                let field = field.get_or_init(|| {
+                    let (f, _) = bake(&caster.mesh, params, &BakeOptions::default()).expect("bake");
+                    Arc::new(f)
+                });
+                FieldScene {
+                    instances: vec![FieldInstance::new(field.clone(), caster.transform)],
+                    options: LookupOptions {
+                        selection,
+                        ..LookupOptions::default()
+                    },
+                }
+            };
             for selection in [Selection::Nearest, Selection::Interpolated] {
                 let id = BenchmarkId::new(
                     format!("field_{selection:?}").to_lowercase(),
                     precision.name(),
                 );
                 group.bench_function(id, |b| {
-                    let field = field.get_or_init(|| {
-                        let (f, _) =
-                            bake(&caster.mesh, params, &BakeOptions::default()).expect("bake");
-                        Arc::new(f)
-                    });
-                    let fs = FieldScene {
-                        instances: vec![FieldInstance::new(field.clone(), caster.transform)],
-                        options: LookupOptions {
-                            selection,
-                            ..LookupOptions::default()
-                        },
-                    };
+                    let fs = scene(selection);
                     b.iter(|| ao_at_points(&fs, &recv.points, &recv.normals, &rays, &opts))
                 });
                 if precision != Precision::U8 {
@@ -106,18 +109,7 @@ fn ao_lookup_vs_raycast(c: &mut Criterion) {
                     precision.name(),
                 );
                 group.bench_function(id, |b| {
-                    let field = field.get_or_init(|| {
-                        let (f, _) =
-                            bake(&caster.mesh, params, &BakeOptions::default()).expect("bake");
-                        Arc::new(f)
-                    });
-                    let fs = FieldScene {
-                        instances: vec![FieldInstance::new(field.clone(), caster.transform)],
-                        options: LookupOptions {
-                            selection,
-                            ..LookupOptions::default()
-                        },
-                    };
+                    let fs = scene(selection);
                     let per_ray = PerRay(&fs);
                     b.iter(|| ao_at_points(&per_ray, &recv.points, &recv.normals, &rays, &opts))
                 });
