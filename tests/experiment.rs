@@ -1,7 +1,7 @@
 //! The experiment harness: spec errors, the planner, an end-to-end run of a tiny spec, the
 //! threshold check, and every shipped spec.
 
-use glam::Quat;
+use glam::{Quat, Vec3};
 use std::path::{Path, PathBuf};
 use visfield::experiment::check::check_rows;
 use visfield::experiment::fields::{requantize, FieldSupply};
@@ -464,6 +464,45 @@ fn fit_transform_reproduces_over_corner() {
     assert!((a.scale - b.scale).abs() < 1e-6 && a.rotation.angle_between(b.rotation) < 1e-6);
     // One loaded mesh per distinct source.
     assert_eq!(scenes.meshes.len(), 2);
+}
+
+/// A spec whose instances are all translated by 1e4 builds, in its rebased frame, exactly the
+/// scene of the untranslated spec, with the translation as its origin (so AO, images and
+/// caches agree); without rebasing, f32 world coordinates at 1e4 would round the vertices to
+/// 1e-3.
+#[test]
+fn translated_spec_is_rebased_to_the_untranslated_scene() {
+    let text = tiny(ONE_FIELD, "");
+    let far = text
+        .replace(
+            r#""receiver": true }"#,
+            r#""receiver": true, "transform": { "translate": [10000, 10000, 10000] } }"#,
+        )
+        .replace(
+            r#""radius": 0.35 }"#,
+            r#""radius": 0.35 }, "translate": [10000, 10000, 10000]"#,
+        );
+    assert_eq!(far.matches("10000, 10000").count(), 2);
+    let build = |t: &str| Scenes::build(&parse(t).unwrap(), Path::new("t.json"), "scenes").unwrap();
+    let (near, far) = (build(&text), build(&far));
+    assert_eq!(near.scenes[0].origin, glam::DVec3::ZERO);
+    assert_eq!(far.scenes[0].origin, glam::DVec3::splat(1e4));
+    for (a, b) in near.scenes[0]
+        .scene
+        .instances
+        .iter()
+        .zip(&far.scenes[0].scene.instances)
+    {
+        assert_eq!(a.transform, b.transform);
+    }
+    let cam = visfield::experiment::quickstart::corner_camera();
+    let moved = visfield::render::camera::Camera {
+        eye: cam.eye + Vec3::splat(1e4),
+        target: cam.target + Vec3::splat(1e4),
+        ..cam
+    };
+    let back = far.scenes[0].camera_in_frame(&moved);
+    assert!(back.eye.distance(cam.eye) < 2e-3 && back.target.distance(cam.target) < 2e-3);
 }
 
 #[test]

@@ -49,13 +49,23 @@ case_tests!(
     thread_determinism,
 );
 
-/// Open: translated by 1e4 (f32 spacing 1e-3 ≈ 1e-3 R), ray-cast AO moves by up to 4 rays of
-/// 256 and field AO by up to 21 (measured: 0.0156 and 0.082, `results/stability/cases.csv`),
-/// over the 1/255 asked for.
+/// Translated by 1e4 and 1e6, and a mesh with its coordinates at 1e4: equal AO within 1/255
+/// once the scene is rebased.
 #[test]
-#[ignore = "open: AO at translation 1e4 differs by more than 1/255 (see results/stability)"]
 fn position() {
     run_case("position");
+}
+
+/// Without rebasing, the f32 world coordinates at 1e4 (spacing 1e-3 ≈ 1e-3 R) move the
+/// ray-cast AO by more than 1/255: the case above fails for the reason rebasing removes.
+#[test]
+fn unrebased_translation_fails_the_tolerance() {
+    use visfield::experiment::stability::scale::{unit_scene, unrebased, AO_TOLERANCE};
+    use visfield::experiment::stability::scene_ao::{max_diff, raycast_ao, scene};
+    let unit = scene(&unit_scene(), visfield::geometry::Similarity::default());
+    let d = max_diff(&raycast_ao(&unrebased(1e4), 16), &raycast_ao(&unit, 16));
+    println!("unrebased translation 1e4: max AO difference {d}");
+    assert!(d > AO_TOLERANCE, "{d}");
 }
 
 /// The position-aware offset fixes self-intersection far from the origin: at translation 1e4
@@ -64,12 +74,9 @@ fn position() {
 #[test]
 fn position_aware_offset_removes_self_intersection() {
     use visfield::experiment::stability::scale::translated_raycast_difference;
-    use visfield::experiment::stability::scene_ao::{scene, scene_bounds};
+    use visfield::experiment::stability::scene_ao::scene_bounds;
     use visfield::render::ao::{scene_epsilon, scene_epsilon_for};
-    let sc = scene(
-        &visfield::experiment::stability::scale::unit_scene(),
-        visfield::geometry::Similarity::new(glam::Quat::IDENTITY, glam::Vec3::splat(1e4), 1.0),
-    );
+    let sc = visfield::experiment::stability::scale::unrebased(1e4);
     let b = scene_bounds(&sc);
     let old = translated_raycast_difference(scene_epsilon(b.radius));
     let new = translated_raycast_difference(scene_epsilon_for(b));

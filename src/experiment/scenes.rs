@@ -8,8 +8,10 @@
 
 use super::spec::{MeshSource, Spec, SpecError, TransformSpec};
 use crate::geometry::procedural::{self, Supershape};
-use crate::geometry::{models, Instance, Mesh, Scene, Similarity};
-use glam::{EulerRot, Quat, Vec3};
+use crate::geometry::rebase::{rebase, PlacedMesh, Placement, Rebased};
+use crate::geometry::{models, Mesh, Scene, Similarity};
+use crate::render::camera::Camera;
+use glam::{DVec3, EulerRot, Quat, Vec3};
 use std::path::Path;
 use std::sync::Arc;
 
@@ -27,12 +29,27 @@ pub struct LoadedMesh {
 #[derive(Clone, Debug)]
 pub struct BuiltScene {
     pub name: String,
+    /// The scene in its rebased frame ([`crate::geometry::rebase`]): world coordinates are the
+    /// spec's minus [`BuiltScene::origin`].
     pub scene: Scene,
+    /// The spec-world position of the scene frame's origin (zero for a scene within two
+    /// radii of the spec's origin).
+    pub origin: DVec3,
     /// Per instance: its mesh's index in [`Scenes::meshes`].
     pub mesh_of: Vec<usize>,
 }
 
 impl BuiltScene {
+    /// A spec-world camera in the scene's frame.
+    pub fn camera_in_frame(&self, cam: &Camera) -> Camera {
+        let to = |p: Vec3| (p.as_dvec3() - self.origin).as_vec3();
+        Camera {
+            eye: to(cam.eye),
+            target: to(cam.target),
+            ..*cam
+        }
+    }
+
     /// Indices of the distinct meshes of the casters, in first-use order.
     pub fn caster_meshes(&self) -> Vec<usize> {
         let mut out = Vec::new();
@@ -114,17 +131,19 @@ impl Scenes {
                     }
                 };
                 let mesh = out.meshes[m].mesh.clone();
-                instances.push(Instance {
-                    transform: similarity(&inst.transform, &mesh),
+                instances.push(PlacedMesh {
+                    placement: placement(&inst.transform, &mesh),
                     mesh,
                     caster: inst.caster,
                     receiver: inst.receiver,
                 });
                 mesh_of.push(m);
             }
+            let Rebased { scene, origin } = rebase(&instances);
             out.scenes.push(BuiltScene {
                 name: sc.name.clone(),
-                scene: Scene { instances },
+                scene,
+                origin,
                 mesh_of,
             });
         }
@@ -151,8 +170,8 @@ pub fn build_mesh(src: &MeshSource) -> Result<Mesh, String> {
     r.map_err(|e| e.to_string())
 }
 
-/// The placement of `mesh` described by `t` (see [`TransformSpec`]).
-pub fn similarity(t: &TransformSpec, mesh: &Mesh) -> Similarity {
+/// The placement of `mesh` described by `t` (see [`TransformSpec`]), its translation in f64.
+pub fn placement(t: &TransformSpec, mesh: &Mesh) -> Placement {
     let rotation = t
         .rotate_deg
         .map(|d| {
@@ -173,11 +192,11 @@ pub fn similarity(t: &TransformSpec, mesh: &Mesh) -> Similarity {
         }
         None => Similarity::new(rotation, Vec3::ZERO, 1.0),
     };
-    let outer = Similarity::new(
-        Quat::IDENTITY,
-        t.translate.unwrap_or(Vec3::ZERO),
-        t.scale.unwrap_or(1.0),
-    );
+    let outer = Placement {
+        rotation: Quat::IDENTITY,
+        translation: t.translate.unwrap_or(DVec3::ZERO),
+        scale: t.scale.unwrap_or(1.0),
+    };
     outer.compose(&inner)
 }
 

@@ -172,9 +172,10 @@ pub struct TransformSpec {
     /// Uniform scale (positive).
     #[serde(default)]
     pub scale: Option<f32>,
-    /// Translation.
+    /// Translation (read in f64: a scene far from the origin keeps its exact placement, and
+    /// the runner moves it next to the origin before forming f32 coordinates).
     #[serde(default)]
-    pub translate: Option<Vec3>,
+    pub translate: Option<glam::DVec3>,
 }
 
 /// A target sphere for [`TransformSpec::fit`].

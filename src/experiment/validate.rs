@@ -290,7 +290,7 @@ impl Ctx<'_> {
                     }
                 }
                 let finite = |v: Option<glam::Vec3>| v.is_none_or(|v| v.is_finite());
-                if !finite(t.rotate_deg) || !finite(t.translate) {
+                if !finite(t.rotate_deg) || !t.translate.is_none_or(|v| v.is_finite()) {
                     return Err(self.err(
                         &format!("{at}.transform"),
                         "rotation and translation must be finite".into(),

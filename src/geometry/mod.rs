@@ -11,6 +11,7 @@
 //! - [`minimal_bounding_sphere`]: exact minimal enclosing spheres (Welzl).
 //! - [`Similarity`], [`Instance`], [`Scene`]: meshes placed in the world with caster / receiver
 //!   roles.
+//! - [`rebase`]: scenes moved next to the origin in f64 before f32 world coordinates are formed.
 //! - [`models`]: the registry of real meshes (`data/models.json`), found and sha256-checked.
 //! - [`procedural`]: corner, plane, cube with a hole, UV sphere, supershapes, the default scene.
 
@@ -20,6 +21,7 @@ mod mesh;
 pub mod models;
 mod obj;
 pub mod procedural;
+pub mod rebase;
 
 pub use bounds::{minimal_bounding_sphere, Sphere};
 pub use instance::{Instance, Scene, Similarity};

@@ -56,9 +56,10 @@ impl SceneState {
         opts.max_distance = spec.render.max_distance;
         opts.falloff = spec.render.falloff;
         let gbuf = spec.render.image.as_ref().map(|img| {
-            let cam = img
-                .camera
-                .unwrap_or_else(super::super::quickstart::corner_camera);
+            let cam = bs.camera_in_frame(
+                &img.camera
+                    .unwrap_or_else(super::super::quickstart::corner_camera),
+            );
             let ps = PrimaryScene::new(&bs.scene);
             let (g, _) = stage(&format!("{}: primary visibility", bs.name), || {
                 gbuffer(&ps, &cam, img.width, img.height)

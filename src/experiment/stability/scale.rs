@@ -1,5 +1,8 @@
-//! Scale and position: one scene scaled by 1e-3, 1e3 and 1e4 and translated by 1e4 gives the AO
-//! of the unit scene within 1/255 at every receiver vertex, both ray cast and by field lookup.
+//! Scale and position: one scene scaled by 1e-3, 1e3 and 1e4 and translated by 1e4 and 1e6 gives
+//! the AO of the unit scene within 1/255 at every receiver vertex, both ray cast and by field
+//! lookup. Placements are composed in f64 and the scene rebased next to the origin
+//! ([`crate::geometry::rebase`]) as the experiment runner does; a scene left in f32 world
+//! coordinates at 1e4 ([`unrebased`]) shows what rebasing avoids.
 //!
 //! The scene occludes itself: a cube with a hole (the concave caster), fitted in a sphere of
 //! radius 0.3 at (0.5, 0.45, 0.5), is caster and receiver, over the corner receiver (17 × 17
@@ -9,11 +12,11 @@
 //! answer moves AO by 1/256, inside the tolerance; two do not.
 
 use super::scene_ao::{
-    bake_field, field_ao, field_ao_with, flattened, raycast_ao, raycast_ao_with, scene, Placed,
+    bake_field, field_ao, flattened, raycast_ao, raycast_ao_with, rebased_scene, scene, Placed,
 };
 use super::Row;
 use crate::geometry::{procedural, Similarity};
-use glam::{Quat, Vec3};
+use glam::{DVec3, Quat, Vec3};
 use std::sync::Arc;
 
 /// AO tolerance of the case (the 1/255).
@@ -37,18 +40,31 @@ pub fn unit_scene() -> Vec<Placed> {
     ]
 }
 
-/// The scaled placements compared with the unit scene: (label, scale, translation).
-pub fn scaled() -> Vec<(&'static str, f32, f32)> {
+/// A placement of the unit scene: (label, scale, translation).
+pub type Placement = (&'static str, f32, DVec3);
+
+/// The scaled placements compared with the unit scene.
+pub fn scaled() -> Vec<Placement> {
     vec![
-        ("scaled 1e-3", 1e-3, 0.0),
-        ("scaled 1e3", 1e3, 0.0),
-        ("scaled 1e4", 1e4, 0.0),
+        ("scaled 1e-3", 1e-3, DVec3::ZERO),
+        ("scaled 1e3", 1e3, DVec3::ZERO),
+        ("scaled 1e4", 1e4, DVec3::ZERO),
     ]
 }
 
-/// The translated placement.
-pub fn translated() -> Vec<(&'static str, f32, f32)> {
-    vec![("translated 1e4", 1.0, 1e4)]
+/// The translated placements: by 1e4 and 1e6 on every axis, and by 1e4 plus an offset that
+/// the rebased frame keeps (the scene then sits at (0.375, −0.25, 0.125) from its origin, so
+/// its f32 coordinates differ from the unit scene's).
+pub fn translated() -> Vec<Placement> {
+    vec![
+        ("translated 1e4", 1.0, DVec3::splat(1e4)),
+        (
+            "translated 1e4 + (0.375, -0.25, 0.125)",
+            1.0,
+            DVec3::new(1e4 + 0.375, 1e4 - 0.25, 1e4 + 0.125),
+        ),
+        ("translated 1e6", 1.0, DVec3::splat(1e6)),
+    ]
 }
 
 /// The scale case: [`scaled`].
@@ -56,18 +72,33 @@ pub fn scale() -> Vec<Row> {
     compare("scale", scaled())
 }
 
-/// The position case: [`translated`].
+/// The position case: [`translated`], and a mesh whose own coordinates lie at 1e4
+/// ([`far_mesh_coordinates`]).
 pub fn position() -> Vec<Row> {
-    compare("position", translated())
+    let mut rows = compare("position", translated());
+    rows.push(Row::new(
+        "position",
+        "mesh coordinates at 1e4: ray-cast AO, max difference from the same mesh moved back",
+        far_mesh_coordinates(),
+        AO_TOLERANCE,
+    ));
+    rows
 }
 
-/// Ray-cast AO of the unit scene translated by 1e4 against itself moved back, both with the
-/// ray-origin offset `offset` (model units): the self-intersection check of the offset.
-pub fn translated_raycast_difference(offset: f32) -> f64 {
-    let sc = scene(
+/// The unit scene under `outer` in true world coordinates, without rebasing: f32 composition
+/// and f32 world coordinates.
+pub fn unrebased(outer_translation: f32) -> crate::geometry::Scene {
+    scene(
         &unit_scene(),
-        Similarity::new(Quat::IDENTITY, Vec3::splat(1e4), 1.0),
-    );
+        Similarity::new(Quat::IDENTITY, Vec3::splat(outer_translation), 1.0),
+    )
+}
+
+/// Ray-cast AO of the unit scene translated by 1e4 (f32 world coordinates, not rebased)
+/// against itself moved back, both with the ray-origin offset `offset` (model units): the
+/// self-intersection check of the offset.
+pub fn translated_raycast_difference(offset: f32) -> f64 {
+    let sc = unrebased(1e4);
     let opts = crate::render::ao::AoOptions {
         max_distance: None,
         offset,
@@ -78,14 +109,24 @@ pub fn translated_raycast_difference(offset: f32) -> f64 {
     super::scene_ao::max_diff(&here, &back)
 }
 
+/// A scene whose meshes carry their world coordinates at 1e4 (the unit scene translated and
+/// flattened into f32 vertices: identity transforms), rebased, against the same vertices moved
+/// back by the exact translation. The vertices are the input here, rounded to the f32 spacing
+/// at 1e4 (1e-3) in both; rebasing removes the translation exactly, so only the tracing
+/// differs.
+pub fn far_mesh_coordinates() -> f64 {
+    let sc = unrebased(1e4);
+    let here = flattened(&sc, Vec3::ZERO).rebased();
+    assert_ne!(here.origin, glam::DVec3::ZERO, "the far scene is rebased");
+    let back = flattened(&sc, Vec3::splat(-1e4));
+    super::scene_ao::max_diff(&raycast_ao(&here.scene, 16), &raycast_ao(&back, 16))
+}
+
 /// The case: ray-cast and field AO of each placement against the unit scene's.
 ///
-/// A scaled scene is compared with the unit scene. A translated scene is compared with itself
-/// moved back by the (exact) inverse translation: at 1e4 the f32 vertices are quantised to
-/// 1e-3, which moves the caster's outline and changes AO by a few rays of 256 whatever the
-/// tracer does; moving back is exact (Sterbenz), so the comparison isolates the effect of
-/// position on tracing and offsets from that of the input's own rounding.
-fn compare(case: &str, placements: Vec<(&'static str, f32, f32)>) -> Vec<Row> {
+/// Every placement is composed in f64 and rebased ([`crate::geometry::rebase`]), as the
+/// experiment runner builds its scenes, and compared with the unit scene directly.
+fn compare(case: &str, placements: Vec<Placement>) -> Vec<Row> {
     let placed = unit_scene();
     let k = 16;
     let unit = scene(&placed, Similarity::default());
@@ -94,34 +135,15 @@ fn compare(case: &str, placements: Vec<(&'static str, f32, f32)>) -> Vec<Row> {
         .filter(|p| p.2)
         .map(|p| bake_field(&p.0))
         .collect();
-    let casters = |sc: &crate::geometry::Scene| -> Vec<_> {
-        sc.casters()
-            .zip(&fields)
-            .map(|((_, inst), f)| (f.clone(), inst.transform))
-            .collect()
-    };
     let mut rows = Vec::new();
     for (label, s, t) in placements {
-        let outer = Similarity::new(Quat::IDENTITY, Vec3::splat(t), s);
-        let sc = scene(&placed, outer);
-        let (ray, ray_ref, field, field_ref) = if t == 0.0 {
-            (
-                raycast_ao(&sc, k),
-                raycast_ao(&unit, k),
-                field_ao(&sc, &fields, k),
-                field_ao(&unit, &fields, k),
-            )
-        } else {
-            let here = flattened(&sc, Vec3::ZERO);
-            let back = flattened(&sc, Vec3::splat(-t));
-            let moved_back: Vec<_> = casters(&unit);
-            (
-                raycast_ao(&here, k),
-                raycast_ao(&back, k),
-                field_ao_with(&here, &casters(&sc), k),
-                field_ao_with(&back, &moved_back, k),
-            )
-        };
+        let sc = rebased_scene(&placed, s, t).scene;
+        let (ray, ray_ref, field, field_ref) = (
+            raycast_ao(&sc, k),
+            raycast_ao(&unit, k),
+            field_ao(&sc, &fields, k),
+            field_ao(&unit, &fields, k),
+        );
         rows.push(Row::new(
             case,
             format!(

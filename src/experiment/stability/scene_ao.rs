@@ -5,6 +5,7 @@ use crate::field::bake::{bake, BakeOptions};
 use crate::field::lookup::LookupOptions;
 use crate::field::scene::{FieldInstance, FieldScene};
 use crate::field::{FieldParams, Precision, VisibilityField};
+use crate::geometry::rebase::{rebase, PlacedMesh, Placement, Rebased};
 use crate::geometry::{minimal_bounding_sphere, Instance, Mesh, Scene, Similarity, Sphere};
 use crate::render::ao::{ao_at_points, AoOptions};
 use crate::render::receivers::Receivers;
@@ -16,7 +17,8 @@ use std::sync::Arc;
 /// One placed mesh: (mesh, transform, caster, receiver).
 pub type Placed = (Arc<Mesh>, Similarity, bool, bool);
 
-/// A scene of placed meshes, each transform composed with `outer` (applied last).
+/// A scene of placed meshes, each transform composed with `outer` (applied last) in f32, not
+/// rebased.
 pub fn scene(placed: &[Placed], outer: Similarity) -> Scene {
     Scene {
         instances: placed
@@ -29,6 +31,26 @@ pub fn scene(placed: &[Placed], outer: Similarity) -> Scene {
             })
             .collect(),
     }
+}
+
+/// The placed meshes under the outer placement `translation + scale · p` (composed in f64),
+/// rebased as the experiment runner's scenes are ([`crate::geometry::rebase`]).
+pub fn rebased_scene(placed: &[Placed], scale: f32, translation: glam::DVec3) -> Rebased {
+    let outer = Placement {
+        rotation: glam::Quat::IDENTITY,
+        translation,
+        scale,
+    };
+    let meshes: Vec<PlacedMesh> = placed
+        .iter()
+        .map(|(mesh, t, caster, receiver)| PlacedMesh {
+            mesh: mesh.clone(),
+            placement: outer.compose(t),
+            caster: *caster,
+            receiver: *receiver,
+        })
+        .collect();
+    rebase(&meshes)
 }
 
 /// The minimal bounding sphere of every instance's world vertices.

@@ -1,0 +1,243 @@
+//! World coordinates rebased on the scene.
+//!
+//! Every renderer works in f32. A scene placed far from the origin (translated by 1e4, or a
+//! model whose file coordinates are large) loses precision in f32 world coordinates: at 1e4
+//! their spacing is 2⁻¹⁰ ≈ 1e-3, so hit points, ray offsets and sphere entries are rounded by
+//! an amount that no longer scales with the geometry. AO does not depend on where the scene
+//! is, so the scene is moved next to the origin before any f32 world coordinate is formed:
+//! placements are composed in f64 ([`Placement`]), an origin near the scene's centre is chosen
+//! ([`rebase_origin`]), and each instance's f32 [`Similarity`] is taken relative to it, rounded
+//! once. World coordinates in a [`Rebased`] scene are `true world − origin`.
+//!
+//! The origin is a multiple of a power-of-two step at least four times the scene's radius, so
+//! a scene within two radii of the origin keeps origin 0 (and its exact coordinates), and a
+//! translation by a multiple of the step is removed exactly.
+
+use super::{Instance, Mesh, Scene, Similarity};
+use glam::{DVec3, Quat, Vec3};
+use std::sync::Arc;
+
+/// A placement whose translation is kept in f64 until the scene's origin is known:
+/// world = translation + scale · (rotation · local), as [`Similarity`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Placement {
+    pub rotation: Quat,
+    pub translation: DVec3,
+    pub scale: f32,
+}
+
+impl From<Similarity> for Placement {
+    fn from(s: Similarity) -> Placement {
+        Placement {
+            rotation: s.rotation,
+            translation: s.translation.as_dvec3(),
+            scale: s.scale,
+        }
+    }
+}
+
+impl Placement {
+    /// `self ∘ inner` (applies `inner` first), with the translation summed in f64: the
+    /// rotated inner translation is an f32 vector of the inner placement's size, its scaled
+    /// value is exact in f64, and the sum is rounded only when the placement is rebased.
+    pub fn compose(&self, inner: &Similarity) -> Placement {
+        Placement {
+            rotation: (self.rotation * inner.rotation).normalize(),
+            translation: self.translation
+                + self.scale as f64 * (self.rotation * inner.translation).as_dvec3(),
+            scale: self.scale * inner.scale,
+        }
+    }
+
+    /// A model-space point in true world coordinates (f64).
+    pub fn to_world_point(&self, p: Vec3) -> DVec3 {
+        self.translation + self.scale as f64 * (self.rotation * p).as_dvec3()
+    }
+
+    /// The f32 similarity of this placement in the frame whose origin is `origin` (true world
+    /// coordinates): the translation `translation − origin` is formed in f64 and rounded once.
+    pub fn relative_to(&self, origin: DVec3) -> Similarity {
+        Similarity::new(
+            self.rotation,
+            (self.translation - origin).as_vec3(),
+            self.scale,
+        )
+    }
+}
+
+/// The origin of a rebased frame around spheres `(centre, radius)` in true world coordinates:
+/// the centre of their bounding box rounded to a multiple of the power-of-two step
+/// `2^⌈log₂(4·r)⌉`, `r` the box's half-diagonal. The step is exact in f32 and f64, so the
+/// origin and every shift by it are too. Zero when there are no spheres.
+pub fn rebase_origin(spheres: &[(DVec3, f64)]) -> DVec3 {
+    let Some(&(c0, r0)) = spheres.first() else {
+        return DVec3::ZERO;
+    };
+    let (mut lo, mut hi) = (c0 - r0, c0 + r0);
+    for &(c, r) in &spheres[1..] {
+        lo = lo.min(c - r);
+        hi = hi.max(c + r);
+    }
+    let centre = 0.5 * (lo + hi);
+    let half = 0.5 * (hi - lo).length();
+    if !centre.is_finite() || !half.is_finite() {
+        return DVec3::ZERO;
+    }
+    // At least the f32 spacing at the centre, so a single-point scene far out still rebases.
+    let floor = centre.abs().max_element() * f32::EPSILON as f64;
+    let step = (4.0 * half)
+        .max(floor)
+        .max(f64::MIN_POSITIVE)
+        .log2()
+        .ceil()
+        .exp2();
+    (centre / step).round() * step
+}
+
+/// A mesh placed in true world coordinates, with its roles (see [`Instance`]).
+#[derive(Clone, Debug)]
+pub struct PlacedMesh {
+    pub mesh: Arc<Mesh>,
+    pub placement: Placement,
+    pub caster: bool,
+    pub receiver: bool,
+}
+
+/// A scene in a rebased frame: `scene`'s world coordinates are true world − `origin`.
+#[derive(Clone, Debug)]
+pub struct Rebased {
+    pub scene: Scene,
+    /// The true world position of the scene's origin.
+    pub origin: DVec3,
+}
+
+impl Rebased {
+    /// A true world point in the rebased frame (formed in f64, rounded once).
+    pub fn to_frame(&self, p: Vec3) -> Vec3 {
+        (p.as_dvec3() - self.origin).as_vec3()
+    }
+}
+
+/// The placed meshes as a scene in the frame of [`rebase_origin`] of their world bounding
+/// spheres.
+pub fn rebase(placed: &[PlacedMesh]) -> Rebased {
+    let spheres: Vec<(DVec3, f64)> = placed
+        .iter()
+        .map(|p| {
+            let s = p.mesh.bounding_sphere();
+            (
+                p.placement.to_world_point(s.center),
+                s.radius as f64 * p.placement.scale as f64,
+            )
+        })
+        .collect();
+    let origin = rebase_origin(&spheres);
+    let instances = placed
+        .iter()
+        .map(|p| Instance {
+            mesh: p.mesh.clone(),
+            transform: p.placement.relative_to(origin),
+            caster: p.caster,
+            receiver: p.receiver,
+        })
+        .collect();
+    Rebased {
+        scene: Scene { instances },
+        origin,
+    }
+}
+
+impl Scene {
+    /// This scene in a rebased frame ([`rebase`] of its instances, their transforms read as
+    /// exact true-world placements).
+    pub fn rebased(&self) -> Rebased {
+        let placed: Vec<PlacedMesh> = self
+            .instances
+            .iter()
+            .map(|i| PlacedMesh {
+                mesh: i.mesh.clone(),
+                placement: i.transform.into(),
+                caster: i.caster,
+                receiver: i.receiver,
+            })
+            .collect();
+        rebase(&placed)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::procedural;
+
+    #[test]
+    fn scenes_near_the_origin_keep_origin_zero() {
+        assert_eq!(rebase_origin(&[(DVec3::splat(0.5), 0.87)]), DVec3::ZERO);
+        assert_eq!(
+            rebase_origin(&[(DVec3::new(-3.0, 2.0, 1.0), 2.0)]),
+            DVec3::ZERO
+        );
+        assert_eq!(rebase_origin(&[]), DVec3::ZERO);
+    }
+
+    #[test]
+    fn a_translation_by_a_step_multiple_is_removed_exactly() {
+        let o = rebase_origin(&[(DVec3::splat(1e4 + 0.5), 0.87)]);
+        assert_eq!(o, DVec3::splat(1e4));
+        let o = rebase_origin(&[(DVec3::new(1048576.0, -2097152.0, 3.0), 10.0)]);
+        assert_eq!(o, DVec3::new(1048576.0, -2097152.0, 0.0));
+    }
+
+    #[test]
+    fn a_far_point_rebases_to_itself() {
+        // A zero-radius scene at 1e7: the step is the f32 spacing there.
+        let p = DVec3::new(1e7, 3.0, -1e7);
+        let o = rebase_origin(&[(p, 0.0)]);
+        assert!((o - p).abs().max_element() <= 1.0, "{o}");
+    }
+
+    #[test]
+    fn rebased_scene_equals_the_untranslated_one() {
+        let mesh = Arc::new(procedural::cube_with_hole(1.0, 0.4).unwrap());
+        let inner = Similarity::new(Quat::from_rotation_y(0.7), Vec3::new(0.3, 0.2, 0.1), 0.3);
+        let place = |t: f64| PlacedMesh {
+            mesh: mesh.clone(),
+            placement: Placement {
+                rotation: Quat::IDENTITY,
+                translation: DVec3::splat(t),
+                scale: 1.0,
+            }
+            .compose(&inner),
+            caster: true,
+            receiver: true,
+        };
+        let near = rebase(&[place(0.0)]);
+        let far = rebase(&[place(1e4)]);
+        assert_eq!(near.origin, DVec3::ZERO);
+        assert_eq!(far.origin, DVec3::splat(1e4));
+        let tri = |r: &Rebased| r.scene.instances[0].world_triangles().collect::<Vec<_>>();
+        assert_eq!(tri(&near), tri(&far));
+        // The f32 composition at 1e4 rounds the translation; the rebased one does not.
+        let f32_far = Similarity::new(Quat::IDENTITY, Vec3::splat(1e4), 1.0).compose(&inner);
+        assert_ne!(f32_far.translation - Vec3::splat(1e4), inner.translation);
+    }
+
+    #[test]
+    fn to_frame_and_scene_rebased_agree() {
+        let mesh = Arc::new(procedural::corner(3).unwrap());
+        let far = Scene {
+            instances: vec![Instance {
+                mesh,
+                transform: Similarity::new(Quat::IDENTITY, Vec3::new(2048.0, 0.0, -4096.0), 1.0),
+                caster: true,
+                receiver: true,
+            }],
+        };
+        let r = far.rebased();
+        assert_eq!(r.origin, DVec3::new(2048.0, 0.0, -4096.0));
+        assert_eq!(
+            r.to_frame(Vec3::new(2048.5, 1.0, -4096.0)),
+            Vec3::new(0.5, 1.0, 0.0)
+        );
+    }
+}
