@@ -8,7 +8,7 @@
 
 use super::spec::{MeshSource, Spec, SpecError, TransformSpec};
 use crate::geometry::procedural::{self, Supershape};
-use crate::geometry::rebase::{rebase, PlacedMesh, Placement, Rebased};
+use crate::geometry::rebase::{centred_mesh, rebase, PlacedMesh, Placement, Rebased};
 use crate::geometry::{models, Mesh, Scene, Similarity};
 use crate::render::camera::Camera;
 use glam::{DVec3, EulerRot, Quat, Vec3};
@@ -23,6 +23,9 @@ pub struct LoadedMesh {
     pub mesh: Arc<Mesh>,
     /// sha256 of the model-space positions and triangles (little-endian f32 / u32).
     pub sha256: String,
+    /// Where the file's coordinates were moved from ([`centred_mesh`]): zero unless the model
+    /// lies far from its file's origin.
+    pub model_origin: DVec3,
 }
 
 /// One scene of the spec.
@@ -121,18 +124,20 @@ impl Scenes {
                                 field: at.clone(),
                                 message,
                             })?;
+                        let (mesh, model_origin) = centred_mesh(mesh);
                         sources.push(inst.mesh.clone());
                         out.meshes.push(LoadedMesh {
                             label: inst.mesh.label(),
                             sha256: mesh_sha256(&mesh),
                             mesh: Arc::new(mesh),
+                            model_origin,
                         });
                         out.meshes.len() - 1
                     }
                 };
                 let mesh = out.meshes[m].mesh.clone();
                 instances.push(PlacedMesh {
-                    placement: placement(&inst.transform, &mesh),
+                    placement: placement(&inst.transform, &mesh, out.meshes[m].model_origin),
                     mesh,
                     caster: inst.caster,
                     receiver: inst.receiver,
@@ -170,8 +175,9 @@ pub fn build_mesh(src: &MeshSource) -> Result<Mesh, String> {
     r.map_err(|e| e.to_string())
 }
 
-/// The placement of `mesh` described by `t` (see [`TransformSpec`]), its translation in f64.
-pub fn placement(t: &TransformSpec, mesh: &Mesh) -> Placement {
+/// The placement described by `t` (see [`TransformSpec`]) of `mesh`, whose model-space points
+/// were moved by `−model_origin` ([`centred_mesh`]); the translation in f64.
+pub fn placement(t: &TransformSpec, mesh: &Mesh, model_origin: DVec3) -> Placement {
     let rotation = t
         .rotate_deg
         .map(|d| {
@@ -184,20 +190,23 @@ pub fn placement(t: &TransformSpec, mesh: &Mesh) -> Placement {
             .normalize()
         })
         .unwrap_or(Quat::IDENTITY);
-    let inner = match &t.fit {
+    // A fit places the mesh's sphere, wherever the model's coordinates were: the offset only
+    // matters without one.
+    let (inner, offset) = match &t.fit {
         Some(f) => {
             let s = mesh.bounding_sphere();
             let k = f.radius / s.radius;
-            Similarity::new(rotation, f.center - k * (rotation * s.center), k)
+            let fit = Similarity::new(rotation, f.center - k * (rotation * s.center), k);
+            (fit, DVec3::ZERO)
         }
-        None => Similarity::new(rotation, Vec3::ZERO, 1.0),
+        None => (Similarity::new(rotation, Vec3::ZERO, 1.0), model_origin),
     };
     let outer = Placement {
         rotation: Quat::IDENTITY,
         translation: t.translate.unwrap_or(DVec3::ZERO),
         scale: t.scale.unwrap_or(1.0),
     };
-    outer.compose(&inner)
+    outer.compose(&inner).after_model_offset(offset)
 }
 
 /// sha256 of a mesh's model-space positions and triangles.

@@ -49,6 +49,15 @@ impl Placement {
         }
     }
 
+    /// `self ∘ T(offset)`: the placement of a mesh whose model-space points were moved by
+    /// `−offset` ([`centred_mesh`]), so that it places them where `self` placed the original.
+    pub fn after_model_offset(&self, offset: DVec3) -> Placement {
+        Placement {
+            translation: self.translation + self.scale as f64 * (self.rotation.as_dquat() * offset),
+            ..*self
+        }
+    }
+
     /// A model-space point in true world coordinates (f64).
     pub fn to_world_point(&self, p: Vec3) -> DVec3 {
         self.translation + self.scale as f64 * (self.rotation * p).as_dvec3()
@@ -92,6 +101,22 @@ pub fn rebase_origin(spheres: &[(DVec3, f64)]) -> DVec3 {
         .ceil()
         .exp2();
     (centre / step).round() * step
+}
+
+/// `mesh` moved next to its model-space origin, and the offset removed: where
+/// [`rebase_origin`] of its bounding sphere is not zero (a model whose file coordinates lie far
+/// from the origin), the positions minus that origin, formed in f64 and rounded once, so that
+/// fields are baked and looked up at the precision of the model's size; otherwise the mesh as
+/// it is and zero. Normals are kept (a translation leaves them unchanged).
+pub fn centred_mesh(mut mesh: Mesh) -> (Mesh, DVec3) {
+    let s = mesh.bounding_sphere();
+    let origin = rebase_origin(&[(s.center.as_dvec3(), s.radius as f64)]);
+    if origin != DVec3::ZERO {
+        for p in &mut mesh.positions {
+            *p = (p.as_dvec3() - origin).as_vec3();
+        }
+    }
+    (mesh, origin)
 }
 
 /// A mesh placed in true world coordinates, with its roles (see [`Instance`]).
@@ -220,6 +245,36 @@ mod tests {
         // The f32 composition at 1e4 rounds the translation; the rebased one does not.
         let f32_far = Similarity::new(Quat::IDENTITY, Vec3::splat(1e4), 1.0).compose(&inner);
         assert_ne!(f32_far.translation - Vec3::splat(1e4), inner.translation);
+    }
+
+    #[test]
+    fn centred_far_mesh_is_placed_where_it_was() {
+        let near = procedural::cube_with_hole(1.0, 0.4).unwrap();
+        let far_at = DVec3::new(1e4, -3e4, 0.0);
+        let mut far = near.clone();
+        for p in &mut far.positions {
+            *p = (p.as_dvec3() + far_at).as_vec3();
+        }
+        let (centred, origin) = centred_mesh(far.clone());
+        assert_eq!(origin, far_at);
+        // The far vertices are the input (rounded to 2⁻¹⁰ at 1e4): centring removes the offset
+        // exactly, leaving them within that rounding of the near mesh.
+        for (c, n) in centred.positions.iter().zip(&near.positions) {
+            assert!(c.distance(*n) <= 2e-3, "{c} vs {n}");
+        }
+        let place = Placement::from(Similarity::new(Quat::from_rotation_x(0.4), Vec3::ONE, 2.0));
+        let moved = place.after_model_offset(origin);
+        // Where the original placement puts the far vertices, in exact f64 arithmetic.
+        let exact = |p: Vec3| {
+            place.translation + place.scale as f64 * (place.rotation.as_dquat() * p.as_dvec3())
+        };
+        for (c, f) in centred.positions.iter().zip(&far.positions) {
+            let (a, b) = (moved.to_world_point(*c), exact(*f));
+            assert!((a - b).length() < 1e-5, "{a} vs {b}");
+        }
+        let (same, zero) = centred_mesh(near.clone());
+        assert_eq!(zero, DVec3::ZERO);
+        assert_eq!(same.positions, near.positions);
     }
 
     #[test]
