@@ -15,7 +15,7 @@
 //! - [`field`]: visibility fields: bake, storage, lookup, cache.
 //! - [`render`]: the `Visibility` interface and the AO / shadow / reflection renderers.
 //! - [`gpu`]: headless wgpu paths.
-//! - `relief` (not yet written): the 2005 height-field ray caster.
+//! - [`relief`]: the 2005 height-field ray caster and its safety-zone skipping.
 //! - [`experiment`]: specs, planner, runner, metrics, outputs.
 //!
 //! Conventions (see README): right-handed coordinates, y up for procedural scenes; distances in
@@ -27,6 +27,7 @@ pub mod field;
 pub mod geometry;
 pub mod gpu;
 pub mod io;
+pub mod relief;
 pub mod render;
 pub mod sampling;
 pub mod trace;

@@ -41,6 +41,15 @@ pub enum Command {
         #[arg(long, default_value = "results/stability")]
         out: std::path::PathBuf,
     },
+    /// The 2005 relief caster: Tables 1–3 (skips × viewing angle, sample rate, bisections).
+    Relief {
+        /// Output folder.
+        #[arg(long, default_value = "results/relief")]
+        out: std::path::PathBuf,
+        /// 64² images and one timing per setting (for tests and CI).
+        #[arg(long)]
+        quick: bool,
+    },
     /// List the experiment specs and the figure or table each reproduces.
     List,
     /// Run a spec file from any path.
@@ -280,6 +289,7 @@ pub fn main() {
         Command::Quickstart { out } => report(super::quickstart::run(&out)),
         Command::List => list(),
         Command::Stability { out } => report(super::stability::run(&out).map(|_| ())),
+        Command::Relief { out, quick } => report(super::relief::run(&out, quick).map(|_| ())),
         Command::Run { spec, opts } => report(run_one(&spec, &opts, None).map(|_| ())),
         Command::Check { names, opts } => check(&names, &opts),
         Command::All { opts } => report((|| {

@@ -20,6 +20,7 @@ pub mod plan;
 pub mod plot;
 pub mod progress;
 pub mod quickstart;
+pub mod relief;
 pub mod run;
 pub mod scenes;
 pub mod spec;
