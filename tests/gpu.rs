@@ -753,3 +753,66 @@ fn gpu_ray_cast_ao_matches_the_cpu_and_serves_as_field_reference() {
     );
     assert!(e.rms_255.is_finite());
 }
+
+/// Field AO at 4096 rays per point (k = 64, the top of figure 6's field sweep): the GPU gives
+/// the CPU's answer per vertex within one 8-bit step, for both selections, with the default
+/// split of a point's rays over invocations and with all 4096 rays asked of one invocation
+/// (which lavapipe's loop budget of 65,535 iterations per invocation cannot finish: the kernel
+/// must notice and split). A subset of the receivers keeps it to seconds on lavapipe.
+#[test]
+fn field_ao_at_4096_rays_per_point_matches_the_cpu() {
+    let Some(ctx) = context() else { return };
+    let rays = RaySet::new(64, 9);
+    let field = baked(params(290, 16, Precision::U8, LayoutKind::Concentric));
+    let inst = placed(&field);
+    let (p, n) = receivers(&inst);
+    // Every 7th receiver (corner and caster points alike), and a point far below the scene
+    // facing away, whose rays all miss the field's sphere: AO exactly 1.
+    let (mut p, mut n): (Vec<Vec3>, Vec<Vec3>) = p.into_iter().zip(n).step_by(7).unzip();
+    p.push(Vec3::new(0.5, -5.0, 0.5));
+    n.push(Vec3::NEG_Y);
+    let opts = AoOptions::for_scene_radius(1.0);
+    for rays_per_invocation in [FieldGpuOptions::default().rays_per_invocation, 4096] {
+        let gpu_opts = FieldGpuOptions {
+            rays_per_invocation,
+            ..Default::default()
+        };
+        let mut kernel = FieldAoKernel::new(ctx, std::slice::from_ref(&inst), &gpu_opts).unwrap();
+        for selection in [Selection::Nearest, Selection::Interpolated] {
+            let lookup = LookupOptions {
+                selection,
+                ..Default::default()
+            };
+            let scene = FieldScene {
+                instances: vec![inst.clone()],
+                options: lookup,
+            };
+            let cpu = ao_at_points(&scene, &p, &n, &rays, &opts);
+            assert_occlusion_is_nontrivial(&cpu);
+            assert_eq!(*cpu.last().unwrap(), 1.0);
+            kernel.lookup = lookup;
+            let (gpu, timing) = kernel.vertex_ao(&p, &n, &rays, &opts).expect("gpu ao");
+            let q = parity(&gpu, &cpu);
+            let label = format!("4096 rays, {rays_per_invocation} per invocation, {selection:?}");
+            eprintln!(
+                "{label}: {} vertices, max |Δ| {:.2}/255, {} over 1/255, RMS {:.4}/255, kernel \
+                 {:?}, wall {:?}",
+                p.len(),
+                255.0 * q.max_diff,
+                q.over_one_step,
+                q.rms_255,
+                timing.kernel,
+                timing.wall
+            );
+            if q.over_one_step > 0 {
+                let path = dump_ao(&label.replace([' ', ','], "_"), &gpu, &cpu);
+                panic!("{label}: see {}", path.display());
+            }
+        }
+        // On lavapipe 4096 rays (about 31 loop iterations each) cannot run in one invocation:
+        // the kernel must have split them.
+        if ctx.is_cpu_adapter() && rays_per_invocation == 4096 {
+            assert!(kernel.rays_per_invocation() <= 2048);
+        }
+    }
+}
