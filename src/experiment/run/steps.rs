@@ -316,8 +316,6 @@ impl<'a> Runner<'a> {
             image = format!("images/{id}.png");
             let p = out.join(&image);
             a.save_png(&p).map_err(io_err(&p))?;
-            let p = out.join(format!("images/{id}.exr"));
-            a.save_exr(&p).map_err(io_err(&p))?;
             let p = out.join(format!("images/{id}-diff_x5.png"));
             a.difference(r, 5.0).save_png(&p).map_err(io_err(&p))?;
         }
