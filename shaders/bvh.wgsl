@@ -14,6 +14,8 @@ struct Params {
     counts: vec4<u32>,
     // Origin offset along the normal, tmax (AO), unused x2.
     ray: vec4<f32>,
+    // AO: rays per invocation, invocations per point, trips of the completion loop, unused.
+    split: vec4<u32>,
 }
 
 // Mirrors `RayGpu`: origin and tmin; direction and tmax.
@@ -233,28 +235,28 @@ fn closest_main(@builtin(global_invocation_id) gid: vec3<u32>) {
 }
 
 // Vertex AO by ray casting: `rays` holds the receivers (as Receiver records) and `dirs` the
-// base directions, as in shaders/field_ao.wgsl.
+// base directions, as in shaders/field_ao.wgsl. Each invocation casts one run of a point's rays
+// and writes the number of free rays, or CUT_SHORT when the driver cut its loops short
+// (shaders/loop_budget.wgsl); the host adds up a point's runs.
 @group(0) @binding(5) var<storage, read> dirs: array<vec4<f32>>;
 
 @compute @workgroup_size(64)
 fn ao_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x + gid.y * params.counts.z;
-    if i >= params.counts.x {
+    let per_point = params.split.y;
+    if i >= params.counts.x * per_point {
         return;
     }
-    let count = params.counts.y;
-    if count == 0u {
-        out[i] = bitcast<u32>(1.0);
-        return;
-    }
-    let rc = rays[i];
+    let first = (i % per_point) * params.split.x;
+    let last = min(first + params.split.x, params.counts.y);
+    let rc = rays[i / per_point];
     let nrm = rc.d.xyz;
     let cs = rc.o.w;
     let sn = rc.d.w;
     let frame = frame_from_normal(nrm);
     let origin = rc.o.xyz + params.ray.x * nrm;
     var free = 0u;
-    for (var r = 0u; r < count; r++) {
+    for (var r = first; r < last; r++) {
         let b = dirs[r].xyz;
         let local = vec3<f32>(cs * b.x - sn * b.y, sn * b.x + cs * b.y, b.z);
         let dir = frame_to_world(frame, local);
@@ -262,5 +264,5 @@ fn ao_main(@builtin(global_invocation_id) gid: vec3<u32>) {
             free += 1u;
         }
     }
-    out[i] = bitcast<u32>(f32(free) / f32(count));
+    out[i] = select(CUT_SHORT, free, loops_completed(params.split.z));
 }

@@ -1,8 +1,9 @@
-// Vertex ambient occlusion by field lookup (Gaitatzes et al., WSCG 2008 / WSCG 2010): one
-// thread per receiver point loops over the point's k^2 stratified cosine rays (the host's ray
-// set: base directions in `tables[0 .. rays]`, the point's rotation in the receiver record) and
-// over the field instances, stopping at the first occluding instance. Writes the fraction of
-// free rays (1 = unoccluded), as f32 bits.
+// Vertex ambient occlusion by field lookup (Gaitatzes et al., WSCG 2008 / WSCG 2010): each
+// invocation takes one receiver point and a run of its k^2 stratified cosine rays (the host's
+// ray set: base directions in `dirs`, the point's rotation in the receiver record), loops over
+// them and over the field instances, stopping at the first occluding instance, and writes the
+// number of free rays; the host adds up a point's runs. An invocation whose loops the driver cut
+// short writes CUT_SHORT instead (shaders/loop_budget.wgsl).
 //
 // `probe_main` answers single lookups (nearest map, texel, both selections) so that the host
 // can compare every stage with the CPU path.
@@ -11,7 +12,8 @@
 struct Params {
     // Points, rays per point, instances, threads per dispatch row.
     counts: vec4<u32>,
-    // Selection (0 nearest, 1 interpolated), unused x3.
+    // Selection (0 nearest, 1 interpolated), rays per invocation, invocations per point, trips
+    // of the completion loop.
     mode: vec4<u32>,
     // Origin offset along the normal, tmax, intra-object bias (a fraction of 2R, or the scale of
     // the field's own tolerance), 1 when the bias is such a scale (`IntraBias::Auto`).
@@ -30,19 +32,18 @@ struct Receiver {
 @group(0) @binding(3) var<storage, read> mesh: array<vec4<u32>>;
 @group(0) @binding(4) var<storage, read> instances: array<Instance>;
 @group(0) @binding(5) var<storage, read_write> out: array<u32>;
+@group(0) @binding(6) var<storage, read> dirs: array<vec4<f32>>;
 
 @compute @workgroup_size(64)
 fn ao_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x + gid.y * params.counts.w;
-    if i >= params.counts.x {
+    let per_point = params.mode.z;
+    if i >= params.counts.x * per_point {
         return;
     }
-    let rays = params.counts.y;
-    if rays == 0u {
-        out[i] = bitcast<u32>(1.0);
-        return;
-    }
-    let rc = receivers[i];
+    let first = (i % per_point) * params.mode.y;
+    let last = min(first + params.mode.y, params.counts.y);
+    let rc = receivers[i / per_point];
     let nrm = rc.n.xyz;
     let cs = rc.p.w;
     let sn = rc.n.w;
@@ -50,8 +51,8 @@ fn ao_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let origin = rc.p.xyz + params.ray.x * nrm;
     let tmax = params.ray.y;
     var free = 0u;
-    for (var r = 0u; r < rays; r++) {
-        let b = tables[r].xyz;
+    for (var r = first; r < last; r++) {
+        let b = dirs[r].xyz;
         let local = vec3<f32>(cs * b.x - sn * b.y, sn * b.x + cs * b.y, b.z);
         let dir = frame_to_world(frame, local);
         var blocked = false;
@@ -65,7 +66,7 @@ fn ao_main(@builtin(global_invocation_id) gid: vec3<u32>) {
             free += 1u;
         }
     }
-    out[i] = bitcast<u32>(f32(free) / f32(rays));
+    out[i] = select(CUT_SHORT, free, loops_completed(params.mode.w));
 }
 
 // Probe i: unit point u = receivers[i].p.xyz and model direction receivers[i].n.xyz on the

@@ -6,9 +6,9 @@
 // src/sampling/mesh.rs (`SphereMesh::try_locate`), in f32. The ring parameters are analytic
 // (no table); the points come from the host's f32 table, so candidates are compared on the
 // same coordinates.
-// Needs: `tables` (array<vec4<f32>>: ray directions, then every field's points with the incident
-// triangle's index in w) and `mesh` (array<vec4<u32>>: per triangle, its vertices then its
-// neighbours across the edges opposite them).
+// Needs: `tables` (array<vec4<f32>>: every field's points with the incident triangle's index in
+// w) and `mesh` (array<vec4<u32>>: per triangle, its vertices then its neighbours across the
+// edges opposite them).
 
 const SPHERE_SLATER: u32 = 0u;
 const SPHERE_LAT_LONG: u32 = 1u;

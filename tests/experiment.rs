@@ -388,6 +388,8 @@ fn tiny_spec_runs_end_to_end_and_check_uses_its_thresholds() {
     ] {
         assert!(out.join(f).is_file(), "{f} missing");
     }
+    // The field row's picture is PNG only (no EXR beside it).
+    assert!(!out.join(r.image.replace(".png", ".exr")).exists());
 
     // A threshold below the measured RMS fails, naming the cell; one above passes.
     let below = Threshold {
@@ -597,10 +599,16 @@ fn cpu_and_gpu_backends_give_one_row_each_with_the_adapter_named() {
     let timestamps = ctx.has_timestamps();
     drop(ctx);
     let dir = tempfile::tempdir().unwrap();
-    let text = tiny(ONE_FIELD, "").replace(
-        r#""reference": {"#,
-        r#""backends": ["cpu", "gpu"], "reference": {"#,
-    );
+    // The field sweep reaches 4096 rays per point, past what one lavapipe invocation can loop.
+    let text = tiny(ONE_FIELD, "")
+        .replace(
+            r#""reference": {"#,
+            r#""backends": ["cpu", "gpu"], "reference": {"#,
+        )
+        .replace(
+            r#""field_rays_sweep": [16, 64]"#,
+            r#""field_rays_sweep": [16, 4096]"#,
+        );
     let ls = loaded(dir.path(), &text);
     let mut o = options(dir.path().join("out"));
     o.dry_run = true;
@@ -635,6 +643,38 @@ fn cpu_and_gpu_backends_give_one_row_each_with_the_adapter_named() {
         (cpu.ao_kernel_s, cpu.raycast_kernel_s, cpu.setup_s),
         (None, None, None)
     );
+    // Field rows' pictures are 8-bit PNG only; the ray-cast reference alone keeps an EXR.
+    let out = dir.path().join("out");
+    for r in [cpu, gpu] {
+        assert!(out.join(&r.image).is_file(), "{}", r.image);
+        assert!(!out.join(r.image.replace(".png", ".exr")).exists());
+    }
+    assert!(out.join("images/tiny-reference.exr").is_file());
+    // Both backends sweep the field over every ray count, to the same errors.
+    let fs: Vec<visfield::experiment::outputs::FieldSweepRow> =
+        read_csv(&out.join("field_sweep.csv")).unwrap();
+    for backend in ["cpu", "gpu"] {
+        let n: Vec<u32> = fs
+            .iter()
+            .filter(|f| f.backend.name() == backend)
+            .map(|f| f.rays_per_point)
+            .collect();
+        assert_eq!(n, vec![16, 4096], "{backend}");
+    }
+    for n in [16, 4096] {
+        let e = |b: &str| {
+            fs.iter()
+                .find(|f| f.backend.name() == b && f.rays_per_point == n)
+                .and_then(|f| f.rms_vs_truth)
+                .unwrap()
+        };
+        assert!(
+            (e("cpu") - e("gpu")).abs() <= 0.05,
+            "{n} rays: {} vs {}",
+            e("cpu"),
+            e("gpu")
+        );
+    }
     // The GPU ray-cast time sits in the sweep too, on the render's rays.
     let sweep = std::fs::read_to_string(dir.path().join("out/raycast_sweep.csv")).unwrap();
     assert!(sweep.lines().any(|l| l.contains(",gpu,16,")), "{sweep}");
@@ -650,10 +690,16 @@ fn an_unknown_gpu_adapter_is_an_error_naming_the_adapters() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
-    let text = tiny(ONE_FIELD, "").replace(
-        r#""reference": {"#,
-        r#""backends": ["cpu", "gpu"], "reference": {"#,
-    );
+    // The field sweep reaches 4096 rays per point, past what one lavapipe invocation can loop.
+    let text = tiny(ONE_FIELD, "")
+        .replace(
+            r#""reference": {"#,
+            r#""backends": ["cpu", "gpu"], "reference": {"#,
+        )
+        .replace(
+            r#""field_rays_sweep": [16, 64]"#,
+            r#""field_rays_sweep": [16, 4096]"#,
+        );
     let ls = loaded(dir.path(), &text);
     let mut o = options(dir.path().join("out"));
     o.adapter = AdapterPreference::parse("no-such-adapter-xyz");

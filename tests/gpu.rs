@@ -679,27 +679,30 @@ fn gpu_ray_casting_agrees_with_the_cpu_tracer() {
     assert!(empty.any_hits(&rays[..10]).unwrap().0.iter().all(|&h| !h));
 }
 
+/// [`receivers`] without those on the corner's shared edges: their rays start exactly on the
+/// neighbouring wall (t = 0 up to rounding), and whether such a ray hits depends on the sign of
+/// a rounded zero, which differs between the host and drivers that contract multiply-adds into
+/// FMAs. The ray-casting tests leave them out (the field tests keep them: lookups never meet
+/// t = 0).
+fn off_edge_receivers(inst: &FieldInstance) -> (Vec<Vec3>, Vec<Vec3>) {
+    let (p, n) = receivers(inst);
+    p.into_iter()
+        .zip(n)
+        .filter(|(p, n)| {
+            // Corner vertices have coordinates in [0, 1]; on an edge some coordinate other than
+            // the normal's axis is 0. Caster vertices lie well inside (0, 1)³.
+            !(0..3).any(|a| n[a].abs() < 0.5 && p[a] == 0.0)
+        })
+        .unzip()
+}
+
 #[test]
 fn gpu_ray_cast_ao_matches_the_cpu_and_serves_as_field_reference() {
     let Some(ctx) = context() else { return };
     let field = baked(params(290, 16, Precision::U8, LayoutKind::Concentric));
     let inst = placed(&field);
     let tris = trace_scene(&inst);
-    // Receivers on the corner's shared edges start their rays exactly on the neighbouring
-    // wall (t = 0 up to rounding): whether such a ray hits depends on the sign of a rounded
-    // zero, which differs between the host and drivers that contract multiply-adds into FMAs.
-    // Those receivers are left out here (the field tests keep them: lookups never meet t = 0).
-    let (p, n): (Vec<Vec3>, Vec<Vec3>) = {
-        let (p, n) = receivers(&inst);
-        p.into_iter()
-            .zip(n)
-            .filter(|(p, n)| {
-                // Corner vertices have coordinates in [0, 1]; on an edge some coordinate other
-                // than the normal's axis is 0. Caster vertices lie well inside (0, 1)³.
-                !(0..3).any(|a| n[a].abs() < 0.5 && p[a] == 0.0)
-            })
-            .unzip()
-    };
+    let (p, n) = off_edge_receivers(&inst);
     let rays = RaySet::new(8, 5);
     let opts = AoOptions::for_scene_radius(1.0);
     let cpu = ao_at_points(&Tracer::new(&tris), &p, &n, &rays, &opts);
@@ -752,4 +755,103 @@ fn gpu_ray_cast_ao_matches_the_cpu_and_serves_as_field_reference() {
         mean(&reference[corner_count..])
     );
     assert!(e.rms_255.is_finite());
+}
+
+/// Field AO at 4096 rays per point (k = 64, the top of figure 6's field sweep): the GPU gives
+/// the CPU's answer per vertex within one 8-bit step, for both selections, with the default
+/// split of a point's rays over invocations and with all 4096 rays asked of one invocation
+/// (which lavapipe's loop budget of 65,535 iterations per invocation cannot finish: the kernel
+/// must notice and split). A subset of the receivers keeps it to seconds on lavapipe.
+#[test]
+fn field_ao_at_4096_rays_per_point_matches_the_cpu() {
+    let Some(ctx) = context() else { return };
+    let rays = RaySet::new(64, 9);
+    let field = baked(params(290, 16, Precision::U8, LayoutKind::Concentric));
+    let inst = placed(&field);
+    let (p, n) = receivers(&inst);
+    // Every 7th receiver (corner and caster points alike), and a point far below the scene
+    // facing away, whose rays all miss the field's sphere: AO exactly 1.
+    let (mut p, mut n): (Vec<Vec3>, Vec<Vec3>) = p.into_iter().zip(n).step_by(7).unzip();
+    p.push(Vec3::new(0.5, -5.0, 0.5));
+    n.push(Vec3::NEG_Y);
+    let opts = AoOptions::for_scene_radius(1.0);
+    for rays_per_invocation in [FieldGpuOptions::default().rays_per_invocation, 4096] {
+        let gpu_opts = FieldGpuOptions {
+            rays_per_invocation,
+            ..Default::default()
+        };
+        let mut kernel = FieldAoKernel::new(ctx, std::slice::from_ref(&inst), &gpu_opts).unwrap();
+        for selection in [Selection::Nearest, Selection::Interpolated] {
+            let lookup = LookupOptions {
+                selection,
+                ..Default::default()
+            };
+            let scene = FieldScene {
+                instances: vec![inst.clone()],
+                options: lookup,
+            };
+            let cpu = ao_at_points(&scene, &p, &n, &rays, &opts);
+            assert_occlusion_is_nontrivial(&cpu);
+            assert_eq!(*cpu.last().unwrap(), 1.0);
+            kernel.lookup = lookup;
+            let (gpu, timing) = kernel.vertex_ao(&p, &n, &rays, &opts).expect("gpu ao");
+            let q = parity(&gpu, &cpu);
+            let label = format!("4096 rays, {rays_per_invocation} per invocation, {selection:?}");
+            eprintln!(
+                "{label}: {} vertices, max |Δ| {:.2}/255, {} over 1/255, RMS {:.4}/255, kernel \
+                 {:?}, wall {:?}",
+                p.len(),
+                255.0 * q.max_diff,
+                q.over_one_step,
+                q.rms_255,
+                timing.kernel,
+                timing.wall
+            );
+            if q.over_one_step > 0 {
+                let path = dump_ao(&label.replace([' ', ','], "_"), &gpu, &cpu);
+                panic!("{label}: see {}", path.display());
+            }
+        }
+        // On lavapipe 4096 rays (about 31 loop iterations each) cannot run in one invocation:
+        // the kernel must have split them.
+        if ctx.is_cpu_adapter() && rays_per_invocation == 4096 {
+            assert!(kernel.rays_per_invocation() <= 2048);
+        }
+    }
+}
+
+/// Ray-cast AO at 4096 rays per point on the GPU (more than one lavapipe invocation can loop
+/// over: the tracer spreads a point's rays over invocations) gives the CPU's answer per vertex
+/// within one 8-bit step. Every 7th receiver keeps it to seconds on lavapipe.
+#[test]
+fn gpu_ray_cast_ao_at_4096_rays_per_point_matches_the_cpu() {
+    let Some(ctx) = context() else { return };
+    let field = baked(params(290, 16, Precision::U8, LayoutKind::Concentric));
+    let inst = placed(&field);
+    let tris = trace_scene(&inst);
+    let (p, n) = off_edge_receivers(&inst);
+    let (p, n): (Vec<Vec3>, Vec<Vec3>) = p.into_iter().zip(n).step_by(7).unzip();
+    let rays = RaySet::new(64, 5);
+    let opts = AoOptions::for_scene_radius(1.0);
+    let cpu = ao_at_points(&Tracer::new(&tris), &p, &n, &rays, &opts);
+    assert_occlusion_is_nontrivial(&cpu);
+    let (gpu, timing) = GpuTracer::new(ctx, &tris)
+        .unwrap()
+        .ao(&p, &n, &rays, &opts)
+        .unwrap();
+    let q = parity(&gpu, &cpu);
+    eprintln!(
+        "ray-cast AO, {} vertices × 4096 rays: max |Δ| {:.2}/255, {} over 1/255, RMS \
+         {:.4}/255; kernel {:?}, wall {:?}",
+        p.len(),
+        255.0 * q.max_diff,
+        q.over_one_step,
+        q.rms_255,
+        timing.kernel,
+        timing.wall
+    );
+    if q.over_one_step > 0 {
+        let path = dump_ao("raycast_ao_4096", &gpu, &cpu);
+        panic!("GPU ray-cast AO at 4096 rays: see {}", path.display());
+    }
 }

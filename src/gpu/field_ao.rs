@@ -14,9 +14,15 @@
 //! every triangle). Fibonacci point sets (no GPU nearest query) and jittered ray sets (no shared
 //! directions) are refused with [`GpuError::Unsupported`]. Instances are tested in index order
 //! (the host sorts them by entry distance); for the boolean AO query the order does not matter.
+//!
+//! A point's rays are spread over several invocations ([`FieldGpuOptions::rays_per_invocation`],
+//! halved where the driver cuts long invocations short: src/gpu/loop_budget.rs), and the
+//! receivers over several dispatches where their buffers would pass the adapter's binding
+//! limit, so any ray count and any number of points run.
 
 use super::context::GpuContext;
 use super::field_data::{field_words, PackedFields};
+use super::loop_budget::{free_fractions, Dispatched, COMPLETION_TRIPS};
 use super::rays::{base_directions, receivers, ReceiverGpu};
 use super::texture::FieldTexture;
 use super::{GpuError, GpuTiming};
@@ -26,6 +32,7 @@ use crate::field::Selection;
 use crate::render::ao::AoOptions;
 use crate::sampling::rays::RaySet;
 use glam::Vec3;
+use std::sync::atomic::AtomicU32;
 use std::time::{Duration, Instant};
 
 /// How the stored distances are bound.
@@ -48,8 +55,10 @@ pub struct FieldGpuOptions {
     /// Largest window in bytes (storage layout); `None`: the adapter's binding limit. Smaller
     /// windows only serve to test the windowing.
     pub window_bytes: Option<u64>,
-    /// Most rays per point a call may use (table entries reserved for directions).
-    pub ray_capacity: usize,
+    /// Most rays one invocation traces (a point's rays are spread over several invocations);
+    /// divided by the instance count to start with, then halved while the driver cuts
+    /// invocations short (src/gpu/loop_budget.rs).
+    pub rays_per_invocation: u32,
     /// Largest texture depth (texture layout); `None`: the adapter's
     /// `max_texture_dimension_3d`. Smaller depths only serve to test the tiling.
     pub max_texture_depth: Option<u32>,
@@ -61,7 +70,7 @@ impl Default for FieldGpuOptions {
             lookup: LookupOptions::default(),
             layout: FieldLayout::StorageBuffers,
             window_bytes: None,
-            ray_capacity: 1024,
+            rays_per_invocation: super::loop_budget::DEFAULT_RAYS_PER_INVOCATION,
             max_texture_depth: None,
         }
     }
@@ -73,7 +82,8 @@ impl Default for FieldGpuOptions {
 struct AoParamsGpu {
     /// Points, rays per point, instances, threads per dispatch row.
     counts: [u32; 4],
-    /// Selection (0 nearest, 1 interpolated), unused ×3.
+    /// Selection (0 nearest, 1 interpolated), rays per invocation, invocations per point,
+    /// trips of the completion loop.
     mode: [u32; 4],
     /// Origin offset, tmax, intra-object bias, 1.0 when the bias scales the field's own
     /// tolerance ([`IntraBias::Auto`]) else 0.0.
@@ -95,9 +105,12 @@ pub struct LookupProbe {
 }
 
 const WORKGROUP: u32 = 64;
-/// Bindings before the field's own (params, receivers, tables, mesh, instances, output).
-const FIXED_BINDINGS: u32 = 6;
-const STORAGE_BUFFERS_FIXED: u32 = 5;
+/// Bindings before the field's own (params, receivers, tables, mesh, instances, output, ray
+/// directions).
+const FIXED_BINDINGS: u32 = 7;
+const STORAGE_BUFFERS_FIXED: u32 = 6;
+/// The ray directions' binding (AO kernel only).
+const DIRECTIONS_BINDING: u32 = 6;
 
 /// The field's stored distances on the device.
 enum FieldBinding {
@@ -115,7 +128,8 @@ pub struct FieldAoKernel<'a> {
     instances: wgpu::Buffer,
     instance_count: u32,
     field: FieldBinding,
-    ray_capacity: usize,
+    /// Rays per invocation, as last found to fit (`loop_budget::free_fractions`).
+    rays_per_invocation: AtomicU32,
     field_bytes: u64,
     upload: Duration,
     /// Selection and intra-object bias of the lookups (may be changed between calls).
@@ -130,7 +144,7 @@ impl<'a> FieldAoKernel<'a> {
         opts: &FieldGpuOptions,
     ) -> Result<Self, GpuError> {
         let start = Instant::now();
-        let mut packed = PackedFields::new(instances, opts.ray_capacity.max(1))?;
+        let mut packed = PackedFields::new(instances)?;
         let limits = ctx.limits();
         let (field, prelude, field_src, field_bytes) = match opts.layout {
             FieldLayout::StorageBuffers => {
@@ -194,6 +208,7 @@ impl<'a> FieldAoKernel<'a> {
             include_str!("../../shaders/layouts.wgsl"),
             include_str!("../../shaders/field_lookup.wgsl"),
             field_src,
+            include_str!("../../shaders/loop_budget.wgsl"),
             include_str!("../../shaders/field_ao.wgsl"),
         ]
         .concat();
@@ -212,7 +227,9 @@ impl<'a> FieldAoKernel<'a> {
             instances: instances_buf,
             instance_count: packed.instances.len() as u32,
             field,
-            ray_capacity: opts.ray_capacity.max(1),
+            rays_per_invocation: AtomicU32::new(
+                (opts.rays_per_invocation / instances.len().max(1) as u32).max(1),
+            ),
             field_bytes,
             upload: start.elapsed(),
             lookup: opts.lookup,
@@ -240,6 +257,13 @@ impl<'a> FieldAoKernel<'a> {
         }
     }
 
+    /// Rays per invocation the next call starts with: the options' value divided by the
+    /// instance count, or less where a driver cut an earlier call's invocations short.
+    pub fn rays_per_invocation(&self) -> u32 {
+        self.rays_per_invocation
+            .load(std::sync::atomic::Ordering::Relaxed)
+    }
+
     /// Host time of packing, uploading and compiling in [`Self::new`].
     pub fn setup_time(&self) -> Duration {
         self.upload
@@ -257,28 +281,29 @@ impl<'a> FieldAoKernel<'a> {
     ) -> Result<(Vec<f32>, GpuTiming), GpuError> {
         let start = Instant::now();
         let base = base_directions(rays)?;
-        if base.len() > self.ray_capacity {
-            return Err(GpuError::Invalid(format!(
-                "{} rays per point, the kernel was built for at most {}",
-                base.len(),
-                self.ray_capacity
-            )));
-        }
-        if !base.is_empty() {
-            self.ctx
-                .queue
-                .write_buffer(&self.tables, 0, bytemuck::cast_slice(&base));
-        }
         let recv = receivers(points, normals, rays)?;
+        let max_binding = self.max_binding();
+        let dir_bytes = base.len() as u64 * 16;
+        if dir_bytes > max_binding {
+            return Err(GpuError::TooLarge {
+                what: format!("{} ray directions", base.len()),
+                need: dir_bytes,
+                limit: max_binding,
+                limit_name: "max_storage_buffer_binding_size",
+            });
+        }
+        let dirs = self
+            .ctx
+            .storage_buffer("ray directions", bytemuck::cast_slice(&base));
         let tmax = opts.max_distance.unwrap_or(f32::MAX).min(f32::MAX);
-        let params = AoParamsGpu {
-            counts: [
-                points.len() as u32,
-                base.len() as u32,
-                self.instance_count,
+        let mut params = AoParamsGpu {
+            counts: [0, base.len() as u32, self.instance_count, 0],
+            mode: [
+                selection_code(self.lookup.selection),
                 0,
+                0,
+                COMPLETION_TRIPS,
             ],
-            mode: [selection_code(self.lookup.selection), 0, 0, 0],
             ray: {
                 let (bias, auto) = match self.lookup.intra_bias {
                     IntraBias::Auto { scale } => (scale, 1.0),
@@ -287,8 +312,16 @@ impl<'a> FieldAoKernel<'a> {
                 [opts.offset, tmax, bias, auto]
             },
         };
-        let (words, kernel, upload) = self.run(&self.ao, params, &recv, 1)?;
-        let ao = words.into_iter().map(f32::from_bits).collect();
+        let (ao, kernel, upload) = free_fractions(
+            &self.rays_per_invocation,
+            base.len() as u32,
+            recv.len(),
+            |per_invocation, per_point| {
+                params.mode[1] = per_invocation;
+                params.mode[2] = per_point;
+                self.run(&self.ao, params, &recv, Some(&dirs), per_point, 1)
+            },
+        )?;
         Ok((
             ao,
             GpuTiming {
@@ -323,7 +356,7 @@ impl<'a> FieldAoKernel<'a> {
             counts: [u.len() as u32, 0, self.instance_count, 0],
             ..Default::default()
         };
-        let (words, _, _) = self.run(&self.probe, params, &recv, 4)?;
+        let (words, _, _) = self.run(&self.probe, params, &recv, None, 1, 4)?;
         Ok(words
             .chunks_exact(4)
             .map(|w| LookupProbe {
@@ -335,70 +368,102 @@ impl<'a> FieldAoKernel<'a> {
             .collect())
     }
 
-    /// Uploads the per-call buffers, dispatches one thread per receiver and reads back
-    /// `words_per_item` words per receiver.
+    /// The largest storage binding the adapter allows.
+    fn max_binding(&self) -> u64 {
+        let l = self.ctx.limits();
+        l.max_storage_buffer_binding_size.min(l.max_buffer_size)
+    }
+
+    /// Uploads the per-call buffers, dispatches `threads_per_item` threads per receiver, each
+    /// writing `words_per_thread` words, and reads the words back, receiver-major. Receivers
+    /// go in batches small enough for their buffer and the output to fit one binding each.
     fn run(
         &self,
         pipeline: &wgpu::ComputePipeline,
         mut params: AoParamsGpu,
         recv: &[ReceiverGpu],
-        words_per_item: u64,
-    ) -> Result<(Vec<u32>, Option<Duration>, Duration), GpuError> {
-        let t = Instant::now();
-        if recv.is_empty() {
-            return Ok((Vec::new(), None, t.elapsed()));
+        dirs: Option<&wgpu::Buffer>,
+        threads_per_item: u32,
+        words_per_thread: u32,
+    ) -> Result<Dispatched, GpuError> {
+        let words_per_item = threads_per_item as u64 * words_per_thread as u64;
+        let max_binding = self.max_binding();
+        let batch = (max_binding / (4 * words_per_item))
+            .min(max_binding / std::mem::size_of::<ReceiverGpu>() as u64)
+            .min(u32::MAX as u64 / threads_per_item as u64) as usize;
+        if batch == 0 {
+            return Err(GpuError::TooLarge {
+                what: format!("the output of one receiver ({words_per_item} words)"),
+                need: 4 * words_per_item,
+                limit: max_binding,
+                limit_name: "max_storage_buffer_binding_size",
+            });
         }
-        let n = recv.len() as u32;
-        let groups = n.div_ceil(WORKGROUP);
-        let (gx, _) = super::context::split_groups(
-            groups,
-            self.ctx.limits().max_compute_workgroups_per_dimension,
-        );
-        params.counts[3] = gx * WORKGROUP;
-        let uniform = self
-            .ctx
-            .uniform_buffer("ao params", bytemuck::bytes_of(&params));
-        let recv_buf = self
-            .ctx
-            .storage_buffer("receivers", bytemuck::cast_slice(recv));
-        let out_bytes = recv.len() as u64 * words_per_item * 4;
-        let out = self.ctx.output_buffer("ao out", out_bytes);
-        let mut entries = vec![
-            entry(0, uniform.as_entire_binding()),
-            entry(1, recv_buf.as_entire_binding()),
-            entry(2, self.tables.as_entire_binding()),
-            entry(3, self.mesh.as_entire_binding()),
-            entry(4, self.instances.as_entire_binding()),
-            entry(5, out.as_entire_binding()),
-        ];
-        let view;
-        match &self.field {
-            FieldBinding::Windows(ws) => {
-                for (i, w) in ws.iter().enumerate() {
-                    entries.push(entry(FIXED_BINDINGS + i as u32, w.as_entire_binding()));
+        let mut words = Vec::with_capacity(recv.len() * words_per_item as usize);
+        let (mut kernel, mut upload) = (None, Duration::ZERO);
+        for part in recv.chunks(batch) {
+            let t = Instant::now();
+            let groups = (part.len() as u32 * threads_per_item).div_ceil(WORKGROUP);
+            let (gx, _) = super::context::split_groups(
+                groups,
+                self.ctx.limits().max_compute_workgroups_per_dimension,
+            );
+            params.counts[0] = part.len() as u32;
+            params.counts[3] = gx * WORKGROUP;
+            let uniform = self
+                .ctx
+                .uniform_buffer("ao params", bytemuck::bytes_of(&params));
+            let recv_buf = self
+                .ctx
+                .storage_buffer("receivers", bytemuck::cast_slice(part));
+            let out_bytes = part.len() as u64 * words_per_item * 4;
+            let out = self.ctx.output_buffer("ao out", out_bytes);
+            let mut entries = vec![
+                entry(0, uniform.as_entire_binding()),
+                entry(1, recv_buf.as_entire_binding()),
+                entry(2, self.tables.as_entire_binding()),
+                entry(3, self.mesh.as_entire_binding()),
+                entry(4, self.instances.as_entire_binding()),
+                entry(5, out.as_entire_binding()),
+            ];
+            if let Some(d) = dirs {
+                entries.push(entry(DIRECTIONS_BINDING, d.as_entire_binding()));
+            }
+            let view;
+            match &self.field {
+                FieldBinding::Windows(ws) => {
+                    for (i, w) in ws.iter().enumerate() {
+                        entries.push(entry(FIXED_BINDINGS + i as u32, w.as_entire_binding()));
+                    }
+                }
+                FieldBinding::Texture(tex) => {
+                    view = tex.view();
+                    entries.push(entry(
+                        FIXED_BINDINGS,
+                        wgpu::BindingResource::TextureView(&view),
+                    ));
                 }
             }
-            FieldBinding::Texture(tex) => {
-                view = tex.view();
-                entries.push(entry(
-                    FIXED_BINDINGS,
-                    wgpu::BindingResource::TextureView(&view),
-                ));
-            }
+            let bind_group = self
+                .ctx
+                .device
+                .create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("field ao"),
+                    layout: &pipeline.get_bind_group_layout(0),
+                    entries: &entries,
+                });
+            upload += t.elapsed();
+            let (bytes, k) = self
+                .ctx
+                .dispatch_and_read(pipeline, &bind_group, groups, &out)?;
+            kernel = match (kernel, k) {
+                (Some(a), Some(b)) => Some(a + b),
+                (a, b) => a.or(b),
+            };
+            words.extend(bytemuck::pod_collect_to_vec::<u8, u32>(
+                &bytes[..out_bytes as usize],
+            ));
         }
-        let bind_group = self
-            .ctx
-            .device
-            .create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("field ao"),
-                layout: &pipeline.get_bind_group_layout(0),
-                entries: &entries,
-            });
-        let upload = t.elapsed();
-        let (bytes, kernel) = self
-            .ctx
-            .dispatch_and_read(pipeline, &bind_group, groups, &out)?;
-        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes[..out_bytes as usize]);
         Ok((words, kernel, upload))
     }
 }

@@ -1,5 +1,5 @@
-//! Packing fields for the GPU: per-instance records, the shared tables (ray directions, sphere
-//! points, 1-bit means), the sphere triangulations for the interpolated selection, and the
+//! Packing fields for the GPU: per-instance records, the shared tables (sphere points, 1-bit
+//! means), the sphere triangulations for the interpolated selection, and the
 //! stored words of every distinct field.
 
 use super::GpuError;
@@ -75,8 +75,8 @@ fn sphere_code(field: &VisibilityField) -> Result<(u32, u32), GpuError> {
 /// Everything but the stored distances, plus each distinct field once.
 pub(crate) struct PackedFields {
     pub instances: Vec<FieldInstanceGpu>,
-    /// Ray directions (`ray_capacity` entries), then per field its points (w: bits of an
-    /// incident triangle) and its 1-bit means (four per entry).
+    /// Per field its points (w: bits of an incident triangle) and its 1-bit means (four per
+    /// entry).
     pub tables: Vec<[f32; 4]>,
     /// Per triangle: vertices, then the triangles across the edges opposite them.
     pub mesh: Vec<[u32; 4]>,
@@ -86,10 +86,9 @@ pub(crate) struct PackedFields {
 }
 
 impl PackedFields {
-    /// Packs `instances`, reserving `ray_capacity` table entries for ray directions. The data
-    /// references (`data[2]`) are left for the layout to fill.
-    pub fn new(instances: &[FieldInstance], ray_capacity: usize) -> Result<Self, GpuError> {
-        let mut tables = vec![[0.0f32; 4]; ray_capacity];
+    /// Packs `instances`. The data references (`data[2]`) are left for the layout to fill.
+    pub fn new(instances: &[FieldInstance]) -> Result<Self, GpuError> {
+        let mut tables: Vec<[f32; 4]> = Vec::new();
         let mut mesh: Vec<[u32; 4]> = Vec::new();
         let mut fields: Vec<Arc<VisibilityField>> = Vec::new();
         let mut field_of_instance = Vec::with_capacity(instances.len());
@@ -371,7 +370,7 @@ mod tests {
             FieldInstance::new(b.clone(), Similarity::default()),
             FieldInstance::new(a.clone(), Similarity::default()),
         ];
-        let packed = PackedFields::new(&insts, 16).unwrap();
+        let packed = PackedFields::new(&insts).unwrap();
         // Two distinct fields; the third instance reuses the first.
         assert_eq!(packed.fields.len(), 2);
         assert_eq!(packed.field_of_instance, vec![0, 1, 0]);
@@ -381,12 +380,12 @@ mod tests {
         // The rotation is world → model: its conjugate maps model X to world.
         let q = glam::Quat::from_array(i0.rotation).inverse();
         assert!((q * glam::Vec3::X - tr.rotation * glam::Vec3::X).length() < 1e-6);
-        // Points follow the 16 reserved direction entries; the 1-bit field's means follow its
-        // points (26 means in 7 entries).
-        assert_eq!(i0.tables[0], 16);
+        // The first field's points come first; the 1-bit field's means follow its points (26
+        // means in 7 entries).
+        assert_eq!(i0.tables[0], 0);
         let i1 = packed.instances[1];
         assert_eq!(i1.data[1], 3);
         assert_eq!(i1.data[3], i1.tables[0] + 26);
-        assert_eq!(packed.tables.len(), 16 + 26 + 26 + 7);
+        assert_eq!(packed.tables.len(), 26 + 26 + 7);
     }
 }

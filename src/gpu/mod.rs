@@ -18,6 +18,7 @@
 mod context;
 mod field_ao;
 mod field_data;
+mod loop_budget;
 mod rays;
 mod texture;
 mod tracer;

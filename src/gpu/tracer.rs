@@ -3,6 +3,7 @@
 //! lookup is compared with GPU ray casting on the same device.
 
 use super::context::{split_groups, GpuContext};
+use super::loop_budget::{free_fractions, Dispatched, COMPLETION_TRIPS};
 use super::rays::{base_directions, receivers};
 use super::{GpuError, GpuTiming};
 use crate::render::ao::AoOptions;
@@ -10,6 +11,7 @@ use crate::sampling::rays::RaySet;
 use crate::trace::RayQuery;
 use glam::Vec3;
 use obvhs::{aabb::Aabb, cwbvh::builder::build_cwbvh, cwbvh::node::CwBvhNode, BvhBuildParams};
+use std::sync::atomic::AtomicU32;
 use std::time::{Duration, Instant};
 
 /// The node struct uploaded as is: WGSL reads it as five `vec4<u32>`.
@@ -32,8 +34,10 @@ struct TraceParamsGpu {
     counts: [u32; 4],
     /// Origin offset, tmax (AO), unused ×2.
     ray: [f32; 4],
+    /// AO: rays per invocation, invocations per point, trips of the completion loop, unused.
+    split: [u32; 4],
 }
-const _: () = assert!(std::mem::size_of::<TraceParamsGpu>() == 32);
+const _: () = assert!(std::mem::size_of::<TraceParamsGpu>() == 48);
 
 /// Box padding relative to the scene extent, as the CPU tracer pads (`2^-18`), so that the
 /// quantised node test stays conservative for the watertight triangle test.
@@ -58,6 +62,8 @@ pub struct GpuTracer<'a> {
     any: wgpu::ComputePipeline,
     closest: wgpu::ComputePipeline,
     ao: wgpu::ComputePipeline,
+    /// Rays per AO invocation, as last found to fit (`loop_budget::free_fractions`).
+    rays_per_invocation: AtomicU32,
     setup: Duration,
 }
 
@@ -99,6 +105,7 @@ impl<'a> GpuTracer<'a> {
         }
         let source = [
             include_str!("../../shaders/frame.wgsl"),
+            include_str!("../../shaders/loop_budget.wgsl"),
             include_str!("../../shaders/bvh.wgsl"),
         ]
         .concat();
@@ -110,6 +117,7 @@ impl<'a> GpuTracer<'a> {
             any: ctx.compute_pipeline("bvh_any", &source, "any_main")?,
             closest: ctx.compute_pipeline("bvh_closest", &source, "closest_main")?,
             ao: ctx.compute_pipeline("bvh_ao", &source, "ao_main")?,
+            rays_per_invocation: AtomicU32::new(super::loop_budget::DEFAULT_RAYS_PER_INVOCATION),
             setup: start.elapsed(),
         })
     }
@@ -122,8 +130,14 @@ impl<'a> GpuTracer<'a> {
     /// Whether each ray hits any triangle with `tmin <= t <= tmax`.
     pub fn any_hits(&self, rays: &[RayQuery]) -> Result<(Vec<bool>, GpuTiming), GpuError> {
         let start = Instant::now();
-        let (words, kernel, upload) =
-            self.dispatch(&self.any, &ray_records(rays), 1, 0, None, [0.0; 4])?;
+        let (words, kernel, upload) = self.dispatch(
+            &self.any,
+            &ray_records(rays),
+            1,
+            1,
+            None,
+            Default::default(),
+        )?;
         let hits = words.into_iter().map(|w| w != 0).collect();
         Ok((hits, timing(kernel, upload, start)))
     }
@@ -134,8 +148,14 @@ impl<'a> GpuTracer<'a> {
         rays: &[RayQuery],
     ) -> Result<(Vec<Option<GpuHit>>, GpuTiming), GpuError> {
         let start = Instant::now();
-        let (words, kernel, upload) =
-            self.dispatch(&self.closest, &ray_records(rays), 2, 0, None, [0.0; 4])?;
+        let (words, kernel, upload) = self.dispatch(
+            &self.closest,
+            &ray_records(rays),
+            1,
+            2,
+            None,
+            Default::default(),
+        )?;
         let hits = words
             .chunks_exact(2)
             .map(|w| {
@@ -149,6 +169,8 @@ impl<'a> GpuTracer<'a> {
     }
 
     /// Vertex AO by ray casting with the same rays as [`crate::render::ao::ao_at_points`].
+    /// A point's rays are spread over several invocations, as in
+    /// [`super::FieldAoKernel::vertex_ao`].
     pub fn ao(
         &self,
         points: &[Vec3],
@@ -161,85 +183,99 @@ impl<'a> GpuTracer<'a> {
         let recv = receivers(points, normals, rays)?;
         let records: Vec<RayGpu> = recv.iter().map(|r| RayGpu { o: r.p, d: r.n }).collect();
         let tmax = opts.max_distance.unwrap_or(f32::MAX).min(f32::MAX);
-        let (words, kernel, upload) = self.dispatch(
-            &self.ao,
-            &records,
-            1,
-            base.len() as u32,
-            Some(&base),
-            [opts.offset, tmax, 0.0, 0.0],
+        let rays_n = base.len() as u32;
+        let (ao, kernel, upload) = free_fractions(
+            &self.rays_per_invocation,
+            rays_n,
+            records.len(),
+            |per_invocation, per_point| {
+                let params = TraceParamsGpu {
+                    counts: [0, rays_n, 0, self.node_count],
+                    ray: [opts.offset, tmax, 0.0, 0.0],
+                    split: [per_invocation, per_point, COMPLETION_TRIPS, 0],
+                };
+                self.dispatch(&self.ao, &records, per_point, 1, Some(&base), params)
+            },
         )?;
-        let ao = words.into_iter().map(f32::from_bits).collect();
         Ok((ao, timing(kernel, upload, start)))
     }
 
+    /// Dispatches `threads_per_item` threads per record, each writing `words_per_thread`
+    /// words, and reads the words back, record-major; records go in batches small enough for
+    /// their buffer and the output to fit one binding each. `params` gives everything but the
+    /// batch's record count and the dispatch row (set here).
     fn dispatch(
         &self,
         pipeline: &wgpu::ComputePipeline,
         records: &[RayGpu],
-        words_per_item: u64,
-        per_point: u32,
+        threads_per_item: u32,
+        words_per_thread: u32,
         dirs: Option<&[[f32; 4]]>,
-        ray: [f32; 4],
-    ) -> Result<(Vec<u32>, Option<Duration>, Duration), GpuError> {
-        let t = Instant::now();
-        if records.is_empty() {
-            return Ok((Vec::new(), None, t.elapsed()));
-        }
+        mut params: TraceParamsGpu,
+    ) -> Result<Dispatched, GpuError> {
         let ctx = self.ctx;
-        let n = records.len() as u32;
-        let groups = n.div_ceil(WORKGROUP);
-        let (gx, _) = split_groups(groups, ctx.limits().max_compute_workgroups_per_dimension);
-        let params = TraceParamsGpu {
-            counts: [n, per_point, gx * WORKGROUP, self.node_count],
-            ray,
-        };
-        let uniform = ctx.uniform_buffer("trace params", bytemuck::bytes_of(&params));
-        let rays = ctx.storage_buffer("rays", bytemuck::cast_slice(records));
-        let out_bytes = records.len() as u64 * words_per_item * 4;
-        let out = ctx.output_buffer("trace out", out_bytes);
-        let dir_buf = dirs.map(|d| ctx.storage_buffer("directions", bytemuck::cast_slice(d)));
-        let mut entries = vec![
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: uniform.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: self.nodes.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 2,
-                resource: self.tris.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 3,
-                resource: rays.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 4,
-                resource: out.as_entire_binding(),
-            },
-        ];
-        if let Some(b) = &dir_buf {
-            entries.push(wgpu::BindGroupEntry {
-                binding: 5,
-                resource: b.as_entire_binding(),
+        let limits = ctx.limits();
+        let max_binding = limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size);
+        let words_per_item = threads_per_item as u64 * words_per_thread as u64;
+        let batch = (max_binding / (4 * words_per_item))
+            .min(max_binding / std::mem::size_of::<RayGpu>() as u64)
+            .min(u32::MAX as u64 / threads_per_item as u64) as usize;
+        let dir_bytes = dirs.map_or(0, |d| d.len() as u64 * 16);
+        if batch == 0 || dir_bytes > max_binding {
+            return Err(GpuError::TooLarge {
+                what: "ray directions or the output of one point".into(),
+                need: dir_bytes.max(4 * words_per_item),
+                limit: max_binding,
+                limit_name: "max_storage_buffer_binding_size",
             });
         }
-        let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("trace"),
-            layout: &pipeline.get_bind_group_layout(0),
-            entries: &entries,
-        });
-        let upload = t.elapsed();
-        let (bytes, kernel) = ctx.dispatch_and_read(pipeline, &bind_group, groups, &out)?;
-        Ok((
-            bytemuck::pod_collect_to_vec(&bytes[..out_bytes as usize]),
-            kernel,
-            upload,
-        ))
+        let dir_buf = dirs.map(|d| ctx.storage_buffer("directions", bytemuck::cast_slice(d)));
+        let mut words = Vec::with_capacity(records.len() * words_per_item as usize);
+        let (mut kernel, mut upload) = (None, Duration::ZERO);
+        for part in records.chunks(batch) {
+            let t = Instant::now();
+            let groups = (part.len() as u32 * threads_per_item).div_ceil(WORKGROUP);
+            let (gx, _) = split_groups(groups, limits.max_compute_workgroups_per_dimension);
+            params.counts[0] = part.len() as u32;
+            params.counts[2] = gx * WORKGROUP;
+            params.counts[3] = self.node_count;
+            let uniform = ctx.uniform_buffer("trace params", bytemuck::bytes_of(&params));
+            let rays = ctx.storage_buffer("rays", bytemuck::cast_slice(part));
+            let out_bytes = part.len() as u64 * words_per_item * 4;
+            let out = ctx.output_buffer("trace out", out_bytes);
+            let mut entries = vec![
+                entry(0, uniform.as_entire_binding()),
+                entry(1, self.nodes.as_entire_binding()),
+                entry(2, self.tris.as_entire_binding()),
+                entry(3, rays.as_entire_binding()),
+                entry(4, out.as_entire_binding()),
+            ];
+            if let Some(b) = &dir_buf {
+                entries.push(entry(5, b.as_entire_binding()));
+            }
+            let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("trace"),
+                layout: &pipeline.get_bind_group_layout(0),
+                entries: &entries,
+            });
+            upload += t.elapsed();
+            let (bytes, k) = ctx.dispatch_and_read(pipeline, &bind_group, groups, &out)?;
+            kernel = match (kernel, k) {
+                (Some(a), Some(b)) => Some(a + b),
+                (a, b) => a.or(b),
+            };
+            words.extend(bytemuck::pod_collect_to_vec::<u8, u32>(
+                &bytes[..out_bytes as usize],
+            ));
+        }
+        Ok((words, kernel, upload))
     }
+}
+
+fn entry(binding: u32, resource: wgpu::BindingResource<'_>) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry { binding, resource }
 }
 
 fn ray_records(rays: &[RayQuery]) -> Vec<RayGpu> {

@@ -285,13 +285,6 @@ impl<'a> Runner<'a> {
         let mut field_sweep = Vec::new();
         for &n in &spec.reference.field_rays_sweep {
             let k = exact_sqrt(n).ok_or("field_rays_sweep: not a square")?;
-            // The GPU field kernel holds at most this many directions per call (at 4096 rays on
-            // lavapipe it returned wrong AO, an open defect), so GPU cells sweep up to it only.
-            if c.backend == Backend::Gpu
-                && n as usize > crate::gpu::FieldGpuOptions::default().ray_capacity
-            {
-                continue;
-            }
             let (ao_k, s) = if k == plan.render_k {
                 (None, ao_s)
             } else {
@@ -323,8 +316,6 @@ impl<'a> Runner<'a> {
             image = format!("images/{id}.png");
             let p = out.join(&image);
             a.save_png(&p).map_err(io_err(&p))?;
-            let p = out.join(format!("images/{id}.exr"));
-            a.save_exr(&p).map_err(io_err(&p))?;
             let p = out.join(format!("images/{id}-diff_x5.png"));
             a.difference(r, 5.0).save_png(&p).map_err(io_err(&p))?;
         }

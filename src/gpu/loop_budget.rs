@@ -1,0 +1,153 @@
+//! Splitting a point's rays over several invocations, so that no invocation loops longer than
+//! the driver lets it.
+//!
+//! llvmpipe (Mesa's lavapipe) gives each shader invocation one budget of 65,535 loop
+//! iterations shared by all of its loops (gallivm's `LP_MAX_TGSI_LOOP_ITERATIONS`); once it is
+//! spent every loop stops after its current iteration and the kernel returns a wrong answer
+//! without an error. Masked SIMD execution charges every loop on a ray's path at least once,
+//! so a field lookup costs about 31 iterations per ray even when the ray misses every field:
+//! one invocation looping over 4096 rays ran out after 2115 of them.
+//!
+//! The AO kernels therefore trace at most `rays_per_invocation` rays per invocation (a point's
+//! rays spread over `ceil(rays / rays_per_invocation)` invocations whose free-ray counts the
+//! host adds up), and each invocation ends with a loop whose trip count only the host knows
+//! (shaders/loop_budget.wgsl): when that loop is cut short the budget was spent, the
+//! invocation writes [`CUT_SHORT`], and [`free_fractions`] halves the rays per invocation and
+//! runs again. Drivers without such a budget never cut anything short.
+
+use super::GpuError;
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::time::Duration;
+
+/// What an invocation writes instead of its free-ray count when its loops were cut short
+/// (WGSL `CUT_SHORT`).
+pub(crate) const CUT_SHORT: u32 = u32::MAX;
+
+/// Trip count of the completion loop (WGSL `loops_completed(trips)`).
+pub(crate) const COMPLETION_TRIPS: u32 = 2;
+
+/// Rays per invocation a kernel starts with when the options do not say
+/// ([`crate::gpu::FieldGpuOptions::rays_per_invocation`]): about 8,000 of lavapipe's 65,535
+/// loop iterations for one field instance, and enough invocations per point to fill a GPU.
+pub const DEFAULT_RAYS_PER_INVOCATION: u32 = 256;
+
+/// One dispatch of an AO kernel: its output words, kernel time, upload time.
+pub(crate) type Dispatched = (Vec<u32>, Option<Duration>, Duration);
+
+/// AO (the fraction of free rays) of `points` points with `rays` rays each, from
+/// `dispatch(rays_per_invocation, invocations_per_point)`, which returns one free-ray count
+/// (or [`CUT_SHORT`]) per invocation, point-major. Starts from `split`'s rays per invocation,
+/// halves them while any invocation is cut short, and keeps the last value in `split` for the
+/// next call. Kernel and upload times add up over the dispatches.
+///
+/// Errors: [`GpuError::Unsupported`] when even one ray per invocation is cut short.
+pub(crate) fn free_fractions(
+    split: &AtomicU32,
+    rays: u32,
+    points: usize,
+    mut dispatch: impl FnMut(u32, u32) -> Result<Dispatched, GpuError>,
+) -> Result<(Vec<f32>, Option<Duration>, Duration), GpuError> {
+    if rays == 0 {
+        return Ok((vec![1.0; points], None, Duration::ZERO));
+    }
+    let (mut kernel, mut upload) = (None, Duration::ZERO);
+    loop {
+        let per_invocation = split.load(Ordering::Relaxed).clamp(1, rays);
+        let per_point = rays.div_ceil(per_invocation);
+        let (words, k, u) = dispatch(per_invocation, per_point)?;
+        kernel = match (kernel, k) {
+            (Some(a), Some(b)) => Some(a + b),
+            (a, b) => a.or(b),
+        };
+        upload += u;
+        debug_assert_eq!(words.len(), points * per_point as usize);
+        if !words.contains(&CUT_SHORT) {
+            let ao = words
+                .chunks_exact(per_point as usize)
+                .map(|w| w.iter().sum::<u32>() as f32 / rays as f32)
+                .collect();
+            return Ok((ao, kernel, upload));
+        }
+        if per_invocation == 1 {
+            return Err(GpuError::Unsupported(
+                "one ray overruns the driver's loop budget per invocation \
+                 (lavapipe: 65,535 iterations)"
+                    .into(),
+            ));
+        }
+        split.store(per_invocation / 2, Ordering::Relaxed);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A stand-in for lavapipe: every invocation may spend `budget` iterations at `cost` per
+    /// ray; point p has its first `p % rays` rays blocked.
+    fn fake(
+        budget: u32,
+        cost: u32,
+        rays: u32,
+        points: usize,
+        calls: &mut Vec<u32>,
+    ) -> impl FnMut(u32, u32) -> Result<Dispatched, GpuError> + '_ {
+        move |per_invocation, per_point| {
+            calls.push(per_invocation);
+            let mut words = Vec::new();
+            for p in 0..points as u32 {
+                let blocked = p % rays;
+                for c in 0..per_point {
+                    let (lo, hi) = (c * per_invocation, ((c + 1) * per_invocation).min(rays));
+                    if (hi - lo) * cost > budget {
+                        words.push(CUT_SHORT);
+                    } else {
+                        words.push((lo..hi).filter(|&r| r >= blocked).count() as u32);
+                    }
+                }
+            }
+            Ok((words, Some(Duration::from_millis(1)), Duration::ZERO))
+        }
+    }
+
+    #[test]
+    fn cut_short_invocations_are_split_until_they_fit() {
+        // 4096 rays at 31 iterations each: 2114 rays fit lavapipe's budget, so 256 fit at once
+        // for one instance; at 200 per ray only 327 fit, so 256 does, and at 300 per ray
+        // 218 fit: 256 → 128.
+        for (cost, want) in [
+            (31u32, vec![256u32]),
+            (200, vec![256]),
+            (300, vec![256, 128]),
+        ] {
+            let split = AtomicU32::new(256);
+            let mut calls = Vec::new();
+            let (ao, kernel, _) =
+                free_fractions(&split, 4096, 5, fake(65_535, cost, 4096, 5, &mut calls)).unwrap();
+            assert_eq!(calls, want, "cost {cost}");
+            assert_eq!(split.load(Ordering::Relaxed), *want.last().unwrap());
+            // Point p: 4096 − p rays free, summed over the invocations.
+            for (p, a) in ao.iter().enumerate() {
+                assert_eq!(*a, (4096 - p as u32) as f32 / 4096.0, "point {p}");
+            }
+            assert_eq!(kernel, Some(Duration::from_millis(want.len() as u64)));
+        }
+        // Starting from every ray in one invocation: halved down to what fits (2048 × 31 =
+        // 63,488 iterations).
+        let split = AtomicU32::new(u32::MAX);
+        let mut calls = Vec::new();
+        free_fractions(&split, 4096, 2, fake(65_535, 31, 4096, 2, &mut calls)).unwrap();
+        assert_eq!(calls, vec![4096, 2048]);
+    }
+
+    #[test]
+    fn no_rays_is_unoccluded_and_an_unaffordable_ray_is_an_error() {
+        let split = AtomicU32::new(256);
+        let (ao, _, _) = free_fractions(&split, 0, 3, |_, _| unreachable!()).unwrap();
+        assert_eq!(ao, vec![1.0; 3]);
+        let mut calls = Vec::new();
+        let r = free_fractions(&split, 16, 2, fake(10, 11, 16, 2, &mut calls));
+        assert!(matches!(r, Err(GpuError::Unsupported(_))));
+        assert_eq!(calls, vec![16, 8, 4, 2, 1]);
+    }
+}
