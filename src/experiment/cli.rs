@@ -66,7 +66,8 @@ pub enum Command {
         #[command(flatten)]
         opts: RunArgs,
     },
-    /// Regenerate every result (results/NAME, or results/quick/NAME with --quick).
+    /// Regenerate every result (results/NAME, or results/quick/NAME with --quick): every spec,
+    /// then quickstart, sampling, relief and stability.
     All {
         #[command(flatten)]
         opts: RunArgs,
@@ -297,7 +298,13 @@ pub fn main() {
                 let parent = opts.out.clone();
                 run_one(&p, &opts, parent.as_deref())?;
             }
-            Ok(())
+            // The command-made results beside the specs' (same root).
+            let root = |name: &str| opts.options(name, opts.out.as_deref()).out;
+            super::quickstart::run(&root("quickstart"))?;
+            crate::sampling::report::run(&root("sampling"))
+                .map_err(|e| format!("sampling: {e}"))?;
+            super::relief::run(&root("relief"), opts.quick)?;
+            super::stability::run(&root("stability")).map(|_| ())
         })()),
         Command::Plots { names, quick, dir } => report(plots(&names, quick, dir.as_deref())),
         Command::Named(args) => {
