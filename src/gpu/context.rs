@@ -357,6 +357,19 @@ impl GpuContext {
     }
 }
 
+/// Kernel time summed over dispatches, where the adapter measured any.
+pub(crate) fn add_kernel(total: Option<Duration>, k: Option<Duration>) -> Option<Duration> {
+    match (total, k) {
+        (Some(a), Some(b)) => Some(a + b),
+        (a, b) => a.or(b),
+    }
+}
+
+/// A bind-group entry.
+pub(crate) fn entry(binding: u32, resource: wgpu::BindingResource<'_>) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry { binding, resource }
+}
+
 /// Splits `groups` workgroups into (x, y) with x ≤ `max_dim`, x·y ≥ groups.
 pub(crate) fn split_groups(groups: u32, max_dim: u32) -> (u32, u32) {
     if groups <= max_dim {

@@ -20,6 +20,7 @@
 //! receivers over several dispatches where their buffers would pass the adapter's binding
 //! limit, so any ray count and any number of points run.
 
+use super::context::entry;
 use super::context::GpuContext;
 use super::field_data::{field_words, PackedFields};
 use super::loop_budget::{free_fractions, Dispatched, COMPLETION_TRIPS};
@@ -456,20 +457,13 @@ impl<'a> FieldAoKernel<'a> {
             let (bytes, k) = self
                 .ctx
                 .dispatch_and_read(pipeline, &bind_group, groups, &out)?;
-            kernel = match (kernel, k) {
-                (Some(a), Some(b)) => Some(a + b),
-                (a, b) => a.or(b),
-            };
+            kernel = super::context::add_kernel(kernel, k);
             words.extend(bytemuck::pod_collect_to_vec::<u8, u32>(
                 &bytes[..out_bytes as usize],
             ));
         }
         Ok((words, kernel, upload))
     }
-}
-
-fn entry(binding: u32, resource: wgpu::BindingResource<'_>) -> wgpu::BindGroupEntry<'_> {
-    wgpu::BindGroupEntry { binding, resource }
 }
 
 fn selection_code(s: Selection) -> u32 {

@@ -55,10 +55,7 @@ pub(crate) fn free_fractions(
         let per_invocation = split.load(Ordering::Relaxed).clamp(1, rays);
         let per_point = rays.div_ceil(per_invocation);
         let (words, k, u) = dispatch(per_invocation, per_point)?;
-        kernel = match (kernel, k) {
-            (Some(a), Some(b)) => Some(a + b),
-            (a, b) => a.or(b),
-        };
+        kernel = super::context::add_kernel(kernel, k);
         upload += u;
         debug_assert_eq!(words.len(), points * per_point as usize);
         if !words.contains(&CUT_SHORT) {

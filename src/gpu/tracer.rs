@@ -2,6 +2,7 @@
 //! 2017) with the watertight triangle test (Woop, Benthin, Wald, JCGT 2013), so that GPU field
 //! lookup is compared with GPU ray casting on the same device.
 
+use super::context::entry;
 use super::context::{split_groups, GpuContext};
 use super::loop_budget::{free_fractions, Dispatched, COMPLETION_TRIPS};
 use super::rays::{base_directions, receivers};
@@ -262,20 +263,13 @@ impl<'a> GpuTracer<'a> {
             });
             upload += t.elapsed();
             let (bytes, k) = ctx.dispatch_and_read(pipeline, &bind_group, groups, &out)?;
-            kernel = match (kernel, k) {
-                (Some(a), Some(b)) => Some(a + b),
-                (a, b) => a.or(b),
-            };
+            kernel = super::context::add_kernel(kernel, k);
             words.extend(bytemuck::pod_collect_to_vec::<u8, u32>(
                 &bytes[..out_bytes as usize],
             ));
         }
         Ok((words, kernel, upload))
     }
-}
-
-fn entry(binding: u32, resource: wgpu::BindingResource<'_>) -> wgpu::BindGroupEntry<'_> {
-    wgpu::BindGroupEntry { binding, resource }
 }
 
 fn ray_records(rays: &[RayQuery]) -> Vec<RayGpu> {
