@@ -5,7 +5,8 @@ use serde::{Deserialize, Serialize};
 /// What made a result.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct RunMeta {
-    /// `git rev-parse HEAD`, with "-dirty" when the tree has uncommitted changes to tracked files.
+    /// `git rev-parse HEAD`, with "-dirty" when the tree has uncommitted changes to tracked files
+    /// outside `results/` (the outputs of earlier runs do not change what the code computes).
     pub commit: String,
     /// Host name.
     pub machine: String,
@@ -73,8 +74,15 @@ fn git_commit() -> String {
     };
     match run(&["rev-parse", "HEAD"]) {
         Some(c) => {
-            let dirty = run(&["status", "--porcelain", "--untracked-files=no"])
-                .is_some_and(|s| !s.is_empty());
+            let dirty = run(&[
+                "status",
+                "--porcelain",
+                "--untracked-files=no",
+                "--",
+                ".",
+                ":(exclude)results",
+            ])
+            .is_some_and(|s| !s.is_empty());
             if dirty {
                 format!("{c}-dirty")
             } else {
