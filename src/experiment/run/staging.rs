@@ -3,7 +3,10 @@
 //!
 //! The staging folder is `OUT/.partial-PID`; publishing renames each file over its
 //! counterpart in `OUT` (each rename atomic, the whole publish a few milliseconds) and removes
-//! the folder. Folders left by killed runs (their process gone) are removed by the next run.
+//! the folder. A subfolder the run wrote (such as `images/`) belongs to the run: files in it
+//! that the run did not write (left by an earlier run with other settings) are removed, so a
+//! folder never mixes two runs' images; top-level files other than the run's are kept. Folders
+//! left by killed runs (their process gone) are removed by the next run.
 
 use std::path::{Path, PathBuf};
 
@@ -38,21 +41,33 @@ fn remove_stale(out: &Path) {
     }
 }
 
-/// Moves every file of `staging` (recursively) over its counterpart in `out`, then removes
-/// `staging`.
+/// Moves every file of `staging` (recursively) over its counterpart in `out`, removes files
+/// of `out`'s subfolders that `staging` did not have, then removes `staging`.
 pub fn publish(staging: &Path, out: &Path) -> Result<(), String> {
-    move_tree(staging, out)?;
+    move_tree(staging, out, false)?;
     std::fs::remove_dir_all(staging).map_err(|e| format!("{}: {e}", staging.display()))
 }
 
-fn move_tree(from: &Path, to: &Path) -> Result<(), String> {
+fn move_tree(from: &Path, to: &Path, owned: bool) -> Result<(), String> {
+    if owned {
+        // Files of the previous run that this one did not write.
+        if let Ok(old) = std::fs::read_dir(to) {
+            for e in old.flatten() {
+                let is_file = e.file_type().map(|t| t.is_file()).unwrap_or(false);
+                if is_file && !from.join(e.file_name()).exists() {
+                    std::fs::remove_file(e.path())
+                        .map_err(|err| format!("{}: {err}", e.path().display()))?;
+                }
+            }
+        }
+    }
     std::fs::create_dir_all(to).map_err(|e| format!("{}: {e}", to.display()))?;
     let entries = std::fs::read_dir(from).map_err(|e| format!("{}: {e}", from.display()))?;
     for e in entries {
         let e = e.map_err(|e| format!("{}: {e}", from.display()))?;
         let (src, dst) = (e.path(), to.join(e.file_name()));
         if e.file_type().map(|t| t.is_dir()).unwrap_or(false) {
-            move_tree(&src, &dst)?;
+            move_tree(&src, &dst, true)?;
         } else {
             std::fs::rename(&src, &dst).map_err(|e| format!("{}: {e}", dst.display()))?;
         }
@@ -71,6 +86,7 @@ mod tests {
         std::fs::create_dir_all(out.join("images")).unwrap();
         std::fs::write(out.join("table.csv"), "old").unwrap();
         std::fs::write(out.join("images/a.png"), "old").unwrap();
+        std::fs::write(out.join("images/stale.exr"), "old").unwrap();
         std::fs::write(out.join("keep.txt"), "kept").unwrap();
         let s = create(&out).unwrap();
         std::fs::create_dir_all(s.join("images")).unwrap();
@@ -82,6 +98,8 @@ mod tests {
         assert_eq!(read("table.csv"), "new");
         assert_eq!(read("images/a.png"), "new");
         assert_eq!(read("keep.txt"), "kept");
+        // The run's own subfolder holds only this run's files.
+        assert!(!out.join("images/stale.exr").exists());
     }
 
     #[test]
