@@ -26,17 +26,20 @@ mod frame;
 mod layout;
 mod layout_fast;
 mod mesh;
+mod owner_grid;
 pub mod rays;
 pub mod report;
 mod report_plots;
 mod rings;
 mod sphere;
 mod texel_measure;
+mod texel_table;
 pub mod warp;
 
 pub use frame::Frame;
 pub use layout::{HemisphereLayout, LayoutKind};
 pub use sphere::{Spacing, SphereKind, SpherePoints};
+pub use texel_table::TexelTable;
 
 /// Errors from building a sampling pattern with impossible parameters.
 #[derive(Debug, thiserror::Error)]
