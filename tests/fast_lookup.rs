@@ -112,7 +112,7 @@ fn owner_table_gives_the_searched_nearest_point() {
             }
         }
         // Most random directions are answered by the table (not a requirement of exactness,
-        // but what the table is for): measured 67–79% for these sets.
+        // but what the table is for): measured 91–95% for these sets (one or two candidates).
         let share = owned as f64 / 1e6;
         eprintln!(
             "{kind:?} {n}: {:.1}% owned, {} bytes",
@@ -120,7 +120,7 @@ fn owner_table_gives_the_searched_nearest_point() {
             set.owner_table_bytes()
         );
         if n >= 290 {
-            assert!(share > 0.5, "{kind:?} {n}: only {share} owned");
+            assert!(share > 0.8, "{kind:?} {n}: only {share} owned");
         }
     }
 }

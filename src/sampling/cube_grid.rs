@@ -584,19 +584,30 @@ fn cell_of(g: u32, half_g: f32, d: Vec3) -> usize {
     (f * g as usize + j) * g as usize + i
 }
 
+/// What the pruning of the module doc leaves in one cell of [`few_candidates`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Few {
+    /// One point, nearest to every direction of the cell.
+    One(u32),
+    /// Two points (ascending): every direction's nearest point is one of them.
+    Two(u32, u32),
+    /// More than two.
+    Many,
+}
+
 /// Per cell of a g × g-per-face grid over `points` (triangulation `tris`, as for
-/// [`CubeGrid::new`]): the point nearest to every direction of the (enlarged) cell when the
-/// pruning of the module doc leaves a single candidate, `None` when it leaves several. A
-/// `Some(p)` is exact for the cell: every other point is beaten by p by more than TAU/√3 in
-/// dot product over the whole cell, so p is the brute-force answer there, ties included.
-pub(super) fn single_owners(
+/// [`CubeGrid::new`]): the candidates of the (enlarged) cell when the pruning of the module doc
+/// leaves one or two. Every point left out is beaten by a kept one by more than TAU/√3 in dot
+/// product over the whole cell, so the first largest f64 dot product among the kept points (in
+/// ascending order) is the brute-force answer there, ties included.
+pub(super) fn few_candidates(
     points: &[Vec3],
     tris: &[[u32; 3]],
     g: u32,
     nearest: impl Fn(Vec3) -> usize + Sync,
-) -> Vec<Option<u32>> {
+) -> Vec<Few> {
     let shared = Shared::new(points, tris);
-    let rows: Vec<Vec<Option<u32>>> = (0..6 * g)
+    let rows: Vec<Vec<Few>> = (0..6 * g)
         .into_par_iter()
         .map_init(
             || shared.scratch(),
@@ -606,9 +617,10 @@ pub(super) fn single_owners(
                     .map(|i| {
                         let cell = CubeGrid::geometry(f, i, j, g);
                         shared.undominated(&cell, &nearest, s);
-                        match s.kept.as_slice() {
-                            [only] => Some(*only),
-                            _ => None,
+                        match *s.kept.as_slice() {
+                            [only] => Few::One(only),
+                            [p, q] => Few::Two(p, q),
+                            _ => Few::Many,
                         }
                     })
                     .collect()

@@ -6,11 +6,14 @@
 //! forward map, inverse and density side by side.
 //!
 //! Files: `sphere` (the public point-set type) over `cube_grid` (a cube-map grid of per-cell
-//! candidate points and triangles: the query path of `nearest` and `surrounding`), `rings`
-//! (Slater and lat-long: ring sets with an exact O(1) analytic nearest query) and `fibonacci`
+//! candidate points and triangles: the query path of `nearest` and `surrounding`) with
+//! `owner_grid` (a finer grid of cells with a single nearest point, read first by `nearest`),
+//! `rings` (Slater and lat-long: ring sets with an exact O(1) analytic nearest query) and
+//! `fibonacci`
 //! (Keinert et al.'s inverse plus a certificate), which build the grid; `mesh` (spherical
 //! triangulations: interpolation triangles, Delaunay spacing); `layout` with `layout_fast`
-//! (libm-free square coordinates with a certificate) and `texel_measure` (closed-form texel
+//! (libm-free square coordinates with a certificate), `texel_table` (a certified
+//! concentric texel table over the disk) and `texel_measure` (closed-form texel
 //! solid angles); `warp` (square/disk/hemisphere maps); `frame`; `rays`; `approx` (cheap
 //! atan/floor with stated error bounds); `report` and `report_plots` (`experiment sampling`).
 //!

@@ -223,7 +223,7 @@ impl SpherePoints {
     /// search ([`Self::nearest_searched`]).
     #[inline]
     pub fn nearest(&self, d: Vec3) -> usize {
-        match self.owners.owner(d) {
+        match self.owners.owner(&self.points, d) {
             Some(p) => p,
             None => self.grid.nearest(&self.points, d),
         }
@@ -236,9 +236,9 @@ impl SpherePoints {
     }
 
     /// The owner table's answer alone: `Some(`[`Self::nearest`]`(d))` when `d` lies in a cell
-    /// with a single owner, `None` when the query goes to the candidate search.
+    /// with one or two candidates, `None` when the query goes to the candidate search.
     pub fn nearest_owned(&self, d: Vec3) -> Option<usize> {
-        self.owners.owner(d)
+        self.owners.owner(&self.points, d)
     }
 
     /// Bytes of the owner table that answers most [`Self::nearest`] queries.
