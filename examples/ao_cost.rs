@@ -124,6 +124,12 @@ fn main() {
         std::fs::create_dir_all(&dir).expect("cache folder");
         let (field, _) =
             load_or_bake(&dir, &caster.mesh, &key, params, &BakeOptions::default()).expect("field");
+        println!(
+            "field {} bytes; lookup tables: owner {} bytes, texel {} bytes",
+            field.bytes(),
+            field.points.owner_table_bytes(),
+            field.texels.bytes()
+        );
         let fs = FieldScene {
             instances: vec![FieldInstance::new(Arc::new(field), caster.transform)],
             options: LookupOptions {

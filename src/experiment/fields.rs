@@ -195,6 +195,7 @@ pub fn requantize(f32_field: &VisibilityField, to: Precision) -> VisibilityField
         bounds: f32_field.bounds,
         points: f32_field.points.clone(),
         layout: f32_field.layout,
+        texels: f32_field.texels.clone(),
         frames: f32_field.frames.clone(),
         storage,
         intra: f32_field.intra.with_precision(to, f32_field.bounds.radius),

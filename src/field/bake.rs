@@ -172,6 +172,7 @@ fn bake_maps(
         bounds,
         points,
         layout,
+        texels: crate::sampling::TexelTable::new(layout),
         frames,
         storage,
         intra,

@@ -176,14 +176,31 @@ pub struct NearestRead {
     pub texel: u32,
 }
 
+impl NearestRead {
+    /// [`Reads::of`] without the lookup tables: the cube grid's candidate search for the map
+    /// ([`crate::sampling::SpherePoints::nearest_searched`]) and `layout.to_texel` for the
+    /// texel. The tables only shortcut these, so the two agree for every input (tested).
+    pub fn of_searched(field: &VisibilityField, u: Vec3, dir: Vec3) -> Self {
+        let m = field.points.nearest_searched(u);
+        let local = field.frames[m].to_local(dir);
+        NearestRead {
+            map: m as u32,
+            texel: field.layout.to_texel(local),
+        }
+    }
+}
+
 impl Reads for NearestRead {
+    /// The map from the owner table of [`crate::sampling::SpherePoints::nearest`], the texel
+    /// from the field's [`crate::sampling::TexelTable`]; each falls back to the exact search
+    /// where its table cell is not certified.
     #[inline]
     fn of(field: &VisibilityField, u: Vec3, dir: Vec3) -> Self {
         let m = field.points.nearest(u);
         let local = field.frames[m].to_local(dir);
         NearestRead {
             map: m as u32,
-            texel: field.layout.to_texel(local),
+            texel: field.texels.texel(local),
         }
     }
 

@@ -22,7 +22,7 @@ pub mod scene;
 pub mod storage;
 
 use crate::geometry::Sphere;
-use crate::sampling::{Frame, HemisphereLayout, LayoutKind, SphereKind, SpherePoints};
+use crate::sampling::{Frame, HemisphereLayout, LayoutKind, SphereKind, SpherePoints, TexelTable};
 pub use storage::{Precision, Storage};
 
 /// Errors from building, loading or sizing a field.
@@ -146,6 +146,9 @@ pub struct VisibilityField {
     pub bounds: Sphere,
     pub points: SpherePoints,
     pub layout: HemisphereLayout,
+    /// `layout`'s texel table ([`TexelTable::new`]`(layout)`): most nearest lookups' texel in
+    /// one read, the same texel as `layout.to_texel`.
+    pub texels: TexelTable,
     /// Per map: frame whose z is the inward normal −point(i).
     pub frames: Vec<Frame>,
     pub storage: Storage,
@@ -240,6 +243,7 @@ impl VisibilityField {
             bounds,
             points,
             layout,
+            texels: TexelTable::new(layout),
             frames,
             storage,
             intra,

@@ -157,6 +157,8 @@ struct Scratch {
     queue: Vec<u32>,
     found: Vec<u32>,
     cand: Vec<u32>,
+    /// The candidates left after pruning.
+    kept: Vec<u32>,
     /// Per candidate: its dot products with the cell's four unit corners.
     corner_dots: Vec<[f64; 4]>,
     keep: Vec<(std::cmp::Reverse<usize>, u32)>,
@@ -252,6 +254,7 @@ impl<'a> Shared<'a> {
             queue: Vec::new(),
             found: Vec::new(),
             cand: Vec::new(),
+            kept: Vec::new(),
             corner_dots: Vec::new(),
             keep: Vec::new(),
         }
@@ -290,15 +293,9 @@ impl<'a> Shared<'a> {
         }
     }
 
-    /// Appends the candidate points and triangles of cell (i, j) of face `f` to `row`.
-    fn cell_lists(
-        &self,
-        (f, i, j, g): (usize, u32, u32, u32),
-        nearest: &impl Fn(Vec3) -> usize,
-        s: &mut Scratch,
-        row: &mut RowLists,
-    ) {
-        let cell = CubeGrid::geometry(f, i, j, g);
+    /// The candidate points of `cell` that no other candidate dominates over the whole cell
+    /// (module doc), ascending, into `s.kept`; `s.found` keeps the triangles searched.
+    fn undominated(&self, cell: &CellGeometry, nearest: &impl Fn(Vec3) -> usize, s: &mut Scratch) {
         let q = nearest(cell.centre.as_vec3());
         // Points: within angle(c, q) + 2ρ of the centre.
         let cap = Cap::new(
@@ -329,13 +326,24 @@ impl<'a> Shared<'a> {
                 b != a && (0..4).all(|k| da[k] - db[k] < -TAU)
             })
         };
-        let before = row.points.len();
-        row.points.extend(
-            (0..s.cand.len())
-                .filter(|&a| !dominated(a))
-                .map(|a| s.cand[a]),
-        );
-        row.point_len.push((row.points.len() - before) as u32);
+        s.kept = (0..s.cand.len())
+            .filter(|&a| !dominated(a))
+            .map(|a| s.cand[a])
+            .collect();
+    }
+
+    /// Appends the candidate points and triangles of cell (i, j) of face `f` to `row`.
+    fn cell_lists(
+        &self,
+        (f, i, j, g): (usize, u32, u32, u32),
+        nearest: &impl Fn(Vec3) -> usize,
+        s: &mut Scratch,
+        row: &mut RowLists,
+    ) {
+        let cell = CubeGrid::geometry(f, i, j, g);
+        self.undominated(&cell, nearest, s);
+        row.points.extend_from_slice(&s.kept);
+        row.point_len.push(s.kept.len() as u32);
 
         // Triangles: bounding cap meets the cell's cap (a subset of the cap above, so `found`
         // holds them all), not separated by a plane; most covered first.
@@ -466,27 +474,7 @@ impl CubeGrid {
     /// The cell of direction `d` (any length; zero and NaN give some valid cell).
     #[inline]
     pub fn cell(&self, d: Vec3) -> usize {
-        // Branch-free face selection (random directions would mispredict branches): the axis
-        // of the largest |component|, ties to the lower axis.
-        let (ax, ay, az) = (d.x.abs(), d.y.abs(), d.z.abs());
-        let x_wins = (ax >= ay) & (ax >= az);
-        let y_wins = !x_wins & (ay >= az);
-        let a = if x_wins {
-            0
-        } else if y_wins {
-            1
-        } else {
-            2
-        };
-        let comp = [d.x, d.y, d.z, d.x, d.y];
-        let (da, pb, pc) = (comp[a], comp[a + 1], comp[a + 2]);
-        let (f, m) = (2 * a + (da < 0.0) as usize, da.abs());
-        // (u + 1)·g/2 with u = p/m; float → int casts saturate (NaN → 0).
-        let k = self.half_g / m;
-        let last = self.g - 1;
-        let i = ((pb * k + self.half_g) as u32).min(last) as usize;
-        let j = ((pc * k + self.half_g) as u32).min(last) as usize;
-        (f * self.g as usize + j) * self.g as usize + i
+        cell_of(self.g, self.half_g, d)
     }
 
     /// Candidate points of cell `c` (ascending, never empty).
@@ -567,6 +555,79 @@ impl CubeGrid {
         };
         (stats(&self.point_start), stats(&self.tri_start))
     }
+}
+
+/// The cell of direction `d` in a g × g-per-face grid (`half_g` = g/2): [`CubeGrid::cell`], for
+/// any grid over the same faces.
+#[inline]
+fn cell_of(g: u32, half_g: f32, d: Vec3) -> usize {
+    // Branch-free face selection (random directions would mispredict branches): the axis
+    // of the largest |component|, ties to the lower axis.
+    let (ax, ay, az) = (d.x.abs(), d.y.abs(), d.z.abs());
+    let x_wins = (ax >= ay) & (ax >= az);
+    let y_wins = !x_wins & (ay >= az);
+    let a = if x_wins {
+        0
+    } else if y_wins {
+        1
+    } else {
+        2
+    };
+    let comp = [d.x, d.y, d.z, d.x, d.y];
+    let (da, pb, pc) = (comp[a], comp[a + 1], comp[a + 2]);
+    let (f, m) = (2 * a + (da < 0.0) as usize, da.abs());
+    // (u + 1)·g/2 with u = p/m; float → int casts saturate (NaN → 0).
+    let k = half_g / m;
+    let last = g - 1;
+    let i = ((pb * k + half_g) as u32).min(last) as usize;
+    let j = ((pc * k + half_g) as u32).min(last) as usize;
+    (f * g as usize + j) * g as usize + i
+}
+
+/// What the pruning of the module doc leaves in one cell of [`few_candidates`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Few {
+    /// One point, nearest to every direction of the cell.
+    One(u32),
+    /// Two points (ascending): every direction's nearest point is one of them.
+    Two(u32, u32),
+    /// More than two.
+    Many,
+}
+
+/// Per cell of a g × g-per-face grid over `points` (triangulation `tris`, as for
+/// [`CubeGrid::new`]): the candidates of the (enlarged) cell when the pruning of the module doc
+/// leaves one or two. Every point left out is beaten by a kept one by more than TAU/√3 in dot
+/// product over the whole cell, so the first largest f64 dot product among the kept points (in
+/// ascending order) is the brute-force answer there, ties included.
+pub(super) fn few_candidates(
+    points: &[Vec3],
+    tris: &[[u32; 3]],
+    g: u32,
+    nearest: impl Fn(Vec3) -> usize + Sync,
+) -> Vec<Few> {
+    let shared = Shared::new(points, tris);
+    let rows: Vec<Vec<Few>> = (0..6 * g)
+        .into_par_iter()
+        .map_init(
+            || shared.scratch(),
+            |s, r| {
+                let (f, j) = ((r / g) as usize, r % g);
+                (0..g)
+                    .map(|i| {
+                        let cell = CubeGrid::geometry(f, i, j, g);
+                        shared.undominated(&cell, &nearest, s);
+                        match *s.kept.as_slice() {
+                            [only] => Few::One(only),
+                            [p, q] => Few::Two(p, q),
+                            _ => Few::Many,
+                        }
+                    })
+                    .collect()
+            },
+        )
+        .collect();
+    rows.into_iter().flatten().collect()
 }
 
 /// Whether a plane separates spherical triangle `v` (counter-clockwise) from the cone over the

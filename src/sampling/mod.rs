@@ -6,11 +6,14 @@
 //! forward map, inverse and density side by side.
 //!
 //! Files: `sphere` (the public point-set type) over `cube_grid` (a cube-map grid of per-cell
-//! candidate points and triangles: the query path of `nearest` and `surrounding`), `rings`
-//! (Slater and lat-long: ring sets with an exact O(1) analytic nearest query) and `fibonacci`
+//! candidate points and triangles: the query path of `nearest` and `surrounding`) with
+//! `owner_grid` (a finer grid of cells with a single nearest point, read first by `nearest`),
+//! `rings` (Slater and lat-long: ring sets with an exact O(1) analytic nearest query) and
+//! `fibonacci`
 //! (Keinert et al.'s inverse plus a certificate), which build the grid; `mesh` (spherical
 //! triangulations: interpolation triangles, Delaunay spacing); `layout` with `layout_fast`
-//! (libm-free square coordinates with a certificate) and `texel_measure` (closed-form texel
+//! (libm-free square coordinates with a certificate), `texel_table` (a certified
+//! concentric texel table over the disk) and `texel_measure` (closed-form texel
 //! solid angles); `warp` (square/disk/hemisphere maps); `frame`; `rays`; `approx` (cheap
 //! atan/floor with stated error bounds); `report` and `report_plots` (`experiment sampling`).
 //!
@@ -26,17 +29,20 @@ mod frame;
 mod layout;
 mod layout_fast;
 mod mesh;
+mod owner_grid;
 pub mod rays;
 pub mod report;
 mod report_plots;
 mod rings;
 mod sphere;
 mod texel_measure;
+mod texel_table;
 pub mod warp;
 
 pub use frame::Frame;
 pub use layout::{HemisphereLayout, LayoutKind};
 pub use sphere::{Spacing, SphereKind, SpherePoints};
+pub use texel_table::TexelTable;
 
 /// Errors from building a sampling pattern with impossible parameters.
 #[derive(Debug, thiserror::Error)]

@@ -3,6 +3,7 @@
 use super::cube_grid::CubeGrid;
 use super::fibonacci::{self, FibonacciIndex};
 use super::mesh::SphereMesh;
+use super::owner_grid::{OwnerGrid, OWNER_CELLS_PER_POINT};
 use super::rings::{slater_hemisphere_count, RingSet};
 use super::SamplingError;
 use glam::Vec3;
@@ -87,6 +88,7 @@ pub struct SpherePoints {
     index: Index,
     mesh: SphereMesh,
     grid: CubeGrid,
+    owners: OwnerGrid,
 }
 
 /// Spacing of a point set, in radians.
@@ -147,12 +149,19 @@ impl SpherePoints {
         let grid = CubeGrid::new(&points, mesh.triangles(), g, |d| {
             analytic_nearest(&index, &points, d)
         });
+        let owners = OwnerGrid::new(
+            &points,
+            mesh.triangles(),
+            CubeGrid::resolution_for(points.len(), OWNER_CELLS_PER_POINT),
+            |d| analytic_nearest(&index, &points, d),
+        );
         Ok(SpherePoints {
             kind,
             points,
             index,
             mesh,
             grid,
+            owners,
         })
     }
 
@@ -209,10 +218,32 @@ impl SpherePoints {
     /// Index of the point nearest to unit direction `d` (largest dot product). Exact and
     /// constant-time; `d` need not be normalised. Answered from a cube-map grid of candidate
     /// lists ([`super::cube_grid`]): the first largest f64 dot product, the same index as
-    /// [`Self::nearest_brute_force`].
+    /// [`Self::nearest_brute_force`]. Most directions are answered by one read of a finer
+    /// table of cells with a single owner ([`super::owner_grid`]), the rest by the candidate
+    /// search ([`Self::nearest_searched`]).
     #[inline]
     pub fn nearest(&self, d: Vec3) -> usize {
+        match self.owners.owner(&self.points, d) {
+            Some(p) => p,
+            None => self.grid.nearest(&self.points, d),
+        }
+    }
+
+    /// [`Self::nearest`] without the owner table: always the cube grid's candidate search (the
+    /// reference the table is tested against).
+    pub fn nearest_searched(&self, d: Vec3) -> usize {
         self.grid.nearest(&self.points, d)
+    }
+
+    /// The owner table's answer alone: `Some(`[`Self::nearest`]`(d))` when `d` lies in a cell
+    /// with one or two candidates, `None` when the query goes to the candidate search.
+    pub fn nearest_owned(&self, d: Vec3) -> Option<usize> {
+        self.owners.owner(&self.points, d)
+    }
+
+    /// Bytes of the owner table that answers most [`Self::nearest`] queries.
+    pub fn owner_table_bytes(&self) -> usize {
+        self.owners.bytes()
     }
 
     /// The analytic nearest-point query of the set (Slater and lat-long rings, Keinert et al.
