@@ -39,6 +39,20 @@ fn tiny(fields: &str, thresholds: &str) -> String {
     )
 }
 
+/// The tiny spec on both backends, its field sweep reaching 4096 rays per point (past what one
+/// lavapipe invocation can loop).
+fn cpu_gpu_spec() -> String {
+    tiny(ONE_FIELD, "")
+        .replace(
+            r#""reference": {"#,
+            r#""backends": ["cpu", "gpu"], "reference": {"#,
+        )
+        .replace(
+            r#""field_rays_sweep": [16, 64]"#,
+            r#""field_rays_sweep": [16, 4096]"#,
+        )
+}
+
 const ONE_FIELD: &str = r#"{ "counts": [290], "resolutions": [16] }"#;
 
 fn parse(text: &str) -> Result<Spec, SpecError> {
@@ -599,16 +613,7 @@ fn cpu_and_gpu_backends_give_one_row_each_with_the_adapter_named() {
     let timestamps = ctx.has_timestamps();
     drop(ctx);
     let dir = tempfile::tempdir().unwrap();
-    // The field sweep reaches 4096 rays per point, past what one lavapipe invocation can loop.
-    let text = tiny(ONE_FIELD, "")
-        .replace(
-            r#""reference": {"#,
-            r#""backends": ["cpu", "gpu"], "reference": {"#,
-        )
-        .replace(
-            r#""field_rays_sweep": [16, 64]"#,
-            r#""field_rays_sweep": [16, 4096]"#,
-        );
+    let text = cpu_gpu_spec();
     let ls = loaded(dir.path(), &text);
     let mut o = options(dir.path().join("out"));
     o.dry_run = true;
@@ -690,16 +695,7 @@ fn an_unknown_gpu_adapter_is_an_error_naming_the_adapters() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
-    // The field sweep reaches 4096 rays per point, past what one lavapipe invocation can loop.
-    let text = tiny(ONE_FIELD, "")
-        .replace(
-            r#""reference": {"#,
-            r#""backends": ["cpu", "gpu"], "reference": {"#,
-        )
-        .replace(
-            r#""field_rays_sweep": [16, 64]"#,
-            r#""field_rays_sweep": [16, 4096]"#,
-        );
+    let text = cpu_gpu_spec();
     let ls = loaded(dir.path(), &text);
     let mut o = options(dir.path().join("out"));
     o.adapter = AdapterPreference::parse("no-such-adapter-xyz");
