@@ -432,15 +432,7 @@ impl CubeGrid {
 
     /// Geometry of enlarged cell (i, j) of face `f`.
     fn geometry(f: usize, i: u32, j: u32, g: u32) -> CellGeometry {
-        let h = 2.0 / g as f64;
-        let (u0, u1) = (
-            -1.0 + h * i as f64 - DELTA,
-            -1.0 + h * (i + 1) as f64 + DELTA,
-        );
-        let (v0, v1) = (
-            -1.0 + h * j as f64 - DELTA,
-            -1.0 + h * (j + 1) as f64 + DELTA,
-        );
+        let ((u0, u1), (v0, v1)) = enlarged_cell(g, i, j, DELTA);
         let corners =
             [(u0, v0), (u1, v0), (u1, v1), (u0, v1)].map(|(u, v)| face_point(f, u, v).normalize());
         let centre = face_point(f, 0.5 * (u0 + u1), 0.5 * (v0 + v1)).normalize();
@@ -660,6 +652,20 @@ fn separated(v: &[DVec3; 3], corners: &[DVec3; 4]) -> bool {
 fn inside(v: &[DVec3; 3], d: DVec3) -> bool {
     let w = [det(d, v[1], v[2]), det(v[0], d, v[2]), det(v[0], v[1], d)];
     w.iter().all(|&x| x >= 0.0)
+}
+
+/// The bounds `((x0, x1), (y0, y1))` of cell (i, j) of a `g × g` grid over `[−1, 1]²`,
+/// enlarged by `delta` on every side (the cube faces' cells here, the disk's in
+/// `texel_table`).
+pub(crate) fn enlarged_cell(g: u32, i: u32, j: u32, delta: f64) -> ((f64, f64), (f64, f64)) {
+    let h = 2.0 / g as f64;
+    let span = |k: u32| {
+        (
+            -1.0 + h * k as f64 - delta,
+            -1.0 + h * (k + 1) as f64 + delta,
+        )
+    };
+    (span(i), span(j))
 }
 
 #[cfg(test)]

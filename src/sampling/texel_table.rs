@@ -89,15 +89,7 @@ impl TexelTable {
 
     /// The texel of every direction of enlarged cell (i, j) when the certificate holds.
     fn certify(layout: HemisphereLayout, g: u32, i: u32, j: u32) -> Option<u32> {
-        let h = 2.0 / g as f64;
-        let (x0, x1) = (
-            -1.0 + h * i as f64 - DELTA,
-            -1.0 + h * (i + 1) as f64 + DELTA,
-        );
-        let (y0, y1) = (
-            -1.0 + h * j as f64 - DELTA,
-            -1.0 + h * (j + 1) as f64 + DELTA,
-        );
+        let ((x0, x1), (y0, y1)) = super::cube_grid::enlarged_cell(g, i, j, DELTA);
         // Inside one piece: no axis and no diagonal crosses the cell.
         let abs_range = |a: f64, b: f64| {
             if a > 0.0 {
