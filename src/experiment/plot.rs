@@ -75,6 +75,7 @@ pub fn xy_plot(path: &Path, axes: &Axes, series: &[Series], hlines: &[HLine]) ->
         .chain(hlines.iter().map(|h| h.y));
     let (x0, x1) = range(xs, axes.log_x);
     let (y0, y1) = range(ys, axes.log_y);
+    let legend_corner = emptiest_corner(series, (x0, x1, axes.log_x), (y0, y1, axes.log_y));
     let mut buf = vec![0u8; 1000 * 700 * 3];
     {
         let root = BitMapBackend::with_buffer(&mut buf, (1000, 700)).into_drawing_area();
@@ -128,7 +129,7 @@ pub fn xy_plot(path: &Path, axes: &Axes, series: &[Series], hlines: &[HLine]) ->
                     .background_style(WHITE.mix(0.85))
                     .border_style(BLACK)
                     .label_font(("sans-serif", 15))
-                    .position(SeriesLabelPosition::UpperRight)
+                    .position(legend_corner)
                     .draw()
                     .map_err(err(path))?;
             }};
@@ -158,6 +159,44 @@ pub fn xy_plot(path: &Path, axes: &Axes, series: &[Series], hlines: &[HLine]) ->
         root.present().map_err(err(path))?;
     }
     write_rgb_png(path, 1000, 700, buf)
+}
+
+/// The corner of the plot where a legend box of the series' size covers the fewest points (axes
+/// in plot scale; the box about 45% of the width and 3% of the height per entry).
+fn emptiest_corner(
+    series: &[Series],
+    (x0, x1, log_x): (f64, f64, bool),
+    (y0, y1, log_y): (f64, f64, bool),
+) -> SeriesLabelPosition {
+    let unit = |v: f64, lo: f64, hi: f64, log: bool| {
+        if log {
+            (v.ln() - lo.ln()) / (hi.ln() - lo.ln())
+        } else {
+            (v - lo) / (hi - lo)
+        }
+    };
+    let (w, h) = (0.45, (0.03 * series.len() as f64 + 0.03).min(1.0));
+    // Upper right, upper left, lower right, lower left: points under a legend there.
+    let mut count = [0usize; 4];
+    for &(x, y) in series.iter().flat_map(|s| s.points.iter()) {
+        let (u, v) = (unit(x, x0, x1, log_x), unit(y, y0, y1, log_y));
+        if !(u.is_finite() && v.is_finite()) {
+            continue;
+        }
+        let (right, left, top, bottom) = (u >= 1.0 - w, u <= w, v >= 1.0 - h, v <= h);
+        count[0] += (right && top) as usize;
+        count[1] += (left && top) as usize;
+        count[2] += (right && bottom) as usize;
+        count[3] += (left && bottom) as usize;
+    }
+    let best = (0..4).min_by_key(|&k| count[k]).unwrap_or(0);
+    [
+        SeriesLabelPosition::UpperRight,
+        SeriesLabelPosition::UpperLeft,
+        SeriesLabelPosition::LowerRight,
+        SeriesLabelPosition::LowerLeft,
+    ][best]
+        .clone()
 }
 
 /// A compact tick label: 3 significant digits, no float noise.
@@ -294,5 +333,29 @@ mod tests {
         let img = image::open(&q).unwrap();
         // 2 columns: 2·(16 + 8) + 8 wide; one row: 40 + 12 + (2·20 + 8) + 8 + 8 high.
         assert_eq!((img.width(), img.height()), (56, 40 + 12 + 48 + 8 + 8));
+    }
+}
+
+#[cfg(test)]
+mod legend_tests {
+    use super::*;
+
+    #[test]
+    fn legend_goes_to_the_corner_without_points() {
+        let s = |pts: &[(f64, f64)]| Series {
+            label: "s".into(),
+            points: pts.to_vec(),
+            line: false,
+        };
+        // A falling log–log line: its ends fill the upper left and lower right.
+        let falling = [(0.01, 10.0), (0.03, 3.0), (0.3, 0.3), (1.0, 0.1)];
+        let corner = emptiest_corner(&[s(&falling)], (0.01, 1.0, true), (0.1, 10.0, true));
+        assert!(matches!(corner, SeriesLabelPosition::UpperRight));
+        let rising = [(0.0, 0.0), (0.2, 0.3), (0.8, 0.7), (1.0, 1.0), (0.9, 0.95)];
+        let corner = emptiest_corner(&[s(&rising)], (0.0, 1.0, false), (0.0, 1.0, false));
+        assert!(
+            matches!(corner, SeriesLabelPosition::UpperLeft),
+            "{corner:?}"
+        );
     }
 }
