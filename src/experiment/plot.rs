@@ -76,10 +76,14 @@ pub fn xy_plot(path: &Path, axes: &Axes, series: &[Series], hlines: &[HLine]) ->
     let (x0, x1) = range(xs, axes.log_x);
     let (y0, y1) = range(ys, axes.log_y);
     let legend_corner = emptiest_corner(series, (x0, x1, axes.log_x), (y0, y1, axes.log_y));
-    let mut buf = vec![0u8; 1000 * 700 * 3];
+    // Many entries: the legend goes beside the plot, where it hides nothing.
+    let outside = series.len() + hlines.len() > 8;
+    let width: u32 = if outside { 1450 } else { 1000 };
+    let mut buf = vec![0u8; width as usize * 700 * 3];
     {
-        let root = BitMapBackend::with_buffer(&mut buf, (1000, 700)).into_drawing_area();
+        let root = BitMapBackend::with_buffer(&mut buf, (width, 700)).into_drawing_area();
         root.fill(&WHITE).map_err(err(path))?;
+        let (plot, side) = root.split_horizontally(1000);
         macro_rules! draw {
             ($chart:expr) => {{
                 let mut chart = $chart;
@@ -124,17 +128,44 @@ pub fn xy_plot(path: &Path, axes: &Axes, series: &[Series], hlines: &[HLine]) ->
                             PathElement::new(vec![(x, y), (x + 20, y)], BLACK.mix(0.6))
                         });
                 }
-                chart
-                    .configure_series_labels()
-                    .background_style(WHITE.mix(0.85))
-                    .border_style(BLACK)
-                    .label_font(("sans-serif", 15))
-                    .position(legend_corner)
-                    .draw()
-                    .map_err(err(path))?;
+                if !outside {
+                    chart
+                        .configure_series_labels()
+                        .background_style(WHITE.mix(0.85))
+                        .border_style(BLACK)
+                        .label_font(("sans-serif", 15))
+                        .position(legend_corner.clone())
+                        .draw()
+                        .map_err(err(path))?;
+                }
             }};
         }
-        let mut builder = ChartBuilder::on(&root);
+        if outside {
+            for (i, s) in series.iter().enumerate() {
+                let y = 70 + 24 * i as i32;
+                let color = Palette99::pick(i).to_rgba();
+                side.draw(&Circle::new((12, y), 5, color.filled()))
+                    .map_err(err(path))?;
+                side.draw(&Text::new(
+                    s.label.as_str(),
+                    (26, y - 9),
+                    ("sans-serif", 15),
+                ))
+                .map_err(err(path))?;
+            }
+            for (j, h) in hlines.iter().enumerate() {
+                let y = 70 + 24 * (series.len() + j) as i32;
+                side.draw(&PathElement::new(vec![(2, y), (22, y)], BLACK.mix(0.6)))
+                    .map_err(err(path))?;
+                side.draw(&Text::new(
+                    h.label.as_str(),
+                    (26, y - 9),
+                    ("sans-serif", 15),
+                ))
+                .map_err(err(path))?;
+            }
+        }
+        let mut builder = ChartBuilder::on(&plot);
         builder
             .caption(axes.title.as_str(), ("sans-serif", 24))
             .margin(16)
@@ -158,7 +189,7 @@ pub fn xy_plot(path: &Path, axes: &Axes, series: &[Series], hlines: &[HLine]) ->
         }
         root.present().map_err(err(path))?;
     }
-    write_rgb_png(path, 1000, 700, buf)
+    write_rgb_png(path, width, 700, buf)
 }
 
 /// The corner of the plot where a legend box of the series' size covers the fewest points (axes
