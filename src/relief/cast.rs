@@ -347,13 +347,8 @@ mod tests {
         for dset in Dataset::ALL {
             let map = dset.map(64);
             let zones = SafetyZones::new(&map, &PAPER_BOXES);
-            let mut state = 11u64;
-            let mut rnd = || {
-                state = state
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
-                (state >> 40) as f32 / (1u64 << 24) as f32
-            };
+            let mut rng = crate::relief::height::Lcg(11);
+            let mut rnd = || rng.next_f32();
             let mut fetches = [0u64; 3];
             let mut agree = [0usize; 3];
             let n = 3000;

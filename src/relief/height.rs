@@ -132,16 +132,27 @@ impl Dataset {
     }
 }
 
+/// A 64-bit linear congruential sequence (Knuth's MMIX constants): the same numbers on every
+/// machine, for the procedural maps and the seeded tests.
+#[derive(Clone, Copy, Debug)]
+pub struct Lcg(pub u64);
+
+impl Lcg {
+    /// The next number in [0, 1), from the state's top 24 bits.
+    pub fn next_f32(&mut self) -> f32 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (self.0 >> 40) as f32 / (1u64 << 24) as f32
+    }
+}
+
 /// Seeded bumps (centre, radius, amplitude) of [`Dataset::Relief`]: a fixed linear congruential
 /// sequence, so the map is the same on every machine.
 fn relief_bumps() -> Vec<(Vec2, f32, f32)> {
-    let mut state: u64 = 0x2005_0b1e;
-    let mut next = || {
-        state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((state >> 40) as f32) / (1u64 << 24) as f32
-    };
+    let mut rng = Lcg(0x2005_0b1e);
+    let mut next = || rng.next_f32();
     (0..48)
         .map(|k| {
             let c = Vec2::new(next(), next());

@@ -134,13 +134,8 @@ mod tests {
         for d in Dataset::ALL {
             let map = d.map(64);
             let zones = SafetyZones::new(&map, &PAPER_BOXES);
-            let mut state = 7u64;
-            let mut rnd = || {
-                state = state
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
-                (state >> 40) as f32 / (1u64 << 24) as f32
-            };
+            let mut rng = crate::relief::height::Lcg(7);
+            let mut rnd = || rng.next_f32();
             for _ in 0..20_000 {
                 let p = Vec2::new(rnd(), rnd());
                 let (dil, ero) = zones.at(p);
