@@ -8,7 +8,7 @@
 
 use super::spec::{MeshSource, Spec, SpecError, TransformSpec};
 use crate::geometry::procedural::{self, Supershape};
-use crate::geometry::rebase::{centred_mesh, rebase, PlacedMesh, Placement, Rebased};
+use crate::geometry::rebase::{centred_mesh, rebase, to_frame, PlacedMesh, Placement, Rebased};
 use crate::geometry::{models, Mesh, Scene, Similarity};
 use crate::render::camera::Camera;
 use glam::{DVec3, EulerRot, Quat, Vec3};
@@ -45,10 +45,9 @@ pub struct BuiltScene {
 impl BuiltScene {
     /// A spec-world camera in the scene's frame.
     pub fn camera_in_frame(&self, cam: &Camera) -> Camera {
-        let to = |p: Vec3| (p.as_dvec3() - self.origin).as_vec3();
         Camera {
-            eye: to(cam.eye),
-            target: to(cam.target),
+            eye: to_frame(self.origin, cam.eye),
+            target: to_frame(self.origin, cam.target),
             ..*cam
         }
     }

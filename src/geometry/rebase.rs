@@ -136,11 +136,9 @@ pub struct Rebased {
     pub origin: DVec3,
 }
 
-impl Rebased {
-    /// A true world point in the rebased frame (formed in f64, rounded once).
-    pub fn to_frame(&self, p: Vec3) -> Vec3 {
-        (p.as_dvec3() - self.origin).as_vec3()
-    }
+/// A true world point in the frame whose origin is `origin` (formed in f64, rounded once).
+pub fn to_frame(origin: DVec3, p: Vec3) -> Vec3 {
+    (p.as_dvec3() - origin).as_vec3()
 }
 
 /// The placed meshes as a scene in the frame of [`rebase_origin`] of their world bounding
@@ -291,7 +289,7 @@ mod tests {
         let r = far.rebased();
         assert_eq!(r.origin, DVec3::new(2048.0, 0.0, -4096.0));
         assert_eq!(
-            r.to_frame(Vec3::new(2048.5, 1.0, -4096.0)),
+            to_frame(r.origin, Vec3::new(2048.5, 1.0, -4096.0)),
             Vec3::new(0.5, 1.0, 0.0)
         );
     }
