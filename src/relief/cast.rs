@@ -48,7 +48,8 @@ pub fn intersect(
     let len = (x - e).length();
     let mut fetches = 1;
     let miss = |fetches| Cast { hit: None, fetches };
-    if d(map, e) < 0.0 || len <= 0.0 {
+    let de = d(map, e);
+    if de < 0.0 || len <= 0.0 {
         return miss(fetches);
     }
     let r = (x - e) / len;
@@ -61,10 +62,15 @@ pub fn intersect(
         None => (0.0, len),
     };
     let step = 1.0 / params.samples_per_unit;
-    let (mut la, mut da) = (l1, d(map, at(l1)));
-    fetches += 1;
+    // The entry's sample is read once; a forward skip moves the start to a new sample.
+    let (mut la, mut da) = if l1 > 0.0 {
+        fetches += 1;
+        (l1, d(map, at(l1)))
+    } else {
+        (0.0, de)
+    };
     if da < 0.0 {
-        // A skip never ends inside the solid; this is the entry itself below the surface.
+        // A skip ends on the zone's boundary, above the surface; only rounding lands below.
         return Cast {
             hit: Some(la),
             fetches,
