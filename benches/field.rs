@@ -3,7 +3,10 @@
 //! triangle count, every precision and both map selections; and bake throughput against the
 //! tracer's raw closest-hit throughput on the same rays. Field rows go through
 //! `ao_at_points`, which batches each vertex's rays (`Visibility::occluded_many`); the
-//! `*_per_ray` rows run the same lookups one ray at a time (`PerRay`).
+//! `*_per_ray` rows run the same lookups one ray at a time (`PerRay`). The `floor_*` rows time
+//! `render::floor`'s backends on the same rays: the AO pass with a free query, and with only the
+//! bounding-sphere cull and crossing that every lookup starts with; ray casting's time over
+//! theirs bounds the speed-up any field lookup can reach here.
 //!
 //! `cargo bench --bench field`. Casters: stanford-bunny_39k (38,889 triangles), dragon
 //! (100,000) and a 261,120-triangle supershape (the 2010 paper's count). Real models are found
@@ -23,6 +26,7 @@ use visfield::field::{FieldParams, Precision, Selection};
 use visfield::geometry::procedural::{over_corner, supershape, Supershape};
 use visfield::geometry::{models, Mesh};
 use visfield::render::ao::{ao_at_points, AoOptions};
+use visfield::render::floor::{NoQuery, SphereCull};
 use visfield::render::receivers::Receivers;
 use visfield::render::PerRay;
 use visfield::sampling::rays::RaySet;
@@ -63,6 +67,10 @@ fn ao_lookup_vs_raycast(c: &mut Criterion) {
             let tracer = tracer.get_or_init(|| Tracer::new(&scene.caster_triangles()));
             b.iter(|| ao_at_points(tracer, &recv.points, &recv.normals, &rays, &opts))
         });
+        // Cost floor: the AO pass with a query that costs nothing (render::floor).
+        group.bench_function("floor_no_query", |b| {
+            b.iter(|| ao_at_points(&NoQuery, &recv.points, &recv.normals, &rays, &opts))
+        });
         for precision in [
             Precision::U8,
             Precision::U16,
@@ -102,6 +110,14 @@ fn ao_lookup_vs_raycast(c: &mut Criterion) {
                 });
                 if precision != Precision::U8 {
                     continue;
+                }
+                if selection == Selection::Nearest {
+                    // Cost floor: the sphere cull and crossing every lookup starts with.
+                    group.bench_function("floor_sphere_cull", |b| {
+                        let fs = scene(selection);
+                        let cull = SphereCull(&fs);
+                        b.iter(|| ao_at_points(&cull, &recv.points, &recv.normals, &rays, &opts))
+                    });
                 }
                 // The same lookups one ray at a time (no shared origin work, no prefetch).
                 let id = BenchmarkId::new(

@@ -6,7 +6,11 @@
 //!
 //! - CASTER: `bunny` (stanford-bunny_39k), `dragon` or `supershape` (261,120 triangles).
 //! - BACKEND: `anyhit` (obvhs ray casting), `nearest`, `interpolated` (field lookup, per-ray
-//!   queries) or `nearest-batch`, `interpolated-batch` (the batched per-point entry point).
+//!   queries) or `nearest-batch`, `interpolated-batch` (the batched per-point entry point);
+//!   and the two cost floors of `visfield::render::floor`, below any field lookup: `none`
+//!   (every ray free: building the rays and the AO loop alone) and `sphere` (occluded where the
+//!   ray meets the caster's bounding sphere: the cull and exact crossing every lookup starts
+//!   with, without a map, texel or storage read).
 //! - PRECISION: `u8` (default), `u16`, `f32`, `bit1`.
 //! - STRIDE: use every STRIDE-th receiver vertex (default 1).
 //!
@@ -26,6 +30,7 @@ use visfield::field::{FieldParams, Precision, Selection};
 use visfield::geometry::procedural::{over_corner, supershape, Supershape};
 use visfield::geometry::{models, Mesh};
 use visfield::render::ao::{ao_at_point, AoOptions};
+use visfield::render::floor::{NoQuery, SphereCull};
 use visfield::render::receivers::Receivers;
 use visfield::render::{PerRay, Visibility};
 use visfield::sampling::rays::RaySet;
@@ -35,7 +40,7 @@ use visfield::trace::Tracer;
 fn usage() -> ! {
     eprintln!(
         "usage: ao_cost CASTER(bunny|dragon|supershape) \
-         BACKEND(anyhit|nearest|interpolated|nearest-batch|interpolated-batch) \
+         BACKEND(anyhit|nearest|interpolated|nearest-batch|interpolated-batch|none|sphere) \
          [PRECISION(u8|u16|f32|bit1)] [STRIDE]"
     );
     std::process::exit(2)
@@ -100,7 +105,11 @@ fn main() {
     let rays = RaySet::new(16, 1);
     let caster = &scene.instances[1];
     let n_rays = points.len() * rays.len();
-    let (ao, secs) = if args[1] == "anyhit" {
+    let (ao, secs) = if args[1] == "none" {
+        let t = Instant::now();
+        let ao = ao_pass(&NoQuery, &points, &normals, &rays);
+        (ao, t.elapsed().as_secs_f64())
+    } else if args[1] == "anyhit" {
         let tracer = Tracer::new(&scene.caster_triangles());
         let t = Instant::now();
         let ao = ao_pass(&tracer, &points, &normals, &rays);
@@ -110,7 +119,7 @@ fn main() {
             "nearest" => (Selection::Nearest, false),
             "interpolated" => (Selection::Interpolated, false),
             "nearest-batch" => (Selection::Nearest, true),
-            "interpolated-batch" => (Selection::Interpolated, true),
+            "interpolated-batch" | "sphere" => (Selection::Interpolated, true),
             _ => usage(),
         };
         let params = FieldParams {
@@ -138,7 +147,9 @@ fn main() {
             },
         };
         let t = Instant::now();
-        let ao = if batch {
+        let ao = if args[1] == "sphere" {
+            ao_pass(&SphereCull(&fs), &points, &normals, &rays)
+        } else if batch {
             ao_pass(&fs, &points, &normals, &rays)
         } else {
             ao_pass(&PerRay(&fs), &points, &normals, &rays)

@@ -26,6 +26,7 @@ pub mod experiment;
 pub mod field;
 pub mod geometry;
 pub mod gpu;
+mod hint;
 pub mod io;
 pub mod relief;
 pub mod render;

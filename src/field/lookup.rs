@@ -158,7 +158,7 @@ pub struct LookupOptions {
 
 /// The texels a lookup reads, computed apart from reading them so that batched lookups can
 /// prefetch the storage: [`NearestRead`] (the papers' method) or [`BlendReads`] (interpolated).
-pub trait Reads: Copy {
+pub trait Reads: Copy + Default {
     /// The texels read for a ray crossing the sphere at unit position `u` with model-space
     /// direction `dir` pointing into the sphere.
     fn of(field: &VisibilityField, u: Vec3, dir: Vec3) -> Self;
@@ -166,11 +166,24 @@ pub trait Reads: Copy {
     fn prefetch(&self, field: &VisibilityField);
     /// The normalised distance D of these reads.
     fn read(&self, field: &VisibilityField) -> f32;
+    /// `out[k] = Self::of(field, at[k].u, at[k].dir)` for a block of crossings, each
+    /// prefetched; implementations may order the work differently, never the answers.
+    ///
+    /// # Panics
+    /// If `at` and `out` differ in length.
+    #[inline]
+    fn of_block(field: &VisibilityField, at: &[Crossed], out: &mut [Self]) {
+        assert_eq!(at.len(), out.len(), "of_block: at and out differ in length");
+        for (c, o) in at.iter().zip(out.iter_mut()) {
+            *o = Self::of(field, c.u, c.dir);
+            o.prefetch(field);
+        }
+    }
 }
 
 /// [`Selection::Nearest`]: the map of the nearest positional sample and the texel containing
 /// the direction.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub struct NearestRead {
     pub map: u32,
     pub texel: u32,
@@ -215,11 +228,42 @@ impl Reads for NearestRead {
     fn read(&self, field: &VisibilityField) -> f32 {
         field.storage.get(self.map as usize, self.texel as usize)
     }
+
+    /// The lookups' memory reads in stages: the owner-table cells of every crossing are
+    /// requested before any is read, then the frames of the maps found, then the texel-table
+    /// cells, then the stored texels, [`STAGE`] crossings at a time. Each stage's cache misses
+    /// overlap instead of queueing behind each other (a lookup's owner cell, frame and
+    /// texel-table cell are dependent reads); the answers are those of [`Reads::of`].
+    #[inline]
+    fn of_block(field: &VisibilityField, at: &[Crossed], out: &mut [Self]) {
+        assert_eq!(at.len(), out.len(), "of_block: at and out differ in length");
+        for (at, out) in at.chunks(STAGE).zip(out.chunks_mut(STAGE)) {
+            for c in at {
+                field.points.prefetch_nearest(c.u);
+            }
+            for (c, o) in at.iter().zip(out.iter_mut()) {
+                o.map = field.points.nearest(c.u) as u32;
+                crate::hint::prefetch_value(&field.frames[o.map as usize]);
+            }
+            let mut local = [Vec3::ZERO; STAGE];
+            for ((c, o), l) in at.iter().zip(out.iter()).zip(local.iter_mut()) {
+                *l = field.frames[o.map as usize].to_local(c.dir);
+                field.texels.prefetch(*l);
+            }
+            for (o, &l) in out.iter_mut().zip(&local) {
+                o.texel = field.texels.texel(l);
+                o.prefetch(field);
+            }
+        }
+    }
 }
+
+/// Crossings per stage of [`NearestRead`]'s [`Reads::of_block`].
+const STAGE: usize = 16;
 
 /// [`Selection::Interpolated`]: up to three maps × four texels, weight = map weight × bilinear
 /// weight, blended as an occupancy ([`VisibilityField::sample_interpolated`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
 pub struct BlendReads {
     /// (map, texel, weight); the first `n` are used.
     items: [(u32, u32, f32); 12],
@@ -276,6 +320,31 @@ impl Reads for BlendReads {
             dist / occ
         } else {
             1.0
+        }
+    }
+}
+
+/// One ray's field lookup up to the choice of its texels ([`VisibilityField::cross`]): the
+/// [`Probe`] without its reads.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct Crossed {
+    /// As [`Probe`]'s.
+    t: f32,
+    inside: bool,
+    /// The unit position on the sphere whose map is read.
+    pub u: Vec3,
+    /// The model-space direction read, pointing into the sphere.
+    pub dir: Vec3,
+}
+
+impl Crossed {
+    /// The probe that reads `reads` for this crossing.
+    #[inline]
+    pub fn with_reads<R>(&self, reads: R) -> Probe<R> {
+        Probe {
+            t: self.t,
+            inside: self.inside,
+            reads,
         }
     }
 }
@@ -353,6 +422,21 @@ impl VisibilityField {
         tmin: f32,
         tmax: f32,
     ) -> Option<Probe<R>> {
+        let c = self.cross(from, origin, dir, tmin, tmax)?;
+        Some(c.with_reads(R::of(self, c.u, c.dir)))
+    }
+
+    /// The sphere crossing of [`Self::probe`], before its reads: `None` when the ray cannot
+    /// hit, else where the field is read (unit position and direction into the sphere).
+    #[inline]
+    pub fn cross(
+        &self,
+        from: &SphereOrigin,
+        origin: Vec3,
+        dir: Vec3,
+        tmin: f32,
+        tmax: f32,
+    ) -> Option<Crossed> {
         let c = self.bounds.center;
         let r = self.bounds.radius;
         let hit = from.crossing(dir)?;
@@ -365,20 +449,20 @@ impl VisibilityField {
             if t0 > tmax {
                 return None;
             }
-            let u = (hit.entry / r as f64).as_vec3();
-            Some(Probe {
+            Some(Crossed {
                 t: t0,
                 inside: false,
-                reads: R::of(self, u, dir),
+                u: (hit.entry / r as f64).as_vec3(),
+                dir,
             })
         } else {
             // Inside: intra-object test from the exit point back towards the origin.
             let p1 = (origin - c) + t1 * dir;
-            let u = p1.normalize_or_zero();
-            Some(Probe {
+            Some(Crossed {
                 t: t1,
                 inside: true,
-                reads: R::of(self, u, -dir),
+                u: p1.normalize_or_zero(),
+                dir: -dir,
             })
         }
     }

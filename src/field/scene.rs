@@ -2,7 +2,7 @@
 //! occluders; 2010 §3.2).
 
 use super::lookup::{
-    ray_sphere, BlendReads, LookupOptions, NearestRead, Probe, Reads, SphereOrigin,
+    ray_sphere, BlendReads, Crossed, LookupOptions, NearestRead, Reads, SphereOrigin,
 };
 use super::Selection;
 use super::VisibilityField;
@@ -158,29 +158,32 @@ impl FieldInstance {
         let o = self.local_origin(origin);
         let from = SphereOrigin::new(o, field.bounds.center, field.bounds.radius);
         let (lmin, lmax) = (tr.to_local_distance(tmin), tr.to_local_distance(tmax));
-        let mut pending: [Option<(usize, Probe<R>)>; BLOCK] = [None; BLOCK];
+        let mut index = [0usize; BLOCK];
+        let mut crossed = [Crossed::default(); BLOCK];
+        let mut reads = [R::default(); BLOCK];
         let mut n = 0;
-        let resolve = |pending: &[Option<(usize, Probe<R>)>], out: &mut [bool]| {
-            for (i, p) in pending.iter().flatten() {
-                out[*i] |= field.finish(p, lmin, lmax, opts).is_some();
+        let mut resolve = |n: usize, index: &[usize], crossed: &[Crossed], out: &mut [bool]| {
+            R::of_block(field, &crossed[..n], &mut reads[..n]);
+            for k in 0..n {
+                let probe = crossed[k].with_reads(reads[k]);
+                out[index[k]] |= field.finish(&probe, lmin, lmax, opts).is_some();
             }
         };
         for (i, &dir) in dirs.iter().enumerate() {
             if out[i] || !candidate(dir) {
                 continue;
             }
-            let Some(probe) = field.probe::<R>(&from, o, self.local_dir(dir), lmin, lmax) else {
+            let Some(c) = field.cross(&from, o, self.local_dir(dir), lmin, lmax) else {
                 continue;
             };
-            probe.reads().prefetch(field);
-            pending[n] = Some((i, probe));
+            (index[n], crossed[n]) = (i, c);
             n += 1;
             if n == BLOCK {
-                resolve(&pending, out);
+                resolve(n, &index, &crossed, out);
                 n = 0;
             }
         }
-        resolve(&pending[..n], out);
+        resolve(n, &index, &crossed, out);
     }
 }
 

@@ -9,6 +9,8 @@
 //! - `Bit1`: 2008 §4 "Further Memory Optimization" (Figure 7): one bit per direction (hit or
 //!   miss) and, per map, the mean normalised distance of that map's hits, returned for every hit.
 
+use crate::hint::prefetch_line;
+
 /// Stored precision.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -85,21 +87,6 @@ const U8_DECODE: [f32; 256] = {
     }
     table
 };
-
-/// A prefetch hint for the cache line holding `ptr`. A prefetch never faults, so any address is
-/// allowed.
-#[inline(always)]
-fn prefetch_line(ptr: *const u8) {
-    #[cfg(target_arch = "x86_64")]
-    // SAFETY: `prefetcht0` only hints the cache; it never faults or reads into registers, so it
-    // is sound for any address (SSE is part of the x86-64 baseline).
-    #[allow(unused_unsafe)]
-    unsafe {
-        core::arch::x86_64::_mm_prefetch::<{ core::arch::x86_64::_MM_HINT_T0 }>(ptr.cast());
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = ptr;
-}
 
 /// The stored distances of every map, row-major: index = map · texels + texel.
 #[derive(Clone, Debug, PartialEq)]

@@ -91,6 +91,22 @@ impl OwnerGrid {
     /// [`super::cube_grid::cell_of`]'s, with the range checks folded into one test.
     #[inline(always)]
     pub fn owner(&self, points: &[Vec3], d: Vec3) -> Option<usize> {
+        let cell = self.cell(d)?;
+        let o = self.owner[cell] as u32;
+        if o < self.n {
+            return Some(o as usize);
+        }
+        let [p, q] = *self.pairs.get((o - self.n) as usize)?; // None for MIXED
+        let dd = d.as_dvec3();
+        let better = dd.dot(points[q as usize].as_dvec3()) > dd.dot(points[p as usize].as_dvec3());
+        Some(if better { q } else { p } as usize)
+    }
+
+    /// The table cell of `d` ([`super::cube_grid::cell_of`]'s, with the range checks folded
+    /// into one test), `None` for zero, tiny (< 1e-30), infinite and NaN inputs, whose cell the
+    /// f32 computation does not place reliably.
+    #[inline(always)]
+    fn cell(&self, d: Vec3) -> Option<usize> {
         let (ax, ay, az) = (d.x.abs(), d.y.abs(), d.z.abs());
         let x_wins = (ax >= ay) & (ax >= az);
         let y_wins = !x_wins & (ay >= az);
@@ -113,15 +129,15 @@ impl OwnerGrid {
         let (i, j) = unsafe { (fi.to_int_unchecked::<u32>(), fj.to_int_unchecked::<u32>()) };
         let last = self.g - 1;
         let f = 2 * a + (da < 0.0) as u32;
-        let cell = (f * self.g + j.min(last)) * self.g + i.min(last);
-        let o = self.owner[cell as usize] as u32;
-        if o < self.n {
-            return Some(o as usize);
+        Some(((f * self.g + j.min(last)) * self.g + i.min(last)) as usize)
+    }
+
+    /// Hints the CPU to fetch the table cell that [`Self::owner`] reads for `d`.
+    #[inline(always)]
+    pub fn prefetch(&self, d: Vec3) {
+        if let Some(cell) = self.cell(d) {
+            crate::hint::prefetch_value(self.owner.as_ptr().wrapping_add(cell));
         }
-        let [p, q] = *self.pairs.get((o - self.n) as usize)?; // None for MIXED
-        let dd = d.as_dvec3();
-        let better = dd.dot(points[q as usize].as_dvec3()) > dd.dot(points[p as usize].as_dvec3());
-        Some(if better { q } else { p } as usize)
     }
 
     /// Bytes held by the table.

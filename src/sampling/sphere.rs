@@ -229,6 +229,13 @@ impl SpherePoints {
         }
     }
 
+    /// Hints the CPU to fetch the owner-table cell that [`Self::nearest`] reads for `d` (no
+    /// effect on results).
+    #[inline]
+    pub fn prefetch_nearest(&self, d: Vec3) {
+        self.owners.prefetch(d);
+    }
+
     /// [`Self::nearest`] without the owner table: always the cube grid's candidate search (the
     /// reference the table is tested against).
     pub fn nearest_searched(&self, d: Vec3) -> usize {

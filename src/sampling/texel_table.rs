@@ -143,6 +143,13 @@ impl TexelTable {
     /// The table's texel of `d`, `None` when `d` is not in a certified cell.
     #[inline]
     pub fn certified(&self, d: Vec3) -> Option<u32> {
+        let t = self.texel[self.cell(d)?];
+        (t != MIXED).then_some(t as u32)
+    }
+
+    /// The table cell of `d`, `None` outside the table (and always when it is empty).
+    #[inline(always)]
+    fn cell(&self, d: Vec3) -> Option<usize> {
         let gf = self.g as f32;
         let (fx, fy) = ((d.x + 1.0) * self.half_g, (d.y + 1.0) * self.half_g);
         // Also false for NaN, and always when the table is empty (g = 0).
@@ -151,8 +158,15 @@ impl TexelTable {
         }
         // SAFETY: fx and fy are finite and in [0, g) (checked above), so they convert.
         let (i, j) = unsafe { (fx.to_int_unchecked::<u32>(), fy.to_int_unchecked::<u32>()) };
-        let t = self.texel[(j * self.g + i) as usize];
-        (t != MIXED).then_some(t as u32)
+        Some((j * self.g + i) as usize)
+    }
+
+    /// Hints the CPU to fetch the table cell that [`Self::texel`] reads for `d`.
+    #[inline(always)]
+    pub fn prefetch(&self, d: Vec3) {
+        if let Some(cell) = self.cell(d) {
+            crate::hint::prefetch_value(self.texel.as_ptr().wrapping_add(cell));
+        }
     }
 
     /// Cells per side of the table (G; 0 for an empty table).

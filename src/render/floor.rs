@@ -1,0 +1,165 @@
+//! Cost floors for the lookup-versus-ray-casting comparison (`benches/field.rs`,
+//! `examples/ao_cost.rs`): two [`Visibility`] backends that do strictly less work than any field
+//! lookup must do on the same rays, so that "ray casting time / floor time" bounds the speed-up
+//! that any field lookup can reach there.
+//!
+//! - [`NoQuery`]: every ray free. What remains is the caller's own cost: building the rays and
+//!   reducing the answers (the AO loop).
+//! - [`SphereCull`]: occluded wherever the segment meets a caster's bounding sphere. Every field
+//!   lookup decides this first (2008 Algorithm 2 starts from the ray's entry into the sphere):
+//!   the same cheap cull ([`FieldInstance::may_meet`]) and the same exact f64 crossing
+//!   ([`SphereOrigin`]), shared per origin as in the batched lookup, taken in world space (the
+//!   lookup also moves each ray into the field's model space), without choosing a map or a
+//!   texel and without reading the field.
+//!
+//! Neither answers visibility; they exist to be timed.
+
+use super::Visibility;
+use crate::field::lookup::SphereOrigin;
+use crate::field::scene::{FieldInstance, FieldScene};
+use glam::Vec3;
+
+/// Every ray free, at no cost ([module docs](self)).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NoQuery;
+
+impl Visibility for NoQuery {
+    fn occluded(&self, _: Vec3, _: Vec3, _: f32, _: f32) -> bool {
+        false
+    }
+
+    fn hit_distance(&self, _: Vec3, _: Vec3, _: f32, _: f32) -> Option<f32> {
+        None
+    }
+
+    fn occluded_many(&self, _: Vec3, dirs: &[Vec3], _: f32, _: f32, out: &mut [bool]) {
+        assert_eq!(
+            dirs.len(),
+            out.len(),
+            "occluded_many: dirs and out differ in length"
+        );
+        // The caller must still build the rays, although nothing reads them.
+        std::hint::black_box(dirs);
+        out.fill(false);
+    }
+}
+
+/// Occluded where the segment meets a caster's bounding sphere ([module docs](self)).
+#[derive(Clone, Copy, Debug)]
+pub struct SphereCull<'a>(pub &'a FieldScene);
+
+impl SphereCull<'_> {
+    /// The distance at which the segment enters `inst`'s world sphere (`tmin` when it starts
+    /// inside), if it meets it within [tmin, tmax].
+    #[inline]
+    fn entry(
+        inst: &FieldInstance,
+        from: &SphereOrigin,
+        o: Vec3,
+        d: Vec3,
+        tmin: f32,
+        tmax: f32,
+    ) -> Option<f32> {
+        if !inst.may_meet(o, d, tmin) {
+            return None;
+        }
+        let c = from.crossing(d)?;
+        (c.t1 >= tmin && c.t0 <= tmax).then_some(c.t0.max(tmin))
+    }
+}
+
+impl Visibility for SphereCull<'_> {
+    fn occluded(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> bool {
+        self.hit_distance(origin, dir, tmin, tmax).is_some()
+    }
+
+    fn hit_distance(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<f32> {
+        self.0
+            .instances
+            .iter()
+            .filter_map(|inst| {
+                let from = SphereOrigin::new(origin, inst.world_center, inst.world_radius);
+                Self::entry(inst, &from, origin, dir, tmin, tmax)
+            })
+            .min_by(f32::total_cmp)
+    }
+
+    fn occluded_many(&self, origin: Vec3, dirs: &[Vec3], tmin: f32, tmax: f32, out: &mut [bool]) {
+        assert_eq!(
+            dirs.len(),
+            out.len(),
+            "occluded_many: dirs and out differ in length"
+        );
+        out.fill(false);
+        for inst in &self.0.instances {
+            let from = SphereOrigin::new(origin, inst.world_center, inst.world_radius);
+            for (o, &d) in out.iter_mut().zip(dirs) {
+                *o = *o || Self::entry(inst, &from, origin, d, tmin, tmax).is_some();
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::field::{FieldParams, Precision, Storage, VisibilityField};
+    use crate::geometry::{Similarity, Sphere};
+    use crate::sampling::{LayoutKind, SphereKind};
+    use std::sync::Arc;
+
+    /// A field of one sphere of radius 1 at (0, 0, 5) (its texels do not matter here).
+    fn scene() -> FieldScene {
+        let params = FieldParams {
+            sphere: SphereKind::Slater,
+            count: 290,
+            layout: LayoutKind::Concentric,
+            res: 8,
+            precision: Precision::F32,
+        };
+        let storage = Storage::F32 {
+            texels: 64,
+            data: vec![1.0; 290 * 64],
+        };
+        let bounds = Sphere {
+            center: Vec3::new(0.0, 0.0, 5.0),
+            radius: 1.0,
+        };
+        let field = VisibilityField::from_storage(params, bounds, storage).unwrap();
+        FieldScene {
+            instances: vec![FieldInstance::new(Arc::new(field), Similarity::default())],
+            options: Default::default(),
+        }
+    }
+
+    #[test]
+    fn sphere_cull_answers_whether_the_segment_meets_the_sphere() {
+        let fs = scene();
+        let cull = SphereCull(&fs);
+        let o = Vec3::ZERO;
+        let toward = Vec3::Z;
+        let past = Vec3::new(0.3, 0.0, 1.0).normalize(); // 5·0.3/1.04 ≈ 1.44 > 1 from the centre
+        let grazing_in = Vec3::new(0.19, 0.0, 1.0).normalize(); // ≈ 0.93 from the centre
+        assert_eq!(cull.hit_distance(o, toward, 0.0, 10.0), Some(4.0));
+        assert!(!cull.occluded(o, past, 0.0, 10.0));
+        assert!(cull.occluded(o, grazing_in, 0.0, 10.0));
+        assert!(
+            !cull.occluded(o, toward, 0.0, 3.9),
+            "segment ends before the sphere"
+        );
+        assert!(
+            !cull.occluded(o, -toward, 0.0, 10.0),
+            "sphere behind the ray"
+        );
+        assert_eq!(
+            cull.hit_distance(Vec3::new(0.0, 0.0, 5.0), Vec3::X, 0.0, 1.0),
+            Some(0.0)
+        );
+        let dirs = [toward, past, grazing_in, -toward];
+        let mut out = [true; 4];
+        cull.occluded_many(o, &dirs, 0.0, 10.0, &mut out);
+        assert_eq!(out, [true, false, true, false]);
+        NoQuery.occluded_many(o, &dirs, 0.0, 10.0, &mut out);
+        assert_eq!(out, [false; 4]);
+    }
+}
