@@ -267,3 +267,21 @@ pub fn frames_for(points: &SpherePoints) -> Vec<Frame> {
         .map(|i| Frame::from_normal(-points.point(i)))
         .collect()
 }
+
+/// A field of 290 Slater maps of 8² concentric f32 texels around `bounds`, every texel storing
+/// the normalised distance `d` (1 = miss): for tests whose answers follow from the sphere alone.
+#[cfg(test)]
+pub(crate) fn constant_field(d: f32, bounds: crate::geometry::Sphere) -> VisibilityField {
+    let params = FieldParams {
+        sphere: crate::sampling::SphereKind::Slater,
+        count: 290,
+        layout: crate::sampling::LayoutKind::Concentric,
+        res: 8,
+        precision: Precision::F32,
+    };
+    let storage = Storage::F32 {
+        texels: 64,
+        data: vec![d; 290 * 64],
+    };
+    VisibilityField::from_storage(params, bounds, storage).unwrap()
+}

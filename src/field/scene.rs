@@ -321,31 +321,18 @@ impl Visibility for FieldScene {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::field::{FieldParams, Precision, Storage};
     use crate::geometry::Sphere;
     use crate::sampling::rays::seeded_sphere_direction;
-    use crate::sampling::{LayoutKind, SphereKind};
 
     /// A field whose every texel stores a hit halfway across: a ray entering the sphere from
     /// outside always reports a hit, so `hit_distance` is `Some` for every ray that meets the
     /// sphere ahead.
     fn solid_field() -> Arc<VisibilityField> {
-        let params = FieldParams {
-            sphere: SphereKind::Slater,
-            count: 290,
-            layout: LayoutKind::Concentric,
-            res: 8,
-            precision: Precision::F32,
-        };
-        let storage = Storage::F32 {
-            texels: 64,
-            data: vec![0.5; 290 * 64],
-        };
         let bounds = Sphere {
             center: Vec3::new(0.1, -0.2, 0.3),
             radius: 0.8,
         };
-        Arc::new(VisibilityField::from_storage(params, bounds, storage).unwrap())
+        Arc::new(crate::field::constant_field(0.5, bounds))
     }
 
     #[test]

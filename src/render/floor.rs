@@ -103,29 +103,16 @@ impl Visibility for SphereCull<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::field::{FieldParams, Precision, Storage, VisibilityField};
     use crate::geometry::{Similarity, Sphere};
-    use crate::sampling::{LayoutKind, SphereKind};
     use std::sync::Arc;
 
     /// A field of one sphere of radius 1 at (0, 0, 5) (its texels do not matter here).
     fn scene() -> FieldScene {
-        let params = FieldParams {
-            sphere: SphereKind::Slater,
-            count: 290,
-            layout: LayoutKind::Concentric,
-            res: 8,
-            precision: Precision::F32,
-        };
-        let storage = Storage::F32 {
-            texels: 64,
-            data: vec![1.0; 290 * 64],
-        };
         let bounds = Sphere {
             center: Vec3::new(0.0, 0.0, 5.0),
             radius: 1.0,
         };
-        let field = VisibilityField::from_storage(params, bounds, storage).unwrap();
+        let field = crate::field::constant_field(1.0, bounds);
         FieldScene {
             instances: vec![FieldInstance::new(Arc::new(field), Similarity::default())],
             options: Default::default(),
