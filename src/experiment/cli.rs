@@ -49,6 +49,13 @@ pub enum Command {
         /// 64² images and one timing per setting (for tests and CI).
         #[arg(long)]
         quick: bool,
+        /// The adapter of the GPU columns: auto, lavapipe, hardware, or part of its name
+        /// (default: $VISFIELD_ADAPTER, else auto).
+        #[arg(long)]
+        adapter: Option<String>,
+        /// CPU only: leave the GPU columns empty.
+        #[arg(long, conflicts_with = "adapter")]
+        no_gpu: bool,
     },
     /// List the experiment specs and the figure or table each reproduces.
     List,
@@ -290,7 +297,18 @@ pub fn main() {
         Command::Quickstart { out } => report(super::quickstart::run(&out)),
         Command::List => list(),
         Command::Stability { out } => report(super::stability::run(&out).map(|_| ())),
-        Command::Relief { out, quick } => report(super::relief::run(&out, quick).map(|_| ())),
+        Command::Relief {
+            out,
+            quick,
+            adapter,
+            no_gpu,
+        } => {
+            let gpu = (!no_gpu).then(|| match adapter {
+                Some(a) => crate::gpu::AdapterPreference::parse(&a),
+                None => crate::gpu::AdapterPreference::from_env(),
+            });
+            report(super::relief::run(&out, quick, gpu).map(|_| ()))
+        }
         Command::Run { spec, opts } => report(run_one(&spec, &opts, None).map(|_| ())),
         Command::Check { names, opts } => check(&names, &opts),
         Command::All { opts } => report((|| {
@@ -303,7 +321,8 @@ pub fn main() {
             super::quickstart::run(&root("quickstart"))?;
             crate::sampling::report::run(&root("sampling"))
                 .map_err(|e| format!("sampling: {e}"))?;
-            super::relief::run(&root("relief"), opts.quick)?;
+            let adapter = opts.options("relief", opts.out.as_deref()).adapter;
+            super::relief::run(&root("relief"), opts.quick, Some(adapter))?;
             super::stability::run(&root("stability")).map(|_| ())
         })()),
         Command::Plots { names, quick, dir } => report(plots(&names, quick, dir.as_deref())),

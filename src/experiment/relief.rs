@@ -7,12 +7,16 @@
 //! gains from skipping beside ours in time and in texture fetches), plots (fetches and time
 //! against viewing angle, error against time), an image grid and `run.json`.
 //!
+//! With an adapter (lavapipe or a GPU; `--no-gpu` to skip) every setting also runs on the
+//! GPU caster (`gpu::ReliefKernel`) and its frame is compared with the CPU's (`gpu_*` columns).
+//!
 //! Deviation from the paper: frame rates on a 2005 GPU become CPU seconds per frame and texture
 //! fetches per pixel (the cost the skips remove, independent of the machine); images are 256²
 //! (the paper's 512²); the "angel" map is replaced by the procedural `relief` map.
 
 use super::plot::{image_grid, xy_plot, Axes, Series};
-use crate::relief::view::{render, View};
+use crate::gpu::{AdapterPreference, GpuContext, GpuError, ReliefKernel};
+use crate::relief::view::{render, render_gpu, Frame, View};
 use crate::relief::{CastParams, Dataset, SafetyZones, PAPER_BOXES};
 use crate::render::image::{rms_255, GrayImage};
 use serde::Serialize;
@@ -48,6 +52,41 @@ pub struct Row {
     /// Time and fetches relative to the same settings without skips.
     pub time_speedup: f64,
     pub fetch_reduction: f64,
+    /// The GPU caster on the same segments (empty where no adapter ran): adapter and driver,
+    /// fastest kernel time (GPU timestamps) and wall time (upload, dispatch, read-back; the
+    /// host's shading excluded), fetches per entering pixel, and the frame against the CPU's:
+    /// pixels hit by one only, RMS (0–255) over pixels hit by either. On lavapipe the times are
+    /// parity evidence, not speed.
+    pub gpu_adapter: Option<String>,
+    pub gpu_kernel_s: Option<f64>,
+    pub gpu_wall_s: Option<f64>,
+    pub gpu_fetches_per_pixel: Option<f64>,
+    pub gpu_hit_mismatches_vs_cpu: Option<usize>,
+    pub gpu_rms_vs_cpu: Option<f64>,
+    /// GPU kernel time relative to the same settings without skips (the paper's frame-rate
+    /// gain, where the adapter is a GPU).
+    pub gpu_time_speedup: Option<f64>,
+}
+
+/// The GPU columns of a [`Row`].
+#[derive(Clone, Debug, Default)]
+struct GpuCells {
+    adapter: Option<String>,
+    kernel_s: Option<f64>,
+    wall_s: Option<f64>,
+    fetches_per_pixel: Option<f64>,
+    hit_mismatches_vs_cpu: Option<usize>,
+    rms_vs_cpu: Option<f64>,
+}
+
+/// What [`measure`] found for one setting.
+struct Measured {
+    time_s: f64,
+    fetches_per_pixel: f64,
+    pixels: usize,
+    rms_vs_exact: f64,
+    hit_mismatches: usize,
+    gpu: GpuCells,
 }
 
 /// The paper's frame rates (fps) for 0, 1 and 2 skips: Table 1 (75 samples per unit, two
@@ -90,6 +129,8 @@ pub struct Comparison {
     pub paper_fps_gain: f64,
     pub our_time_gain: f64,
     pub our_fetch_gain: f64,
+    /// In GPU kernel time (empty without an adapter; lavapipe's is a CPU's).
+    pub our_gpu_time_gain: Option<f64>,
 }
 
 fn view(angle: f32, size: u32, close_up: bool) -> View {
@@ -102,7 +143,24 @@ fn view(angle: f32, size: u32, close_up: bool) -> View {
     }
 }
 
-/// Renders one setting `repeats` times (the fastest time kept) and measures it against `exact`.
+/// Mean fetches over the pixels whose ray entered the prism (those with at least one fetch),
+/// and their count.
+fn fetches_per_entering_pixel(f: &Frame) -> (f64, usize) {
+    let entering: Vec<u32> = f.fetches.iter().copied().filter(|&c| c > 0).collect();
+    let mean = entering.iter().map(|&c| c as f64).sum::<f64>() / entering.len().max(1) as f64;
+    (mean, entering.len())
+}
+
+/// RMS (0–255) of `a` against `b` over the pixels hit by either, and the pixels hit by one only.
+fn compare_frames(a: &Frame, b_image: &GrayImage, b_hit: &[bool]) -> (f64, usize) {
+    let mask: Vec<bool> = a.hit.iter().zip(b_hit).map(|(x, y)| *x || *y).collect();
+    let rms = rms_255(&a.image.data, &b_image.data, Some(&mask));
+    let mismatches = a.hit.iter().zip(b_hit).filter(|(x, y)| x != y).count();
+    (rms, mismatches)
+}
+
+/// Renders one setting `repeats` times (the fastest time kept) and measures it against `exact`;
+/// with `gpu`, renders it there as often and compares the GPU frame with the CPU's.
 fn measure(
     map: &crate::relief::HeightMap,
     zones: &SafetyZones,
@@ -110,7 +168,8 @@ fn measure(
     p: &CastParams,
     exact: &(GrayImage, Vec<bool>),
     repeats: usize,
-) -> (f64, f64, usize, f64, usize) {
+    gpu: Option<(&ReliefKernel, &str)>,
+) -> Result<Measured, String> {
     let mut best = f64::INFINITY;
     let mut frame = None;
     for _ in 0..repeats.max(1) {
@@ -120,18 +179,69 @@ fn measure(
         frame = Some(f);
     }
     let f = frame.expect("rendered once");
-    let entering: Vec<u32> = f.fetches.iter().copied().filter(|&c| c > 0).collect();
-    let fetches = entering.iter().map(|&c| c as f64).sum::<f64>() / entering.len().max(1) as f64;
-    let mask: Vec<bool> = f.hit.iter().zip(&exact.1).map(|(a, b)| *a || *b).collect();
-    let rms = rms_255(&f.image.data, &exact.0.data, Some(&mask));
-    let mismatches = f.hit.iter().zip(&exact.1).filter(|(a, b)| a != b).count();
-    (best, fetches, entering.len(), rms, mismatches)
+    let (fetches, pixels) = fetches_per_entering_pixel(&f);
+    let (rms, mismatches) = compare_frames(&f, &exact.0, &exact.1);
+    let mut cells = GpuCells::default();
+    if let Some((kernel, adapter)) = gpu {
+        let (mut kernel_s, mut wall_s) = (None::<f64>, f64::INFINITY);
+        let mut gpu_frame = None;
+        // At least twice: the first dispatch of a kernel also pays its driver-side compile.
+        for _ in 0..repeats.max(2) {
+            let (g, timing) =
+                render_gpu(kernel, map, v, p).map_err(|e| format!("relief on the GPU: {e}"))?;
+            if let Some(k) = timing.kernel {
+                let k = k.as_secs_f64();
+                kernel_s = Some(kernel_s.map_or(k, |b| b.min(k)));
+            }
+            wall_s = wall_s.min(timing.wall.as_secs_f64());
+            gpu_frame = Some(g);
+        }
+        let g = gpu_frame.expect("rendered once");
+        let (rms_vs_cpu, mismatches_vs_cpu) = compare_frames(&g, &f.image, &f.hit);
+        cells = GpuCells {
+            adapter: Some(adapter.to_string()),
+            kernel_s,
+            wall_s: Some(wall_s),
+            fetches_per_pixel: Some(fetches_per_entering_pixel(&g).0),
+            hit_mismatches_vs_cpu: Some(mismatches_vs_cpu),
+            rms_vs_cpu: Some(rms_vs_cpu),
+        };
+    }
+    Ok(Measured {
+        time_s: best,
+        fetches_per_pixel: fetches,
+        pixels,
+        rms_vs_exact: rms,
+        hit_mismatches: mismatches,
+        gpu: cells,
+    })
 }
 
-/// Runs the tables at `size`² pixels (`quick`: 64², one timing) and writes `out/`.
-pub fn run(out: &Path, quick: bool) -> Result<Vec<Row>, String> {
+/// The GPU device for the relief columns: `None` when not asked for, or (with a note) when
+/// no Vulkan driver is installed; other failures are errors.
+fn gpu_context(pref: Option<AdapterPreference>) -> Result<Option<GpuContext>, String> {
+    let Some(pref) = pref else { return Ok(None) };
+    match GpuContext::new(pref) {
+        Ok(c) => Ok(Some(c)),
+        Err(GpuError::NoAdapter) => {
+            eprintln!(
+                "relief: no Vulkan adapter, GPU columns left empty ({})",
+                GpuError::NoAdapter
+            );
+            Ok(None)
+        }
+        Err(e) => Err(format!("relief: GPU: {e}")),
+    }
+}
+
+/// Runs the tables at `size`² pixels (`quick`: 64², one timing) and writes `out/`; with `gpu`,
+/// every setting also runs on that adapter (the `gpu_*` columns).
+pub fn run(out: &Path, quick: bool, gpu: Option<AdapterPreference>) -> Result<Vec<Row>, String> {
     crate::experiment::run::ensure_writable(out)?;
-    let meta = crate::experiment::meta::RunMeta::collect(None);
+    let mut meta = crate::experiment::meta::RunMeta::collect(None);
+    let ctx = gpu_context(gpu)?;
+    let adapter = ctx.as_ref().map(|c| c.adapter_label());
+    meta.gpu_adapter = adapter.clone();
     let (size, repeats) = if quick { (64, 1) } else { (256, 3) };
     let mut rows: Vec<Row> = Vec::new();
     let mut grid: Vec<(GrayImage, Vec<String>)> = Vec::new();
@@ -154,17 +264,26 @@ pub fn run(out: &Path, quick: bool) -> Result<Vec<Row>, String> {
         }) {
             r.time_speedup = base.time_s / r.time_s;
             r.fetch_reduction = base.fetches_per_pixel / r.fetches_per_pixel;
+            r.gpu_time_speedup = base.gpu_kernel_s.zip(r.gpu_kernel_s).map(|(b, t)| b / t);
         }
         rows.push(r);
     };
     for dset in Dataset::ALL {
         let map = dset.map(MAP_RES);
         let zones = SafetyZones::new(&map, &PAPER_BOXES);
+        let kernel = match &ctx {
+            Some(c) => {
+                Some(ReliefKernel::new(c, &map, &zones).map_err(|e| format!("relief: GPU: {e}"))?)
+            }
+            None => None,
+        };
+        let gpu = kernel.as_ref().zip(adapter.as_deref());
         let mut run_table = |table: &'static str,
                              angles: &[f32],
                              settings: &[(f32, u32)],
                              close_up: bool,
-                             rows: &mut Vec<Row>| {
+                             rows: &mut Vec<Row>|
+         -> Result<(), String> {
             for &angle in angles {
                 let v = view(angle, size, close_up);
                 let ex = render(&map, None, &v, None);
@@ -176,12 +295,21 @@ pub fn run(out: &Path, quick: bool) -> Result<Vec<Row>, String> {
                             bisections,
                             skips,
                         };
-                        let (t, fetches, pixels, rms, mism) =
-                            measure(&map, &zones, &v, &p, &exact, repeats);
+                        let m = measure(&map, &zones, &v, &p, &exact, repeats, gpu)?;
+                        let gpu_note = match (m.gpu.kernel_s, m.gpu.hit_mismatches_vs_cpu) {
+                            (Some(k), Some(d)) => {
+                                format!("; GPU kernel {k:.4} s, {d} pixel(s) differ")
+                            }
+                            (None, Some(d)) => format!("; GPU {d} pixel(s) differ"),
+                            _ => String::new(),
+                        };
                         eprintln!(
                             "relief: {table} {} {angle}° rate {rate} bisections {bisections} \
-                             skips {skips}: {fetches:.1} fetches/pixel, {t:.4} s, RMS {rms:.2}",
-                            dset.name()
+                             skips {skips}: {:.1} fetches/pixel, {:.4} s, RMS {:.2}{gpu_note}",
+                            dset.name(),
+                            m.fetches_per_pixel,
+                            m.time_s,
+                            m.rms_vs_exact,
                         );
                         push(
                             rows,
@@ -192,13 +320,20 @@ pub fn run(out: &Path, quick: bool) -> Result<Vec<Row>, String> {
                                 samples_per_unit: rate,
                                 bisections,
                                 skips,
-                                pixels,
-                                fetches_per_pixel: fetches,
-                                time_s: t,
-                                rms_vs_exact: rms,
-                                hit_mismatches: mism,
+                                pixels: m.pixels,
+                                fetches_per_pixel: m.fetches_per_pixel,
+                                time_s: m.time_s,
+                                rms_vs_exact: m.rms_vs_exact,
+                                hit_mismatches: m.hit_mismatches,
                                 time_speedup: 1.0,
                                 fetch_reduction: 1.0,
+                                gpu_adapter: m.gpu.adapter,
+                                gpu_kernel_s: m.gpu.kernel_s,
+                                gpu_wall_s: m.gpu.wall_s,
+                                gpu_fetches_per_pixel: m.gpu.fetches_per_pixel,
+                                gpu_hit_mismatches_vs_cpu: m.gpu.hit_mismatches_vs_cpu,
+                                gpu_rms_vs_cpu: m.gpu.rms_vs_cpu,
+                                gpu_time_speedup: None,
                             },
                         );
                     }
@@ -207,16 +342,17 @@ pub fn run(out: &Path, quick: bool) -> Result<Vec<Row>, String> {
                     grid.push((exact.0.clone(), vec![format!("{} 60°: exact", dset.name())]));
                 }
             }
+            Ok(())
         };
-        run_table("angles", &ANGLES, &[(75.0, 2)], false, &mut rows);
+        run_table("angles", &ANGLES, &[(75.0, 2)], false, &mut rows)?;
         if dset == Dataset::Relief {
             let settings = [(10.0, 0), (10.0, 2), (40.0, 2), (75.0, 2), (75.0, 0)];
-            run_table("rates", &[45.0], &settings, true, &mut rows);
+            run_table("rates", &[45.0], &settings, true, &mut rows)?;
         }
     }
     super::outputs::write_csv(&out.join("table.csv"), &rows)?;
     super::outputs::write_csv(&out.join("paper_vs_ours.csv"), &compare(&rows))?;
-    plots(out, &rows)?;
+    plots(out, &rows, size)?;
     let cells: Vec<(&GrayImage, Vec<String>)> = grid.iter().map(|(i, c)| (i, c.clone())).collect();
     image_grid(
         &out.join("images.png"),
@@ -264,6 +400,7 @@ fn compare(rows: &[Row]) -> Vec<Comparison> {
                     paper_fps_gain: fps[skips as usize] / fps[0],
                     our_time_gain: r.time_speedup,
                     our_fetch_gain: r.fetch_reduction,
+                    our_gpu_time_gain: r.gpu_time_speedup,
                 });
             }
         }
@@ -278,6 +415,7 @@ fn compare(rows: &[Row]) -> Vec<Comparison> {
                     paper_fps_gain: fps[skips as usize] / fps[0],
                     our_time_gain: r.time_speedup,
                     our_fetch_gain: r.fetch_reduction,
+                    our_gpu_time_gain: r.gpu_time_speedup,
                 });
             }
         }
@@ -295,13 +433,14 @@ fn compare(rows: &[Row]) -> Vec<Comparison> {
                 paper_fps_gain: fps / base,
                 our_time_gain: r.time_speedup,
                 our_fetch_gain: r.fetch_reduction,
+                our_gpu_time_gain: r.gpu_time_speedup,
             });
         }
     }
     out
 }
 
-fn plots(out: &Path, rows: &[Row]) -> Result<(), String> {
+fn plots(out: &Path, rows: &[Row], size: u32) -> Result<(), String> {
     let series = |f: &dyn Fn(&Row) -> f64| -> Vec<Series> {
         let mut s = Vec::new();
         for d in Dataset::ALL {
@@ -339,10 +478,30 @@ fn plots(out: &Path, rows: &[Row]) -> Result<(), String> {
     )?;
     xy_plot(
         &out.join("time_vs_angle.png"),
-        &axes("CPU time per 256² frame", "seconds"),
+        &axes(&format!("CPU time per {size}² frame"), "seconds"),
         &series(&|r| r.time_s),
         &[],
     )?;
+    let angle_rows = rows.iter().filter(|r| r.table == "angles");
+    if let Some(adapter) = angle_rows.clone().find_map(|r| r.gpu_adapter.as_deref()) {
+        if angle_rows.clone().all(|r| r.gpu_kernel_s.is_some()) {
+            let name = adapter.split(" | ").next().unwrap_or(adapter);
+            let note = if name.contains("llvmpipe") {
+                ": a CPU, parity not speed"
+            } else {
+                ""
+            };
+            xy_plot(
+                &out.join("gpu_time_vs_angle.png"),
+                &axes(
+                    &format!("GPU kernel time per {size}² frame ({name}{note})"),
+                    "seconds",
+                ),
+                &series(&|r| r.gpu_kernel_s.unwrap_or(f64::NAN)),
+                &[],
+            )?;
+        }
+    }
     let pareto: Vec<Series> = (0..=2u32)
         .map(|skips| Series {
             label: format!("relief 45° close-up · {skips} skip(s)"),

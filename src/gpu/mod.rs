@@ -10,6 +10,8 @@
 //! - [`GpuTracer`]: the GPU ray-cast reference, an obvhs CWBVH traversed in WGSL with the
 //!   watertight triangle test, so that GPU lookup is compared with GPU ray casting on the same
 //!   device.
+//! - [`ReliefKernel`]: the 2005 relief caster (linear search, bisection, safety-zone skips)
+//!   over segments through the prism, for the relief experiment's GPU columns.
 //! - [`GpuTiming`]: GPU timestamps (where the adapter has them) and wall time, separately.
 //!
 //! WGSL lives in `shaders/` and is included at compile time; every uniform and storage struct
@@ -20,12 +22,14 @@ mod field_ao;
 mod field_data;
 mod loop_budget;
 mod rays;
+mod relief;
 mod texture;
 mod tracer;
 
 pub use context::{AdapterPreference, GpuContext, ADAPTER_ENV};
 pub use field_ao::{FieldAoKernel, FieldGpuOptions, FieldLayout, LookupProbe};
 pub use field_data::FieldInstanceGpu;
+pub use relief::ReliefKernel;
 pub use tracer::{GpuHit, GpuTracer};
 
 use std::time::Duration;

@@ -1,10 +1,12 @@
 //! Images of the displaced unit square: a pinhole camera looking at the square's centre from a
 //! given angle to its normal, each pixel's ray clipped to the prism box and searched with
-//! [`intersect`] (or [`exact`] for the reference), the hit shaded with the map's normal.
+//! [`intersect`] (or [`exact`] for the reference; [`render_gpu`] for the GPU caster), the hit
+//! shaded with the map's normal.
 
 use super::cast::{exact, intersect, CastParams};
 use super::height::HeightMap;
 use super::zones::SafetyZones;
+use crate::gpu::{GpuError, GpuTiming, ReliefKernel};
 use crate::render::image::GrayImage;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
@@ -34,6 +36,13 @@ impl View {
         let px = ((x as f32 + 0.5) / self.width as f32 * 2.0 - 1.0) * th * aspect;
         let py = (1.0 - (y as f32 + 0.5) / self.height as f32 * 2.0) * th;
         (eye, (fwd + px * right + py * up).normalize())
+    }
+
+    /// The segment `(E, X)` of pixel `k` (row-major) through the prism, `None` where its ray
+    /// misses the prism.
+    pub fn segment(&self, k: u32) -> Option<(Vec3, Vec3)> {
+        let (eye, d) = self.ray(k % self.width, k / self.width);
+        clip_to_prism(eye, d)
     }
 }
 
@@ -76,8 +85,7 @@ pub fn render(
     let px: Vec<(f32, bool, u32)> = (0..w * h)
         .into_par_iter()
         .map(|k| {
-            let (eye, d) = view.ray(k % w, k / w);
-            let Some((e, x)) = clip_to_prism(eye, d) else {
+            let Some((e, x)) = view.segment(k) else {
                 return (0.0, false, 0);
             };
             let (hit, fetches) = match params {
@@ -87,19 +95,55 @@ pub fn render(
                 }
                 None => (exact(map, e, x), 0),
             };
-            match hit {
-                Some(l) => {
-                    let p = e + l * (x - e).normalize();
-                    (shade(map, Vec2::new(p.x, p.y)), true, fetches)
-                }
-                None => (0.0, false, fetches),
-            }
+            shade_pixel(map, e, x, hit, fetches)
         })
         .collect();
+    assemble(view, px)
+}
+
+/// Renders `view` with the GPU caster (`kernel`, made for `map`); the hits are shaded on the
+/// host as in [`render`].
+pub fn render_gpu(
+    kernel: &ReliefKernel,
+    map: &HeightMap,
+    view: &View,
+    params: &CastParams,
+) -> Result<(Frame, GpuTiming), GpuError> {
+    let (w, h) = (view.width, view.height);
+    let pixels: Vec<(u32, (Vec3, Vec3))> = (0..w * h)
+        .filter_map(|k| view.segment(k).map(|s| (k, s)))
+        .collect();
+    let segments: Vec<(Vec3, Vec3)> = pixels.iter().map(|p| p.1).collect();
+    let (casts, timing) = kernel.cast(&segments, params)?;
+    let mut px = vec![(0.0, false, 0); (w * h) as usize];
+    for (&(k, (e, x)), c) in pixels.iter().zip(&casts) {
+        px[k as usize] = shade_pixel(map, e, x, c.hit, c.fetches);
+    }
+    Ok((assemble(view, px), timing))
+}
+
+/// A pixel's (shade, hit, fetches) for the answer `hit` on its segment `E → X`.
+fn shade_pixel(
+    map: &HeightMap,
+    e: Vec3,
+    x: Vec3,
+    hit: Option<f32>,
+    fetches: u32,
+) -> (f32, bool, u32) {
+    match hit {
+        Some(l) => {
+            let p = e + l * (x - e).normalize();
+            (shade(map, Vec2::new(p.x, p.y)), true, fetches)
+        }
+        None => (0.0, false, fetches),
+    }
+}
+
+fn assemble(view: &View, px: Vec<(f32, bool, u32)>) -> Frame {
     Frame {
         image: GrayImage {
-            width: w,
-            height: h,
+            width: view.width,
+            height: view.height,
             data: px.iter().map(|p| p.0).collect(),
         },
         hit: px.iter().map(|p| p.1).collect(),

@@ -89,6 +89,11 @@ impl SafetyZones {
         (&self.dilation[k], &self.erosion[k])
     }
 
+    /// The maps' width and height in texels (those of the displacement map they were made from).
+    pub fn size(&self) -> (usize, usize) {
+        (self.width, self.height)
+    }
+
     /// Bytes of the two four-channel maps (f32 here; the paper's are 8-bit RGBA textures).
     pub fn bytes(&self) -> usize {
         (self.dilation.len() + self.erosion.len()) * std::mem::size_of::<[f32; 4]>()

@@ -1,0 +1,196 @@
+//! The 2005 relief caster on the GPU (`shaders/relief.wgsl`): the linear search, bisection and
+//! safety-zone skips of [`crate::relief::intersect`] (Kolb and Rezk-Salama, VMV 2005,
+//! §3.1–3.4), one invocation per ray segment through the prism.
+//!
+//! The displacement map and the dilation/erosion zones are uploaded once as storage buffers
+//! and read with the CPU's own filters, so the two paths take the same steps on the same
+//! segments; they differ only where the driver rounds an expression differently (a fused
+//! multiply-add), which moves a sample that lies within a rounding error of the surface to the
+//! other side. `tests/gpu.rs` bounds how often that happens.
+//!
+//! Deviation from the paper: a compute shader over segments clipped on the host, not a pixel
+//! shader over the rasterised prism; zones in f32, not 8-bit RGBA textures.
+
+use super::context::{entry, split_groups, GpuContext};
+use super::{GpuError, GpuTiming};
+use crate::relief::{Cast, CastParams, HeightMap, SafetyZones};
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+use std::time::{Duration, Instant};
+
+/// `ReliefParams` in `shaders/relief.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct ReliefParamsGpu {
+    size: [u32; 2],
+    count: u32,
+    stride: u32,
+    samples_per_unit: f32,
+    bisections: u32,
+    skips: u32,
+    channels: u32,
+    deltas: [f32; 4],
+}
+const _: () = assert!(std::mem::size_of::<ReliefParamsGpu>() == 48);
+
+const WORKGROUP: u32 = 64;
+const MISS: u32 = u32::MAX;
+
+/// Loop iterations one invocation may take: lavapipe ends every invocation's loops after
+/// 65,535 iterations in all, silently (see `loop_budget`); settings that could need more are
+/// refused instead of answered wrongly.
+const MAX_ITERATIONS: f64 = 60_000.0;
+
+/// One displacement map and its safety zones, uploaded.
+pub struct ReliefKernel<'a> {
+    ctx: &'a GpuContext,
+    size: [u32; 2],
+    channels: u32,
+    deltas: [f32; 4],
+    heights: wgpu::Buffer,
+    dilation: wgpu::Buffer,
+    erosion: wgpu::Buffer,
+    pipeline: wgpu::ComputePipeline,
+    setup: Duration,
+}
+
+impl<'a> ReliefKernel<'a> {
+    /// Uploads `map` and `zones` (made from `map`) and compiles the kernel.
+    pub fn new(
+        ctx: &'a GpuContext,
+        map: &HeightMap,
+        zones: &SafetyZones,
+    ) -> Result<ReliefKernel<'a>, GpuError> {
+        let start = Instant::now();
+        if zones.size() != (map.width, map.height) {
+            return Err(GpuError::Invalid(format!(
+                "safety zones of {:?} texels for a {}×{} map",
+                zones.size(),
+                map.width,
+                map.height
+            )));
+        }
+        let mut deltas = [0.0f32; 4];
+        deltas[..zones.deltas.len()].copy_from_slice(&zones.deltas);
+        let source = include_str!("../../shaders/relief.wgsl");
+        Ok(ReliefKernel {
+            ctx,
+            size: [map.width as u32, map.height as u32],
+            channels: zones.deltas.len() as u32,
+            deltas,
+            heights: ctx.storage_buffer("heights", bytemuck::cast_slice(&map.data)),
+            dilation: ctx.storage_buffer("dilation", bytemuck::cast_slice(&zones.dilation)),
+            erosion: ctx.storage_buffer("erosion", bytemuck::cast_slice(&zones.erosion)),
+            pipeline: ctx.compute_pipeline("relief", source, "relief_main")?,
+            setup: start.elapsed(),
+        })
+    }
+
+    /// Host time of the upload and shader compilation.
+    pub fn setup_time(&self) -> Duration {
+        self.setup
+    }
+
+    /// [`crate::relief::intersect`] of every segment `(E, X)` (prism coordinates) with the
+    /// zones always given (`params.skips` rounds of skips; 0 for none).
+    pub fn cast(
+        &self,
+        segments: &[(Vec3, Vec3)],
+        params: &CastParams,
+    ) -> Result<(Vec<Cast>, GpuTiming), GpuError> {
+        let start = Instant::now();
+        if let Some(k) = segments
+            .iter()
+            .position(|(e, x)| !e.is_finite() || !x.is_finite())
+        {
+            return Err(GpuError::Invalid(format!(
+                "relief segment {k} is not finite"
+            )));
+        }
+        let longest = segments
+            .iter()
+            .map(|(e, x)| (*x - *e).length())
+            .fold(0.0f32, f32::max);
+        if !params.samples_per_unit.is_finite() || params.samples_per_unit <= 0.0 {
+            return Err(GpuError::Invalid(format!(
+                "samples per unit must be positive, got {}",
+                params.samples_per_unit
+            )));
+        }
+        let iterations = (longest as f64 * params.samples_per_unit as f64).ceil()
+            + params.bisections as f64
+            + 4.0 * params.skips as f64
+            + 2.0;
+        if iterations > MAX_ITERATIONS {
+            return Err(GpuError::Unsupported(format!(
+                "{} samples per unit over a segment of {longest} and {} bisections need {iterations} \
+                 loop iterations per ray; the GPU path allows {MAX_ITERATIONS}",
+                params.samples_per_unit, params.bisections
+            )));
+        }
+        let ctx = self.ctx;
+        let limits = ctx.limits();
+        let max_binding = limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size);
+        let need = segments.len() as u64 * 32;
+        if need > max_binding {
+            return Err(GpuError::TooLarge {
+                what: format!("{} relief segments", segments.len()),
+                need,
+                limit: max_binding,
+                limit_name: "max_storage_buffer_binding_size",
+            });
+        }
+        let data: Vec<[f32; 4]> = segments
+            .iter()
+            .flat_map(|(e, x)| [e.extend(1.0).to_array(), x.extend(0.0).to_array()])
+            .collect();
+        let groups = (segments.len() as u32).div_ceil(WORKGROUP);
+        let (gx, _) = split_groups(groups, limits.max_compute_workgroups_per_dimension);
+        let uniform = ReliefParamsGpu {
+            size: self.size,
+            count: segments.len() as u32,
+            stride: gx * WORKGROUP,
+            samples_per_unit: params.samples_per_unit,
+            bisections: params.bisections,
+            skips: params.skips,
+            channels: self.channels,
+            deltas: self.deltas,
+        };
+        let uniform = ctx.uniform_buffer("relief params", bytemuck::bytes_of(&uniform));
+        let rays = ctx.storage_buffer("segments", bytemuck::cast_slice(&data));
+        let out_bytes = segments.len() as u64 * 8;
+        let out = ctx.output_buffer("relief out", out_bytes);
+        let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("relief"),
+            layout: &self.pipeline.get_bind_group_layout(0),
+            entries: &[
+                entry(0, uniform.as_entire_binding()),
+                entry(1, self.heights.as_entire_binding()),
+                entry(2, self.dilation.as_entire_binding()),
+                entry(3, self.erosion.as_entire_binding()),
+                entry(4, rays.as_entire_binding()),
+                entry(5, out.as_entire_binding()),
+            ],
+        });
+        let upload = start.elapsed();
+        let (bytes, kernel) = ctx.dispatch_and_read(&self.pipeline, &bind_group, groups, &out)?;
+        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes[..out_bytes as usize]);
+        let casts = words
+            .chunks_exact(2)
+            .map(|w| Cast {
+                hit: (w[0] != MISS).then(|| f32::from_bits(w[0])),
+                fetches: w[1],
+            })
+            .collect();
+        Ok((
+            casts,
+            GpuTiming {
+                kernel,
+                upload,
+                wall: start.elapsed(),
+            },
+        ))
+    }
+}
