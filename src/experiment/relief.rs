@@ -333,7 +333,7 @@ pub fn run(out: &Path, quick: bool, gpu: Option<AdapterPreference>) -> Result<Ve
                                 gpu_fetches_per_pixel: m.gpu.fetches_per_pixel,
                                 gpu_hit_mismatches_vs_cpu: m.gpu.hit_mismatches_vs_cpu,
                                 gpu_rms_vs_cpu: m.gpu.rms_vs_cpu,
-                                gpu_time_speedup: None,
+                                gpu_time_speedup: m.gpu.kernel_s.map(|_| 1.0),
                             },
                         );
                     }
