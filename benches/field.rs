@@ -6,7 +6,10 @@
 //! `*_per_ray` rows run the same lookups one ray at a time (`PerRay`). The `floor_*` rows time
 //! `render::floor`'s backends on the same rays: the AO pass with a free query, and with only the
 //! bounding-sphere cull and crossing that every lookup starts with; ray casting's time over
-//! theirs bounds the speed-up any field lookup can reach here.
+//! theirs bounds the speed-up any field lookup can reach here. The `entering_*` rows take the
+//! same AO rays but only those that enter the caster's bounding sphere (the rays whose answer
+//! comes from the field), so that their ratio is the lookup's against ray casting where the
+//! field is actually read.
 //!
 //! `cargo bench --bench field`. Casters: stanford-bunny_39k (38,889 triangles), dragon
 //! (100,000) and a 261,120-triangle supershape (the 2010 paper's count). Real models are found
@@ -15,7 +18,8 @@
 //! (`cargo bench --bench field -- bunny`) skips the setup of the groups it leaves out.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use glam::Quat;
+use glam::{Quat, Vec3};
+use rayon::prelude::*;
 use std::cell::OnceCell;
 use std::sync::Arc;
 use std::time::Duration;
@@ -28,7 +32,7 @@ use visfield::geometry::{models, Mesh};
 use visfield::render::ao::{ao_at_points, AoOptions};
 use visfield::render::floor::{NoQuery, SphereCull};
 use visfield::render::receivers::Receivers;
-use visfield::render::PerRay;
+use visfield::render::{PerRay, Visibility};
 use visfield::sampling::rays::RaySet;
 use visfield::sampling::{Frame, HemisphereLayout, LayoutKind, SphereKind, SpherePoints};
 use visfield::trace::Tracer;
@@ -63,8 +67,9 @@ fn ao_lookup_vs_raycast(c: &mut Criterion) {
         group.throughput(Throughput::Elements(
             (recv.points.len() * rays.len()) as u64,
         ));
+        let scene_tris = || scene.caster_triangles();
         group.bench_function("raycast_anyhit", |b| {
-            let tracer = tracer.get_or_init(|| Tracer::new(&scene.caster_triangles()));
+            let tracer = tracer.get_or_init(|| Tracer::new(&scene_tris()));
             b.iter(|| ao_at_points(tracer, &recv.points, &recv.normals, &rays, &opts))
         });
         // Cost floor: the AO pass with a query that costs nothing (render::floor).
@@ -118,6 +123,43 @@ fn ao_lookup_vs_raycast(c: &mut Criterion) {
                         let cull = SphereCull(&fs);
                         b.iter(|| ao_at_points(&cull, &recv.points, &recv.normals, &rays, &opts))
                     });
+                    // The same AO rays kept only where they enter the caster's bounding
+                    // sphere: the rays a lookup must answer from the field.
+                    let entering = OnceCell::new();
+                    let entering = || {
+                        entering.get_or_init(|| {
+                            entering_rays(&SphereCull(&scene(selection)), &recv, &rays, &opts)
+                        })
+                    };
+                    let run = |vis: &dyn Visibility, batches: &[(Vec3, Vec<Vec3>)]| {
+                        batches
+                            .par_iter()
+                            .map(|(o, dirs)| {
+                                let mut out = vec![false; dirs.len()];
+                                vis.occluded_many(*o, dirs, 0.0, f32::INFINITY, &mut out);
+                                out.iter().filter(|&&b| b).count()
+                            })
+                            .sum::<usize>()
+                    };
+                    let count = |batches: &[(Vec3, Vec<Vec3>)]| {
+                        batches.iter().map(|b| b.1.len()).sum::<usize>() as u64
+                    };
+                    group.throughput(Throughput::Elements(count(entering())));
+                    group.bench_function("entering_raycast_anyhit", |b| {
+                        let tracer = tracer.get_or_init(|| Tracer::new(&scene_tris()));
+                        b.iter(|| run(tracer, entering()))
+                    });
+                    group.bench_function("entering_field_nearest/u8", |b| {
+                        let fs = scene(selection);
+                        b.iter(|| run(&fs, entering()))
+                    });
+                    group.bench_function("entering_floor_sphere_cull", |b| {
+                        let fs = scene(selection);
+                        b.iter(|| run(&SphereCull(&fs), entering()))
+                    });
+                    group.throughput(Throughput::Elements(
+                        (recv.points.len() * rays.len()) as u64,
+                    ));
                 }
                 // The same lookups one ray at a time (no shared origin work, no prefetch).
                 let id = BenchmarkId::new(
@@ -133,6 +175,30 @@ fn ao_lookup_vs_raycast(c: &mut Criterion) {
         }
         group.finish();
     }
+}
+
+/// Per receiver point, the origin and the world directions of its AO rays (as `ao_at_point`
+/// builds them) that `cull` reports as meeting the caster's bounding sphere.
+fn entering_rays(
+    cull: &SphereCull,
+    recv: &Receivers,
+    rays: &RaySet,
+    opts: &AoOptions,
+) -> Vec<(Vec3, Vec<Vec3>)> {
+    (0..recv.points.len())
+        .map(|i| {
+            let (p, n) = (recv.points[i], recv.normals[i]);
+            let frame = Frame::from_normal(n);
+            let origin = p + opts.offset * n;
+            let dirs = rays
+                .directions(i as u32)
+                .into_iter()
+                .map(|d| frame.to_world(d))
+                .filter(|&d| cull.occluded(origin, d, 0.0, f32::INFINITY))
+                .collect();
+            (origin, dirs)
+        })
+        .collect()
 }
 
 /// Bake throughput against the tracer's raw closest-hit throughput on exactly the bake's rays.
@@ -169,7 +235,6 @@ fn bake_vs_closest_hit(c: &mut Criterion) {
     group.sample_size(10);
     group.throughput(Throughput::Elements(rays.len() as u64));
     group.bench_function("raw_closest_hit", |b| {
-        use rayon::prelude::*;
         b.iter(|| {
             rays.par_chunks(layout.texel_count())
                 .map(|chunk| {
