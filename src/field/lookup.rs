@@ -16,7 +16,7 @@
 //!   nearest to the origin, which matters only for distance-limited queries.
 
 use super::{Selection, VisibilityField};
-use crate::sampling::{HemisphereLayout, LayoutKind};
+use crate::sampling::{HemisphereLayout, LayoutKind, OwnerCell, TexelCell};
 use glam::{DVec3, Vec2, Vec3};
 
 /// Where a ray crosses a sphere: [`sphere_crossing`].
@@ -230,7 +230,7 @@ impl Reads for NearestRead {
     }
 
     /// The lookups' memory reads in stages: the owner-table cells of every crossing are
-    /// requested before any is read, then the frames of the maps found, then the texel-table
+    /// found and requested before any is read, then the frames of the maps found, then the texel-table
     /// cells, then the stored texels, [`STAGE`] crossings at a time. Each stage's cache misses
     /// overlap instead of queueing behind each other (a lookup's owner cell, frame and
     /// texel-table cell are dependent reads); the answers are those of [`Reads::of`].
@@ -238,20 +238,21 @@ impl Reads for NearestRead {
     fn of_block(field: &VisibilityField, at: &[Crossed], out: &mut [Self]) {
         assert_eq!(at.len(), out.len(), "of_block: at and out differ in length");
         for (at, out) in at.chunks(STAGE).zip(out.chunks_mut(STAGE)) {
-            for c in at {
-                field.points.prefetch_nearest(c.u);
+            let mut owner = [OwnerCell::default(); STAGE];
+            for (c, cell) in at.iter().zip(owner.iter_mut()) {
+                *cell = field.points.prefetch_nearest(c.u);
             }
-            for (c, o) in at.iter().zip(out.iter_mut()) {
-                o.map = field.points.nearest(c.u) as u32;
+            for ((c, o), &cell) in at.iter().zip(out.iter_mut()).zip(&owner) {
+                o.map = field.points.nearest_at(cell, c.u) as u32;
                 crate::hint::prefetch_value(&field.frames[o.map as usize]);
             }
-            let mut local = [Vec3::ZERO; STAGE];
+            let mut local = [(Vec3::ZERO, TexelCell::default()); STAGE];
             for ((c, o), l) in at.iter().zip(out.iter()).zip(local.iter_mut()) {
-                *l = field.frames[o.map as usize].to_local(c.dir);
-                field.texels.prefetch(*l);
+                let d = field.frames[o.map as usize].to_local(c.dir);
+                *l = (d, field.texels.prefetch(d));
             }
-            for (o, &l) in out.iter_mut().zip(&local) {
-                o.texel = field.texels.texel(l);
+            for (o, &(d, cell)) in out.iter_mut().zip(&local) {
+                o.texel = field.texels.texel_at(cell, d);
                 o.prefetch(field);
             }
         }

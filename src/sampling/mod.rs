@@ -41,8 +41,8 @@ pub mod warp;
 
 pub use frame::Frame;
 pub use layout::{HemisphereLayout, LayoutKind};
-pub use sphere::{Spacing, SphereKind, SpherePoints};
-pub use texel_table::TexelTable;
+pub use sphere::{OwnerCell, Spacing, SphereKind, SpherePoints};
+pub use texel_table::{TexelCell, TexelTable};
 
 /// Errors from building a sampling pattern with impossible parameters.
 #[derive(Debug, thiserror::Error)]

@@ -91,8 +91,18 @@ impl OwnerGrid {
     /// [`super::cube_grid::cell_of`]'s, with the range checks folded into one test.
     #[inline(always)]
     pub fn owner(&self, points: &[Vec3], d: Vec3) -> Option<usize> {
-        let cell = self.cell(d)?;
-        let o = self.owner[cell] as u32;
+        self.owner_at(self.cell(d), points, d)
+    }
+
+    /// [`Self::owner`] with `d`'s cell already found (`cell` is [`Self::prefetch`]`(d)`).
+    #[inline(always)]
+    pub fn owner_at(&self, cell: Option<usize>, points: &[Vec3], d: Vec3) -> Option<usize> {
+        debug_assert_eq!(
+            cell,
+            self.cell(d),
+            "owner_at: the cell of another direction"
+        );
+        let o = self.owner[cell?] as u32;
         if o < self.n {
             return Some(o as usize);
         }
@@ -132,12 +142,15 @@ impl OwnerGrid {
         Some(((f * self.g + j.min(last)) * self.g + i.min(last)) as usize)
     }
 
-    /// Hints the CPU to fetch the table cell that [`Self::owner`] reads for `d`.
+    /// Hints the CPU to fetch the table cell that [`Self::owner`] reads for `d`, and returns
+    /// that cell for [`Self::owner_at`].
     #[inline(always)]
-    pub fn prefetch(&self, d: Vec3) {
-        if let Some(cell) = self.cell(d) {
+    pub fn prefetch(&self, d: Vec3) -> Option<usize> {
+        let cell = self.cell(d);
+        if let Some(cell) = cell {
             crate::hint::prefetch_value(self.owner.as_ptr().wrapping_add(cell));
         }
+        cell
     }
 
     /// Bytes held by the table.

@@ -54,6 +54,11 @@ enum Index {
     Fibonacci(FibonacciIndex),
 }
 
+/// The owner-table cell of a direction, found once by [`SpherePoints::prefetch_nearest`] and
+/// read by [`SpherePoints::nearest_at`] (for the same direction).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct OwnerCell(Option<usize>);
+
 /// A point set on the unit sphere with exact nearest-point and interpolation queries.
 ///
 /// The 2008 paper (Gaitatzes, Chrysanthou, Papaioannou, WSCG 2008, "Selecting Samples around the
@@ -229,11 +234,21 @@ impl SpherePoints {
         }
     }
 
-    /// Hints the CPU to fetch the owner-table cell that [`Self::nearest`] reads for `d` (no
-    /// effect on results).
+    /// [`Self::nearest`] with `d`'s owner-table cell already found (`cell` is
+    /// [`Self::prefetch_nearest`]`(d)`).
     #[inline]
-    pub fn prefetch_nearest(&self, d: Vec3) {
-        self.owners.prefetch(d);
+    pub fn nearest_at(&self, cell: OwnerCell, d: Vec3) -> usize {
+        match self.owners.owner_at(cell.0, &self.points, d) {
+            Some(p) => p,
+            None => self.grid.nearest(&self.points, d),
+        }
+    }
+
+    /// Hints the CPU to fetch the owner-table cell that [`Self::nearest`] reads for `d` (no
+    /// effect on results), and returns that cell for [`Self::nearest_at`].
+    #[inline]
+    pub fn prefetch_nearest(&self, d: Vec3) -> OwnerCell {
+        OwnerCell(self.owners.prefetch(d))
     }
 
     /// [`Self::nearest`] without the owner table: always the cube grid's candidate search (the

@@ -68,6 +68,11 @@ fn concentric_exact(x: f64, y: f64) -> (f64, f64) {
     }
 }
 
+/// The table cell of a direction, found once by [`TexelTable::prefetch`] and read by
+/// [`TexelTable::texel_at`] (for the same direction).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TexelCell(Option<usize>);
+
 impl TexelTable {
     /// The table of `layout` (empty unless concentric with res ≤ 255).
     pub fn new(layout: HemisphereLayout) -> TexelTable {
@@ -134,8 +139,19 @@ impl TexelTable {
     /// there): from the table when `d` lies in a certified cell, else from `to_texel`.
     #[inline]
     pub fn texel(&self, d: Vec3) -> u32 {
-        match self.certified(d) {
-            Some(t) => t,
+        self.texel_at(TexelCell(self.cell(d)), d)
+    }
+
+    /// [`Self::texel`] with `d`'s cell already found (`cell` is [`Self::prefetch`]`(d)`).
+    #[inline]
+    pub fn texel_at(&self, cell: TexelCell, d: Vec3) -> u32 {
+        debug_assert_eq!(
+            cell.0,
+            self.cell(d),
+            "texel_at: the cell of another direction"
+        );
+        match cell.0.map(|c| self.texel[c]).filter(|&t| t != MIXED) {
+            Some(t) => t as u32,
             None => self.layout.to_texel(d),
         }
     }
@@ -161,12 +177,15 @@ impl TexelTable {
         Some((j * self.g + i) as usize)
     }
 
-    /// Hints the CPU to fetch the table cell that [`Self::texel`] reads for `d`.
+    /// Hints the CPU to fetch the table cell that [`Self::texel`] reads for `d`, and returns
+    /// that cell for [`Self::texel_at`].
     #[inline(always)]
-    pub fn prefetch(&self, d: Vec3) {
-        if let Some(cell) = self.cell(d) {
+    pub fn prefetch(&self, d: Vec3) -> TexelCell {
+        let cell = self.cell(d);
+        if let Some(cell) = cell {
             crate::hint::prefetch_value(self.texel.as_ptr().wrapping_add(cell));
         }
+        TexelCell(cell)
     }
 
     /// Cells per side of the table (G; 0 for an empty table).
