@@ -6,7 +6,8 @@ use serde::{Deserialize, Serialize};
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct RunMeta {
     /// `git rev-parse HEAD`, with "-dirty" when the tree has uncommitted changes to tracked files
-    /// outside `results/` (the outputs of earlier runs do not change what the code computes).
+    /// outside `results/` (the outputs of earlier runs do not change what the code computes);
+    /// without git, `$VISFIELD_COMMIT`, else "unknown".
     pub commit: String,
     /// Host name.
     pub machine: String,
@@ -89,7 +90,9 @@ fn git_commit() -> String {
                 c
             }
         }
-        None => "unknown".into(),
+        // A copy of the tree without its git history (another machine's run of a packed build,
+        // `scripts/device_pack.sh`) names its commit through the environment.
+        None => std::env::var("VISFIELD_COMMIT").unwrap_or_else(|_| "unknown".into()),
     }
 }
 

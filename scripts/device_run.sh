@@ -1,0 +1,34 @@
+#!/usr/bin/env bash
+# Runs the GPU figures on a GPU machine from the build packed by scripts/device_pack.sh: figure6,
+# figure8 and relief on the hardware adapter (a run fails rather than fall back to lavapipe),
+# then the results as one archive in $OUT (the device tool returns at most 8 files).
+# Budget: about 5 minutes on a 16-core machine with an H200; the time limit of the call should
+# leave room for one rerun.
+set -uo pipefail
+cd "$(dirname "$0")/.."
+out="${OUT:-/tmp/device-out}"
+mkdir -p "$out"
+# DEVICE_ADAPTER and DEVICE_ARGS (e.g. lavapipe and --quick) try the script on another machine;
+# DEVICE_SKIP_LOADER=1 leaves its Vulkan loader alone.
+adapter="${DEVICE_ADAPTER:-hardware}"
+if [ -z "${DEVICE_SKIP_LOADER:-}" ]; then
+  for f in .gl/*.deb; do dpkg -x "$f" /; done
+  ldconfig
+fi
+if [ ! -e /usr/share/vulkan/icd.d/nvidia_icd.json ] && [ -e /usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json ]; then
+  export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
+fi
+export VISFIELD_MODELS="$PWD/.device/models" VISFIELD_COMMIT="$(cat .device/COMMIT)"
+nvidia-smi --query-gpu=name,driver_version --format=csv,noheader | tee "$out/gpu.txt" || true
+exp=.device/experiment
+status=0
+for job in "figure6 --no-cache" "figure8 --no-cache" "relief"; do
+  name="${job%% *}"
+  echo "== $name"
+  # shellcheck disable=SC2086
+  if ! $exp $job --adapter "$adapter" ${DEVICE_ARGS:-} --out "results-device/$name" 2>&1 | tee "$out/$name.log"; then
+    status=1
+  fi
+done
+tar czf "$out/results-device.tgz" results-device
+exit $status
