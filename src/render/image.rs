@@ -41,7 +41,8 @@ impl GrayImage {
         crate::io::write_atomic(path, &self.png_bytes())
     }
 
-    /// Writes a 32-bit float single-channel EXR (channel "Y") atomically.
+    /// Writes a 32-bit float single-channel EXR (channel "Y") atomically; the same image always
+    /// gives the same bytes.
     pub fn save_exr(&self, path: &Path) -> std::io::Result<()> {
         use exr::prelude::*;
         let w = self.width as usize;
@@ -51,8 +52,11 @@ impl GrayImage {
             .with_pixel_fn(|pos: Vec2<usize>| (data[pos.y() * w + pos.x()],));
         let image = Image::from_channels((w, self.height as usize), channel);
         let mut cursor = std::io::Cursor::new(Vec::new());
+        // One thread: the parallel writer stores the compressed blocks in the order they finish,
+        // so the same image gave different bytes from run to run.
         image
             .write()
+            .non_parallel()
             .to_buffered(&mut cursor)
             .map_err(|e| std::io::Error::other(e.to_string()))?;
         crate::io::write_atomic(path, &cursor.into_inner())
@@ -115,6 +119,26 @@ mod tests {
         let b = [1.0, 0.5, 1.0, 0.25];
         assert!((rms_255(&a, &b, None) - 127.5).abs() < 1e-9);
         assert_eq!(rms_255(&a, &b, Some(&[false, true, true, true])), 0.0);
+    }
+
+    /// Results are committed: writing the same image again must give the same file, or every
+    /// rerun would change the EXRs under `results/` without a pixel changing.
+    #[test]
+    fn exr_bytes_are_the_same_on_every_write() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut img = GrayImage::new(512, 384, 0.0);
+        for (i, v) in img.data.iter_mut().enumerate() {
+            *v = ((i as f32 * 0.618).sin() * 0.5 + 0.5) * (i % 7) as f32;
+        }
+        let bytes = |k: usize| {
+            let p = dir.path().join(format!("{k}.exr"));
+            img.save_exr(&p).unwrap();
+            std::fs::read(p).unwrap()
+        };
+        let first = bytes(0);
+        for k in 1..6 {
+            assert!(bytes(k) == first, "write {k} differs from the first");
+        }
     }
 
     #[test]
