@@ -246,22 +246,23 @@ fn nearest_map_texel_and_samples_agree_with_the_cpu() {
     }
 }
 
-/// AO of `inst` by the CPU field path and by `kernel`, both with `lookup`.
+/// AO at the points `p` (normals `n`) of `inst` by the CPU field path and by `kernel`, both
+/// with `lookup`.
 fn ao_pair(
     kernel: &mut FieldAoKernel,
     inst: &FieldInstance,
     lookup: LookupOptions,
+    (p, n): (&[Vec3], &[Vec3]),
     rays: &RaySet,
 ) -> (Vec<f32>, Vec<f32>, visfield::gpu::GpuTiming) {
-    let (p, n) = receivers(inst);
     let opts = AoOptions::for_scene_radius(1.0);
     let scene = FieldScene {
         instances: vec![inst.clone()],
         options: lookup,
     };
-    let cpu = ao_at_points(&scene, &p, &n, rays, &opts);
+    let cpu = ao_at_points(&scene, p, n, rays, &opts);
     kernel.lookup = lookup;
-    let (gpu, timing) = kernel.vertex_ao(&p, &n, rays, &opts).expect("gpu ao");
+    let (gpu, timing) = kernel.vertex_ao(p, n, rays, &opts).expect("gpu ao");
     (gpu, cpu, timing)
 }
 
@@ -303,7 +304,8 @@ fn field_ao_matches_the_cpu_for_every_precision_layout_and_selection() {
                     selection,
                     ..Default::default()
                 };
-                let (gpu, cpu, timing) = ao_pair(&mut kernel, &inst, lookup, &rays);
+                let (p, n) = receivers(&inst);
+                let (gpu, cpu, timing) = ao_pair(&mut kernel, &inst, lookup, (&p, &n), &rays);
                 assert_occlusion_is_nontrivial(&cpu);
                 let q = parity(&gpu, &cpu);
                 let label = format!("{precision:?} {layout:?} {selection:?}");
@@ -774,7 +776,6 @@ fn field_ao_at_4096_rays_per_point_matches_the_cpu() {
     let (mut p, mut n): (Vec<Vec3>, Vec<Vec3>) = p.into_iter().zip(n).step_by(7).unzip();
     p.push(Vec3::new(0.5, -5.0, 0.5));
     n.push(Vec3::NEG_Y);
-    let opts = AoOptions::for_scene_radius(1.0);
     for rays_per_invocation in [FieldGpuOptions::default().rays_per_invocation, 4096] {
         let gpu_opts = FieldGpuOptions {
             rays_per_invocation,
@@ -786,15 +787,9 @@ fn field_ao_at_4096_rays_per_point_matches_the_cpu() {
                 selection,
                 ..Default::default()
             };
-            let scene = FieldScene {
-                instances: vec![inst.clone()],
-                options: lookup,
-            };
-            let cpu = ao_at_points(&scene, &p, &n, &rays, &opts);
+            let (gpu, cpu, timing) = ao_pair(&mut kernel, &inst, lookup, (&p, &n), &rays);
             assert_occlusion_is_nontrivial(&cpu);
             assert_eq!(*cpu.last().unwrap(), 1.0);
-            kernel.lookup = lookup;
-            let (gpu, timing) = kernel.vertex_ao(&p, &n, &rays, &opts).expect("gpu ao");
             let q = parity(&gpu, &cpu);
             let label = format!("4096 rays, {rays_per_invocation} per invocation, {selection:?}");
             eprintln!(
