@@ -116,7 +116,7 @@ impl OwnerGrid {
     /// into one test), `None` for zero, tiny (< 1e-30), infinite and NaN inputs, whose cell the
     /// f32 computation does not place reliably.
     #[inline(always)]
-    fn cell(&self, d: Vec3) -> Option<usize> {
+    pub fn cell(&self, d: Vec3) -> Option<usize> {
         let (ax, ay, az) = (d.x.abs(), d.y.abs(), d.z.abs());
         let x_wins = (ax >= ay) & (ax >= az);
         let y_wins = !x_wins & (ay >= az);

@@ -228,10 +228,7 @@ impl SpherePoints {
     /// search ([`Self::nearest_searched`]).
     #[inline]
     pub fn nearest(&self, d: Vec3) -> usize {
-        match self.owners.owner(&self.points, d) {
-            Some(p) => p,
-            None => self.grid.nearest(&self.points, d),
-        }
+        self.nearest_at(OwnerCell(self.owners.cell(d)), d)
     }
 
     /// [`Self::nearest`] with `d`'s owner-table cell already found (`cell` is

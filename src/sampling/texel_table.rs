@@ -150,8 +150,8 @@ impl TexelTable {
             self.cell(d),
             "texel_at: the cell of another direction"
         );
-        match cell.0.map(|c| self.texel[c]).filter(|&t| t != MIXED) {
-            Some(t) => t as u32,
+        match self.certified_in(cell.0) {
+            Some(t) => t,
             None => self.layout.to_texel(d),
         }
     }
@@ -159,7 +159,13 @@ impl TexelTable {
     /// The table's texel of `d`, `None` when `d` is not in a certified cell.
     #[inline]
     pub fn certified(&self, d: Vec3) -> Option<u32> {
-        let t = self.texel[self.cell(d)?];
+        self.certified_in(self.cell(d))
+    }
+
+    /// The texel stored in `cell`, `None` outside the table or where the cell is not certified.
+    #[inline(always)]
+    fn certified_in(&self, cell: Option<usize>) -> Option<u32> {
+        let t = self.texel[cell?];
         (t != MIXED).then_some(t as u32)
     }
 
