@@ -18,6 +18,8 @@ struct ReliefParams {
     channels: u32,
     // Half-widths δ of the zone channels (texture units).
     deltas: vec4<f32>,
+    // Trips of the completion loop (loop_budget.wgsl), unused.
+    trips: vec4<u32>,
 }
 
 @group(0) @binding(0) var<uniform> params: ReliefParams;
@@ -26,7 +28,8 @@ struct ReliefParams {
 @group(0) @binding(3) var<storage, read> erosion: array<vec4<f32>>;
 // Two per ray: E (xyz) and X (xyz).
 @group(0) @binding(4) var<storage, read> segments: array<vec4<f32>>;
-// Per ray: the hit λ's bits (MISS for none) and the texture fetches.
+// Per ray: the hit λ's bits (MISS for none) and the texture fetches (CUT_SHORT when the
+// driver's loop budget stopped the invocation: loop_budget.wgsl).
 @group(0) @binding(5) var<storage, read_write> results: array<vec2<u32>>;
 
 const MISS: u32 = 0xffffffffu;
@@ -132,7 +135,8 @@ fn relief_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let e = segments[2u * ray].xyz;
     let x = segments[2u * ray + 1u].xyz;
-    results[ray] = vec2<u32>(cast_ray(e, x), fetches);
+    let hit = cast_ray(e, x);
+    results[ray] = vec2<u32>(hit, select(CUT_SHORT, fetches, loops_completed(params.trips.x)));
 }
 
 // `intersect`: λ's bits, or MISS; the fetches are left in `fetches`.

@@ -12,6 +12,7 @@
 //! shader over the rasterised prism; zones in f32, not 8-bit RGBA textures.
 
 use super::context::{entry, split_groups, GpuContext};
+use super::loop_budget::{COMPLETION_TRIPS, CUT_SHORT};
 use super::{GpuError, GpuTiming};
 use crate::relief::{Cast, CastParams, HeightMap, SafetyZones};
 use bytemuck::{Pod, Zeroable};
@@ -30,15 +31,18 @@ struct ReliefParamsGpu {
     skips: u32,
     channels: u32,
     deltas: [f32; 4],
+    /// Trips of the completion loop (`loops_completed`), then padding.
+    trips: [u32; 4],
 }
-const _: () = assert!(std::mem::size_of::<ReliefParamsGpu>() == 48);
+const _: () = assert!(std::mem::size_of::<ReliefParamsGpu>() == 64);
 
 const WORKGROUP: u32 = 64;
 const MISS: u32 = u32::MAX;
 
 /// Loop iterations one invocation may take: lavapipe ends every invocation's loops after
-/// 65,535 iterations in all, silently (see `loop_budget`); settings that could need more are
-/// refused instead of answered wrongly.
+/// 65,535 iterations in all, silently (see `loop_budget`). Settings that could need more are
+/// refused before the dispatch; an invocation cut short all the same (the shared completion
+/// check, `loops_completed`) makes the call an error, never a wrong answer.
 const MAX_ITERATIONS: f64 = 60_000.0;
 
 /// One displacement map and its safety zones, uploaded.
@@ -72,7 +76,11 @@ impl<'a> ReliefKernel<'a> {
         }
         let mut deltas = [0.0f32; 4];
         deltas[..zones.deltas.len()].copy_from_slice(&zones.deltas);
-        let source = include_str!("../../shaders/relief.wgsl");
+        let source = [
+            include_str!("../../shaders/loop_budget.wgsl"),
+            include_str!("../../shaders/relief.wgsl"),
+        ]
+        .concat();
         Ok(ReliefKernel {
             ctx,
             size: [map.width as u32, map.height as u32],
@@ -81,7 +89,7 @@ impl<'a> ReliefKernel<'a> {
             heights: ctx.storage_buffer("heights", bytemuck::cast_slice(&map.data)),
             dilation: ctx.storage_buffer("dilation", bytemuck::cast_slice(&zones.dilation)),
             erosion: ctx.storage_buffer("erosion", bytemuck::cast_slice(&zones.erosion)),
-            pipeline: ctx.compute_pipeline("relief", source, "relief_main")?,
+            pipeline: ctx.compute_pipeline("relief", &source, "relief_main")?,
             setup: start.elapsed(),
         })
     }
@@ -117,10 +125,14 @@ impl<'a> ReliefKernel<'a> {
                 params.samples_per_unit
             )));
         }
+        // The linear search (its end sample included), the bisection, per round of skips the
+        // round and a forward and a backward pass over the zone channels, the completion loop.
+        let channels = self.channels as f64;
         let iterations = (longest as f64 * params.samples_per_unit as f64).ceil()
+            + 1.0
             + params.bisections as f64
-            + 4.0 * params.skips as f64
-            + 2.0;
+            + params.skips as f64 * (1.0 + 2.0 * channels)
+            + COMPLETION_TRIPS as f64;
         if iterations > MAX_ITERATIONS {
             return Err(GpuError::Unsupported(format!(
                 "{} samples per unit over a segment of {longest} and {} bisections need {iterations} \
@@ -157,6 +169,7 @@ impl<'a> ReliefKernel<'a> {
             skips: params.skips,
             channels: self.channels,
             deltas: self.deltas,
+            trips: [COMPLETION_TRIPS, 0, 0, 0],
         };
         let uniform = ctx.uniform_buffer("relief params", bytemuck::bytes_of(&uniform));
         let rays = ctx.storage_buffer("segments", bytemuck::cast_slice(&data));
@@ -177,6 +190,14 @@ impl<'a> ReliefKernel<'a> {
         let upload = start.elapsed();
         let (bytes, kernel) = ctx.dispatch_and_read(&self.pipeline, &bind_group, groups, &out)?;
         let words: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes[..out_bytes as usize]);
+        let cut = words.chunks_exact(2).filter(|w| w[1] == CUT_SHORT).count();
+        if cut > 0 {
+            return Err(GpuError::Unsupported(format!(
+                "{cut} of {} relief rays were cut short by the driver's loop budget per \
+                 invocation (lavapipe: 65,535 iterations)",
+                segments.len()
+            )));
+        }
         let casts = words
             .chunks_exact(2)
             .map(|w| Cast {
