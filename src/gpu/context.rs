@@ -357,6 +357,64 @@ impl GpuContext {
     }
 }
 
+/// Invocations per workgroup of every kernel (`@workgroup_size(64)` in `shaders/`).
+pub(crate) const WORKGROUP: u32 = 64;
+
+impl GpuContext {
+    /// The largest storage binding the adapter allows.
+    pub(crate) fn max_binding(&self) -> u64 {
+        let l = &self.limits;
+        l.max_storage_buffer_binding_size.min(l.max_buffer_size)
+    }
+
+    /// Runs `pipeline` over `items` with `threads_per_item` invocations per item, each writing
+    /// `words_per_thread` words, and returns the words item-major with the kernels' GPU time
+    /// and the host's upload time. Items go in batches small enough for their buffer and the
+    /// output to fit one binding each; `bind(batch, stride, out)` makes a batch's bind group,
+    /// `stride` being the invocations per row of the dispatch grid (the shader linearises
+    /// `gid.x + gid.y · stride`) and `out` the buffer the kernel writes. `item` names an item in
+    /// errors.
+    pub(crate) fn run_batched<T: bytemuck::Pod>(
+        &self,
+        pipeline: &wgpu::ComputePipeline,
+        items: &[T],
+        item: &str,
+        (threads_per_item, words_per_thread): (u32, u32),
+        mut bind: impl FnMut(&[T], u32, &wgpu::Buffer) -> wgpu::BindGroup,
+    ) -> Result<super::loop_budget::Dispatched, GpuError> {
+        let words_per_item = threads_per_item as u64 * words_per_thread as u64;
+        let max_binding = self.max_binding();
+        let batch = (max_binding / (4 * words_per_item))
+            .min(max_binding / std::mem::size_of::<T>() as u64)
+            .min(u32::MAX as u64 / threads_per_item as u64) as usize;
+        if batch == 0 {
+            return Err(GpuError::TooLarge {
+                what: format!("the output of one {item} ({words_per_item} words)"),
+                need: 4 * words_per_item,
+                limit: max_binding,
+                limit_name: "max_storage_buffer_binding_size",
+            });
+        }
+        let mut words = Vec::with_capacity(items.len() * words_per_item as usize);
+        let (mut kernel, mut upload) = (None, Duration::ZERO);
+        for part in items.chunks(batch) {
+            let t = std::time::Instant::now();
+            let groups = (part.len() as u32 * threads_per_item).div_ceil(WORKGROUP);
+            let (gx, _) = split_groups(groups, self.limits.max_compute_workgroups_per_dimension);
+            let out_bytes = part.len() as u64 * words_per_item * 4;
+            let out = self.output_buffer("out", out_bytes);
+            let bind_group = bind(part, gx * WORKGROUP, &out);
+            upload += t.elapsed();
+            let (bytes, k) = self.dispatch_and_read(pipeline, &bind_group, groups, &out)?;
+            kernel = add_kernel(kernel, k);
+            words.extend(bytemuck::pod_collect_to_vec::<u8, u32>(
+                &bytes[..out_bytes as usize],
+            ));
+        }
+        Ok((words, kernel, upload))
+    }
+}
+
 /// Kernel time summed over dispatches, where the adapter measured any.
 pub(crate) fn add_kernel(total: Option<Duration>, k: Option<Duration>) -> Option<Duration> {
     match (total, k) {

@@ -105,7 +105,6 @@ pub struct LookupProbe {
     pub interpolated: f32,
 }
 
-const WORKGROUP: u32 = 64;
 /// Bindings before the field's own (params, receivers, tables, mesh, instances, output, ray
 /// directions).
 const FIXED_BINDINGS: u32 = 7;
@@ -151,9 +150,7 @@ impl<'a> FieldAoKernel<'a> {
             FieldLayout::StorageBuffers => {
                 let (words, bases) = field_words(&packed.fields);
                 packed.set_data_base(&bases);
-                let max_binding = limits
-                    .max_storage_buffer_binding_size
-                    .min(limits.max_buffer_size);
+                let max_binding = ctx.max_binding();
                 let window_bytes = opts.window_bytes.unwrap_or(max_binding).min(max_binding);
                 let window_words = ((window_bytes / 4) / 64 * 64).max(64) as usize;
                 let windows_needed = words.len().div_ceil(window_words).max(1);
@@ -283,7 +280,7 @@ impl<'a> FieldAoKernel<'a> {
         let start = Instant::now();
         let base = base_directions(rays)?;
         let recv = receivers(points, normals, rays)?;
-        let max_binding = self.max_binding();
+        let max_binding = self.ctx.max_binding();
         let dir_bytes = base.len() as u64 * 16;
         if dir_bytes > max_binding {
             return Err(GpuError::TooLarge {
@@ -369,15 +366,9 @@ impl<'a> FieldAoKernel<'a> {
             .collect())
     }
 
-    /// The largest storage binding the adapter allows.
-    fn max_binding(&self) -> u64 {
-        let l = self.ctx.limits();
-        l.max_storage_buffer_binding_size.min(l.max_buffer_size)
-    }
-
     /// Uploads the per-call buffers, dispatches `threads_per_item` threads per receiver, each
-    /// writing `words_per_thread` words, and reads the words back, receiver-major. Receivers
-    /// go in batches small enough for their buffer and the output to fit one binding each.
+    /// writing `words_per_thread` words, and reads the words back, receiver-major, in batches
+    /// ([`GpuContext::run_batched`]).
     fn run(
         &self,
         pipeline: &wgpu::ComputePipeline,
@@ -387,82 +378,51 @@ impl<'a> FieldAoKernel<'a> {
         threads_per_item: u32,
         words_per_thread: u32,
     ) -> Result<Dispatched, GpuError> {
-        let words_per_item = threads_per_item as u64 * words_per_thread as u64;
-        let max_binding = self.max_binding();
-        let batch = (max_binding / (4 * words_per_item))
-            .min(max_binding / std::mem::size_of::<ReceiverGpu>() as u64)
-            .min(u32::MAX as u64 / threads_per_item as u64) as usize;
-        if batch == 0 {
-            return Err(GpuError::TooLarge {
-                what: format!("the output of one receiver ({words_per_item} words)"),
-                need: 4 * words_per_item,
-                limit: max_binding,
-                limit_name: "max_storage_buffer_binding_size",
-            });
-        }
-        let mut words = Vec::with_capacity(recv.len() * words_per_item as usize);
-        let (mut kernel, mut upload) = (None, Duration::ZERO);
-        for part in recv.chunks(batch) {
-            let t = Instant::now();
-            let groups = (part.len() as u32 * threads_per_item).div_ceil(WORKGROUP);
-            let (gx, _) = super::context::split_groups(
-                groups,
-                self.ctx.limits().max_compute_workgroups_per_dimension,
-            );
-            params.counts[0] = part.len() as u32;
-            params.counts[3] = gx * WORKGROUP;
-            let uniform = self
-                .ctx
-                .uniform_buffer("ao params", bytemuck::bytes_of(&params));
-            let recv_buf = self
-                .ctx
-                .storage_buffer("receivers", bytemuck::cast_slice(part));
-            let out_bytes = part.len() as u64 * words_per_item * 4;
-            let out = self.ctx.output_buffer("ao out", out_bytes);
-            let mut entries = vec![
-                entry(0, uniform.as_entire_binding()),
-                entry(1, recv_buf.as_entire_binding()),
-                entry(2, self.tables.as_entire_binding()),
-                entry(3, self.mesh.as_entire_binding()),
-                entry(4, self.instances.as_entire_binding()),
-                entry(5, out.as_entire_binding()),
-            ];
-            if let Some(d) = dirs {
-                entries.push(entry(DIRECTIONS_BINDING, d.as_entire_binding()));
-            }
-            let view;
-            match &self.field {
-                FieldBinding::Windows(ws) => {
-                    for (i, w) in ws.iter().enumerate() {
-                        entries.push(entry(FIXED_BINDINGS + i as u32, w.as_entire_binding()));
+        let shape = (threads_per_item, words_per_thread);
+        self.ctx
+            .run_batched(pipeline, recv, "receiver", shape, |part, stride, out| {
+                params.counts[0] = part.len() as u32;
+                params.counts[3] = stride;
+                let uniform = self
+                    .ctx
+                    .uniform_buffer("ao params", bytemuck::bytes_of(&params));
+                let recv_buf = self
+                    .ctx
+                    .storage_buffer("receivers", bytemuck::cast_slice(part));
+                let mut entries = vec![
+                    entry(0, uniform.as_entire_binding()),
+                    entry(1, recv_buf.as_entire_binding()),
+                    entry(2, self.tables.as_entire_binding()),
+                    entry(3, self.mesh.as_entire_binding()),
+                    entry(4, self.instances.as_entire_binding()),
+                    entry(5, out.as_entire_binding()),
+                ];
+                if let Some(d) = dirs {
+                    entries.push(entry(DIRECTIONS_BINDING, d.as_entire_binding()));
+                }
+                let view;
+                match &self.field {
+                    FieldBinding::Windows(ws) => {
+                        for (i, w) in ws.iter().enumerate() {
+                            entries.push(entry(FIXED_BINDINGS + i as u32, w.as_entire_binding()));
+                        }
+                    }
+                    FieldBinding::Texture(tex) => {
+                        view = tex.view();
+                        entries.push(entry(
+                            FIXED_BINDINGS,
+                            wgpu::BindingResource::TextureView(&view),
+                        ));
                     }
                 }
-                FieldBinding::Texture(tex) => {
-                    view = tex.view();
-                    entries.push(entry(
-                        FIXED_BINDINGS,
-                        wgpu::BindingResource::TextureView(&view),
-                    ));
-                }
-            }
-            let bind_group = self
-                .ctx
-                .device
-                .create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("field ao"),
-                    layout: &pipeline.get_bind_group_layout(0),
-                    entries: &entries,
-                });
-            upload += t.elapsed();
-            let (bytes, k) = self
-                .ctx
-                .dispatch_and_read(pipeline, &bind_group, groups, &out)?;
-            kernel = super::context::add_kernel(kernel, k);
-            words.extend(bytemuck::pod_collect_to_vec::<u8, u32>(
-                &bytes[..out_bytes as usize],
-            ));
-        }
-        Ok((words, kernel, upload))
+                self.ctx
+                    .device
+                    .create_bind_group(&wgpu::BindGroupDescriptor {
+                        label: Some("field ao"),
+                        layout: &pipeline.get_bind_group_layout(0),
+                        entries: &entries,
+                    })
+            })
     }
 }
 

@@ -11,7 +11,7 @@
 //! Deviation from the paper: a compute shader over segments clipped on the host, not a pixel
 //! shader over the rasterised prism; zones in f32, not 8-bit RGBA textures.
 
-use super::context::{entry, split_groups, GpuContext};
+use super::context::{entry, GpuContext};
 use super::loop_budget::{COMPLETION_TRIPS, CUT_SHORT};
 use super::{GpuError, GpuTiming};
 use crate::relief::{Cast, CastParams, HeightMap, SafetyZones};
@@ -36,7 +36,6 @@ struct ReliefParamsGpu {
 }
 const _: () = assert!(std::mem::size_of::<ReliefParamsGpu>() == 64);
 
-const WORKGROUP: u32 = 64;
 const MISS: u32 = u32::MAX;
 
 /// Loop iterations one invocation may take: lavapipe ends every invocation's loops after
@@ -141,55 +140,45 @@ impl<'a> ReliefKernel<'a> {
             )));
         }
         let ctx = self.ctx;
-        let limits = ctx.limits();
-        let max_binding = limits
-            .max_storage_buffer_binding_size
-            .min(limits.max_buffer_size);
-        let need = segments.len() as u64 * 32;
-        if need > max_binding {
-            return Err(GpuError::TooLarge {
-                what: format!("{} relief segments", segments.len()),
-                need,
-                limit: max_binding,
-                limit_name: "max_storage_buffer_binding_size",
-            });
-        }
-        let data: Vec<[f32; 4]> = segments
+        let data: Vec<[[f32; 4]; 2]> = segments
             .iter()
-            .flat_map(|(e, x)| [e.extend(1.0).to_array(), x.extend(0.0).to_array()])
+            .map(|(e, x)| [e.extend(1.0).to_array(), x.extend(0.0).to_array()])
             .collect();
-        let groups = (segments.len() as u32).div_ceil(WORKGROUP);
-        let (gx, _) = split_groups(groups, limits.max_compute_workgroups_per_dimension);
-        let uniform = ReliefParamsGpu {
-            size: self.size,
-            count: segments.len() as u32,
-            stride: gx * WORKGROUP,
-            samples_per_unit: params.samples_per_unit,
-            bisections: params.bisections,
-            skips: params.skips,
-            channels: self.channels,
-            deltas: self.deltas,
-            trips: [COMPLETION_TRIPS, 0, 0, 0],
-        };
-        let uniform = ctx.uniform_buffer("relief params", bytemuck::bytes_of(&uniform));
-        let rays = ctx.storage_buffer("segments", bytemuck::cast_slice(&data));
-        let out_bytes = segments.len() as u64 * 8;
-        let out = ctx.output_buffer("relief out", out_bytes);
-        let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("relief"),
-            layout: &self.pipeline.get_bind_group_layout(0),
-            entries: &[
-                entry(0, uniform.as_entire_binding()),
-                entry(1, self.heights.as_entire_binding()),
-                entry(2, self.dilation.as_entire_binding()),
-                entry(3, self.erosion.as_entire_binding()),
-                entry(4, rays.as_entire_binding()),
-                entry(5, out.as_entire_binding()),
-            ],
-        });
-        let upload = start.elapsed();
-        let (bytes, kernel) = ctx.dispatch_and_read(&self.pipeline, &bind_group, groups, &out)?;
-        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes[..out_bytes as usize]);
+        let packed = start.elapsed();
+        let (words, kernel, upload) = ctx.run_batched(
+            &self.pipeline,
+            &data,
+            "relief segment",
+            (1, 2),
+            |part, stride, out| {
+                let uniform = ReliefParamsGpu {
+                    size: self.size,
+                    count: part.len() as u32,
+                    stride,
+                    samples_per_unit: params.samples_per_unit,
+                    bisections: params.bisections,
+                    skips: params.skips,
+                    channels: self.channels,
+                    deltas: self.deltas,
+                    trips: [COMPLETION_TRIPS, 0, 0, 0],
+                };
+                let uniform = ctx.uniform_buffer("relief params", bytemuck::bytes_of(&uniform));
+                let rays = ctx.storage_buffer("segments", bytemuck::cast_slice(part));
+                ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("relief"),
+                    layout: &self.pipeline.get_bind_group_layout(0),
+                    entries: &[
+                        entry(0, uniform.as_entire_binding()),
+                        entry(1, self.heights.as_entire_binding()),
+                        entry(2, self.dilation.as_entire_binding()),
+                        entry(3, self.erosion.as_entire_binding()),
+                        entry(4, rays.as_entire_binding()),
+                        entry(5, out.as_entire_binding()),
+                    ],
+                })
+            },
+        )?;
+        let upload = packed + upload;
         let cut = words.chunks_exact(2).filter(|w| w[1] == CUT_SHORT).count();
         if cut > 0 {
             return Err(GpuError::Unsupported(format!(

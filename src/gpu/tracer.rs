@@ -2,8 +2,7 @@
 //! 2017) with the watertight triangle test (Woop, Benthin, Wald, JCGT 2013), so that GPU field
 //! lookup is compared with GPU ray casting on the same device.
 
-use super::context::entry;
-use super::context::{split_groups, GpuContext};
+use super::context::{entry, GpuContext};
 use super::loop_budget::{free_fractions, Dispatched, COMPLETION_TRIPS};
 use super::rays::{base_directions, receivers};
 use super::{GpuError, GpuTiming};
@@ -43,7 +42,6 @@ const _: () = assert!(std::mem::size_of::<TraceParamsGpu>() == 48);
 /// Box padding relative to the scene extent, as the CPU tracer pads (`2^-18`), so that the
 /// quantised node test stays conservative for the watertight triangle test.
 const BOX_PAD_RELATIVE: f32 = 1.0 / (1u32 << 18) as f32;
-const WORKGROUP: u32 = 64;
 
 /// A closest hit found on the GPU.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -215,37 +213,24 @@ impl<'a> GpuTracer<'a> {
         mut params: TraceParamsGpu,
     ) -> Result<Dispatched, GpuError> {
         let ctx = self.ctx;
-        let limits = ctx.limits();
-        let max_binding = limits
-            .max_storage_buffer_binding_size
-            .min(limits.max_buffer_size);
-        let words_per_item = threads_per_item as u64 * words_per_thread as u64;
-        let batch = (max_binding / (4 * words_per_item))
-            .min(max_binding / std::mem::size_of::<RayGpu>() as u64)
-            .min(u32::MAX as u64 / threads_per_item as u64) as usize;
+        let max_binding = ctx.max_binding();
         let dir_bytes = dirs.map_or(0, |d| d.len() as u64 * 16);
-        if batch == 0 || dir_bytes > max_binding {
+        if dir_bytes > max_binding {
             return Err(GpuError::TooLarge {
-                what: "ray directions or the output of one point".into(),
-                need: dir_bytes.max(4 * words_per_item),
+                what: format!("{} ray directions", dir_bytes / 16),
+                need: dir_bytes,
                 limit: max_binding,
                 limit_name: "max_storage_buffer_binding_size",
             });
         }
         let dir_buf = dirs.map(|d| ctx.storage_buffer("directions", bytemuck::cast_slice(d)));
-        let mut words = Vec::with_capacity(records.len() * words_per_item as usize);
-        let (mut kernel, mut upload) = (None, Duration::ZERO);
-        for part in records.chunks(batch) {
-            let t = Instant::now();
-            let groups = (part.len() as u32 * threads_per_item).div_ceil(WORKGROUP);
-            let (gx, _) = split_groups(groups, limits.max_compute_workgroups_per_dimension);
+        let shape = (threads_per_item, words_per_thread);
+        ctx.run_batched(pipeline, records, "ray", shape, |part, stride, out| {
             params.counts[0] = part.len() as u32;
-            params.counts[2] = gx * WORKGROUP;
+            params.counts[2] = stride;
             params.counts[3] = self.node_count;
             let uniform = ctx.uniform_buffer("trace params", bytemuck::bytes_of(&params));
             let rays = ctx.storage_buffer("rays", bytemuck::cast_slice(part));
-            let out_bytes = part.len() as u64 * words_per_item * 4;
-            let out = ctx.output_buffer("trace out", out_bytes);
             let mut entries = vec![
                 entry(0, uniform.as_entire_binding()),
                 entry(1, self.nodes.as_entire_binding()),
@@ -256,19 +241,12 @@ impl<'a> GpuTracer<'a> {
             if let Some(b) = &dir_buf {
                 entries.push(entry(5, b.as_entire_binding()));
             }
-            let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("trace"),
                 layout: &pipeline.get_bind_group_layout(0),
                 entries: &entries,
-            });
-            upload += t.elapsed();
-            let (bytes, k) = ctx.dispatch_and_read(pipeline, &bind_group, groups, &out)?;
-            kernel = super::context::add_kernel(kernel, k);
-            words.extend(bytemuck::pod_collect_to_vec::<u8, u32>(
-                &bytes[..out_bytes as usize],
-            ));
-        }
-        Ok((words, kernel, upload))
+            })
+        })
     }
 }
 
