@@ -141,28 +141,22 @@ pub fn xy_plot(path: &Path, axes: &Axes, series: &[Series], hlines: &[HLine]) ->
             }};
         }
         if outside {
-            for (i, s) in series.iter().enumerate() {
+            // One row per entry: the series' dot or the line's stroke, then its label.
+            let labels = series
+                .iter()
+                .map(|s| &s.label)
+                .chain(hlines.iter().map(|h| &h.label));
+            for (i, label) in labels.enumerate() {
                 let y = 70 + 24 * i as i32;
-                let color = Palette99::pick(i).to_rgba();
-                side.draw(&Circle::new((12, y), 5, color.filled()))
-                    .map_err(err(path))?;
-                side.draw(&Text::new(
-                    s.label.as_str(),
-                    (26, y - 9),
-                    ("sans-serif", 15),
-                ))
+                if i < series.len() {
+                    let color = Palette99::pick(i).to_rgba();
+                    side.draw(&Circle::new((12, y), 5, color.filled()))
+                } else {
+                    side.draw(&PathElement::new(vec![(2, y), (22, y)], BLACK.mix(0.6)))
+                }
                 .map_err(err(path))?;
-            }
-            for (j, h) in hlines.iter().enumerate() {
-                let y = 70 + 24 * (series.len() + j) as i32;
-                side.draw(&PathElement::new(vec![(2, y), (22, y)], BLACK.mix(0.6)))
+                side.draw(&Text::new(label.as_str(), (26, y - 9), ("sans-serif", 15)))
                     .map_err(err(path))?;
-                side.draw(&Text::new(
-                    h.label.as_str(),
-                    (26, y - 9),
-                    ("sans-serif", 15),
-                ))
-                .map_err(err(path))?;
             }
         }
         let mut builder = ChartBuilder::on(&plot);
