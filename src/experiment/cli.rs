@@ -149,9 +149,7 @@ impl RunArgs {
         let mut o = RunOptions::new(out);
         o.quick = self.quick;
         o.dry_run = self.dry_run;
-        if let Some(a) = &self.adapter {
-            o.adapter = crate::gpu::AdapterPreference::parse(a);
-        }
+        o.adapter = adapter_preference(self.adapter.as_deref());
         o.supply = FieldSupply {
             cache: if self.no_cache {
                 None
@@ -291,6 +289,14 @@ fn report(r: Result<(), String>) -> i32 {
     }
 }
 
+/// The adapter a `--adapter` flag names, else `$VISFIELD_ADAPTER`'s, else auto.
+fn adapter_preference(flag: Option<&str>) -> crate::gpu::AdapterPreference {
+    flag.map_or_else(
+        crate::gpu::AdapterPreference::from_env,
+        crate::gpu::AdapterPreference::parse,
+    )
+}
+
 pub fn main() {
     let cli = Cli::parse();
     let code = match cli.command {
@@ -303,10 +309,7 @@ pub fn main() {
             adapter,
             no_gpu,
         } => {
-            let gpu = (!no_gpu).then(|| match adapter {
-                Some(a) => crate::gpu::AdapterPreference::parse(&a),
-                None => crate::gpu::AdapterPreference::from_env(),
-            });
+            let gpu = (!no_gpu).then(|| adapter_preference(adapter.as_deref()));
             report(super::relief::run(&out, quick, gpu).map(|_| ()))
         }
         Command::Run { spec, opts } => report(run_one(&spec, &opts, None).map(|_| ())),
@@ -321,7 +324,7 @@ pub fn main() {
             super::quickstart::run(&root("quickstart"))?;
             crate::sampling::report::run(&root("sampling"))
                 .map_err(|e| format!("sampling: {e}"))?;
-            let adapter = opts.options("relief", opts.out.as_deref()).adapter;
+            let adapter = adapter_preference(opts.adapter.as_deref());
             super::relief::run(&root("relief"), opts.quick, Some(adapter))?;
             super::stability::run(&root("stability")).map(|_| ())
         })()),
