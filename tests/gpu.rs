@@ -293,6 +293,7 @@ fn field_ao_matches_the_cpu_for_every_precision_layout_and_selection() {
     ] {
         let field = baked(params(290, 16, precision, LayoutKind::Concentric));
         let inst = placed(&field);
+        let (p, n) = receivers(&inst);
         for layout in [FieldLayout::StorageBuffers, FieldLayout::Texture3d] {
             let opts = FieldGpuOptions {
                 layout,
@@ -304,7 +305,6 @@ fn field_ao_matches_the_cpu_for_every_precision_layout_and_selection() {
                     selection,
                     ..Default::default()
                 };
-                let (p, n) = receivers(&inst);
                 let (gpu, cpu, timing) = ao_pair(&mut kernel, &inst, lookup, (&p, &n), &rays);
                 assert_occlusion_is_nontrivial(&cpu);
                 let q = parity(&gpu, &cpu);
