@@ -11,6 +11,7 @@ pub mod backend_gpu;
 pub mod check;
 pub mod cli;
 pub mod discover;
+pub mod error;
 pub mod fields;
 pub mod figures;
 pub mod meta;
@@ -27,3 +28,5 @@ pub mod spec;
 pub mod stability;
 pub mod truth;
 pub mod validate;
+
+pub use error::{Error, Result, ResultExt};
