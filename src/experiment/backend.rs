@@ -1,18 +1,21 @@
-//! Compute backends of a run: where the field lookup and the ray-cast timing run.
+//! Compute backends of a run: where the estimates through fields and by ray casting run.
 //!
-//! A backend first prepares what it reads ([`AoBackend::fields`], [`AoBackend::casters`]: on
-//! the GPU the upload of the fields or of the CWBVH and the shader compilation), then evaluates
-//! AO on given points and rays as many times as the timing asks ([`AoEval::ao`]), so that the
-//! preparation is reported apart from the AO time. The CPU backend evaluates both through the
-//! [`crate::render::Visibility`] interface on the same rays ([`ao_at_points`]); the GPU backend
-//! ([`super::backend_gpu::GpuBackend`]) runs the wgpu kernels of [`crate::gpu`] on the same
-//! rays. No GPU device is ever opened unless a spec asks for "gpu".
+//! A backend first prepares what it reads ([`ComputeBackend::fields`],
+//! [`ComputeBackend::casters`]: on the GPU the upload of the fields or of the CWBVH and the
+//! shader compilation) for one render kind's [`Estimator`], then evaluates it on given points
+//! and rays as many times as the timing asks ([`Eval::estimate`]), so that the preparation is
+//! reported apart from the estimate's time. The CPU backend runs the estimator through the
+//! [`crate::render::Visibility`] interface on the same rays; the GPU backend
+//! ([`super::backend_gpu::GpuBackend`]) runs the wgpu kernel of the estimator's quantity
+//! ([`crate::gpu`]) on the same rays. No GPU device is ever opened unless a spec asks for
+//! "gpu".
 
 use super::backend_gpu::GpuBackend;
 use super::spec::Backend;
+use super::Result;
 use crate::field::scene::FieldScene;
 use crate::gpu::AdapterPreference;
-use crate::render::ao::{ao_at_points, AoOptions};
+use crate::render::estimator::{Estimator, Points};
 use crate::sampling::rays::RaySet;
 use crate::trace::Tracer;
 use glam::Vec3;
@@ -25,62 +28,64 @@ pub struct Casters<'a> {
     pub tracer: &'a Tracer,
 }
 
-/// AO points: positions and unit normals, world space.
-pub struct Points<'a> {
-    pub points: &'a [Vec3],
-    pub normals: &'a [Vec3],
-}
-
-/// One AO evaluation.
+/// One evaluation.
 #[derive(Clone, Debug, PartialEq)]
-pub struct AoOut {
-    /// AO per point, in [0, 1].
-    pub ao: Vec<f32>,
+pub struct Estimate {
+    /// The estimate per point, in [0, 1].
+    pub values: Vec<f32>,
     /// Kernel time from GPU timestamps (seconds); `None` on the CPU or where the adapter has
     /// no timestamp queries.
     pub kernel_s: Option<f64>,
 }
 
-/// Fields or casters prepared on a backend, evaluated on any points and rays.
-pub trait AoEval {
-    /// AO at `at` on `rays` (point i uses the directions of point index i).
-    fn ao(&self, at: &Points, rays: &RaySet, opts: &AoOptions) -> Result<AoOut, String>;
+/// Fields or casters prepared on a backend for one estimator, evaluated on any points and rays.
+pub trait Eval {
+    /// The estimate at `at` on `rays` (point i uses the directions of point index i).
+    fn estimate(&self, at: Points, rays: &RaySet) -> Result<Estimate>;
     /// Host time of the preparation (GPU: pack, upload, BVH build, compile); `None` on the CPU,
     /// which reads the fields and the tracer in place.
     fn setup_s(&self) -> Option<f64>;
 }
 
-/// A place where AO is computed.
-pub trait AoBackend {
+/// A place where estimates are computed.
+pub trait ComputeBackend {
     /// Which backend this is.
     fn kind(&self) -> Backend;
     /// The device, for tables and run.json (CPU model and threads, or GPU adapter and driver).
     fn adapter(&self) -> String;
-    /// Prepares `fields` for lookups.
-    fn fields<'s>(&'s self, fields: &'s FieldScene) -> Result<Box<dyn AoEval + 's>, String>;
-    /// Prepares the casters for ray casting.
-    fn casters<'s>(&'s self, casters: &'s Casters<'s>) -> Result<Box<dyn AoEval + 's>, String>;
+    /// Prepares `fields` for `est`.
+    fn fields<'s>(
+        &'s self,
+        fields: &'s FieldScene,
+        est: &'s dyn Estimator,
+    ) -> Result<Box<dyn Eval + 's>>;
+    /// Prepares the casters for ray casting `est`.
+    fn casters<'s>(
+        &'s self,
+        casters: &'s Casters<'s>,
+        est: &'s dyn Estimator,
+    ) -> Result<Box<dyn Eval + 's>>;
 
-    /// AO through the fields, on `rays` (point i uses the directions of point index i).
-    fn field_ao(
+    /// `est` through the fields, on `rays`.
+    fn field_estimate(
         &self,
         fields: &FieldScene,
-        at: &Points,
+        est: &dyn Estimator,
+        at: Points,
         rays: &RaySet,
-        opts: &AoOptions,
-    ) -> Result<Vec<f32>, String> {
-        Ok(self.fields(fields)?.ao(at, rays, opts)?.ao)
+    ) -> Result<Vec<f32>> {
+        Ok(self.fields(fields, est)?.estimate(at, rays)?.values)
     }
 
-    /// Ray-cast AO against the casters, on the same rays.
-    fn raycast_ao(
+    /// `est` by ray casting the casters, on the same rays.
+    fn raycast_estimate(
         &self,
         casters: &Casters,
-        at: &Points,
+        est: &dyn Estimator,
+        at: Points,
         rays: &RaySet,
-        opts: &AoOptions,
-    ) -> Result<Vec<f32>, String> {
-        Ok(self.casters(casters)?.ao(at, rays, opts)?.ao)
+    ) -> Result<Vec<f32>> {
+        Ok(self.casters(casters, est)?.estimate(at, rays)?.values)
     }
 }
 
@@ -104,13 +109,16 @@ impl Default for CpuBackend {
     }
 }
 
-/// [`ao_at_points`] over any [`crate::render::Visibility`].
-struct CpuEval<'a, V: crate::render::Visibility>(&'a V);
+/// An estimator over any [`crate::render::Visibility`].
+struct CpuEval<'a> {
+    vis: &'a dyn crate::render::Visibility,
+    est: &'a dyn Estimator,
+}
 
-impl<V: crate::render::Visibility> AoEval for CpuEval<'_, V> {
-    fn ao(&self, at: &Points, rays: &RaySet, opts: &AoOptions) -> Result<AoOut, String> {
-        Ok(AoOut {
-            ao: ao_at_points(self.0, at.points, at.normals, rays, opts),
+impl Eval for CpuEval<'_> {
+    fn estimate(&self, at: Points, rays: &RaySet) -> Result<Estimate> {
+        Ok(Estimate {
+            values: self.est.estimate(self.vis, at, rays),
             kernel_s: None,
         })
     }
@@ -120,7 +128,7 @@ impl<V: crate::render::Visibility> AoEval for CpuEval<'_, V> {
     }
 }
 
-impl AoBackend for CpuBackend {
+impl ComputeBackend for CpuBackend {
     fn kind(&self) -> Backend {
         Backend::Cpu
     }
@@ -129,18 +137,29 @@ impl AoBackend for CpuBackend {
         self.adapter.clone()
     }
 
-    fn fields<'s>(&'s self, fields: &'s FieldScene) -> Result<Box<dyn AoEval + 's>, String> {
-        Ok(Box::new(CpuEval(fields)))
+    fn fields<'s>(
+        &'s self,
+        fields: &'s FieldScene,
+        est: &'s dyn Estimator,
+    ) -> Result<Box<dyn Eval + 's>> {
+        Ok(Box::new(CpuEval { vis: fields, est }))
     }
 
-    fn casters<'s>(&'s self, casters: &'s Casters<'s>) -> Result<Box<dyn AoEval + 's>, String> {
-        Ok(Box::new(CpuEval(casters.tracer)))
+    fn casters<'s>(
+        &'s self,
+        casters: &'s Casters<'s>,
+        est: &'s dyn Estimator,
+    ) -> Result<Box<dyn Eval + 's>> {
+        Ok(Box::new(CpuEval {
+            vis: casters.tracer,
+            est,
+        }))
     }
 }
 
 /// Opens a backend; "gpu" opens the adapter `adapter` selects ([`AdapterPreference::Auto`]:
 /// hardware where there is one, else lavapipe).
-pub fn open(kind: Backend, adapter: &AdapterPreference) -> Result<Box<dyn AoBackend>, String> {
+pub fn open(kind: Backend, adapter: &AdapterPreference) -> Result<Box<dyn ComputeBackend>> {
     match kind {
         Backend::Cpu => Ok(Box::new(CpuBackend::new())),
         Backend::Gpu => Ok(Box::new(GpuBackend::open(adapter.clone())?)),

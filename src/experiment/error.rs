@@ -136,3 +136,17 @@ impl<T, E: Into<Error>> ResultExt<T> for std::result::Result<T, E> {
         self.map_err(|e| e.into().context(context()))
     }
 }
+
+// TODO(layering-merge): remove once every harness function returns `Result`.
+impl From<Error> for String {
+    fn from(e: Error) -> String {
+        e.to_string()
+    }
+}
+
+// TODO(layering-merge): remove once every harness function returns `Result`.
+impl From<String> for Error {
+    fn from(message: String) -> Error {
+        Error::invalid("experiment", message)
+    }
+}

@@ -1,4 +1,8 @@
-//! Error metrics on the 0–255 scale of 8-bit images (the papers' scale).
+//! Error metrics on the 0–255 scale of 8-bit images (the papers' scale). Every RMS of the
+//! harness is computed here, and each name says whether the values are rounded first:
+//! [`rms_u8`] rounds both sides to 8-bit levels (images as written to PNG), [`rms_unquantised`]
+//! does not (per-point values). Over zero values an RMS is NaN, never 0: no point, no error
+//! figure (`experiment check` fails a NaN).
 //!
 //! - Per receiver vertex ([`vertex_errors`]): the AO values themselves, unquantised, times 255.
 //!   This is the error of the quantity the 2008 method computes (AO at the corner's vertices).
@@ -7,7 +11,49 @@
 //!   Reference image"): their images show vertex AO interpolated across triangles, so the
 //!   per-pixel figure weighs vertices by their screen area and includes the 8-bit rounding.
 
-use crate::render::image::{rms_255, rms_vertex, GrayImage};
+use crate::render::image::GrayImage;
+
+/// RMS difference on the 0–255 scale after rounding both sides to 8-bit levels (images as
+/// written to PNG: the papers' figure), over the values where `mask` is true (all when `None`).
+/// NaN when no value is selected.
+///
+/// # Panics
+/// If the lengths differ.
+pub fn rms_u8(a: &[f32], b: &[f32], mask: Option<&[bool]>) -> f64 {
+    assert_eq!(a.len(), b.len(), "rms_u8: lengths differ");
+    let d = (0..a.len())
+        .filter(|&i| mask.is_none_or(|m| m[i]))
+        .map(|i| GrayImage::to_u8(a[i]) as f64 - GrayImage::to_u8(b[i]) as f64);
+    rms_of(d)
+}
+
+/// RMS difference on the 0–255 scale of unrounded values (per-point AO), over the indices
+/// `keep` selects. NaN when none is selected.
+///
+/// # Panics
+/// If the lengths differ.
+pub fn rms_unquantised_where(a: &[f32], b: &[f32], keep: impl Fn(usize) -> bool) -> f64 {
+    assert_eq!(a.len(), b.len(), "rms_unquantised: lengths differ");
+    let d = (0..a.len())
+        .filter(|&i| keep(i))
+        .map(|i| 255.0 * (a[i] as f64 - b[i] as f64));
+    rms_of(d)
+}
+
+/// [`rms_unquantised_where`] over every value.
+pub fn rms_unquantised(a: &[f32], b: &[f32]) -> f64 {
+    rms_unquantised_where(a, b, |_| true)
+}
+
+/// The RMS of `d`; NaN when empty.
+fn rms_of(d: impl Iterator<Item = f64>) -> f64 {
+    let (sum, n) = d.fold((0.0f64, 0usize), |(s, n), x| (s + x * x, n + 1));
+    if n == 0 {
+        f64::NAN
+    } else {
+        (sum / n as f64).sqrt()
+    }
+}
 
 /// RMS, largest error and the share of values off by more than one 8-bit level.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -34,7 +80,7 @@ pub fn vertex_errors(ao: &[f32], reference: &[f32]) -> ErrorStats {
         (m.max(e), n + (e > 1.0) as usize)
     });
     ErrorStats {
-        rms: rms_vertex(ao, reference),
+        rms: rms_unquantised(ao, reference),
         max,
         share_off_1: off as f64 / ao.len().max(1) as f64,
     }
@@ -57,7 +103,7 @@ pub fn image_errors(a: &[f32], b: &[f32], mask: &[bool]) -> ErrorStats {
         n += 1;
     }
     ErrorStats {
-        rms: rms_255(a, b, Some(mask)),
+        rms: rms_u8(a, b, Some(mask)),
         max,
         share_off_1: off as f64 / n.max(1) as f64,
     }
@@ -66,6 +112,27 @@ pub fn image_errors(a: &[f32], b: &[f32], mask: &[bool]) -> ErrorStats {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn rms_u8_closed_form_and_rounding() {
+        // One pixel off by 1.0 (255 levels) out of four: sqrt(255²/4) = 127.5.
+        let a = [0.0, 0.5, 1.0, 0.25];
+        let b = [1.0, 0.5, 1.0, 0.25];
+        assert!((rms_u8(&a, &b, None) - 127.5).abs() < 1e-9);
+        assert_eq!(rms_u8(&a, &b, Some(&[false, true, true, true])), 0.0);
+        // Within one 8-bit level: 0 rounded, 0.3 unrounded.
+        let (x, y) = ([10.2f32 / 255.0], [10.4f32 / 255.0]);
+        assert_eq!(rms_u8(&x, &y, None), 0.0);
+        assert!((rms_unquantised(&x, &y) - 0.2).abs() < 1e-4);
+    }
+
+    #[test]
+    fn an_rms_over_no_values_is_nan_not_zero() {
+        assert!(rms_u8(&[0.5], &[0.0], Some(&[false])).is_nan());
+        assert!(rms_unquantised(&[], &[]).is_nan());
+        assert!(rms_unquantised_where(&[1.0, 0.0], &[0.0, 0.0], |i| i == 1) == 0.0);
+        assert!((rms_unquantised_where(&[1.0, 0.0], &[0.0, 0.0], |i| i == 0) - 255.0).abs() < 1e-9);
+    }
 
     #[test]
     fn vertex_errors_closed_form() {

@@ -14,6 +14,7 @@ pub mod discover;
 pub mod error;
 pub mod fields;
 pub mod figures;
+pub mod kind;
 pub mod meta;
 pub mod metrics;
 pub mod outputs;
@@ -26,7 +27,7 @@ pub mod run;
 pub mod scenes;
 pub mod spec;
 pub mod stability;
-pub mod truth;
+pub mod truth_cache;
 pub mod validate;
 
 pub use error::{Error, Result, ResultExt};

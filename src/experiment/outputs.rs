@@ -11,6 +11,7 @@
 //!   to a reference cell, since 2008 seconds are not a target.
 
 use super::spec::{Backend, PaperCell, PaperNumbers};
+use super::{Error, Result};
 use crate::field::{Precision, Selection};
 use crate::sampling::{LayoutKind, SphereKind};
 use serde::{de::DeserializeOwned, Deserialize, Serialize};
@@ -128,6 +129,111 @@ pub const TABLE_COLUMNS: [&str; 15] = [
     "truth_stderr",
 ];
 
+/// A row's identity: the cell, its axes and its scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CellColumns {
+    pub cell: String,
+    pub scene: String,
+    pub sphere: SphereKind,
+    pub positional_samples: usize,
+    pub directional_res: u32,
+    pub layout: LayoutKind,
+    pub precision: Precision,
+    pub selection: Selection,
+    pub backend: Backend,
+    pub adapter: String,
+    pub rays_per_point: u32,
+    pub receiver_points: usize,
+    pub crease_points: usize,
+    pub caster_triangles: usize,
+}
+
+/// A row's times (seconds).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TimeColumns {
+    pub bake_s: Option<f64>,
+    pub ao_s: f64,
+    pub raycast_s: Option<f64>,
+    pub ao_kernel_s: Option<f64>,
+    pub raycast_kernel_s: Option<f64>,
+    pub setup_s: Option<f64>,
+}
+
+/// A row's fields: their bytes and bakes.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FieldColumns {
+    pub field_bytes: u64,
+    pub bake_rays: u64,
+    pub bake_cached: bool,
+}
+
+/// A row's errors (0–255): against the same-ray reference (the kind's metric columns) and
+/// against the converged reference.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ErrorColumns {
+    pub seeds: u32,
+    pub rms_vertex: Option<(f64, Option<f64>)>,
+    pub rms_image: Option<(f64, Option<f64>)>,
+    pub max_error_vertex: Option<f64>,
+    pub max_error_image: Option<f64>,
+    pub share_pixels_off_1: Option<f64>,
+    pub rms_vs_truth: Option<(f64, Option<f64>)>,
+    pub rms_vs_truth_crease: Option<f64>,
+    pub rms_vs_truth_interior: Option<f64>,
+    pub truth_stderr: Option<f64>,
+    pub truth_rays: Option<u32>,
+    pub raycast_rms_vs_truth: Option<f64>,
+    /// The image, relative to the output folder (empty without an image).
+    pub image: String,
+}
+
+impl Row {
+    /// The row of its typed parts.
+    pub fn from_parts(c: CellColumns, t: TimeColumns, f: FieldColumns, e: ErrorColumns) -> Row {
+        Row {
+            positional_samples: c.positional_samples,
+            directional_res: c.directional_res,
+            layout: c.layout,
+            precision: c.precision,
+            selection: c.selection,
+            backend: c.backend,
+            adapter: c.adapter,
+            bake_s: t.bake_s,
+            ao_s: t.ao_s,
+            raycast_s: t.raycast_s,
+            rms_vertex: e.rms_vertex.map(|m| m.0),
+            rms_image: e.rms_image.map(|m| m.0),
+            field_bytes: f.field_bytes,
+            rms_vs_truth: e.rms_vs_truth.map(|m| m.0),
+            truth_stderr: e.truth_stderr,
+            scene: c.scene,
+            sphere: c.sphere,
+            rays_per_point: c.rays_per_point,
+            receiver_points: c.receiver_points,
+            caster_triangles: c.caster_triangles,
+            max_error_vertex: e.max_error_vertex,
+            max_error_image: e.max_error_image,
+            share_pixels_off_1: e.share_pixels_off_1,
+            bake_rays: f.bake_rays,
+            bake_cached: f.bake_cached,
+            image: e.image,
+            cell: c.cell,
+            ao_kernel_s: t.ao_kernel_s,
+            raycast_kernel_s: t.raycast_kernel_s,
+            setup_s: t.setup_s,
+            seeds: e.seeds,
+            rms_vertex_sd: e.rms_vertex.and_then(|m| m.1),
+            rms_image_sd: e.rms_image.and_then(|m| m.1),
+            rms_vs_truth_sd: e.rms_vs_truth.and_then(|m| m.1),
+            raycast_rms_vs_truth: e.raycast_rms_vs_truth,
+            truth_rays: e.truth_rays,
+            crease_points: c.crease_points,
+            rms_vs_truth_crease: e.rms_vs_truth_crease,
+            rms_vs_truth_interior: e.rms_vs_truth_interior,
+        }
+    }
+}
+
 /// Ray-cast AO at one ray count, against the reference.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SweepRow {
@@ -214,24 +320,24 @@ pub struct PaperRow {
 }
 
 /// Writes rows as CSV (header from the struct), atomically.
-pub fn write_csv<T: Serialize>(path: &Path, rows: &[T]) -> Result<(), String> {
+pub fn write_csv<T: Serialize>(path: &Path, rows: &[T]) -> Result<()> {
     let mut w = csv::Writer::from_writer(Vec::new());
     for r in rows {
-        w.serialize(r)
-            .map_err(|e| format!("{}: {e}", path.display()))?;
+        w.serialize(r).map_err(Error::csv(path))?;
     }
-    let bytes = w
-        .into_inner()
-        .map_err(|e| format!("{}: {e}", path.display()))?;
-    crate::io::write_atomic(path, &bytes).map_err(|e| format!("{}: {e}", path.display()))
+    let bytes = w.into_inner().map_err(|e| Error::Io {
+        path: path.to_path_buf(),
+        source: e.into_error(),
+    })?;
+    crate::io::write_atomic(path, &bytes).map_err(Error::io(path))
 }
 
 /// Reads rows written by [`write_csv`].
-pub fn read_csv<T: DeserializeOwned>(path: &Path) -> Result<Vec<T>, String> {
-    let mut r = csv::Reader::from_path(path).map_err(|e| format!("{}: {e}", path.display()))?;
+pub fn read_csv<T: DeserializeOwned>(path: &Path) -> Result<Vec<T>> {
+    let mut r = csv::Reader::from_path(path).map_err(Error::csv(path))?;
     r.deserialize()
-        .collect::<Result<Vec<T>, _>>()
-        .map_err(|e| format!("{}: {e}", path.display()))
+        .collect::<std::result::Result<Vec<T>, _>>()
+        .map_err(Error::csv(path))
 }
 
 fn matches_row(c: &PaperCell, r: &Row) -> bool {

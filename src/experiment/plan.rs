@@ -12,11 +12,14 @@
 //! - each precision's fields are released after its cells are evaluated, the group's f32
 //!   source after the group, so at most one group's fields are alive at a time.
 //!
-//! No normal field is planned (no render in this build reads one) and no GPU device is opened
-//! unless a cell's backend is "gpu".
+//! Only what the render kind declares ([`super::kind::Needs`]) is planned: a G-buffer where it
+//! has an image, normal fields where it reads them (no kind of this build does), a GPU device
+//! only where a cell's backend is "gpu".
 
+use super::kind::Kind;
 use super::scenes::Scenes;
 use super::spec::{exact_sqrt, Backend, Spec};
+use super::{Error, Result};
 use crate::field::{ByteSize, FieldParams, Precision, Selection};
 use crate::sampling::{HemisphereLayout, LayoutKind, SphereKind};
 use std::collections::HashSet;
@@ -171,7 +174,7 @@ pub struct Plan {
     /// Largest sum of live field bytes.
     pub peak_field_bytes: u64,
     pub needs_gpu: bool,
-    /// Always false in this build (no reflection render).
+    /// Whether the render kind reads normal fields (none of this build's kinds does).
     pub needs_normal_field: bool,
     /// Receiver rays per point of the render (k).
     pub render_k: u32,
@@ -184,184 +187,131 @@ pub struct PlanLimits {
     pub memory_limit: u64,
 }
 
-/// Points at which a scene's AO is evaluated (receiver vertices, or receiver pixels for
-/// image AO, bounded by the image's pixel count).
-fn ao_points(spec: &Spec, scenes: &Scenes, scene: usize) -> u64 {
-    match (&spec.render.what, &spec.render.image) {
-        (super::spec::RenderKind::ImageAo, Some(img)) => img.width as u64 * img.height as u64,
-        _ => scenes.scenes[scene].receiver_vertices() as u64,
-    }
-}
-
 impl Plan {
-    /// Plans a spec profile over its built scenes.
-    pub fn new(spec: &Spec, scenes: &Scenes, limits: PlanLimits) -> Result<Plan, String> {
+    /// Plans a spec profile over its built scenes: per scene the reference steps
+    /// ([`scene_steps`]), then per field geometry its bakes, lookups and releases
+    /// ([`GroupPlanner`]).
+    pub fn new(spec: &Spec, scenes: &Scenes, limits: PlanLimits) -> Result<Plan> {
+        let kind = super::kind::of(&spec.render);
         let cells = cells_of(spec);
-        let render_k = exact_sqrt(spec.render.rays_per_point).ok_or("render rays")?;
-        let ref_k = exact_sqrt(spec.reference.rays_per_point).ok_or("reference rays")?;
+        let render_k = square_root(spec.render.rays_per_point(), "render.rays_per_point")?;
+        let ref_k = square_root(spec.reference.rays_per_point, "reference.rays_per_point")?;
         let mut steps = Vec::new();
-        for (s, _) in scenes.scenes.iter().enumerate() {
-            let pts = ao_points(spec, scenes, s);
-            if let Some(img) = &spec.render.image {
-                steps.push(Step::Primary {
-                    scene: s,
-                    pixels: img.width as u64 * img.height as u64,
-                });
-            }
-            let rays = |k: u32| pts * (k * k) as u64;
-            let max_rays = spec.reference.truth.max_rays;
-            steps.push(Step::Truth {
-                scene: s,
-                max_rays,
-                rays: pts * max_rays as u64,
-            });
-            steps.push(Step::Reference {
-                scene: s,
-                k: ref_k,
-                rays: rays(ref_k),
-            });
-            let mut sweep: Vec<u32> = spec
-                .reference
-                .raycast_sweep
-                .iter()
-                .filter_map(|&n| exact_sqrt(n))
-                .collect();
-            sweep.push(render_k);
-            sweep.sort_unstable();
-            sweep.dedup();
-            for k in sweep.into_iter().filter(|&k| k != ref_k) {
-                steps.push(Step::Sweep {
-                    scene: s,
-                    k,
-                    rays: rays(k),
-                });
-            }
-            for &b in spec.backends.iter().filter(|&&b| b != Backend::Cpu) {
-                steps.push(Step::Raycast {
-                    scene: s,
-                    backend: b,
-                    k: render_k,
-                    rays: rays(render_k),
-                });
-            }
+        for s in 0..scenes.scenes.len() {
+            steps.extend(scene_steps(spec, scenes, kind.as_ref(), s, render_k, ref_k));
         }
-
-        let mut groups: Vec<(Geometry, Vec<usize>)> = Vec::new();
-        for (i, c) in cells.iter().enumerate() {
-            match groups.iter_mut().find(|(g, _)| *g == c.geometry()) {
-                Some((_, v)) => v.push(i),
-                None => groups.push((c.geometry(), vec![i])),
-            }
+        let mut groups = GroupPlanner {
+            cells: &cells,
+            scenes,
+            limits,
+            points: |scene: usize| kind.max_points(&scenes.scenes[scene]),
+            render_k,
+            steps,
+            live: 0,
+            peak: 0,
+        };
+        for (geometry, members) in field_groups(&cells) {
+            groups.group(geometry, &members)?;
         }
-        let (mut live, mut peak) = (0u64, 0u64);
-        for (geometry, members) in &groups {
-            let used = HemisphereLayout::new(geometry.layout, geometry.res).used_count() as u64;
-            let bake_rays = used * geometry.count as u64;
-            // Per mesh: the precisions its cells need, in first-use order.
-            let mut needs: Vec<(usize, Vec<Precision>)> = Vec::new();
-            let mut precisions: Vec<Precision> = Vec::new();
-            for &ci in members {
-                let c = &cells[ci];
-                if !precisions.contains(&c.params.precision) {
-                    precisions.push(c.params.precision);
-                }
-                for m in scenes.scenes[c.scene].caster_meshes() {
-                    match needs.iter_mut().find(|(mm, _)| *mm == m) {
-                        Some((_, v)) if !v.contains(&c.params.precision) => {
-                            v.push(c.params.precision)
-                        }
-                        Some(_) => {}
-                        None => needs.push((m, vec![c.params.precision])),
-                    }
-                }
-            }
-            let f32_bytes = geometry.with(Precision::F32).storage_bytes();
-            let shared: Vec<usize> = needs
-                .iter()
-                .filter(|(_, p)| p.len() > 1 && f32_bytes <= limits.memory_limit)
-                .map(|(m, _)| *m)
-                .collect();
-            let mut group_fields = Vec::new();
-            for &m in &shared {
-                let params = geometry.with(Precision::F32);
-                steps.push(Step::Bake {
-                    mesh: m,
-                    params,
-                    rays: bake_rays,
-                    bytes: f32_bytes,
-                });
-                group_fields.push((m, params));
-                live += f32_bytes;
-            }
-            peak = peak.max(live);
-            for &p in &precisions {
-                let params = geometry.with(p);
-                let bytes = params.storage_bytes();
-                let mut stage_fields = Vec::new();
-                for (m, ps) in &needs {
-                    if !ps.contains(&p) {
-                        continue;
-                    }
-                    if shared.contains(m) {
-                        if p != Precision::F32 {
-                            steps.push(Step::Derive {
-                                mesh: *m,
-                                geometry: *geometry,
-                                to: p,
-                                bytes,
-                            });
-                            stage_fields.push((*m, params));
-                            live += bytes;
-                        }
-                    } else {
-                        params
-                            .check_memory(limits.memory_limit)
-                            .map_err(|e| e.to_string())?;
-                        steps.push(Step::Bake {
-                            mesh: *m,
-                            params,
-                            rays: bake_rays,
-                            bytes,
-                        });
-                        stage_fields.push((*m, params));
-                        live += bytes;
-                    }
-                }
-                peak = peak.max(live);
-                for &ci in members
-                    .iter()
-                    .filter(|&&ci| cells[ci].params.precision == p)
-                {
-                    let rays =
-                        ao_points(spec, scenes, cells[ci].scene) * (render_k * render_k) as u64;
-                    steps.push(Step::Lookup { cell: ci, rays });
-                }
-                if !stage_fields.is_empty() {
-                    let bytes = stage_fields.iter().map(|(_, p)| p.storage_bytes()).sum();
-                    live -= bytes;
-                    steps.push(Step::Release {
-                        fields: stage_fields,
-                        bytes,
-                    });
-                }
-            }
-            if !group_fields.is_empty() {
-                let bytes = group_fields.iter().map(|(_, p)| p.storage_bytes()).sum();
-                live -= bytes;
-                steps.push(Step::Release {
-                    fields: group_fields,
-                    bytes,
-                });
-            }
-        }
+        let (steps, peak) = (groups.steps, groups.peak);
         Ok(Plan {
             needs_gpu: cells.iter().any(|c| c.backend == Backend::Gpu),
-            needs_normal_field: false,
+            needs_normal_field: kind.needs().normal_field,
             cells,
             steps,
             peak_field_bytes: peak,
             render_k,
         })
+    }
+
+    /// One line of [`Self::describe`]: what the step does, its rays and its bytes.
+    fn step_line(&self, step: &Step, scenes: &Scenes) -> (String, u64, Option<u64>) {
+        let sc = |s: usize| scenes.scenes[s].name.as_str();
+        match step {
+            Step::Primary { scene, pixels } => {
+                (format!("primary visibility {}", sc(*scene)), *pixels, None)
+            }
+            Step::Truth {
+                scene,
+                max_rays,
+                rays,
+            } => (
+                format!(
+                    "converged reference {}, at most {max_rays} rays/point",
+                    sc(*scene)
+                ),
+                *rays,
+                None,
+            ),
+            Step::Reference { scene, k, rays } => (
+                format!("ray-cast reference {}, {} rays/point", sc(*scene), k * k),
+                *rays,
+                None,
+            ),
+            Step::Sweep { scene, k, rays } => (
+                format!("ray-cast AO {}, {} rays/point (cpu)", sc(*scene), k * k),
+                *rays,
+                None,
+            ),
+            Step::Raycast {
+                scene,
+                backend,
+                k,
+                rays,
+            } => (
+                format!(
+                    "ray-cast AO {}, {} rays/point ({})",
+                    sc(*scene),
+                    k * k,
+                    backend.name()
+                ),
+                *rays,
+                None,
+            ),
+            Step::Bake {
+                mesh,
+                params,
+                rays,
+                bytes,
+            } => (
+                format!(
+                    "bake {} {} {} × {}² {} {}",
+                    scenes.meshes[*mesh].label,
+                    params.sphere.name(),
+                    params.count,
+                    params.res,
+                    params.layout.name(),
+                    params.precision.name(),
+                ),
+                *rays,
+                Some(*bytes),
+            ),
+            Step::Derive {
+                mesh,
+                geometry,
+                to,
+                bytes,
+            } => (
+                format!(
+                    "derive {} {} × {}² f32 -> {}",
+                    scenes.meshes[*mesh].label,
+                    geometry.count,
+                    geometry.res,
+                    to.name()
+                ),
+                0,
+                Some(*bytes),
+            ),
+            Step::Lookup { cell, rays } => {
+                let c = &self.cells[*cell];
+                (format!("lookup AO {}", c.id(sc(c.scene))), *rays, None)
+            }
+            Step::Release { fields, bytes } => (
+                format!("release {} field(s)", fields.len()),
+                0,
+                Some(*bytes),
+            ),
+        }
     }
 
     /// Number of bake steps.
@@ -380,7 +330,6 @@ impl Plan {
         scenes: &Scenes,
         cached: &dyn Fn(usize, &FieldParams) -> &'static str,
     ) -> String {
-        let sc = |s: usize| scenes.scenes[s].name.as_str();
         let mut out = String::new();
         let _ = writeln!(
             out,
@@ -413,94 +362,10 @@ impl Plan {
                 Step::Bake { mesh, params, .. } => cached(*mesh, params),
                 _ => "",
             };
-            let (what, rays, bytes) = match step {
-                Step::Primary { scene, pixels } => {
-                    (format!("primary visibility {}", sc(*scene)), *pixels, None)
-                }
-                Step::Truth {
-                    scene,
-                    max_rays,
-                    rays,
-                } => (
-                    format!(
-                        "converged reference {}, at most {max_rays} rays/point",
-                        sc(*scene)
-                    ),
-                    *rays,
-                    None,
-                ),
-                Step::Reference { scene, k, rays } => (
-                    format!("ray-cast reference {}, {} rays/point", sc(*scene), k * k),
-                    *rays,
-                    None,
-                ),
-                Step::Sweep { scene, k, rays } => (
-                    format!("ray-cast AO {}, {} rays/point (cpu)", sc(*scene), k * k),
-                    *rays,
-                    None,
-                ),
-                Step::Raycast {
-                    scene,
-                    backend,
-                    k,
-                    rays,
-                } => (
-                    format!(
-                        "ray-cast AO {}, {} rays/point ({})",
-                        sc(*scene),
-                        k * k,
-                        backend.name()
-                    ),
-                    *rays,
-                    None,
-                ),
-                Step::Bake {
-                    mesh,
-                    params,
-                    rays,
-                    bytes,
-                } => {
-                    bake_rays += rays;
-                    (
-                        format!(
-                            "bake {} {} {} × {}² {} {}",
-                            scenes.meshes[*mesh].label,
-                            params.sphere.name(),
-                            params.count,
-                            params.res,
-                            params.layout.name(),
-                            params.precision.name(),
-                        ),
-                        *rays,
-                        Some(*bytes),
-                    )
-                }
-                Step::Derive {
-                    mesh,
-                    geometry,
-                    to,
-                    bytes,
-                } => (
-                    format!(
-                        "derive {} {} × {}² f32 -> {}",
-                        scenes.meshes[*mesh].label,
-                        geometry.count,
-                        geometry.res,
-                        to.name()
-                    ),
-                    0,
-                    Some(*bytes),
-                ),
-                Step::Lookup { cell, rays } => {
-                    let c = &self.cells[*cell];
-                    (format!("lookup AO {}", c.id(sc(c.scene))), *rays, None)
-                }
-                Step::Release { fields, bytes } => (
-                    format!("release {} field(s)", fields.len()),
-                    0,
-                    Some(*bytes),
-                ),
-            };
+            let (what, rays, bytes) = self.step_line(step, scenes);
+            if let Step::Bake { rays, .. } = step {
+                bake_rays += rays;
+            }
             total_rays += rays;
             let bytes = bytes.map_or("-".to_string(), |b| ByteSize(b).to_string());
             let rays = if rays == 0 {
@@ -517,5 +382,198 @@ impl Plan {
             ByteSize(self.peak_field_bytes)
         );
         out
+    }
+}
+
+/// `k` with `k² = n`, or the error naming the spec field.
+fn square_root(n: u32, field: &str) -> Result<u32> {
+    exact_sqrt(n).ok_or_else(|| Error::invalid(field, format!("{n} is not a perfect square")))
+}
+
+/// The steps of one scene: its G-buffer (when an image is asked for), the converged
+/// reference, the same-ray reference, the CPU ray-cast sweep and the other backends' ray casts.
+fn scene_steps(
+    spec: &Spec,
+    scenes: &Scenes,
+    kind: &dyn Kind,
+    s: usize,
+    render_k: u32,
+    ref_k: u32,
+) -> Vec<Step> {
+    let pts = kind.max_points(&scenes.scenes[s]);
+    let rays = |k: u32| pts * (k * k) as u64;
+    let mut steps = Vec::new();
+    if let Some(img) = kind.image() {
+        steps.push(Step::Primary {
+            scene: s,
+            pixels: img.width as u64 * img.height as u64,
+        });
+    }
+    let max_rays = spec.reference.truth.max_rays;
+    steps.push(Step::Truth {
+        scene: s,
+        max_rays,
+        rays: pts * max_rays as u64,
+    });
+    steps.push(Step::Reference {
+        scene: s,
+        k: ref_k,
+        rays: rays(ref_k),
+    });
+    let mut sweep: Vec<u32> = spec
+        .reference
+        .raycast_sweep
+        .iter()
+        .filter_map(|&n| exact_sqrt(n))
+        .collect();
+    sweep.push(render_k);
+    sweep.sort_unstable();
+    sweep.dedup();
+    for k in sweep.into_iter().filter(|&k| k != ref_k) {
+        steps.push(Step::Sweep {
+            scene: s,
+            k,
+            rays: rays(k),
+        });
+    }
+    for &b in spec.backends.iter().filter(|&&b| b != Backend::Cpu) {
+        steps.push(Step::Raycast {
+            scene: s,
+            backend: b,
+            k: render_k,
+            rays: rays(render_k),
+        });
+    }
+    steps
+}
+
+/// The cells grouped by field geometry, in first-use order.
+fn field_groups(cells: &[Cell]) -> Vec<(Geometry, Vec<usize>)> {
+    let mut groups: Vec<(Geometry, Vec<usize>)> = Vec::new();
+    for (i, c) in cells.iter().enumerate() {
+        match groups.iter_mut().find(|(g, _)| *g == c.geometry()) {
+            Some((_, v)) => v.push(i),
+            None => groups.push((c.geometry(), vec![i])),
+        }
+    }
+    groups
+}
+
+/// Plans the field groups one after the other, tracking the live field bytes.
+struct GroupPlanner<'a, P: Fn(usize) -> u64> {
+    cells: &'a [Cell],
+    scenes: &'a Scenes,
+    limits: PlanLimits,
+    /// The most evaluation points of a scene.
+    points: P,
+    render_k: u32,
+    steps: Vec<Step>,
+    live: u64,
+    peak: u64,
+}
+
+impl<P: Fn(usize) -> u64> GroupPlanner<'_, P> {
+    /// One field geometry: the shared f32 bakes, then per precision its bakes or
+    /// derivations, its cells' lookups and the release of its fields; the f32 source last.
+    fn group(&mut self, geometry: Geometry, members: &[usize]) -> Result<()> {
+        let used = HemisphereLayout::new(geometry.layout, geometry.res).used_count() as u64;
+        let bake_rays = used * geometry.count as u64;
+        let (needs, precisions) = self.needs(members);
+        let f32_bytes = geometry.with(Precision::F32).storage_bytes();
+        let shared: Vec<usize> = needs
+            .iter()
+            .filter(|(_, p)| p.len() > 1 && f32_bytes <= self.limits.memory_limit)
+            .map(|(m, _)| *m)
+            .collect();
+        let mut group_fields = Vec::new();
+        for &m in &shared {
+            let params = geometry.with(Precision::F32);
+            self.steps.push(Step::Bake {
+                mesh: m,
+                params,
+                rays: bake_rays,
+                bytes: f32_bytes,
+            });
+            group_fields.push((m, params));
+            self.live += f32_bytes;
+        }
+        self.peak = self.peak.max(self.live);
+        for &p in &precisions {
+            let params = geometry.with(p);
+            let bytes = params.storage_bytes();
+            let mut stage_fields = Vec::new();
+            for (m, _) in needs.iter().filter(|(_, ps)| ps.contains(&p)) {
+                if shared.contains(m) {
+                    if p != Precision::F32 {
+                        self.steps.push(Step::Derive {
+                            mesh: *m,
+                            geometry,
+                            to: p,
+                            bytes,
+                        });
+                        stage_fields.push((*m, params));
+                        self.live += bytes;
+                    }
+                } else {
+                    params
+                        .check_memory(self.limits.memory_limit)
+                        .map_err(|source| Error::Field {
+                            what: format!("bake of {}", self.scenes.meshes[*m].label),
+                            source,
+                        })?;
+                    self.steps.push(Step::Bake {
+                        mesh: *m,
+                        params,
+                        rays: bake_rays,
+                        bytes,
+                    });
+                    stage_fields.push((*m, params));
+                    self.live += bytes;
+                }
+            }
+            self.peak = self.peak.max(self.live);
+            for &ci in members
+                .iter()
+                .filter(|&&ci| self.cells[ci].params.precision == p)
+            {
+                let k = self.render_k as u64;
+                let rays = (self.points)(self.cells[ci].scene) * k * k;
+                self.steps.push(Step::Lookup { cell: ci, rays });
+            }
+            self.release(stage_fields);
+        }
+        self.release(group_fields);
+        Ok(())
+    }
+
+    /// Per caster mesh the precisions its cells need, and every precision, in first-use order.
+    #[allow(clippy::type_complexity)]
+    fn needs(&self, members: &[usize]) -> (Vec<(usize, Vec<Precision>)>, Vec<Precision>) {
+        let mut needs: Vec<(usize, Vec<Precision>)> = Vec::new();
+        let mut precisions: Vec<Precision> = Vec::new();
+        for &ci in members {
+            let c = &self.cells[ci];
+            if !precisions.contains(&c.params.precision) {
+                precisions.push(c.params.precision);
+            }
+            for m in self.scenes.scenes[c.scene].caster_meshes() {
+                match needs.iter_mut().find(|(mm, _)| *mm == m) {
+                    Some((_, v)) if !v.contains(&c.params.precision) => v.push(c.params.precision),
+                    Some(_) => {}
+                    None => needs.push((m, vec![c.params.precision])),
+                }
+            }
+        }
+        (needs, precisions)
+    }
+
+    /// Releases `fields` (nothing when empty).
+    fn release(&mut self, fields: Vec<(usize, FieldParams)>) {
+        if fields.is_empty() {
+            return;
+        }
+        let bytes = fields.iter().map(|(_, p)| p.storage_bytes()).sum();
+        self.live -= bytes;
+        self.steps.push(Step::Release { fields, bytes });
     }
 }

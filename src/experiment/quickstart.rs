@@ -7,13 +7,13 @@
 use super::meta::RunMeta;
 use super::plot::{self, Axes, Series};
 use super::progress::{stage, stage_best_of};
+use crate::experiment::metrics::{rms_u8 as rms_255, rms_unquantised as rms_vertex};
 use crate::field::bake::{bake, BakeOptions};
 use crate::field::scene::{FieldInstance, FieldScene};
 use crate::field::{FieldParams, Precision};
 use crate::geometry::procedural;
 use crate::render::ao::{ao_at_points, AoOptions};
 use crate::render::camera::Camera;
-use crate::render::image::{rms_255, rms_vertex};
 use crate::render::primary::{gbuffer, shade_vertex_ao, PrimaryScene};
 use crate::render::receivers::Receivers;
 use crate::sampling::rays::RaySet;
@@ -26,12 +26,7 @@ use std::sync::Arc;
 
 /// The default camera of the corner scenes: looking into the corner from the open octant.
 pub fn corner_camera() -> Camera {
-    Camera {
-        eye: Vec3::new(2.3, 1.9, 2.3),
-        target: Vec3::new(0.35, 0.3, 0.35),
-        up: Vec3::Y,
-        fov_y_deg: 38.0,
-    }
+    Camera::corner()
 }
 
 /// Runs the tour and writes its outputs to `out`.

@@ -15,10 +15,11 @@
 //! (the paper's 512²); the "angel" map is replaced by the procedural `relief` map.
 
 use super::plot::{image_grid, xy_plot, Axes, Series};
+use crate::experiment::metrics::rms_u8 as rms_255;
 use crate::gpu::{AdapterPreference, GpuContext, GpuError, ReliefKernel};
 use crate::relief::view::{render, render_gpu, Frame, View};
 use crate::relief::{CastParams, Dataset, SafetyZones, PAPER_BOXES};
-use crate::render::image::{rms_255, GrayImage};
+use crate::render::image::GrayImage;
 use serde::Serialize;
 use std::path::Path;
 use std::time::Instant;

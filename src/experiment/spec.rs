@@ -251,7 +251,7 @@ impl FieldAxes {
     }
 }
 
-/// What a render computes.
+/// The render kinds a spec can ask for (`render.what`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum RenderKind {
@@ -266,32 +266,153 @@ pub enum RenderKind {
     Reflections,
 }
 
-/// What is rendered.
+impl RenderKind {
+    /// The snake-case name, as in specs.
+    pub fn name(self) -> &'static str {
+        match self {
+            RenderKind::VertexAo => "vertex_ao",
+            RenderKind::ImageAo => "image_ao",
+            RenderKind::Shadows => "shadows",
+            RenderKind::Reflections => "reflections",
+        }
+    }
+}
+
+/// What is rendered, one variant per render kind (the tagged form): in JSON an object whose
+/// `what` names the kind and whose other keys are that kind's options ([`RenderWire`] lists
+/// every key any kind reads; a key of another kind is an error). See
+/// [`super::kind`] for what each kind computes.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct RenderSpec {
-    /// "vertex_ao" (2008, default) or "image_ao" (2010).
-    #[serde(default)]
-    pub what: RenderKind,
+#[serde(try_from = "RenderWire", into = "RenderWire")]
+pub enum RenderSpec {
+    /// `"vertex_ao"` (2008, the default): AO at the receivers' vertices.
+    VertexAo(AoRender),
+    /// `"image_ao"` (2010): AO at every receiver pixel of `image` (required).
+    ImageAo(AoRender),
+}
+
+/// The options of the AO kinds.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AoRender {
     /// Receiver rays per point, k² stratified cosine directions (a perfect square; the papers
     /// use 256).
     pub rays_per_point: u32,
     /// The image (PNG and EXR, and the per-pixel RMS); none: per-vertex numbers only.
-    #[serde(default)]
     pub image: Option<ImageSpec>,
     /// AO radius in world units: farther hits do not occlude (none: unlimited, the papers).
-    #[serde(default)]
     pub max_distance: Option<f32>,
     /// How a hit within `max_distance` occludes: "step" (binary, the papers' V; default) or
     /// "linear" (a hit at t occludes by 1 − t/max_distance; needs `max_distance`). Applied
     /// identically to the ray cast, the field lookup and the converged reference.
-    #[serde(default)]
     pub falloff: crate::render::ao::Falloff,
     /// A fixed tolerance of the intra-object test (receivers that are casters), as a fraction
     /// of 2R (none: the field's own resolution-derived tolerance, `IntraBias::Auto`; see
     /// `field::lookup`).
+    pub intra_bias: Option<f32>,
+}
+
+/// `render` as written in a spec: every key of every kind, unknown keys rejected. Converted to
+/// [`RenderSpec`] on reading, which refuses a key the kind does not read.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RenderWire {
+    /// The render kind: "vertex_ao" (2008, default) or "image_ao" (2010).
+    #[serde(default)]
+    pub what: RenderKind,
+    /// See [`AoRender::rays_per_point`].
+    pub rays_per_point: u32,
+    /// See [`AoRender::image`].
+    #[serde(default)]
+    pub image: Option<ImageSpec>,
+    /// See [`AoRender::max_distance`].
+    #[serde(default)]
+    pub max_distance: Option<f32>,
+    /// See [`AoRender::falloff`].
+    #[serde(default)]
+    pub falloff: crate::render::ao::Falloff,
+    /// See [`AoRender::intra_bias`].
     #[serde(default)]
     pub intra_bias: Option<f32>,
+}
+
+impl TryFrom<RenderWire> for RenderSpec {
+    type Error = String;
+
+    fn try_from(w: RenderWire) -> Result<RenderSpec, String> {
+        let ao = AoRender {
+            rays_per_point: w.rays_per_point,
+            image: w.image,
+            max_distance: w.max_distance,
+            falloff: w.falloff,
+            intra_bias: w.intra_bias,
+        };
+        match w.what {
+            RenderKind::VertexAo => Ok(RenderSpec::VertexAo(ao)),
+            RenderKind::ImageAo => Ok(RenderSpec::ImageAo(ao)),
+            k @ (RenderKind::Shadows | RenderKind::Reflections) => Err(format!(
+                "`what`: \"{}\" is not in this build yet; use \"vertex_ao\" or \"image_ao\"",
+                k.name()
+            )),
+        }
+    }
+}
+
+impl From<RenderSpec> for RenderWire {
+    fn from(r: RenderSpec) -> RenderWire {
+        let what = r.kind();
+        let (RenderSpec::VertexAo(a) | RenderSpec::ImageAo(a)) = r;
+        RenderWire {
+            what,
+            rays_per_point: a.rays_per_point,
+            image: a.image,
+            max_distance: a.max_distance,
+            falloff: a.falloff,
+            intra_bias: a.intra_bias,
+        }
+    }
+}
+
+impl RenderSpec {
+    /// The kind.
+    pub fn kind(&self) -> RenderKind {
+        match self {
+            RenderSpec::VertexAo(_) => RenderKind::VertexAo,
+            RenderSpec::ImageAo(_) => RenderKind::ImageAo,
+        }
+    }
+
+    /// The AO options of an AO kind.
+    pub fn ao(&self) -> &AoRender {
+        match self {
+            RenderSpec::VertexAo(a) | RenderSpec::ImageAo(a) => a,
+        }
+    }
+
+    fn ao_mut(&mut self) -> &mut AoRender {
+        match self {
+            RenderSpec::VertexAo(a) | RenderSpec::ImageAo(a) => a,
+        }
+    }
+
+    /// Rays per evaluation point (k²).
+    pub fn rays_per_point(&self) -> u32 {
+        self.ao().rays_per_point
+    }
+
+    /// The image, if the spec renders one.
+    pub fn image(&self) -> Option<&ImageSpec> {
+        self.ao().image.as_ref()
+    }
+
+    /// Replaces the rays per point (the quick profile).
+    pub fn set_rays_per_point(&mut self, n: u32) {
+        self.ao_mut().rays_per_point = n;
+    }
+
+    /// Replaces the image (the quick profile).
+    pub fn set_image(&mut self, image: ImageSpec) {
+        self.ao_mut().image = Some(image);
+    }
 }
 
 /// An image.
@@ -302,7 +423,7 @@ pub struct ImageSpec {
     pub width: u32,
     /// Height in pixels.
     pub height: u32,
-    /// The camera; none: the corner scenes' camera (`quickstart::corner_camera`).
+    /// The camera; none: the corner scenes' camera ([`Camera::corner`]).
     #[serde(default)]
     pub camera: Option<Camera>,
 }
@@ -556,11 +677,11 @@ impl Spec {
             s.fields = f.clone();
         }
         if let Some(r) = q.rays_per_point {
-            s.render.rays_per_point = r;
+            s.render.set_rays_per_point(r);
             s.reference.rays_per_point = r;
         }
         if let Some(i) = &q.image {
-            s.render.image = Some(i.clone());
+            s.render.set_image(i.clone());
         }
         if let Some(sw) = &q.raycast_sweep {
             s.reference.raycast_sweep = sw.clone();

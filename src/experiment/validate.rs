@@ -4,7 +4,7 @@
 //! parts it replaces prefixed by `quick.`.
 
 use super::spec::{
-    exact_sqrt, Backend, FieldAxes, MeshSource, RenderKind, SceneSpec, Spec, SpecError, Threshold,
+    exact_sqrt, Backend, FieldAxes, MeshSource, SceneSpec, Spec, SpecError, Threshold,
 };
 use crate::geometry::models::ModelRegistry;
 use crate::sampling::{HemisphereLayout, SphereKind, SpherePoints};
@@ -100,7 +100,7 @@ impl Ctx<'_> {
         for (i, f) in s.fields.iter().enumerate() {
             self.axes(f, &format!("{}[{i}]", p.fields))?;
         }
-        self.square(s.render.rays_per_point, p.render_rays)?;
+        self.square(s.render.rays_per_point(), p.render_rays)?;
         self.square(s.reference.rays_per_point, p.reference_rays)?;
         for (i, &n) in s.reference.raycast_sweep.iter().enumerate() {
             self.square(n, &format!("{}[{i}]", p.sweep))?;
@@ -137,7 +137,7 @@ impl Ctx<'_> {
         if s.reference.seeds == 0 {
             return Err(self.err("reference.seeds", "needs at least 1 seed".into()));
         }
-        if let Some(img) = &s.render.image {
+        if let Some(img) = s.render.image() {
             for (name, v) in [("width", img.width), ("height", img.height)] {
                 if !(1..=8192).contains(&v) {
                     return Err(self.err(
@@ -147,25 +147,15 @@ impl Ctx<'_> {
                 }
             }
         }
-        match s.render.what {
-            RenderKind::VertexAo => {}
-            RenderKind::ImageAo if s.render.image.is_none() => {
-                return Err(self.err(
-                    "render.image",
-                    "\"image_ao\" computes AO per pixel and needs an image".into(),
-                ))
-            }
-            RenderKind::ImageAo => {}
-            RenderKind::Shadows | RenderKind::Reflections => {
-                return Err(self.err(
-                    "render.what",
-                    "soft shadows and reflections (2010 §4) are not in this build yet; use \
-                     \"vertex_ao\" or \"image_ao\""
-                        .into(),
-                ))
-            }
+        let kind = super::kind::of(&s.render);
+        if kind.needs().view && s.render.image().is_none() {
+            return Err(self.err(
+                "render.image",
+                format!("\"{}\" computes per pixel and needs an image", kind.name()),
+            ));
         }
-        if let Some(d) = s.render.max_distance {
+        let ao = s.render.ao();
+        if let Some(d) = ao.max_distance {
             if !(d > 0.0 && d.is_finite()) {
                 return Err(self.err(
                     "render.max_distance",
@@ -173,8 +163,8 @@ impl Ctx<'_> {
                 ));
             }
         }
-        if s.render.falloff != crate::render::ao::Falloff::Step {
-            if s.render.max_distance.is_none() {
+        if ao.falloff != crate::render::ao::Falloff::Step {
+            if ao.max_distance.is_none() {
                 return Err(self.err(
                     "render.falloff",
                     "a distance falloff needs `render.max_distance`".into(),
@@ -187,7 +177,7 @@ impl Ctx<'_> {
                 ));
             }
         }
-        if let Some(b) = s.render.intra_bias {
+        if let Some(b) = ao.intra_bias {
             if !(0.0..1.0).contains(&b) {
                 return Err(self.err("render.intra_bias", format!("{b} is outside [0, 1)")));
             }
@@ -407,16 +397,17 @@ impl Ctx<'_> {
                 ));
             }
         }
-        if t.rms_image_max.is_some() && s.render.image.is_none() {
+        if t.rms_image_max.is_some() && s.render.image().is_none() {
             return Err(self.err(
                 &format!("{path}.rms_image_max"),
                 "the spec renders no image".into(),
             ));
         }
-        if t.rms_vertex_max.is_some() && s.render.what == RenderKind::ImageAo {
+        let kind = super::kind::of(&s.render);
+        if t.rms_vertex_max.is_some() && !kind.columns().vertex {
             return Err(self.err(
                 &format!("{path}.rms_vertex_max"),
-                "\"image_ao\" has no per-vertex AO".into(),
+                format!("\"{}\" has no per-vertex values", kind.name()),
             ));
         }
         let cells = super::plan::cells_of(s);

@@ -22,6 +22,18 @@ fn default_up() -> Vec3 {
 }
 
 impl Camera {
+    /// The corner scenes' camera (the 2008 paper's corner receiver, a caster over it): looking
+    /// into the corner from the open octant. The default of a spec's image and the
+    /// quickstart's view.
+    pub fn corner() -> Camera {
+        Camera {
+            eye: Vec3::new(2.3, 1.9, 2.3),
+            target: Vec3::new(0.35, 0.3, 0.35),
+            up: Vec3::Y,
+            fov_y_deg: 38.0,
+        }
+    }
+
     /// Unit direction through the centre of pixel (x, y) of a `width × height` image; row 0 is
     /// the top.
     pub fn ray_dir(&self, x: u32, y: u32, width: u32, height: u32) -> Vec3 {

@@ -78,48 +78,9 @@ impl GrayImage {
     }
 }
 
-/// RMS difference on the 0–255 scale of the 8-bit images (the papers' figure), over the pixels
-/// where `mask` is true (all when `None`).
-pub fn rms_255(a: &[f32], b: &[f32], mask: Option<&[bool]>) -> f64 {
-    assert_eq!(a.len(), b.len());
-    let (mut sum, mut n) = (0.0f64, 0usize);
-    for i in 0..a.len() {
-        if mask.is_none_or(|m| m[i]) {
-            let d = GrayImage::to_u8(a[i]) as f64 - GrayImage::to_u8(b[i]) as f64;
-            sum += d * d;
-            n += 1;
-        }
-    }
-    if n == 0 {
-        0.0
-    } else {
-        (sum / n as f64).sqrt()
-    }
-}
-
-/// RMS of two AO vectors on the 0–255 scale, unquantised (the per-vertex figure).
-pub fn rms_vertex(a: &[f32], b: &[f32]) -> f64 {
-    assert_eq!(a.len(), b.len());
-    let s: f64 = a
-        .iter()
-        .zip(b)
-        .map(|(x, y)| (255.0 * (*x as f64 - *y as f64)).powi(2))
-        .sum();
-    (s / a.len().max(1) as f64).sqrt()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn rms_255_closed_form() {
-        // One pixel off by 1.0 (255 levels) out of four: sqrt(255²/4) = 127.5.
-        let a = [0.0, 0.5, 1.0, 0.25];
-        let b = [1.0, 0.5, 1.0, 0.25];
-        assert!((rms_255(&a, &b, None) - 127.5).abs() < 1e-9);
-        assert_eq!(rms_255(&a, &b, Some(&[false, true, true, true])), 0.0);
-    }
 
     /// Results are committed: writing the same image again must give the same file, or every
     /// rerun would change the EXRs under `results/` without a pixel changing.

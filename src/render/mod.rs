@@ -70,8 +70,10 @@ impl Visibility for Tracer {
 
 pub mod camera;
 pub mod contact;
+pub mod estimator;
 pub mod floor;
 pub mod image;
+pub mod points;
 pub mod primary;
 pub mod receivers;
 pub mod truth;

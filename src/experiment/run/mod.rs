@@ -2,14 +2,16 @@
 //! read them, release), and writes the outputs of [`super::outputs`], the images, `run.json` and
 //! the plots of [`super::figures`].
 //!
-//! Every lookup uses the reference's rays: the same seeded k² set, the same points, the same
-//! offset; the lookup and the ray cast differ only in the [`crate::render::Visibility`] behind
-//! them. Stages shorter than `short_stage_s` are timed as the best of `repeats` runs.
+//! Everything runs through the spec's render kind ([`super::kind::Kind`]): its points, its
+//! estimator, its metric columns. Every lookup uses the reference's rays: the same seeded k²
+//! set, the same points, the same offset; the lookup and the ray cast differ only in the
+//! [`crate::render::Visibility`] behind the same estimator. Stages shorter than
+//! `short_stage_s` are timed as the best of `repeats` runs.
 
+mod references;
 mod staging;
 mod state;
 mod steps;
-mod truth;
 mod write;
 
 use super::fields::FieldSupply;
@@ -18,6 +20,7 @@ use super::plan::{Plan, PlanLimits};
 use super::progress::stage;
 use super::scenes::Scenes;
 use super::spec::{Spec, SpecError, Threshold};
+use super::{Error, Result, ResultExt};
 use crate::gpu::AdapterPreference;
 use std::path::{Path, PathBuf};
 use steps::Runner;
@@ -106,8 +109,14 @@ pub struct RunReport {
 }
 
 /// Fails unless `dir` can be created and written to.
-pub fn ensure_writable(dir: &Path) -> Result<(), String> {
-    let fail = |e: std::io::Error| format!("output folder {} is not writable: {e}", dir.display());
+pub fn ensure_writable(dir: &Path) -> Result<()> {
+    let fail = |source: std::io::Error| {
+        Error::Io {
+            path: dir.to_path_buf(),
+            source,
+        }
+        .context("output folder is not writable")
+    };
     std::fs::create_dir_all(dir).map_err(fail)?;
     let probe = dir.join(format!(".write-probe-{}", std::process::id()));
     std::fs::write(&probe, b"").map_err(fail)?;
@@ -115,7 +124,7 @@ pub fn ensure_writable(dir: &Path) -> Result<(), String> {
 }
 
 /// Runs `ls` (or prints its plan with `dry_run`).
-pub fn run(ls: &LoadedSpec, opts: &RunOptions) -> Result<RunReport, String> {
+pub fn run(ls: &LoadedSpec, opts: &RunOptions) -> Result<RunReport> {
     let started = std::time::Instant::now();
     let spec = ls.spec.profile(opts.quick);
     let profile = if opts.quick { "quick" } else { "full" };
@@ -131,12 +140,11 @@ pub fn run(ls: &LoadedSpec, opts: &RunOptions) -> Result<RunReport, String> {
     let (scenes, _) = stage("load scenes", || {
         Scenes::build(&spec, &ls.path, scenes_path)
     });
-    let scenes = scenes.map_err(|e| e.to_string())?;
+    let scenes = scenes?;
     let limits = PlanLimits {
         memory_limit: opts.supply.memory_limit,
     };
-    let plan =
-        Plan::new(&spec, &scenes, limits).map_err(|e| format!("{}: {e}", ls.path.display()))?;
+    let plan = Plan::new(&spec, &scenes, limits).context(|| ls.path.display().to_string())?;
     let supply = &opts.supply;
     let plan_text = plan.describe(&ls.name, &scenes, &|m, p| {
         supply.state(&scenes.meshes[m], p)

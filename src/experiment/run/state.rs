@@ -1,113 +1,80 @@
-//! Per-scene state of a run: the AO points, the reference tracer, the G-buffer, the reference
-//! AO and image, and the ray-cast times.
+//! Per-scene state of a run: the render kind's points and estimator, the reference tracer, the
+//! G-buffer, the same-ray reference and its image, and the ray-cast times.
 
-use super::super::backend::Points;
+use super::super::kind::Kind;
 use super::super::progress::stage;
 use super::super::scenes::BuiltScene;
-use super::super::spec::{Backend, RenderKind, Spec};
-use crate::render::ao::AoOptions;
-use crate::render::contact::separate_contacts;
-use crate::render::image::{rms_255, rms_vertex, GrayImage};
-use crate::render::primary::{gbuffer, shade_vertex_ao, PixelHit, PrimaryScene};
-use crate::render::receivers::Receivers;
+use super::super::spec::Backend;
+use crate::experiment::metrics::{rms_u8, rms_unquantised, rms_unquantised_where};
+use crate::render::camera::Camera;
+use crate::render::estimator::{Estimator, Points};
+use crate::render::image::GrayImage;
+use crate::render::points::{EvalPoints, GBuffer};
+use crate::render::primary::{gbuffer, PrimaryScene};
 use crate::render::truth::Truth;
 use crate::trace::Tracer;
 use glam::Vec3;
 use std::collections::HashMap;
-use std::path::Path;
 
-/// Where AO is evaluated in a scene, and the scene's reference state.
+/// Where a scene's render kind is evaluated, and the scene's reference state.
 pub(super) struct SceneState {
-    pub(super) points: Vec<Vec3>,
-    pub(super) normals: Vec<Vec3>,
-    /// Vertex AO: the receivers (for shading); image AO: the pixel of each point.
-    pub(super) receivers: Option<Receivers>,
-    pub(super) pixels: Vec<usize>,
+    /// The kind's evaluation points.
+    pub(super) at: EvalPoints,
+    /// The kind's estimator on this scene.
+    pub(super) estimator: Box<dyn Estimator>,
+    /// The ray offset (model units).
+    pub(super) offset: f32,
     pub(super) triangles: Vec<[Vec3; 3]>,
     pub(super) tracer: Tracer,
-    pub(super) opts: AoOptions,
-    pub(super) gbuf: Option<(Vec<Option<PixelHit>>, u32, u32)>,
+    /// The G-buffer of the spec's image.
+    pub(super) view: Option<GBuffer>,
     pub(super) reference: Vec<f32>,
     pub(super) ref_image: Option<(GrayImage, Vec<bool>)>,
-    /// Whether each AO point touches another surface (`render::contact`).
-    pub(super) crease: Vec<bool>,
     /// The converged reference.
     pub(super) truth: Option<Truth>,
     /// Where the truth came from (cache file, or computed and how long it took).
     pub(super) truth_source: String,
-    /// The same-ray reference on the seeds after the first: AO and image.
+    /// The same-ray reference on the seeds after the first: values and image.
     pub(super) seed_refs: Vec<(Vec<f32>, Option<GrayImage>)>,
     /// RMS over points of the same-ray references against the truth, per seed.
     pub(super) reference_vs_truth: Vec<f64>,
-    /// Ray-cast AO time per (backend, k).
+    /// Ray-cast time per (backend, k).
     pub(super) raycast_s: HashMap<(Backend, u32), f64>,
     /// Ray-cast kernel time from GPU timestamps per (backend, k), where there are any.
     pub(super) raycast_kernel_s: HashMap<(Backend, u32), f64>,
 }
 
 impl SceneState {
-    pub(super) fn new(spec: &Spec, bs: &BuiltScene) -> SceneState {
+    pub(super) fn new(kind: &dyn Kind, bs: &BuiltScene) -> SceneState {
         let ((triangles, tracer), _) = stage(&format!("{}: caster BVH", bs.name), || {
             let t = bs.scene.caster_triangles();
             let tracer = Tracer::new(&t);
             (t, tracer)
         });
-        let mut opts = AoOptions::for_scene(bs.bounds());
-        opts.max_distance = spec.render.max_distance;
-        opts.falloff = spec.render.falloff;
-        let gbuf = spec.render.image.as_ref().map(|img| {
-            let cam = bs.camera_in_frame(
-                &img.camera
-                    .unwrap_or_else(super::super::quickstart::corner_camera),
-            );
+        let view = kind.image().map(|img| {
+            let cam = bs.camera_in_frame(&img.camera.unwrap_or_else(Camera::corner));
             let ps = PrimaryScene::new(&bs.scene);
-            let (g, _) = stage(&format!("{}: primary visibility", bs.name), || {
+            let (hits, _) = stage(&format!("{}: primary visibility", bs.name), || {
                 gbuffer(&ps, &cam, img.width, img.height)
             });
-            (g, img.width, img.height)
+            GBuffer {
+                hits,
+                width: img.width,
+                height: img.height,
+            }
         });
-        let (mut points, mut normals, mut pixels, mut receivers) = (vec![], vec![], vec![], None);
-        match (spec.render.what, &gbuf) {
-            (RenderKind::ImageAo, Some((g, _, _))) => {
-                for (i, h) in g.iter().enumerate() {
-                    if let Some(h) = h.filter(|h| bs.scene.instances[h.instance as usize].receiver)
-                    {
-                        points.push(h.position);
-                        normals.push(h.normal);
-                        pixels.push(i);
-                    }
-                }
-            }
-            _ => {
-                let r = Receivers::of(&bs.scene);
-                points = r.points.clone();
-                normals = r.normals.clone();
-                receivers = Some(r);
-            }
-        }
-        // The contact convention: points on another surface are moved in front of it.
-        let all: Vec<[Vec3; 3]> = bs
-            .scene
-            .instances
-            .iter()
-            .flat_map(|i| i.world_triangles())
-            .collect();
-        let contacts = separate_contacts(&points, &normals, &all, opts.offset, opts.offset);
-        let points = contacts.points;
+        let setup = kind.setup(bs, view.as_ref());
         SceneState {
-            crease: contacts.crease,
+            at: setup.points,
+            estimator: setup.estimator,
+            offset: setup.offset,
             truth: None,
             truth_source: String::new(),
             seed_refs: Vec::new(),
             reference_vs_truth: Vec::new(),
-            points,
-            normals,
-            receivers,
-            pixels,
             triangles,
             tracer,
-            opts,
-            gbuf,
+            view,
             reference: Vec::new(),
             ref_image: None,
             raycast_s: HashMap::new(),
@@ -115,46 +82,38 @@ impl SceneState {
         }
     }
 
+    /// The evaluation points.
     pub(super) fn at(&self) -> Points<'_> {
-        Points {
-            points: &self.points,
-            normals: &self.normals,
-        }
+        self.at.at()
     }
 
-    /// The image showing `ao`, and the mask of AO pixels.
-    pub(super) fn image(&self, bs: &BuiltScene, ao: &[f32]) -> Option<(GrayImage, Vec<bool>)> {
-        let (g, w, h) = self.gbuf.as_ref()?;
-        Some(match &self.receivers {
-            Some(r) => shade_vertex_ao(&bs.scene, g, *w, *h, &r.split(&bs.scene, ao)),
-            None => {
-                let none = vec![None; bs.scene.instances.len()];
-                let (mut img, mut mask) = shade_vertex_ao(&bs.scene, g, *w, *h, &none);
-                for (j, &px) in self.pixels.iter().enumerate() {
-                    img.data[px] = ao[j];
-                    mask[px] = true;
-                }
-                (img, mask)
-            }
-        })
+    /// The image showing `values`, and the mask of the pixels that show them.
+    pub(super) fn image(&self, bs: &BuiltScene, values: &[f32]) -> Option<(GrayImage, Vec<bool>)> {
+        Some(self.at.image(&bs.scene, self.view.as_ref()?, values))
     }
 
-    /// (RMS per vertex, RMS per pixel) of `ao` against the reference.
-    pub(super) fn errors(&self, bs: &BuiltScene, ao: &[f32]) -> (Option<f64>, Option<f64>) {
-        let v = self
-            .receivers
-            .is_some()
-            .then(|| rms_vertex(ao, &self.reference));
-        let i = match (self.image(bs, ao), &self.ref_image) {
-            (Some((img, _)), Some((r, mask))) => Some(rms_255(&img.data, &r.data, Some(mask))),
+    /// (RMS per vertex, RMS per pixel) of `values` against the same-ray reference: the
+    /// per-vertex column where the kind has one, the per-pixel one where there is an image.
+    pub(super) fn errors(
+        &self,
+        kind: &dyn Kind,
+        bs: &BuiltScene,
+        values: &[f32],
+    ) -> (Option<f64>, Option<f64>) {
+        let v = kind
+            .columns()
+            .vertex
+            .then(|| rms_unquantised(values, &self.reference));
+        let i = match (self.image(bs, values), &self.ref_image) {
+            (Some((img, _)), Some((r, mask))) => Some(rms_u8(&img.data, &r.data, Some(mask))),
             _ => None,
         };
         (v, i)
     }
 }
 
-/// RMS over points of `ao` against the truth, 0–255: over all points, the crease points and
-/// the other points (`None` for an empty subset).
+/// RMS over points of the values against the truth, 0–255, unquantised: over all points (NaN
+/// when there are none), the crease points and the other points (`None` for an empty subset).
 pub(super) struct TruthErrors {
     pub(super) all: f64,
     pub(super) crease: Option<f64>,
@@ -162,23 +121,18 @@ pub(super) struct TruthErrors {
 }
 
 impl SceneState {
-    /// [`TruthErrors`] of `ao`, `None` before the truth is known.
-    pub(super) fn truth_errors(&self, ao: &[f32]) -> Option<TruthErrors> {
+    /// [`TruthErrors`] of `values`, `None` before the truth is known.
+    pub(super) fn truth_errors(&self, values: &[f32]) -> Option<TruthErrors> {
         let t = self.truth.as_ref()?;
-        let rms = |want: Option<bool>| {
-            let (mut sum, mut n) = (0.0f64, 0usize);
-            for (i, (a, b)) in ao.iter().zip(&t.ao).enumerate() {
-                if want.is_none_or(|w| self.crease[i] == w) {
-                    sum += (255.0 * (*a as f64 - *b as f64)).powi(2);
-                    n += 1;
-                }
-            }
-            (n > 0).then(|| (sum / n as f64).sqrt())
+        let crease = &self.at.crease;
+        let part = |want: bool| {
+            let e = rms_unquantised_where(values, &t.ao, |i| crease[i] == want);
+            (!e.is_nan()).then_some(e)
         };
         Some(TruthErrors {
-            all: rms(None).unwrap_or(0.0),
-            crease: rms(Some(true)),
-            interior: rms(Some(false)),
+            all: rms_unquantised(values, &t.ao),
+            crease: part(true),
+            interior: part(false),
         })
     }
 }
@@ -192,13 +146,9 @@ pub(super) fn mean_sd(v: &[f64]) -> (f64, Option<f64>) {
     (mean, sd)
 }
 
-/// One evaluated cell, kept for the pair table and the per-vertex CSV.
+/// One evaluated cell, kept for the pair table and the per-point CSV.
 pub(super) struct CellResult {
     pub(super) cell: usize,
-    pub(super) ao: Vec<f32>,
+    pub(super) values: Vec<f32>,
     pub(super) image: Option<GrayImage>,
-}
-
-pub(super) fn io_err(p: &Path) -> impl Fn(std::io::Error) -> String + '_ {
-    move |e| format!("{}: {e}", p.display())
 }

@@ -1,31 +1,37 @@
-//! The runner's steps: ray-cast reference and sweep, bakes and derivations, field-lookup AO per
-//! cell with its metrics and images.
+//! The runner's steps: ray-cast reference and sweep, bakes and derivations, and each cell's
+//! estimate through its fields in three stages (evaluate → measure → write), all through the
+//! render kind's [`crate::render::estimator::Estimator`].
 
-use super::state::{io_err, mean_sd, CellResult, SceneState};
-use super::truth::{raycast_truth_errors, seed_errors};
+use super::references::{raycast_truth_errors, seed_errors, SeedErrors};
+use super::state::{mean_sd, CellResult, SceneState};
 use super::RunOptions;
-use crate::experiment::backend::{self, AoBackend, Casters, CpuBackend};
+use crate::experiment::backend::{self, Casters, ComputeBackend, CpuBackend};
 use crate::experiment::fields::{derive, Supplied};
-use crate::experiment::metrics::{image_errors, vertex_errors};
-use crate::experiment::outputs::{FieldSweepRow, Row, SweepRow};
-use crate::experiment::plan::{Plan, Step};
+use crate::experiment::kind::Kind;
+use crate::experiment::metrics::{image_errors, vertex_errors, ErrorStats};
+use crate::experiment::outputs::{
+    CellColumns, ErrorColumns, FieldColumns, FieldSweepRow, Row, SweepRow, TimeColumns,
+};
+use crate::experiment::plan::{Cell, Plan, Step};
 use crate::experiment::progress::stage_adaptive;
-use crate::experiment::scenes::Scenes;
+use crate::experiment::scenes::{BuiltScene, Scenes};
 use crate::experiment::spec::{exact_sqrt, Backend, Spec};
-use crate::field::lookup::{IntraBias, LookupOptions};
+use crate::experiment::{Error, Result};
 use crate::field::scene::{FieldInstance, FieldScene};
 use crate::field::{FieldParams, Precision};
+use crate::render::image::GrayImage;
 use crate::sampling::rays::RaySet;
 use std::collections::HashMap;
 
 /// The state of a run between steps.
 pub(super) struct Runner<'a> {
     pub(super) spec: &'a Spec,
+    pub(super) kind: Box<dyn Kind>,
     pub(super) plan: &'a Plan,
     pub(super) scenes: &'a Scenes,
     pub(super) opts: &'a RunOptions,
     pub(super) cpu: CpuBackend,
-    pub(super) backends: HashMap<Backend, Box<dyn AoBackend>>,
+    pub(super) backends: HashMap<Backend, Box<dyn ComputeBackend>>,
     pub(super) states: Vec<Option<SceneState>>,
     live: HashMap<(usize, FieldParams), Supplied>,
     pub(super) rows: Vec<(usize, Row)>,
@@ -36,6 +42,20 @@ pub(super) struct Runner<'a> {
     done: usize,
 }
 
+/// A cell's fields as the lookup reads them, and what their bakes cost.
+struct CellFields {
+    scene: FieldScene,
+    columns: FieldColumns,
+    bake_s: Option<f64>,
+}
+
+/// A cell evaluated on every seed: the first seed's values timed, the others not.
+struct Evaluated {
+    /// Values per seed, the timed seed first.
+    values: Vec<Vec<f32>>,
+    times: TimeColumns,
+}
+
 impl<'a> Runner<'a> {
     /// Opens the backends the plan needs (a GPU device only when a cell asks for one).
     pub(super) fn new(
@@ -43,13 +63,14 @@ impl<'a> Runner<'a> {
         plan: &'a Plan,
         scenes: &'a Scenes,
         opts: &'a RunOptions,
-    ) -> Result<Runner<'a>, String> {
+    ) -> Result<Runner<'a>> {
         let mut backends = HashMap::new();
         for &b in &spec.backends {
             backends.insert(b, backend::open(b, &opts.adapter)?);
         }
         Ok(Runner {
             spec,
+            kind: crate::experiment::kind::of(&spec.render),
             plan,
             scenes,
             opts,
@@ -72,12 +93,12 @@ impl<'a> Runner<'a> {
 
     /// The state of scene `s`, built on first use.
     pub(super) fn scene(&mut self, s: usize) -> &mut SceneState {
-        let (spec, scenes) = (self.spec, self.scenes);
-        self.states[s].get_or_insert_with(|| SceneState::new(spec, &scenes.scenes[s]))
+        let (kind, scenes) = (self.kind.as_ref(), self.scenes);
+        self.states[s].get_or_insert_with(|| SceneState::new(kind, &scenes.scenes[s]))
     }
 
     /// Executes one step.
-    pub(super) fn step(&mut self, step: &Step) -> Result<(), String> {
+    pub(super) fn step(&mut self, step: &Step) -> Result<()> {
         match step {
             Step::Primary { scene, .. } => {
                 self.scene(*scene);
@@ -113,7 +134,7 @@ impl<'a> Runner<'a> {
     }
 
     /// The ray-cast reference of a scene (CPU), its image, and its point of the sweep.
-    fn reference(&mut self, scene: usize, k: u32) -> Result<(), String> {
+    fn reference(&mut self, scene: usize, k: u32) -> Result<()> {
         let (short, reps) = (self.opts.short_stage_s, self.opts.repeats);
         let seed = self.spec.reference.seed;
         let out = self.opts.out.clone();
@@ -128,20 +149,21 @@ impl<'a> Runner<'a> {
             tracer: &st.tracer,
         };
         let msg = format!("{}: ray-cast reference, {} rays", bs.name, k * k);
-        let (ao, s, _) = stage_adaptive(&msg, short, reps, || {
-            cpu.raycast_ao(&casters, &st.at(), &rays, &st.opts)
+        let est = st.estimator.as_ref();
+        let (values, s, _) = stage_adaptive(&msg, short, reps, || {
+            cpu.raycast_estimate(&casters, est, st.at(), &rays)
         })?;
         st.raycast_s.insert((Backend::Cpu, k), s);
-        st.reference = ao;
+        st.reference = values;
         st.ref_image = st.image(bs, &st.reference);
         if let Some((img, _)) = &st.ref_image {
             let p = out.join(format!("images/{}-reference.png", bs.name));
-            img.save_png(&p).map_err(io_err(&p))?;
+            img.save_png(&p).map_err(Error::io(&p))?;
             let p = out.join(format!("images/{}-reference.exr", bs.name));
-            img.save_exr(&p).map_err(io_err(&p))?;
+            img.save_exr(&p).map_err(Error::io(&p))?;
         }
         let (rms_vertex, rms_image) = (
-            st.receivers.as_ref().map(|_| 0.0),
+            self.kind.columns().vertex.then_some(0.0),
             st.ref_image.as_ref().map(|_| 0.0),
         );
         let name = bs.name.clone();
@@ -164,8 +186,9 @@ impl<'a> Runner<'a> {
         Ok(())
     }
 
-    /// Ray-cast AO with k² rays on a backend, timed, with its error against the reference.
-    fn raycast(&mut self, scene: usize, k: u32, b: Backend) -> Result<(), String> {
+    /// The estimate by ray casting with k² rays on a backend, timed, with its error against
+    /// the reference.
+    fn raycast(&mut self, scene: usize, k: u32, b: Backend) -> Result<()> {
         let (short, reps) = (self.opts.short_stage_s, self.opts.repeats);
         let seed = self.spec.reference.seed;
         let seeds = self.seeds();
@@ -173,7 +196,7 @@ impl<'a> Runner<'a> {
         let bs = &scenes.scenes[scene];
         self.scene(scene);
         let st = self.states[scene].as_mut().expect("scene state");
-        let be: &dyn AoBackend = match b {
+        let be: &dyn ComputeBackend = match b {
             Backend::Cpu => &self.cpu,
             _ => self.backends[&b].as_ref(),
         };
@@ -183,19 +206,20 @@ impl<'a> Runner<'a> {
             tracer: &st.tracer,
         };
         let msg = format!("{}: ray-cast AO, {} rays ({})", bs.name, k * k, b.name());
-        let eval = be.casters(&casters)?;
+        let eval = be.casters(&casters, st.estimator.as_ref())?;
         let mut kernel_s = None;
-        let (ao, s, _) = stage_adaptive(&msg, short, reps, || {
-            let o = eval.ao(&st.at(), &rays, &st.opts)?;
+        let (values, s, _) = stage_adaptive(&msg, short, reps, || {
+            let o = eval.estimate(st.at(), &rays)?;
             kernel_s = min_time(kernel_s, o.kernel_s);
-            Ok::<_, String>(o.ao)
+            Ok::<_, Error>(o.values)
         })?;
+        drop(eval);
         st.raycast_s.insert((b, k), s);
         if let Some(ks) = kernel_s {
             st.raycast_kernel_s.insert((b, k), ks);
         }
-        let (rms_vertex, rms_image) = st.errors(bs, &ao);
-        let vs = raycast_truth_errors(be, st, k, &seeds, &ao)?;
+        let (rms_vertex, rms_image) = st.errors(self.kind.as_ref(), bs, &values);
+        let vs = raycast_truth_errors(be, st, k, &seeds, &values)?;
         let (t, t_sd) = mean_sd(&vs);
         self.sweep.push(SweepRow {
             scene: bs.name.clone(),
@@ -212,23 +236,61 @@ impl<'a> Runner<'a> {
         Ok(())
     }
 
-    /// Field-lookup AO of one cell on the reference's rays: time, errors, images, table row.
-    fn lookup(&mut self, cell: usize) -> Result<(), String> {
+    /// One cell: its estimate through its fields on the reference's rays (evaluate), its
+    /// errors (measure), its images and row (write).
+    fn lookup(&mut self, cell: usize) -> Result<()> {
         self.done += 1;
-        let (spec, plan) = (self.spec, self.plan);
-        let c = plan.cells[cell];
-        let scenes = self.scenes;
-        let bs = &scenes.scenes[c.scene];
+        let c = self.plan.cells[cell];
+        let bs = &self.scenes.scenes[c.scene];
         self.scene(c.scene);
-        let st = self.states[c.scene].as_ref().expect("scene state");
         let id = c.id(&bs.name);
-        let (mut bake_s, mut bytes, mut bake_rays, mut cached) = (Some(0.0), 0, 0, true);
+        let fields = self.cell_fields(&c);
+        let run = self.evaluate(&c, &fields, &id);
+        let (ev, field_sweep) = run.map_err(|e| e.context(format!("cell {id}")))?;
+        let st = self.states[c.scene].as_ref().expect("scene state");
+        let img = st.image(bs, &ev.values[0]);
+        let errors = self.measure(st, bs, &ev.values, img.as_ref().map(|(i, _)| i));
+        let image = self.write_images(&id, img.as_ref(), st)?;
+        let be = self.backends[&c.backend].as_ref();
+        let row = Row::from_parts(
+            self.cell_columns(&c, &id, st, be.adapter()),
+            TimeColumns {
+                bake_s: fields.bake_s,
+                raycast_s: st.raycast_s.get(&(c.backend, self.plan.render_k)).copied(),
+                raycast_kernel_s: st
+                    .raycast_kernel_s
+                    .get(&(c.backend, self.plan.render_k))
+                    .copied(),
+                ..ev.times
+            },
+            fields.columns,
+            ErrorColumns { image, ..errors },
+        );
+        self.rows.push((cell, row));
+        self.field_sweep.extend(field_sweep);
+        let values = ev.values.into_iter().next().expect("the first seed");
+        self.results.push(CellResult {
+            cell,
+            values,
+            image: img.map(|(i, _)| i),
+        });
+        Ok(())
+    }
+
+    /// The fields of cell `c`'s casters (from the live set), as the lookup reads them.
+    fn cell_fields(&self, c: &Cell) -> CellFields {
+        let bs = &self.scenes.scenes[c.scene];
+        let mut columns = FieldColumns {
+            bake_cached: true,
+            ..FieldColumns::default()
+        };
+        let mut bake_s = Some(0.0);
         for m in bs.caster_meshes() {
             let f = &self.live[&(m, c.params)];
             bake_s = bake_s.zip(f.bake_s).map(|(a, b)| a + b);
-            bytes += f.field.bytes();
-            bake_rays += f.rays;
-            cached &= f.cached;
+            columns.field_bytes += f.field.bytes();
+            columns.bake_rays += f.rays;
+            columns.bake_cached &= f.cached;
         }
         let instances = bs
             .scene
@@ -238,67 +300,71 @@ impl<'a> Runner<'a> {
                 FieldInstance::new(f.field.clone(), inst.transform)
             })
             .collect();
-        let default = LookupOptions::default();
-        let fs = FieldScene {
-            instances,
-            options: LookupOptions {
-                selection: c.selection,
-                intra_bias: spec
-                    .render
-                    .intra_bias
-                    .map(IntraBias::Fixed)
-                    .unwrap_or(default.intra_bias),
+        CellFields {
+            scene: FieldScene {
+                instances,
+                options: self.kind.lookup_options(c.selection),
             },
-        };
-        let be = self.backends[&c.backend].as_ref();
-        let rays = RaySet::new(plan.render_k, spec.reference.seed);
-        let msg = format!("[{}/{}] lookup {id}", self.done, self.lookups);
-        let (short, reps) = (self.opts.short_stage_s, self.opts.repeats);
-        let eval = be.fields(&fs)?;
-        let mut ao_kernel_s = None;
-        let (ao, ao_s, _) = stage_adaptive(&msg, short, reps, || {
-            let o = eval.ao(&st.at(), &rays, &st.opts)?;
-            ao_kernel_s = min_time(ao_kernel_s, o.kernel_s);
-            Ok::<_, String>(o.ao)
-        })?;
-        let setup_s = eval.setup_s();
-        drop(eval);
-        let ve = st
-            .receivers
-            .as_ref()
-            .map(|_| vertex_errors(&ao, &st.reference));
-        let img = st.image(bs, &ao);
-        let ie = match (&img, &st.ref_image) {
-            (Some((a, _)), Some((r, mask))) => Some(image_errors(&a.data, &r.data, mask)),
-            _ => None,
-        };
-        // The other seeds (untimed), and every seed's errors.
-        let mut aos = vec![ao];
-        for &sd in &self.seeds()[1..] {
-            let rays = RaySet::new(plan.render_k, sd);
-            aos.push(be.field_ao(&fs, &st.at(), &rays, &st.opts)?);
+            columns,
+            bake_s,
         }
-        let se = seed_errors(st, bs, &aos, img.as_ref().map(|(i, _)| i));
-        let seeds = aos.len() as u32;
-        let ao = aos.swap_remove(0);
-        // The same field with more rays per point, against the truth only.
-        let mut field_sweep = Vec::new();
+    }
+
+    /// Evaluate: the estimate through the fields on every seed (the first timed), and the same
+    /// fields with the field sweep's ray counts against the truth.
+    fn evaluate(
+        &self,
+        c: &Cell,
+        fields: &CellFields,
+        id: &str,
+    ) -> Result<(Evaluated, Vec<FieldSweepRow>)> {
+        let st = self.states[c.scene].as_ref().expect("scene state");
+        let est = st.estimator.as_ref();
+        let be = self.backends[&c.backend].as_ref();
+        let (spec, k) = (self.spec, self.plan.render_k);
+        let (short, reps) = (self.opts.short_stage_s, self.opts.repeats);
+        let msg = format!("[{}/{}] lookup {id}", self.done, self.lookups);
+        let eval = be.fields(&fields.scene, est)?;
+        let mut ao_kernel_s = None;
+        let rays = RaySet::new(k, spec.reference.seed);
+        let (first, ao_s, _) = stage_adaptive(&msg, short, reps, || {
+            let o = eval.estimate(st.at(), &rays)?;
+            ao_kernel_s = min_time(ao_kernel_s, o.kernel_s);
+            Ok::<_, Error>(o.values)
+        })?;
+        let times = TimeColumns {
+            ao_s,
+            ao_kernel_s,
+            setup_s: eval.setup_s(),
+            ..TimeColumns::default()
+        };
+        drop(eval);
+        // The other seeds (untimed).
+        let mut values = vec![first];
+        for &sd in &self.seeds()[1..] {
+            let rays = RaySet::new(k, sd);
+            values.push(be.field_estimate(&fields.scene, est, st.at(), &rays)?);
+        }
+        // The same fields with more rays per point, against the truth only.
+        let mut sweep = Vec::new();
         for &n in &spec.reference.field_rays_sweep {
-            let k = exact_sqrt(n).ok_or("field_rays_sweep: not a square")?;
-            let (ao_k, s) = if k == plan.render_k {
+            let kn = exact_sqrt(n).ok_or_else(|| {
+                Error::invalid("reference.field_rays_sweep", format!("{n} is not a square"))
+            })?;
+            let (other, s) = if kn == k {
                 (None, ao_s)
             } else {
-                let rays = RaySet::new(k, spec.reference.seed);
+                let rays = RaySet::new(kn, spec.reference.seed);
                 let msg = format!("  lookup {id}, {n} rays");
                 let (a, s, _) = stage_adaptive(&msg, short, reps, || {
-                    be.field_ao(&fs, &st.at(), &rays, &st.opts)
+                    be.field_estimate(&fields.scene, est, st.at(), &rays)
                 })?;
                 (Some(a), s)
             };
-            let e = st.truth_errors(ao_k.as_deref().unwrap_or(&ao));
-            field_sweep.push(FieldSweepRow {
-                scene: bs.name.clone(),
-                cell: id.clone(),
+            let e = st.truth_errors(other.as_deref().unwrap_or(&values[0]));
+            sweep.push(FieldSweepRow {
+                scene: self.scenes.scenes[c.scene].name.clone(),
+                cell: id.to_string(),
                 positional_samples: c.params.count,
                 directional_res: c.params.res,
                 precision: c.params.precision,
@@ -310,68 +376,86 @@ impl<'a> Runner<'a> {
                 truth_stderr: st.truth.as_ref().map(|t| t.rms_stderr_255()),
             });
         }
-        let mut image = String::new();
-        if let (Some((a, _)), Some((r, _))) = (&img, &st.ref_image) {
-            let out = &self.opts.out;
-            image = format!("images/{id}.png");
-            let p = out.join(&image);
-            a.save_png(&p).map_err(io_err(&p))?;
-            let p = out.join(format!("images/{id}-diff_x5.png"));
-            a.difference(r, 5.0).save_png(&p).map_err(io_err(&p))?;
+        Ok((Evaluated { values, times }, sweep))
+    }
+
+    /// Measure: the kind's metric columns against the same-ray reference (the first seed's
+    /// largest errors and share off by one level; the RMS columns over every seed) and the
+    /// errors against the converged reference.
+    fn measure(
+        &self,
+        st: &SceneState,
+        bs: &BuiltScene,
+        values: &[Vec<f32>],
+        first_image: Option<&GrayImage>,
+    ) -> ErrorColumns {
+        let vertex: Option<ErrorStats> = self
+            .kind
+            .columns()
+            .vertex
+            .then(|| vertex_errors(&values[0], &st.reference));
+        let image: Option<ErrorStats> = match (first_image, &st.ref_image) {
+            (Some(a), Some((r, mask))) => Some(image_errors(&a.data, &r.data, mask)),
+            _ => None,
+        };
+        let se: SeedErrors = seed_errors(self.kind.as_ref(), st, bs, values, first_image);
+        ErrorColumns {
+            seeds: values.len() as u32,
+            rms_vertex: se.vertex,
+            rms_image: se.image,
+            max_error_vertex: vertex.map(|e| e.max),
+            max_error_image: image.map(|e| e.max),
+            share_pixels_off_1: image.map(|e| e.share_off_1),
+            rms_vs_truth: se.truth,
+            rms_vs_truth_crease: se.crease,
+            rms_vs_truth_interior: se.interior,
+            truth_stderr: st.truth.as_ref().map(|t| t.rms_stderr_255()),
+            truth_rays: st.truth.as_ref().map(|t| t.rays_per_point),
+            raycast_rms_vs_truth: (!st.reference_vs_truth.is_empty())
+                .then(|| mean_sd(&st.reference_vs_truth).0),
+            image: String::new(),
         }
-        let row = Row {
+    }
+
+    /// Write: the cell's image and its difference from the reference ×5; the image's path
+    /// relative to the output folder (empty without an image).
+    fn write_images(
+        &self,
+        id: &str,
+        img: Option<&(GrayImage, Vec<bool>)>,
+        st: &SceneState,
+    ) -> Result<String> {
+        let (Some((a, _)), Some((r, _))) = (img, &st.ref_image) else {
+            return Ok(String::new());
+        };
+        let out = &self.opts.out;
+        let image = format!("images/{id}.png");
+        let p = out.join(&image);
+        a.save_png(&p).map_err(Error::io(&p))?;
+        let p = out.join(format!("images/{id}-diff_x5.png"));
+        a.difference(r, 5.0).save_png(&p).map_err(Error::io(&p))?;
+        Ok(image)
+    }
+
+    /// The identity columns of cell `c`.
+    fn cell_columns(&self, c: &Cell, id: &str, st: &SceneState, adapter: String) -> CellColumns {
+        let bs = &self.scenes.scenes[c.scene];
+        CellColumns {
+            cell: id.to_string(),
+            scene: bs.name.clone(),
+            sphere: c.params.sphere,
             positional_samples: c.params.count,
             directional_res: c.params.res,
             layout: c.params.layout,
             precision: c.params.precision,
             selection: c.selection,
             backend: c.backend,
-            adapter: be.adapter(),
-            bake_s,
-            ao_s,
-            raycast_s: st.raycast_s.get(&(c.backend, plan.render_k)).copied(),
-            rms_vertex: se.vertex.map(|m| m.0),
-            rms_image: se.image.map(|m| m.0),
-            field_bytes: bytes,
-            rms_vs_truth: se.truth.map(|m| m.0),
-            truth_stderr: st.truth.as_ref().map(|t| t.rms_stderr_255()),
-            scene: bs.name.clone(),
-            sphere: c.params.sphere,
-            rays_per_point: spec.render.rays_per_point,
-            receiver_points: st.points.len(),
+            adapter,
+            rays_per_point: self.kind.rays_per_point(),
+            receiver_points: st.at.len(),
+            crease_points: st.at.crease_count(),
             caster_triangles: bs.caster_triangles(),
-            max_error_vertex: ve.map(|e| e.max),
-            max_error_image: ie.map(|e| e.max),
-            share_pixels_off_1: ie.map(|e| e.share_off_1),
-            bake_rays,
-            bake_cached: cached,
-            image,
-            cell: id,
-            ao_kernel_s,
-            raycast_kernel_s: st
-                .raycast_kernel_s
-                .get(&(c.backend, plan.render_k))
-                .copied(),
-            setup_s,
-            seeds,
-            rms_vertex_sd: se.vertex.and_then(|m| m.1),
-            rms_image_sd: se.image.and_then(|m| m.1),
-            rms_vs_truth_sd: se.truth.and_then(|m| m.1),
-            raycast_rms_vs_truth: (!st.reference_vs_truth.is_empty())
-                .then(|| mean_sd(&st.reference_vs_truth).0),
-            truth_rays: st.truth.as_ref().map(|t| t.rays_per_point),
-            crease_points: st.crease.iter().filter(|&&c| c).count(),
-            rms_vs_truth_crease: se.crease,
-            rms_vs_truth_interior: se.interior,
-        };
-        self.rows.push((cell, row));
-        self.field_sweep.extend(field_sweep);
-        self.results.push(CellResult {
-            cell,
-            ao,
-            image: img.map(|(i, _)| i),
-        });
-        Ok(())
+        }
     }
 }
 

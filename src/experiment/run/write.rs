@@ -1,16 +1,17 @@
 //! The end of a run: the pair table, the CSV files, the per-point AO, `run.json`, the spec copy
 //! and the plots.
 
-use super::state::io_err;
 use super::steps::Runner;
 use super::LoadedSpec;
+use crate::experiment::metrics::{rms_u8, rms_unquantised};
 use crate::experiment::outputs::{self, PairRow, Row};
 use crate::experiment::spec::Backend;
-use crate::render::image::{rms_255, rms_vertex};
+use crate::experiment::{Error, Result};
 
 impl Runner<'_> {
     /// RMS between every two cells that differ only in precision.
     fn pairs(&self) -> Vec<PairRow> {
+        let vertex = self.kind.columns().vertex;
         let mut out = Vec::new();
         for (i, a) in self.results.iter().enumerate() {
             for b in &self.results[i + 1..] {
@@ -26,7 +27,7 @@ impl Runner<'_> {
                 let st = self.states[ca.scene].as_ref().expect("scene state");
                 let rms_image = match (&a.image, &b.image, &st.ref_image) {
                     (Some(x), Some(y), Some((_, mask))) => {
-                        Some(rms_255(&x.data, &y.data, Some(mask)))
+                        Some(rms_u8(&x.data, &y.data, Some(mask)))
                     }
                     _ => None,
                 };
@@ -40,7 +41,7 @@ impl Runner<'_> {
                     backend: ca.backend,
                     precision_a: ca.params.precision,
                     precision_b: cb.params.precision,
-                    rms_vertex: st.receivers.as_ref().map(|_| rms_vertex(&a.ao, &b.ao)),
+                    rms_vertex: vertex.then(|| rms_unquantised(&a.values, &b.values)),
                     rms_image,
                 });
             }
@@ -48,10 +49,14 @@ impl Runner<'_> {
         out
     }
 
-    /// Per-point AO of every vertex-AO scene: the reference and each cell, one column each.
-    fn write_point_ao(&self) -> Result<(), String> {
+    /// Per-point values of every scene whose kind has per-vertex columns: the reference and
+    /// each cell, one column each.
+    fn write_point_ao(&self) -> Result<()> {
+        if !self.kind.columns().vertex {
+            return Ok(());
+        }
         for (s, bs) in self.scenes.scenes.iter().enumerate() {
-            let Some(st) = self.states[s].as_ref().filter(|st| st.receivers.is_some()) else {
+            let Some(st) = self.states[s].as_ref() else {
                 continue;
             };
             let cols: Vec<_> = self
@@ -68,8 +73,8 @@ impl Runner<'_> {
                 text.push_str(&self.plan.cells[r.cell].id(&bs.name));
             }
             text.push('\n');
-            for (i, p) in st.points.iter().enumerate() {
-                let crease = st.crease[i] as u8;
+            for (i, p) in st.at.points.iter().enumerate() {
+                let crease = st.at.crease[i] as u8;
                 text.push_str(&format!(
                     "{i},{},{},{},{crease},{}",
                     p.x, p.y, p.z, st.reference[i]
@@ -78,18 +83,18 @@ impl Runner<'_> {
                     text.push_str(&format!(",{},{}", t.ao[i], t.stderr[i]));
                 }
                 for r in &cols {
-                    text.push_str(&format!(",{}", r.ao[i]));
+                    text.push_str(&format!(",{}", r.values[i]));
                 }
                 text.push('\n');
             }
             let p = self.opts.out.join(format!("ao_{}.csv", bs.name));
-            crate::io::write_atomic(&p, text.as_bytes()).map_err(io_err(&p))?;
+            crate::io::write_atomic(&p, text.as_bytes()).map_err(Error::io(&p))?;
         }
         Ok(())
     }
 
     /// Writes every output and returns the table rows in cell order.
-    pub(super) fn finish(mut self, ls: &LoadedSpec) -> Result<Vec<Row>, String> {
+    pub(super) fn finish(mut self, ls: &LoadedSpec) -> Result<Vec<Row>> {
         self.rows.sort_by_key(|(c, _)| *c);
         self.results.sort_by_key(|r| r.cell);
         let rows: Vec<Row> = self.rows.iter().map(|(_, r)| r.clone()).collect();
@@ -127,10 +132,10 @@ impl Runner<'_> {
                 serde_json::json!({
                     "name": bs.name,
                     "instances": bs.scene.instances.len(),
-                    "ao_points": st.as_ref().map(|st| st.points.len()),
+                    "ao_points": st.as_ref().map(|st| st.at.len()),
                     "caster_triangles": bs.caster_triangles(),
-                    "ray_offset": st.as_ref().map(|st| st.opts.offset),
-                    "crease_points": st.as_ref().map(|st| st.crease.iter().filter(|&&c| c).count()),
+                    "ray_offset": st.as_ref().map(|st| st.offset),
+                    "crease_points": st.as_ref().map(|st| st.at.crease_count()),
                     "truth": st.as_ref().and_then(|st| st.truth.as_ref().map(|t| serde_json::json!({
                         "rays_per_point": t.rays_per_point,
                         "batches": t.batches,
@@ -150,7 +155,8 @@ impl Runner<'_> {
             "reproduces": spec.reproduces,
             "profile": if opts.quick { "quick" } else { "full" },
             "meta": meta,
-            "rays_per_point": spec.render.rays_per_point,
+            "render": self.kind.name(),
+            "rays_per_point": spec.render.rays_per_point(),
             "reference_rays_per_point": spec.reference.rays_per_point,
             "seed": spec.reference.seed,
             "seeds": spec.reference.seeds,
@@ -173,9 +179,9 @@ impl Runner<'_> {
         });
         let p = out.join("run.json");
         let json = serde_json::to_string_pretty(&summary).expect("run summary serialises");
-        crate::io::write_atomic(&p, json.as_bytes()).map_err(io_err(&p))?;
+        crate::io::write_atomic(&p, json.as_bytes()).map_err(Error::io(&p))?;
         let p = out.join("spec.json");
-        crate::io::write_atomic(&p, ls.text.as_bytes()).map_err(io_err(&p))?;
+        crate::io::write_atomic(&p, ls.text.as_bytes()).map_err(Error::io(&p))?;
         let title = format!("{}{}", ls.name, if opts.quick { " (quick)" } else { "" });
         crate::experiment::figures::draw_all(out, &title)?;
         Ok(rows)

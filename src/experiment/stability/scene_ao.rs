@@ -148,7 +148,7 @@ pub fn max_diff(a: &[f32], b: &[f32]) -> f64 {
 
 /// RMS difference on the 0–255 scale.
 pub fn rms_255(a: &[f32], b: &[f32]) -> f64 {
-    crate::render::image::rms_255(a, b, None)
+    crate::experiment::metrics::rms_u8(a, b, None)
 }
 
 /// `scene` with every instance's world vertices moved by `shift` (in f32) baked into its mesh,

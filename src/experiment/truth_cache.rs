@@ -1,9 +1,10 @@
 //! The converged reference of a scene ([`crate::render::truth`]), computed once and cached like
 //! fields.
 //!
-//! A cache file is keyed by the sha256 of everything that determines the answer: the AO points
-//! and normals (after the contact convention), the casters' world triangles, the AO options
-//! (offset, radius), the truth options and the code version. It holds:
+//! A cache file is keyed by the sha256 of everything that determines the answer: the evaluation
+//! points and normals (after the contact convention), the casters' world triangles, the
+//! estimator's options ([`Estimator::key`]: for AO the offset, radius and falloff), the truth
+//! options and the code version. It holds:
 //!
 //! ```text
 //! magic    8 bytes  "VTRUTHCA"
@@ -15,8 +16,10 @@
 //!
 //! Files are written atomically; a truncated, corrupt or stale file is reported and recomputed.
 
-use crate::render::ao::AoOptions;
-use crate::render::truth::{converged_ao, Truth, TruthOptions};
+use super::{Error, Result};
+use crate::field::cache::CacheError;
+use crate::render::estimator::{Estimator, Points};
+use crate::render::truth::{Truth, TruthOptions};
 use crate::render::Visibility;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
@@ -38,25 +41,31 @@ struct TruthHeader {
     payload_sha256: String,
 }
 
-/// The cache key of a truth: sha256 over its inputs.
-pub fn truth_key(
-    points: &[Vec3],
-    normals: &[Vec3],
-    casters: &[[Vec3; 3]],
-    opts: &AoOptions,
-    t: &TruthOptions,
-) -> String {
-    let mut bytes: Vec<u8> = bytemuck::cast_slice(points).to_vec();
-    bytes.extend_from_slice(bytemuck::cast_slice(normals));
-    bytes.extend_from_slice(bytemuck::cast_slice(casters));
-    let meta = serde_json::json!({
-        "offset": opts.offset,
-        "max_distance": opts.max_distance,
-        "falloff": opts.falloff,
-        "truth": t,
-        "code": format!("{}+t{}", env!("CARGO_PKG_VERSION"), FORMAT_VERSION),
-    });
-    bytes.extend_from_slice(meta.to_string().as_bytes());
+/// What a converged reference is computed from.
+pub struct TruthInputs<'a> {
+    /// The render kind's estimator (its options are part of the key).
+    pub estimator: &'a dyn Estimator,
+    /// The visibility of `casters` (the reference tracer).
+    pub tracer: &'a dyn Visibility,
+    /// The casters' world triangles.
+    pub casters: &'a [[Vec3; 3]],
+    /// The evaluation points.
+    pub at: Points<'a>,
+}
+
+/// The cache key of a truth: sha256 over its inputs (the points and normals, the casters, the
+/// estimator's options, the truth options and the code version).
+pub fn truth_key(inputs: &TruthInputs, t: &TruthOptions) -> String {
+    let mut bytes: Vec<u8> = bytemuck::cast_slice(inputs.at.points).to_vec();
+    bytes.extend_from_slice(bytemuck::cast_slice(inputs.at.normals));
+    bytes.extend_from_slice(bytemuck::cast_slice(inputs.casters));
+    let mut meta = inputs.estimator.key();
+    meta.insert("truth".into(), serde_json::json!(t));
+    meta.insert(
+        "code".into(),
+        serde_json::json!(format!("{}+t{}", env!("CARGO_PKG_VERSION"), FORMAT_VERSION)),
+    );
+    bytes.extend_from_slice(serde_json::Value::Object(meta).to_string().as_bytes());
     crate::io::sha256_hex(&bytes)
 }
 
@@ -66,7 +75,7 @@ pub fn truth_path(dir: &Path, scene: &str, key: &str) -> PathBuf {
 }
 
 /// Writes `truth` under `key`, atomically.
-pub fn save(path: &Path, key: &str, truth: &Truth) -> Result<(), String> {
+pub fn save(path: &Path, key: &str, truth: &Truth) -> Result<()> {
     let mut payload: Vec<u8> = bytemuck::cast_slice(&truth.ao).to_vec();
     payload.extend_from_slice(bytemuck::cast_slice(&truth.stderr));
     let header = TruthHeader {
@@ -81,20 +90,30 @@ pub fn save(path: &Path, key: &str, truth: &Truth) -> Result<(), String> {
     };
     let h = serde_json::to_vec(&header).expect("header serialises");
     let out = crate::io::framed(MAGIC, FORMAT_VERSION, &h, &payload);
-    crate::io::write_atomic(path, &out).map_err(|e| format!("{}: {e}", path.display()))
+    crate::io::write_atomic(path, &out).map_err(Error::io(path))
 }
 
 /// Reads a truth saved under `key`, verifying magic, version, key, length and checksum.
-pub fn load(path: &Path, key: &str) -> Result<Truth, String> {
-    let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let bad = |why: &str| format!("{}: {why}", path.display());
+pub fn load(path: &Path, key: &str) -> std::result::Result<Truth, CacheError> {
+    let bytes = std::fs::read(path).map_err(|source| CacheError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let bad = |why: &str| CacheError::Corrupt {
+        path: path.to_path_buf(),
+        reason: why.to_string(),
+    };
+    let stale = |why: String| CacheError::Stale {
+        path: path.to_path_buf(),
+        reason: why,
+    };
     if bytes.len() < 16 || &bytes[..8] != MAGIC {
         return Err(bad("not a truth cache file (bad magic or truncated)"));
     }
     let version = u32::from_le_bytes(bytes[8..12].try_into().expect("4 bytes"));
     if version != FORMAT_VERSION {
-        return Err(bad(&format!(
-            "stale cache: format version {version}, this build reads {FORMAT_VERSION}"
+        return Err(stale(format!(
+            "format version {version}, this build reads {FORMAT_VERSION}"
         )));
     }
     let hlen = u32::from_le_bytes(bytes[12..16].try_into().expect("4 bytes")) as usize;
@@ -105,7 +124,7 @@ pub fn load(path: &Path, key: &str) -> Result<Truth, String> {
     let h: TruthHeader =
         serde_json::from_slice(&bytes[16..end]).map_err(|e| bad(&format!("header: {e}")))?;
     if h.key != key {
-        return Err(bad("stale cache: the key differs"));
+        return Err(stale("the key differs".into()));
     }
     let payload = &bytes[end..];
     if payload.len() as u64 != h.payload_len || h.payload_len != h.points * 8 {
@@ -138,35 +157,29 @@ pub enum TruthOutcome {
     },
 }
 
-/// The truth of (`points`, `normals`) against `casters`, from the cache in `dir` or computed
-/// (and cached) with `vis`, the visibility of `casters`.
-#[allow(clippy::too_many_arguments)]
-pub fn load_or_compute<V: Visibility + ?Sized>(
+/// The truth of `inputs`, from the cache in `dir` or computed (and cached).
+pub fn load_or_compute(
     dir: Option<&Path>,
     scene: &str,
-    vis: &V,
-    casters: &[[Vec3; 3]],
-    points: &[Vec3],
-    normals: &[Vec3],
-    opts: &AoOptions,
+    inputs: &TruthInputs,
     t: &TruthOptions,
-) -> Result<(Truth, TruthOutcome), String> {
-    let key = truth_key(points, normals, casters, opts, t);
+) -> Result<(Truth, TruthOutcome)> {
+    let key = truth_key(inputs, t);
     let path = dir.map(|d| truth_path(d, scene, &key));
     let mut rejected = None;
     if let Some(p) = path.as_ref().filter(|p| p.exists()) {
         match load(p, &key) {
-            Ok(truth) if truth.ao.len() == points.len() => {
+            Ok(truth) if truth.ao.len() == inputs.at.len() => {
                 return Ok((truth, TruthOutcome::Hit(p.clone())))
             }
             Ok(_) => rejected = Some(format!("{}: wrong point count", p.display())),
-            Err(e) => rejected = Some(e),
+            Err(e) => rejected = Some(e.to_string()),
         }
     }
-    let truth = converged_ao(vis, points, normals, opts, t);
+    let truth = inputs.estimator.converged(inputs.tracer, inputs.at, t);
     if let Some(p) = &path {
         if let Some(d) = p.parent() {
-            std::fs::create_dir_all(d).map_err(|e| format!("{}: {e}", d.display()))?;
+            std::fs::create_dir_all(d).map_err(Error::io(d))?;
         }
         save(p, &key, &truth)?;
     }
@@ -194,15 +207,16 @@ mod tests {
         let p = dir.path().join("t.vtruth");
         save(&p, "abc", &sample()).unwrap();
         assert_eq!(load(&p, "abc").unwrap(), sample());
-        assert!(load(&p, "abd").unwrap_err().contains("stale"));
+        let err = |p: &Path, key: &str| load(p, key).unwrap_err().to_string();
+        assert!(err(&p, "abd").contains("stale"));
         let good = std::fs::read(&p).unwrap();
         let mut flipped = good.clone();
         *flipped.last_mut().unwrap() ^= 1;
         std::fs::write(&p, &flipped).unwrap();
-        assert!(load(&p, "abc").unwrap_err().contains("checksum"));
+        assert!(err(&p, "abc").contains("checksum"));
         std::fs::write(&p, &good[..good.len() - 4]).unwrap();
-        assert!(load(&p, "abc").unwrap_err().contains("truncated"));
+        assert!(err(&p, "abc").contains("truncated"));
         std::fs::write(&p, b"nonsense").unwrap();
-        assert!(load(&p, "abc").unwrap_err().contains("magic"));
+        assert!(err(&p, "abc").contains("magic"));
     }
 }

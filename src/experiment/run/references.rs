@@ -3,10 +3,13 @@
 
 use super::state::{mean_sd, SceneState};
 use super::steps::Runner;
-use crate::experiment::backend::{AoBackend, Casters};
+use crate::experiment::backend::{Casters, ComputeBackend};
+use crate::experiment::kind::Kind;
+use crate::experiment::metrics::{rms_u8, rms_unquantised};
 use crate::experiment::progress::stage;
-use crate::experiment::truth::{load_or_compute, TruthOutcome};
-use crate::render::image::{rms_255, rms_vertex, GrayImage};
+use crate::experiment::truth_cache::{load_or_compute, TruthInputs, TruthOutcome};
+use crate::experiment::Result;
+use crate::render::image::GrayImage;
 use crate::render::truth::TruthOptions;
 use crate::sampling::rays::RaySet;
 
@@ -31,7 +34,7 @@ impl Runner<'_> {
     }
 
     /// The converged reference of scene `scene`, from the cache or computed.
-    pub(super) fn truth(&mut self, scene: usize) -> Result<(), String> {
+    pub(super) fn truth(&mut self, scene: usize) -> Result<()> {
         let t = &self.spec.reference.truth;
         let topts = TruthOptions {
             target_stderr_255: t.target_stderr,
@@ -48,16 +51,13 @@ impl Runner<'_> {
             bs.name, topts.max_rays
         );
         let (res, s) = stage(&msg, || {
-            load_or_compute(
-                cache.as_deref(),
-                &bs.name,
-                &st.tracer,
-                &st.triangles,
-                &st.points,
-                &st.normals,
-                &st.opts,
-                &topts,
-            )
+            let inputs = TruthInputs {
+                estimator: st.estimator.as_ref(),
+                tracer: &st.tracer,
+                casters: &st.triangles,
+                at: st.at(),
+            };
+            load_or_compute(cache.as_deref(), &bs.name, &inputs, &topts)
         });
         let (truth, outcome) = res?;
         let source = match &outcome {
@@ -88,7 +88,7 @@ impl Runner<'_> {
 
     /// The same-ray reference on the seeds after the first, and every seed's reference against
     /// the truth.
-    pub(super) fn seed_references(&mut self, scene: usize, k: u32) -> Result<(), String> {
+    pub(super) fn seed_references(&mut self, scene: usize, k: u32) -> Result<()> {
         let seeds = self.seeds();
         let bs = &self.scenes.scenes[scene];
         let st = self.states[scene].as_mut().expect("scene state");
@@ -98,11 +98,12 @@ impl Runner<'_> {
         };
         let mut refs = Vec::new();
         for &sd in &seeds[1..] {
-            let ao = self
-                .cpu
-                .raycast_ao(&casters, &st.at(), &RaySet::new(k, sd), &st.opts)?;
-            let img = st.image(bs, &ao).map(|(i, _)| i);
-            refs.push((ao, img));
+            let rays = RaySet::new(k, sd);
+            let values =
+                self.cpu
+                    .raycast_estimate(&casters, st.estimator.as_ref(), st.at(), &rays)?;
+            let img = st.image(bs, &values).map(|(i, _)| i);
+            refs.push((values, img));
         }
         st.seed_refs = refs;
         let mut vs = Vec::new();
@@ -116,15 +117,15 @@ impl Runner<'_> {
     }
 }
 
-/// Ray-cast AO of `k²` rays on every seed after the first (untimed), against the truth: the
-/// RMS per seed, `first` (the timed seed's AO) included.
+/// The ray-cast estimate of `k²` rays on every seed after the first (untimed), against the
+/// truth: the RMS per seed, `first` (the timed seed's values) included.
 pub(super) fn raycast_truth_errors(
-    be: &dyn AoBackend,
+    be: &dyn ComputeBackend,
     st: &SceneState,
     k: u32,
     seeds: &[u64],
     first: &[f32],
-) -> Result<Vec<f64>, String> {
+) -> Result<Vec<f64>> {
     let Some(e) = st.truth_errors(first) else {
         return Ok(Vec::new());
     };
@@ -134,15 +135,18 @@ pub(super) fn raycast_truth_errors(
         tracer: &st.tracer,
     };
     for &sd in &seeds[1..] {
-        let ao = be.raycast_ao(&casters, &st.at(), &RaySet::new(k, sd), &st.opts)?;
-        out.extend(st.truth_errors(&ao).map(|e| e.all));
+        let rays = RaySet::new(k, sd);
+        let values = be.raycast_estimate(&casters, st.estimator.as_ref(), st.at(), &rays)?;
+        out.extend(st.truth_errors(&values).map(|e| e.all));
     }
     Ok(out)
 }
 
-/// The errors of a cell's AO on every seed (`aos[j]` on seed j, `first_image` the image of
-/// seed 0's AO), against the same-ray reference of that seed and against the truth.
+/// The errors of a cell's values on every seed (`aos[j]` on seed j, `first_image` the image of
+/// seed 0's values), against the same-ray reference of that seed (the kind's metric columns)
+/// and against the truth.
 pub(super) fn seed_errors(
+    kind: &dyn Kind,
     st: &SceneState,
     bs: &crate::experiment::scenes::BuiltScene,
     aos: &[Vec<f32>],
@@ -156,8 +160,8 @@ pub(super) fn seed_errors(
             let (a, img) = &st.seed_refs[j - 1];
             (a, img.as_ref())
         };
-        if st.receivers.is_some() {
-            v.push(rms_vertex(ao, reference));
+        if kind.columns().vertex {
+            v.push(rms_unquantised(ao, reference));
         }
         if let (Some(r), Some((_, mask))) = (ref_img, &st.ref_image) {
             let own;
@@ -168,7 +172,7 @@ pub(super) fn seed_errors(
                 own.as_ref()
             };
             if let Some(img) = img {
-                im.push(rms_255(&img.data, &r.data, Some(mask)));
+                im.push(rms_u8(&img.data, &r.data, Some(mask)));
             }
         }
         if let Some(e) = st.truth_errors(ao) {

@@ -1,0 +1,188 @@
+//! Render kinds: what a spec's `render` computes, behind one interface ([`Kind`]) that the
+//! planner, the runner, the backends and the row writer work through.
+//!
+//! A kind declares what it needs of a scene ([`Needs`]: a view with its G-buffer, normal
+//! fields, lights), supplies its evaluation points and its [`Estimator`] for a built scene
+//! ([`Kind::setup`]), and says which metric columns it fills ([`Columns`]). Everything else
+//! (the same-ray reference, the seeds, the converged reference and its cache, the sweeps, the
+//! images, the tables) is the runner's, the same for every kind. ARCHITECTURE.md lists the
+//! steps that add a kind.
+
+use super::scenes::BuiltScene;
+use super::spec::{AoRender, ImageSpec, RenderSpec};
+use crate::field::lookup::{IntraBias, LookupOptions};
+use crate::field::Selection;
+use crate::render::ao::AoOptions;
+use crate::render::estimator::{AoEstimator, Estimator};
+use crate::render::points::{EvalPoints, GBuffer};
+
+/// What a kind needs built before it can run.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Needs {
+    /// A camera and the G-buffer of its view (the points are pixels).
+    pub view: bool,
+    /// Normal fields beside the distance fields (reflections).
+    pub normal_field: bool,
+    /// Light sources (shadows).
+    pub lights: bool,
+}
+
+/// The metric columns a kind fills beside the ones every kind has (`rms_vs_truth` and its
+/// crease/interior split, over the evaluation points).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Columns {
+    /// Per-point values whose unquantised RMS is `rms_vertex` (the 2008 paper's per-vertex AO).
+    pub vertex: bool,
+}
+
+/// A kind set up on one scene: its points, its estimator, its ray offset.
+pub struct Setup {
+    pub points: EvalPoints,
+    pub estimator: Box<dyn Estimator>,
+    /// How far ray origins move along the normal (model units), for run.json.
+    pub offset: f32,
+}
+
+/// A render kind.
+pub trait Kind: Sync {
+    /// The spec's name for it ("vertex_ao").
+    fn name(&self) -> &'static str;
+    /// What it needs built.
+    fn needs(&self) -> Needs;
+    /// Which metric columns it fills.
+    fn columns(&self) -> Columns;
+    /// Rays per evaluation point (k²).
+    fn rays_per_point(&self) -> u32;
+    /// The image, when the spec renders one (a view kind always has one).
+    fn image(&self) -> Option<&ImageSpec>;
+    /// The most evaluation points a scene can have (the plan's ray counts, before any scene
+    /// state is built).
+    fn max_points(&self, scene: &BuiltScene) -> u64;
+    /// Its points and estimator on `scene` (`view`: the G-buffer of the spec's image, when
+    /// there is one).
+    fn setup(&self, scene: &BuiltScene, view: Option<&GBuffer>) -> Setup;
+    /// How fields are read for it, with the cell's map selection.
+    fn lookup_options(&self, selection: Selection) -> LookupOptions;
+}
+
+/// The kind of a spec's `render`.
+pub fn of(render: &RenderSpec) -> Box<dyn Kind> {
+    match render {
+        RenderSpec::VertexAo(a) => Box::new(VertexAo(a.clone())),
+        RenderSpec::ImageAo(a) => Box::new(ImageAo(a.clone())),
+    }
+}
+
+/// The AO estimator of an AO spec on a scene: the scene-aware ray offset, the spec's radius and
+/// falloff.
+fn ao_estimator(a: &AoRender, scene: &BuiltScene) -> AoEstimator {
+    let mut opts = AoOptions::for_scene(scene.bounds());
+    opts.max_distance = a.max_distance;
+    opts.falloff = a.falloff;
+    AoEstimator { opts }
+}
+
+fn ao_lookup(a: &AoRender, selection: Selection) -> LookupOptions {
+    LookupOptions {
+        selection,
+        intra_bias: a
+            .intra_bias
+            .map(IntraBias::Fixed)
+            .unwrap_or(LookupOptions::default().intra_bias),
+    }
+}
+
+/// Vertex AO (Gaitatzes, Chrysanthou, Papaioannou, WSCG 2008): AO at the receivers' vertices,
+/// shown Gouraud-interpolated in the image.
+pub struct VertexAo(pub AoRender);
+
+impl Kind for VertexAo {
+    fn name(&self) -> &'static str {
+        "vertex_ao"
+    }
+
+    fn needs(&self) -> Needs {
+        Needs::default()
+    }
+
+    fn columns(&self) -> Columns {
+        Columns { vertex: true }
+    }
+
+    fn rays_per_point(&self) -> u32 {
+        self.0.rays_per_point
+    }
+
+    fn image(&self) -> Option<&ImageSpec> {
+        self.0.image.as_ref()
+    }
+
+    fn max_points(&self, scene: &BuiltScene) -> u64 {
+        scene.receiver_vertices() as u64
+    }
+
+    fn setup(&self, scene: &BuiltScene, _view: Option<&GBuffer>) -> Setup {
+        let est = ao_estimator(&self.0, scene);
+        let offset = est.opts.offset;
+        Setup {
+            points: EvalPoints::vertices(&scene.scene, offset),
+            estimator: Box::new(est),
+            offset,
+        }
+    }
+
+    fn lookup_options(&self, selection: Selection) -> LookupOptions {
+        ao_lookup(&self.0, selection)
+    }
+}
+
+/// Per-pixel AO (Gaitatzes, Andreadis, Papaioannou, Chrysanthou, WSCG 2010): AO at the surface
+/// point of every pixel that sees a receiver.
+pub struct ImageAo(pub AoRender);
+
+impl Kind for ImageAo {
+    fn name(&self) -> &'static str {
+        "image_ao"
+    }
+
+    fn needs(&self) -> Needs {
+        Needs {
+            view: true,
+            ..Needs::default()
+        }
+    }
+
+    fn columns(&self) -> Columns {
+        Columns { vertex: false }
+    }
+
+    fn rays_per_point(&self) -> u32 {
+        self.0.rays_per_point
+    }
+
+    fn image(&self) -> Option<&ImageSpec> {
+        self.0.image.as_ref()
+    }
+
+    fn max_points(&self, _scene: &BuiltScene) -> u64 {
+        self.0
+            .image
+            .as_ref()
+            .map_or(0, |i| i.width as u64 * i.height as u64)
+    }
+
+    fn setup(&self, scene: &BuiltScene, view: Option<&GBuffer>) -> Setup {
+        let est = ao_estimator(&self.0, scene);
+        let offset = est.opts.offset;
+        let view = view.expect("image_ao: validation guarantees an image, and so a G-buffer");
+        Setup {
+            points: EvalPoints::pixels(&scene.scene, view, offset),
+            estimator: Box::new(est),
+            offset,
+        }
+    }
+
+    fn lookup_options(&self, selection: Selection) -> LookupOptions {
+        ao_lookup(&self.0, selection)
+    }
+}
