@@ -6,6 +6,7 @@
 //! `cargo run --release --example intra_bias` writes `results/intra_bias/table.csv` and
 //! `run.json` (Igea, the bunny and the tree; pass model names to choose others).
 use std::sync::Arc;
+use visfield::experiment::metrics::rms_unquantised as rms_vertex;
 use visfield::field::bake::{bake, BakeOptions};
 use visfield::field::lookup::{IntraBias, LookupOptions};
 use visfield::field::scene::{FieldInstance, FieldScene};
@@ -13,7 +14,6 @@ use visfield::field::storage::Precision;
 use visfield::field::{FieldParams, Selection};
 use visfield::geometry::{models::load_model, Similarity};
 use visfield::render::ao::{ao_at_points, AoOptions};
-use visfield::render::image::rms_vertex;
 use visfield::sampling::rays::RaySet;
 use visfield::sampling::{LayoutKind, SphereKind};
 

@@ -440,7 +440,9 @@ fn an_unwritable_output_folder_fails_before_any_work() {
     let file = dir.path().join("a-file");
     std::fs::write(&file, b"").unwrap();
     let t = std::time::Instant::now();
-    let e = run(&ls, &options(file.join("out"))).unwrap_err();
+    let e = run(&ls, &options(file.join("out")))
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("not writable") && e.contains("a-file"), "{e}");
     // Nothing was loaded or baked: the failure is immediate.
     assert!(t.elapsed().as_secs_f64() < 1.0);
@@ -511,7 +513,7 @@ fn translated_spec_is_rebased_to_the_untranslated_scene() {
     {
         assert_eq!(a.transform, b.transform);
     }
-    let cam = visfield::experiment::quickstart::corner_camera();
+    let cam = visfield::render::camera::Camera::corner();
     let moved = visfield::render::camera::Camera {
         eye: cam.eye + Vec3::splat(1e4),
         target: cam.target + Vec3::splat(1e4),
@@ -699,7 +701,7 @@ fn an_unknown_gpu_adapter_is_an_error_naming_the_adapters() {
     let ls = loaded(dir.path(), &text);
     let mut o = options(dir.path().join("out"));
     o.adapter = AdapterPreference::parse("no-such-adapter-xyz");
-    let e = run(&ls, &o).unwrap_err();
+    let e = run(&ls, &o).unwrap_err().to_string();
     assert!(
         e.contains("backend \"gpu\"") && e.contains("no-such-adapter-xyz"),
         "{e}"
@@ -740,4 +742,136 @@ fn the_quick_profile_may_replace_the_backends() {
     assert_eq!(spec.profile(false).backends, [Backend::Cpu, Backend::Gpu]);
     let e = error_of(&both.replace(r#""quick": {}"#, r#""quick": {"backends": ["gpu", "gpu"]}"#));
     assert!(e.contains("quick.backends[1]"), "{e}");
+}
+
+/// Per-pixel AO through the estimator seam: the points are the G-buffer's receiver pixels, the
+/// row has the per-pixel columns only, and the same-ray reference at each pixel is the AO
+/// integral evaluated directly at that pixel's surface point (the runner adds nothing of its
+/// own between the kind and the estimate).
+#[test]
+fn image_ao_evaluates_at_the_receiver_pixels_of_the_gbuffer() {
+    use visfield::render::ao::{ao_at_points, AoOptions};
+    use visfield::render::camera::Camera;
+    use visfield::render::points::{EvalPoints, GBuffer};
+    use visfield::render::primary::{gbuffer, PrimaryScene};
+    use visfield::sampling::rays::RaySet;
+    use visfield::trace::Tracer;
+
+    let dir = tempfile::tempdir().unwrap();
+    let text = tiny(ONE_FIELD, "").replace(
+        r#""render": { "rays_per_point""#,
+        r#""render": { "what": "image_ao", "rays_per_point""#,
+    );
+    let ls = loaded(dir.path(), &text);
+    let out = dir.path().join("out");
+    let report = run(&ls, &options(out.clone())).unwrap();
+    let r = &report.rows[0];
+    assert!(r.rms_vertex.is_none() && r.max_error_vertex.is_none());
+    assert!(r.rms_image.unwrap().is_finite() && r.rms_vs_truth.unwrap().is_finite());
+    // No per-vertex CSV for a per-pixel kind.
+    assert!(!out.join("ao_tiny.csv").exists());
+
+    // The same points and reference, computed here from the scene alone.
+    let scenes = Scenes::build(&ls.spec, &ls.path, "scenes").unwrap();
+    let bs = &scenes.scenes[0];
+    let cam = bs.camera_in_frame(&Camera::corner());
+    let hits = gbuffer(&PrimaryScene::new(&bs.scene), &cam, 32, 32);
+    let receiver_pixels = hits
+        .iter()
+        .filter(|h| h.is_some_and(|h| bs.scene.instances[h.instance as usize].receiver))
+        .count();
+    assert_eq!(r.receiver_points, receiver_pixels);
+    assert!(receiver_pixels > 100 && receiver_pixels < 32 * 32);
+    let opts = AoOptions::for_scene(bs.bounds());
+    let view = GBuffer {
+        hits,
+        width: 32,
+        height: 32,
+    };
+    let at = EvalPoints::pixels(&bs.scene, &view, opts.offset);
+    let tracer = Tracer::new(&bs.scene.caster_triangles());
+    let ao = ao_at_points(&tracer, &at.points, &at.normals, &RaySet::new(4, 1), &opts);
+    let (img, mask) = at.image(&bs.scene, &view, &ao);
+    assert_eq!(mask.iter().filter(|&&m| m).count(), receiver_pixels);
+    let png = image::open(out.join("images/tiny-reference.png"))
+        .unwrap()
+        .to_luma8();
+    for (i, px) in png.pixels().enumerate() {
+        assert_eq!(
+            px.0[0],
+            visfield::render::image::GrayImage::to_u8(img.data[i]),
+            "pixel {i}"
+        );
+    }
+}
+
+/// The tagged `render`: each kind reads its own keys, refuses the unknown ones and the kinds
+/// not in this build, and writes back what it read.
+#[test]
+fn render_specs_are_tagged_by_kind() {
+    use visfield::experiment::kind;
+    use visfield::experiment::spec::{RenderKind, RenderSpec};
+    let s = parse(&tiny(ONE_FIELD, "")).unwrap();
+    // No `what`: vertex AO (the 2008 default).
+    assert_eq!(s.render.kind(), RenderKind::VertexAo);
+    let k = kind::of(&s.render);
+    assert_eq!(
+        (k.name(), k.needs().view, k.columns().vertex),
+        ("vertex_ao", false, true)
+    );
+    let image = tiny(ONE_FIELD, "").replace(
+        r#""render": { "rays_per_point""#,
+        r#""render": { "what": "image_ao", "rays_per_point""#,
+    );
+    let s = parse(&image).unwrap();
+    let k = kind::of(&s.render);
+    assert_eq!(
+        (k.name(), k.needs().view, k.columns().vertex),
+        ("image_ao", true, false)
+    );
+    assert!(!k.needs().normal_field && !k.needs().lights);
+    // Round trip through the wire form.
+    let json = serde_json::to_string(&s.render).unwrap();
+    assert!(json.contains(r#""what":"image_ao""#), "{json}");
+    let back: RenderSpec = serde_json::from_str(&json).unwrap();
+    assert_eq!(back, s.render);
+    // A per-pixel kind without an image, a per-vertex threshold on a per-pixel kind, a kind
+    // not in this build: each refused naming the field.
+    let e = error_of(&image.replace(r#", "image": { "width": 32, "height": 32 }"#, ""));
+    assert!(
+        e.contains("field `render.image`") && e.contains("image_ao"),
+        "{e}"
+    );
+    let e = error_of(&tiny(ONE_FIELD, r#"{ "rms_vertex_max": 9 }"#).replace(
+        r#""render": { "rays_per_point""#,
+        r#""render": { "what": "image_ao", "rays_per_point""#,
+    ));
+    assert!(
+        e.contains("rms_vertex_max") && e.contains("per-vertex"),
+        "{e}"
+    );
+    let e = error_of(&tiny(ONE_FIELD, "").replace(
+        r#""render": { "rays_per_point""#,
+        r#""render": { "what": "shadows", "rays_per_point""#,
+    ));
+    assert!(e.contains("at `render`") && e.contains("shadows"), "{e}");
+}
+
+/// The quickstart is an embedded spec, planned and run by the same runner as the others.
+#[test]
+fn the_quickstart_is_an_embedded_spec() {
+    let ls = visfield::experiment::quickstart::spec().unwrap();
+    assert_eq!(ls.name, "quickstart");
+    let scenes = Scenes::build(&ls.spec, &ls.path, "scenes").unwrap();
+    let plan = Plan::new(
+        &ls.spec,
+        &scenes,
+        PlanLimits {
+            memory_limit: 1 << 30,
+        },
+    )
+    .unwrap();
+    assert_eq!((plan.cells.len(), plan.bakes()), (1, 1));
+    assert!(plan.steps.iter().any(|s| matches!(s, Step::Truth { .. })));
+    assert_eq!(scenes.scenes[0].receiver_vertices(), 3 * 33 * 33);
 }

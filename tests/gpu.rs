@@ -341,9 +341,10 @@ fn field_ao_matches_the_cpu_for_every_precision_layout_and_selection() {
 /// actual (GPU), expected (CPU) and difference (×5) images are written and their folder named.
 #[test]
 fn image_space_field_ao_matches_the_cpu_for_every_precision() {
-    use visfield::experiment::quickstart::corner_camera;
+    use visfield::experiment::metrics::rms_u8;
     use visfield::geometry::{Instance, Scene};
-    use visfield::render::image::{rms_255, GrayImage};
+    use visfield::render::camera::Camera;
+    use visfield::render::image::GrayImage;
     use visfield::render::primary::{gbuffer, PrimaryScene};
     let Some(ctx) = context() else { return };
     let (w, h) = (96u32, 96u32);
@@ -374,7 +375,7 @@ fn image_space_field_ao_matches_the_cpu_for_every_precision() {
                 },
             ],
         };
-        let g = gbuffer(&PrimaryScene::new(&scene), &corner_camera(), w, h);
+        let g = gbuffer(&PrimaryScene::new(&scene), &Camera::corner(), w, h);
         let (mut p, mut n, mut px) = (Vec::new(), Vec::new(), Vec::new());
         for (i, hit) in g.iter().enumerate() {
             if let Some(hit) = hit {
@@ -416,7 +417,7 @@ fn image_space_field_ao_matches_the_cpu_for_every_precision() {
             let (actual, expected) = (image(&gpu_ao), image(&cpu_ao));
             let mut mask = vec![false; (w * h) as usize];
             px.iter().for_each(|&i| mask[i] = true);
-            let rms = rms_255(&actual.data, &expected.data, Some(&mask));
+            let rms = rms_u8(&actual.data, &expected.data, Some(&mask));
             let label = format!("{precision:?} {selection:?}");
             eprintln!("image AO {label}: {} pixels, RMS {rms:.4}/255", px.len());
             if rms > 0.5 {

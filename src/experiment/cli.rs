@@ -300,7 +300,7 @@ fn adapter_preference(flag: Option<&str>) -> crate::gpu::AdapterPreference {
 pub fn main() {
     let cli = Cli::parse();
     let code = match cli.command {
-        Command::Quickstart { out } => report(super::quickstart::run(&out)),
+        Command::Quickstart { out } => report(super::quickstart::run(&out).map_err(String::from)),
         Command::List => list(),
         Command::Stability { out } => report(super::stability::run(&out).map(|_| ())),
         Command::Relief {

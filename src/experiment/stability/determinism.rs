@@ -25,7 +25,7 @@ fn outputs() -> Vec<(&'static str, Vec<u8>)> {
         .collect();
     let ray = raycast_ao(&sc, 8);
     let field = field_ao(&sc, &fields, 8);
-    let cam = crate::experiment::quickstart::corner_camera();
+    let cam = crate::render::camera::Camera::corner();
     let g = gbuffer(&PrimaryScene::new(&sc), &cam, 64, 64);
     let recv = Receivers::of(&sc);
     let (img, _) = shade_vertex_ao(&sc, &g, 64, 64, &recv.split(&sc, &field));
