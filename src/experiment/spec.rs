@@ -335,10 +335,15 @@ pub struct RenderWire {
     pub intra_bias: Option<f32>,
 }
 
-impl TryFrom<RenderWire> for RenderSpec {
-    type Error = String;
+/// A `render` whose kind is not in this build.
+#[derive(Debug, thiserror::Error)]
+#[error("`what`: \"{}\" is not in this build yet; use \"vertex_ao\" or \"image_ao\"", .0.name())]
+pub struct UnbuiltKind(pub RenderKind);
 
-    fn try_from(w: RenderWire) -> Result<RenderSpec, String> {
+impl TryFrom<RenderWire> for RenderSpec {
+    type Error = UnbuiltKind;
+
+    fn try_from(w: RenderWire) -> Result<RenderSpec, UnbuiltKind> {
         let ao = AoRender {
             rays_per_point: w.rays_per_point,
             image: w.image,
@@ -349,10 +354,7 @@ impl TryFrom<RenderWire> for RenderSpec {
         match w.what {
             RenderKind::VertexAo => Ok(RenderSpec::VertexAo(ao)),
             RenderKind::ImageAo => Ok(RenderSpec::ImageAo(ao)),
-            k @ (RenderKind::Shadows | RenderKind::Reflections) => Err(format!(
-                "`what`: \"{}\" is not in this build yet; use \"vertex_ao\" or \"image_ao\"",
-                k.name()
-            )),
+            k @ (RenderKind::Shadows | RenderKind::Reflections) => Err(UnbuiltKind(k)),
         }
     }
 }
