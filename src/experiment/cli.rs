@@ -322,7 +322,7 @@ pub fn main() {
             // The command-made results beside the specs' (same root).
             let root = |name: &str| opts.options(name, opts.out.as_deref()).out;
             super::quickstart::run(&root("quickstart"))?;
-            crate::sampling::report::run(&root("sampling"))
+            super::sampling_report::run(&root("sampling"))
                 .map_err(|e| format!("sampling: {e}"))?;
             let adapter = adapter_preference(opts.adapter.as_deref());
             super::relief::run(&root("relief"), opts.quick, Some(adapter))?;
@@ -337,7 +337,7 @@ pub fn main() {
             .unwrap_or_else(|e| e.exit());
             report(discover::find(&name).and_then(|p| run_one(&p, &parsed.opts, None).map(|_| ())))
         }
-        Command::Sampling { out } => match crate::sampling::report::run(&out) {
+        Command::Sampling { out } => match super::sampling_report::run(&out) {
             Ok(()) => 0,
             Err(e) => {
                 eprintln!("sampling: {e}");

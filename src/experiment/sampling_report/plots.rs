@@ -2,7 +2,7 @@
 //! texel solid angles as heat maps. Rendered into memory with plotters, encoded with `image`
 //! and written atomically.
 
-use super::{HemisphereLayout, LayoutKind, SpherePoints};
+use crate::sampling::{HemisphereLayout, LayoutKind, SphereKind, SpherePoints};
 use crate::io::write_atomic;
 use plotters::prelude::*;
 use plotters::style::colors::colormaps::ViridisRGB;
@@ -24,7 +24,7 @@ fn ensure_font() -> Result<(), String> {
         plotters::style::register_font(
             "sans-serif",
             FontStyle::Normal,
-            include_bytes!("../../assets/fonts/DejaVuSans.ttf"),
+            include_bytes!("../../../assets/fonts/DejaVuSans.ttf"),
         )
         .map_err(|_| "assets/fonts/DejaVuSans.ttf is not a valid font".to_string())
     })
@@ -61,9 +61,9 @@ fn render(
 
 fn title_of(set: &SpherePoints) -> String {
     let name = match set.kind {
-        super::SphereKind::Slater => "Slater hemisphere subdivision",
-        super::SphereKind::LatLong => "Lat-long grid",
-        super::SphereKind::Fibonacci => "Spherical Fibonacci",
+        SphereKind::Slater => "Slater hemisphere subdivision",
+        SphereKind::LatLong => "Lat-long grid",
+        SphereKind::Fibonacci => "Spherical Fibonacci",
     };
     format!(
         "{name}, {} points (Lambert azimuthal equal-area)",

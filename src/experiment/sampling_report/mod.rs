@@ -7,14 +7,16 @@
 //! over five passes of 2·10⁵ seeded queries (the machine is shared, the minimum is the least
 //! disturbed pass).
 
-use super::report_plots::{plot_layout_solid_angle, plot_sphere_points, PlotError};
-use super::{rays::seeded_sphere_direction, HemisphereLayout, LayoutKind, SamplingError};
-use super::{SphereKind, SpherePoints};
+use crate::sampling::rays::seeded_sphere_direction;
+use crate::sampling::{HemisphereLayout, LayoutKind, SamplingError, SphereKind, SpherePoints};
+use plots::{plot_layout_solid_angle, plot_sphere_points, PlotError};
 use crate::io::write_atomic;
 use glam::Vec3;
 use std::hint::black_box;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
+
+mod plots;
 
 /// Seed of the report's query directions.
 const SEED: u64 = 0x5a4d_9e37;
@@ -105,7 +107,7 @@ struct MeasureRow {
 /// Runs the report into `out` (created if missing).
 pub fn run(out: &Path) -> Result<(), ReportError> {
     // Timings depend on what else runs on the machine: the metadata records the load average.
-    let meta = crate::experiment::meta::RunMeta::collect(None);
+    let meta = super::meta::RunMeta::collect(None);
     let dirs: Vec<Vec3> = (0..CHECK_DIRECTIONS as u64)
         .map(|i| seeded_sphere_direction(i, SEED))
         .collect();
