@@ -70,7 +70,6 @@ impl Visibility for Tracer {
 
 pub mod camera;
 pub mod contact;
-pub mod floor;
 pub mod image;
 pub mod primary;
 pub mod receivers;
