@@ -7,7 +7,8 @@ use std::path::Path;
 
 static FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
 
-/// Registers the shipped font as "sans-serif" (once per process).
+/// Registers the shipped font as "sans-serif" (once per process): the one registration of
+/// every plot the harness draws (these, the figures, relief and the sampling report).
 pub fn register_font() {
     static ONCE: std::sync::Once = std::sync::Once::new();
     ONCE.call_once(|| {

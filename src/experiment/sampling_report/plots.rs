@@ -7,7 +7,6 @@ use crate::io::write_atomic;
 use plotters::prelude::*;
 use plotters::style::colors::colormaps::ViridisRGB;
 use std::path::{Path, PathBuf};
-use std::sync::OnceLock;
 
 /// A plot could not be drawn, encoded or written.
 #[derive(Debug, thiserror::Error)]
@@ -15,20 +14,6 @@ use std::sync::OnceLock;
 pub struct PlotError {
     pub path: PathBuf,
     pub msg: String,
-}
-
-/// Registers the bundled DejaVu Sans as plotters' "sans-serif" (no system fonts are used).
-fn ensure_font() -> Result<(), String> {
-    static FONT: OnceLock<Result<(), String>> = OnceLock::new();
-    FONT.get_or_init(|| {
-        plotters::style::register_font(
-            "sans-serif",
-            FontStyle::Normal,
-            include_bytes!("../../../assets/fonts/DejaVuSans.ttf"),
-        )
-        .map_err(|_| "assets/fonts/DejaVuSans.ttf is not a valid font".to_string())
-    })
-    .clone()
 }
 
 /// Draws into a `w × h` RGB buffer with `draw`, then writes it to `path` as PNG.
@@ -41,7 +26,7 @@ fn render(
         path: path.to_path_buf(),
         msg,
     };
-    ensure_font().map_err(err)?;
+    crate::experiment::plot::register_font();
     let mut buf = vec![0u8; (w * h * 3) as usize];
     {
         let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
