@@ -16,7 +16,7 @@
 
 use super::plot::{image_grid, xy_plot, Axes, Series};
 use crate::gpu::{AdapterPreference, GpuContext, GpuError, ReliefKernel};
-use crate::relief::view::{render, render_gpu, Frame, View};
+use crate::relief::view::{render, render_gpu, ReliefFrame, View};
 use crate::relief::{CastParams, Dataset, SafetyZones, PAPER_BOXES};
 use crate::render::image::{rms_255, GrayImage};
 use serde::Serialize;
@@ -30,7 +30,7 @@ pub const ANGLES: [f32; 6] = [0.0, 15.0, 30.0, 45.0, 60.0, 75.0];
 
 /// One rendering.
 #[derive(Clone, Debug, Serialize)]
-pub struct Row {
+pub struct ReliefRow {
     /// `angles` (Tables 1–2) or `rates` (Table 3).
     pub table: &'static str,
     pub dataset: &'static str,
@@ -68,7 +68,7 @@ pub struct Row {
     pub gpu_time_speedup: Option<f64>,
 }
 
-/// The GPU columns of a [`Row`].
+/// The GPU columns of a [`ReliefRow`].
 #[derive(Clone, Debug, Default)]
 struct GpuCells {
     adapter: Option<String>,
@@ -145,14 +145,14 @@ fn view(angle: f32, size: u32, close_up: bool) -> View {
 
 /// Mean fetches over the pixels whose ray entered the prism (those with at least one fetch),
 /// and their count.
-fn fetches_per_entering_pixel(f: &Frame) -> (f64, usize) {
+fn fetches_per_entering_pixel(f: &ReliefFrame) -> (f64, usize) {
     let entering: Vec<u32> = f.fetches.iter().copied().filter(|&c| c > 0).collect();
     let mean = entering.iter().map(|&c| c as f64).sum::<f64>() / entering.len().max(1) as f64;
     (mean, entering.len())
 }
 
 /// RMS (0–255) of `a` against `b` over the pixels hit by either, and the pixels hit by one only.
-fn compare_frames(a: &Frame, b_image: &GrayImage, b_hit: &[bool]) -> (f64, usize) {
+fn compare_frames(a: &ReliefFrame, b_image: &GrayImage, b_hit: &[bool]) -> (f64, usize) {
     let mask: Vec<bool> = a.hit.iter().zip(b_hit).map(|(x, y)| *x || *y).collect();
     let rms = rms_255(&a.image.data, &b_image.data, Some(&mask));
     let mismatches = a.hit.iter().zip(b_hit).filter(|(x, y)| x != y).count();
@@ -236,16 +236,16 @@ fn gpu_context(pref: Option<AdapterPreference>) -> Result<Option<GpuContext>, St
 
 /// Runs the tables at `size`² pixels (`quick`: 64², one timing) and writes `out/`; with `gpu`,
 /// every setting also runs on that adapter (the `gpu_*` columns).
-pub fn run(out: &Path, quick: bool, gpu: Option<AdapterPreference>) -> Result<Vec<Row>, String> {
+pub fn run(out: &Path, quick: bool, gpu: Option<AdapterPreference>) -> Result<Vec<ReliefRow>, String> {
     crate::experiment::run::ensure_writable(out)?;
     let mut meta = crate::experiment::meta::RunMeta::collect(None);
     let ctx = gpu_context(gpu)?;
     let adapter = ctx.as_ref().map(|c| c.adapter_label());
     meta.gpu_adapter = adapter.clone();
     let (size, repeats) = if quick { (64, 1) } else { (256, 3) };
-    let mut rows: Vec<Row> = Vec::new();
+    let mut rows: Vec<ReliefRow> = Vec::new();
     let mut grid: Vec<(GrayImage, Vec<String>)> = Vec::new();
-    let push = |rows: &mut Vec<Row>, mut r: Row| {
+    let push = |rows: &mut Vec<ReliefRow>, mut r: ReliefRow| {
         if let Some(base) = rows.iter().rev().find(|b| {
             b.skips == 0
                 && (
@@ -282,7 +282,7 @@ pub fn run(out: &Path, quick: bool, gpu: Option<AdapterPreference>) -> Result<Ve
                              angles: &[f32],
                              settings: &[(f32, u32)],
                              close_up: bool,
-                             rows: &mut Vec<Row>|
+                             rows: &mut Vec<ReliefRow>|
          -> Result<(), String> {
             for &angle in angles {
                 let v = view(angle, size, close_up);
@@ -313,7 +313,7 @@ pub fn run(out: &Path, quick: bool, gpu: Option<AdapterPreference>) -> Result<Ve
                         );
                         push(
                             rows,
-                            Row {
+                            ReliefRow {
                                 table,
                                 dataset: dset.name(),
                                 view_deg: angle,
@@ -368,7 +368,7 @@ pub fn run(out: &Path, quick: bool, gpu: Option<AdapterPreference>) -> Result<Ve
 
 /// The paper's gains beside ours (its "angel" against our `relief`; its perpendicular and
 /// tangential views against our 0° and 75°).
-fn compare(rows: &[Row]) -> Vec<Comparison> {
+fn compare(rows: &[ReliefRow]) -> Vec<Comparison> {
     let find = |table: &str, d: &str, angle: f32, rate: f32, b: u32, skips: u32| {
         rows.iter().find(|r| {
             (
@@ -440,8 +440,8 @@ fn compare(rows: &[Row]) -> Vec<Comparison> {
     out
 }
 
-fn plots(out: &Path, rows: &[Row], size: u32) -> Result<(), String> {
-    let series = |f: &dyn Fn(&Row) -> f64| -> Vec<Series> {
+fn plots(out: &Path, rows: &[ReliefRow], size: u32) -> Result<(), String> {
+    let series = |f: &dyn Fn(&ReliefRow) -> f64| -> Vec<Series> {
         let mut s = Vec::new();
         for d in Dataset::ALL {
             for skips in 0..=2u32 {

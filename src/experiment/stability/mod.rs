@@ -1,7 +1,7 @@
 //! `experiment stability`: stiff and extreme cases, each compared against an f64 or closed-form
 //! answer.
 //!
-//! Every case is a function returning [`Row`]s (`case, quantity, max_error, tolerance, pass`);
+//! Every case is a function returning [`StabilityRow`]s (`case, quantity, max_error, tolerance, pass`);
 //! [`CASES`] lists them, [`run`] runs them all and writes `cases.csv` and `run.json`, and
 //! `tests/stability.rs` runs each case as a test. The cases:
 //!
@@ -27,7 +27,7 @@ use std::path::Path;
 
 /// One measured quantity of a case.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Row {
+pub struct StabilityRow {
     /// The case (a function in [`CASES`]).
     pub case: String,
     /// What was measured, with its unit.
@@ -40,10 +40,10 @@ pub struct Row {
     pub pass: bool,
 }
 
-impl Row {
+impl StabilityRow {
     /// A row; `pass` is `max_error <= tolerance` with a NaN error failing.
-    pub fn new(case: &str, quantity: impl Into<String>, max_error: f64, tolerance: f64) -> Row {
-        Row {
+    pub fn new(case: &str, quantity: impl Into<String>, max_error: f64, tolerance: f64) -> StabilityRow {
+        StabilityRow {
             case: case.to_string(),
             quantity: quantity.into(),
             max_error,
@@ -54,7 +54,7 @@ impl Row {
 }
 
 /// A case: its name and the function that measures it.
-pub type Case = (&'static str, fn() -> Vec<Row>);
+pub type Case = (&'static str, fn() -> Vec<StabilityRow>);
 
 /// Every case of `experiment stability`, in output order.
 pub const CASES: &[Case] = &[
@@ -77,7 +77,7 @@ pub const CASES: &[Case] = &[
 
 /// Runs every case and writes `out/cases.csv` and `out/run.json` (atomically). Returns the
 /// rows; the error names the failing rows when any case fails (the files are written first).
-pub fn run(out: &Path) -> Result<Vec<Row>, String> {
+pub fn run(out: &Path) -> Result<Vec<StabilityRow>, String> {
     crate::experiment::run::ensure_writable(out)?;
     let meta = crate::experiment::meta::RunMeta::collect(None);
     let mut rows = Vec::new();
