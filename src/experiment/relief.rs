@@ -15,6 +15,7 @@
 //! (the paper's 512²); the "angel" map is replaced by the procedural `relief` map.
 
 use super::plot::{image_grid, xy_plot, Axes, Series};
+use super::{Error, Result, ResultExt};
 use crate::gpu::{AdapterPreference, GpuContext, GpuError, ReliefKernel};
 use crate::relief::view::{render, render_gpu, ReliefFrame, View};
 use crate::relief::{CastParams, Dataset, SafetyZones, PAPER_BOXES};
@@ -169,7 +170,7 @@ fn measure(
     exact: &(GrayImage, Vec<bool>),
     repeats: usize,
     gpu: Option<(&ReliefKernel, &str)>,
-) -> Result<Measured, String> {
+) -> Result<Measured> {
     let mut best = f64::INFINITY;
     let mut frame = None;
     for _ in 0..repeats.max(1) {
@@ -187,8 +188,7 @@ fn measure(
         let mut gpu_frame = None;
         // At least twice: the first dispatch of a kernel also pays its driver-side compile.
         for _ in 0..repeats.max(2) {
-            let (g, timing) =
-                render_gpu(kernel, map, v, p).map_err(|e| format!("relief on the GPU: {e}"))?;
+            let (g, timing) = render_gpu(kernel, map, v, p).context(|| "relief".into())?;
             if let Some(k) = timing.kernel {
                 let k = k.as_secs_f64();
                 kernel_s = Some(kernel_s.map_or(k, |b| b.min(k)));
@@ -219,7 +219,7 @@ fn measure(
 
 /// The GPU device for the relief columns: `None` when not asked for, or (with a note) when
 /// no Vulkan driver is installed; other failures are errors.
-fn gpu_context(pref: Option<AdapterPreference>) -> Result<Option<GpuContext>, String> {
+fn gpu_context(pref: Option<AdapterPreference>) -> Result<Option<GpuContext>> {
     let Some(pref) = pref else { return Ok(None) };
     match GpuContext::new(pref) {
         Ok(c) => Ok(Some(c)),
@@ -230,14 +230,14 @@ fn gpu_context(pref: Option<AdapterPreference>) -> Result<Option<GpuContext>, St
             );
             Ok(None)
         }
-        Err(e) => Err(format!("relief: GPU: {e}")),
+        Err(e) => Err(Error::Gpu(e).context("relief")),
     }
 }
 
 /// Runs the tables at `size`² pixels (`quick`: 64², one timing) and writes `out/`; with `gpu`,
 /// every setting also runs on that adapter (the `gpu_*` columns).
-pub fn run(out: &Path, quick: bool, gpu: Option<AdapterPreference>) -> Result<Vec<ReliefRow>, String> {
-    crate::experiment::run::ensure_writable(out)?;
+pub fn run(out: &Path, quick: bool, gpu: Option<AdapterPreference>) -> Result<Vec<ReliefRow>> {
+    crate::experiment::run::ensure_writable(out).map_err(|m| Error::invalid("relief", m))?;
     let mut meta = crate::experiment::meta::RunMeta::collect(None);
     let ctx = gpu_context(gpu)?;
     let adapter = ctx.as_ref().map(|c| c.adapter_label());
@@ -272,9 +272,7 @@ pub fn run(out: &Path, quick: bool, gpu: Option<AdapterPreference>) -> Result<Ve
         let map = dset.map(MAP_RES);
         let zones = SafetyZones::new(&map, &PAPER_BOXES);
         let kernel = match &ctx {
-            Some(c) => {
-                Some(ReliefKernel::new(c, &map, &zones).map_err(|e| format!("relief: GPU: {e}"))?)
-            }
+            Some(c) => Some(ReliefKernel::new(c, &map, &zones).context(|| "relief".into())?),
             None => None,
         };
         let gpu = kernel.as_ref().zip(adapter.as_deref());
@@ -283,7 +281,7 @@ pub fn run(out: &Path, quick: bool, gpu: Option<AdapterPreference>) -> Result<Ve
                              settings: &[(f32, u32)],
                              close_up: bool,
                              rows: &mut Vec<ReliefRow>|
-         -> Result<(), String> {
+         -> Result<()> {
             for &angle in angles {
                 let v = view(angle, size, close_up);
                 let ex = render(&map, None, &v, None);
@@ -350,8 +348,10 @@ pub fn run(out: &Path, quick: bool, gpu: Option<AdapterPreference>) -> Result<Ve
             run_table("rates", &[45.0], &settings, true, &mut rows)?;
         }
     }
-    super::outputs::write_csv(&out.join("table.csv"), &rows)?;
-    super::outputs::write_csv(&out.join("paper_vs_ours.csv"), &compare(&rows))?;
+    super::outputs::write_csv(&out.join("table.csv"), &rows)
+        .map_err(|m| Error::invalid("relief", m))?;
+    super::outputs::write_csv(&out.join("paper_vs_ours.csv"), &compare(&rows))
+        .map_err(|m| Error::invalid("relief", m))?;
     plots(out, &rows, size)?;
     let cells: Vec<(&GrayImage, Vec<String>)> = grid.iter().map(|(i, c)| (i, c.clone())).collect();
     image_grid(
@@ -360,8 +360,8 @@ pub fn run(out: &Path, quick: bool, gpu: Option<AdapterPreference>) -> Result<Ve
         &cells,
         3,
     )?;
-    crate::io::write_atomic(&out.join("run.json"), meta.to_json().as_bytes())
-        .map_err(|e| format!("{}: {e}", out.join("run.json").display()))?;
+    let json = out.join("run.json");
+    crate::io::write_atomic(&json, meta.to_json().as_bytes()).map_err(Error::io(&json))?;
     println!("relief: {} row(s) -> {}", rows.len(), out.display());
     Ok(rows)
 }
@@ -440,7 +440,7 @@ fn compare(rows: &[ReliefRow]) -> Vec<Comparison> {
     out
 }
 
-fn plots(out: &Path, rows: &[ReliefRow], size: u32) -> Result<(), String> {
+fn plots(out: &Path, rows: &[ReliefRow], size: u32) -> Result<()> {
     let series = |f: &dyn Fn(&ReliefRow) -> f64| -> Vec<Series> {
         let mut s = Vec::new();
         for d in Dataset::ALL {

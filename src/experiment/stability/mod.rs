@@ -22,6 +22,7 @@ pub mod scale;
 pub mod scene_ao;
 pub mod sphere;
 
+use super::{Error, Result};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -42,7 +43,12 @@ pub struct StabilityRow {
 
 impl StabilityRow {
     /// A row; `pass` is `max_error <= tolerance` with a NaN error failing.
-    pub fn new(case: &str, quantity: impl Into<String>, max_error: f64, tolerance: f64) -> StabilityRow {
+    pub fn new(
+        case: &str,
+        quantity: impl Into<String>,
+        max_error: f64,
+        tolerance: f64,
+    ) -> StabilityRow {
         StabilityRow {
             case: case.to_string(),
             quantity: quantity.into(),
@@ -77,8 +83,8 @@ pub const CASES: &[Case] = &[
 
 /// Runs every case and writes `out/cases.csv` and `out/run.json` (atomically). Returns the
 /// rows; the error names the failing rows when any case fails (the files are written first).
-pub fn run(out: &Path) -> Result<Vec<StabilityRow>, String> {
-    crate::experiment::run::ensure_writable(out)?;
+pub fn run(out: &Path) -> Result<Vec<StabilityRow>> {
+    crate::experiment::run::ensure_writable(out).map_err(|m| Error::invalid("stability", m))?;
     let meta = crate::experiment::meta::RunMeta::collect(None);
     let mut rows = Vec::new();
     for (name, case) in CASES {
@@ -92,9 +98,10 @@ pub fn run(out: &Path) -> Result<Vec<StabilityRow>, String> {
         );
         rows.extend(r);
     }
-    crate::experiment::outputs::write_csv(&out.join("cases.csv"), &rows)?;
-    crate::io::write_atomic(&out.join("run.json"), meta.to_json().as_bytes())
-        .map_err(|e| format!("{}: {e}", out.join("run.json").display()))?;
+    crate::experiment::outputs::write_csv(&out.join("cases.csv"), &rows)
+        .map_err(|m| Error::invalid("stability", m))?;
+    let json = out.join("run.json");
+    crate::io::write_atomic(&json, meta.to_json().as_bytes()).map_err(Error::io(&json))?;
     let failed: Vec<String> = rows
         .iter()
         .filter(|r| !r.pass)
@@ -114,7 +121,10 @@ pub fn run(out: &Path) -> Result<Vec<StabilityRow>, String> {
     if failed.is_empty() {
         Ok(rows)
     } else {
-        Err(format!("failing cases:\n  {}", failed.join("\n  ")))
+        Err(Error::invalid(
+            "stability",
+            format!("failing cases:\n  {}", failed.join("\n  ")),
+        ))
     }
 }
 
