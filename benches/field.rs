@@ -4,12 +4,12 @@
 //! tracer's raw closest-hit throughput on the same rays. Field rows go through
 //! `ao_at_points`, which batches each vertex's rays (`Visibility::occluded_many`); the
 //! `*_per_ray` rows run the same lookups one ray at a time (`PerRay`). The `floor_*` rows time
-//! `render::floor`'s backends on the same rays: the AO pass with a free query, and with only the
-//! bounding-sphere cull and crossing that every lookup starts with; ray casting's time over
-//! theirs bounds the speed-up any field lookup can reach here. The `entering_*` rows take the
-//! same AO rays but only those that enter the caster's bounding sphere (the rays whose answer
-//! comes from the field), so that their ratio is the lookup's against ray casting where the
-//! field is actually read.
+//! the cost-floor backends of `benches/support/floor.rs` on the same rays: the AO pass with a
+//! free query, and with only the bounding-sphere cull and crossing that every lookup starts
+//! with; ray casting's time over theirs bounds the speed-up any field lookup can reach here.
+//! The `entering_*` rows take the same AO rays but only those that enter the caster's bounding
+//! sphere (the rays whose answer comes from the field), so that their ratio is the lookup's
+//! against ray casting where the field is actually read.
 //!
 //! `cargo bench --bench field`. Casters: stanford-bunny_39k (38,889 triangles), dragon
 //! (100,000) and a 261,120-triangle supershape (the 2010 paper's count). Real models are found
@@ -30,12 +30,15 @@ use visfield::field::{FieldParams, Precision, Selection};
 use visfield::geometry::procedural::{over_corner, supershape, Supershape};
 use visfield::geometry::{models, Mesh};
 use visfield::render::ao::{ao_at_points, AoOptions};
-use visfield::render::floor::{NoQuery, SphereCull};
 use visfield::render::receivers::Receivers;
 use visfield::render::{PerRay, Visibility};
 use visfield::sampling::rays::RaySet;
 use visfield::sampling::{Frame, HemisphereLayout, LayoutKind, SphereKind, SpherePoints};
 use visfield::trace::Tracer;
+
+#[path = "support/floor.rs"]
+mod floor;
+use floor::{NoQuery, SphereCull};
 
 fn casters() -> Vec<(String, Mesh)> {
     let mut v = Vec::new();
@@ -72,7 +75,7 @@ fn ao_lookup_vs_raycast(c: &mut Criterion) {
             let tracer = tracer.get_or_init(|| Tracer::new(&scene_tris()));
             b.iter(|| ao_at_points(tracer, &recv.points, &recv.normals, &rays, &opts))
         });
-        // Cost floor: the AO pass with a query that costs nothing (render::floor).
+        // Cost floor: the AO pass with a query that costs nothing (support/floor.rs).
         group.bench_function("floor_no_query", |b| {
             b.iter(|| ao_at_points(&NoQuery, &recv.points, &recv.normals, &rays, &opts))
         });

@@ -1,14 +1,14 @@
 //! `experiment stability`: every stiff and extreme case passes (one test per case), and the
 //! command writes its table.
 
-use visfield::experiment::stability::{self, Row, CASES};
+use visfield::experiment::stability::{self, StabilityRow, CASES};
 
 fn run_case(name: &str) {
     let (_, case) = CASES
         .iter()
         .find(|(n, _)| *n == name)
         .unwrap_or_else(|| panic!("no case {name}"));
-    let rows: Vec<Row> = case();
+    let rows: Vec<StabilityRow> = case();
     assert!(!rows.is_empty(), "{name}: no rows");
     let failing: Vec<_> = rows.iter().filter(|r| !r.pass).collect();
     assert!(failing.is_empty(), "{name}: failing rows {failing:#?}");
@@ -88,8 +88,8 @@ fn position_aware_offset_removes_self_intersection() {
 /// A failing row is a failure: NaN errors and errors above the tolerance do not pass.
 #[test]
 fn rows_fail_above_tolerance_and_on_nan() {
-    assert!(Row::new("c", "q", 1.0, 1.0).pass);
-    assert!(!Row::new("c", "q", 1.0 + 1e-12, 1.0).pass);
-    assert!(!Row::new("c", "q", f64::NAN, 1.0).pass);
+    assert!(StabilityRow::new("c", "q", 1.0, 1.0).pass);
+    assert!(!StabilityRow::new("c", "q", 1.0 + 1e-12, 1.0).pass);
+    assert!(!StabilityRow::new("c", "q", f64::NAN, 1.0).pass);
     assert!(stability::max_of_for_tests(&[0.5, f64::NAN]).is_nan());
 }

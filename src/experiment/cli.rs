@@ -3,6 +3,7 @@
 use super::discover;
 use super::fields::FieldSupply;
 use super::run::{LoadedSpec, RunOptions};
+use super::Result;
 use clap::{Args, Parser, Subcommand};
 use std::path::{Path, PathBuf};
 
@@ -170,12 +171,8 @@ impl RunArgs {
 }
 
 /// Runs one spec file; prints the plan on a dry run.
-fn run_one(
-    path: &Path,
-    args: &RunArgs,
-    parent: Option<&Path>,
-) -> Result<super::run::RunReport, String> {
-    let ls = LoadedSpec::load(path).map_err(|e| e.to_string())?;
+fn run_one(path: &Path, args: &RunArgs, parent: Option<&Path>) -> Result<super::run::RunReport> {
+    let ls = LoadedSpec::load(path)?;
     let report = super::run::run(&ls, &args.options(&ls.name, parent))?;
     if args.dry_run {
         print!("{}", report.plan_text);
@@ -183,14 +180,9 @@ fn run_one(
     Ok(report)
 }
 
-fn list() -> i32 {
-    let paths = match discover::spec_paths() {
-        Ok(p) => p,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return 1;
-        }
-    };
+/// Lists the specs; exit code 1 when one is invalid.
+fn list() -> Result<i32> {
+    let paths = discover::spec_paths()?;
     let mut code = 0;
     for p in paths {
         match LoadedSpec::load(&p) {
@@ -201,21 +193,19 @@ fn list() -> i32 {
             }
         }
     }
-    code
+    Ok(code)
 }
 
-fn check(names: &[String], args: &RunArgs) -> i32 {
-    let paths: Result<Vec<PathBuf>, String> = if names.is_empty() {
-        discover::spec_paths()
+/// Runs the specs and checks their thresholds; exit code 1 naming each failure (a cell past
+/// its threshold or a spec that failed to run).
+fn check(names: &[String], args: &RunArgs) -> Result<i32> {
+    let paths: Vec<PathBuf> = if names.is_empty() {
+        discover::spec_paths()?
     } else {
-        names.iter().map(|n| discover::find(n)).collect()
-    };
-    let paths = match paths {
-        Ok(p) => p,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return 1;
-        }
+        names
+            .iter()
+            .map(|n| discover::find(n))
+            .collect::<Result<_>>()?
     };
     let parent = args.out.clone().unwrap_or_else(|| {
         std::env::temp_dir().join(if args.quick {
@@ -245,10 +235,10 @@ fn check(names: &[String], args: &RunArgs) -> i32 {
     for f in &failed {
         println!("FAIL {f}");
     }
-    i32::from(!failed.is_empty())
+    Ok(i32::from(!failed.is_empty()))
 }
 
-fn plots(names: &[String], quick: bool, dir: Option<&Path>) -> Result<(), String> {
+fn plots(names: &[String], quick: bool, dir: Option<&Path>) -> Result<()> {
     let root = PathBuf::from(if quick { "results/quick" } else { "results" });
     let dirs: Vec<PathBuf> = match (dir, names.is_empty()) {
         (Some(d), _) => vec![d.to_path_buf()],
@@ -279,16 +269,6 @@ fn plots(names: &[String], quick: bool, dir: Option<&Path>) -> Result<(), String
     Ok(())
 }
 
-fn report(r: Result<(), String>) -> i32 {
-    match r {
-        Ok(()) => 0,
-        Err(e) => {
-            eprintln!("error: {e}");
-            1
-        }
-    }
-}
-
 /// The adapter a `--adapter` flag names, else `$VISFIELD_ADAPTER`'s, else auto.
 fn adapter_preference(flag: Option<&str>) -> crate::gpu::AdapterPreference {
     flag.map_or_else(
@@ -297,12 +277,21 @@ fn adapter_preference(flag: Option<&str>) -> crate::gpu::AdapterPreference {
     )
 }
 
-pub fn main() {
-    let cli = Cli::parse();
-    let code = match cli.command {
-        Command::Quickstart { out } => report(super::quickstart::run(&out).map_err(String::from)),
-        Command::List => list(),
-        Command::Stability { out } => report(super::stability::run(&out).map(|_| ())),
+/// Parses the command line and runs it: the exit code of a command that reports its own
+/// failures (`list`, `check`, 0 elsewhere), or the error for the caller to print
+/// (`src/bin/experiment.rs`, with [`Error::chain`]).
+pub fn main() -> Result<i32> {
+    run(Cli::parse())
+}
+
+/// Runs a parsed command line (see [`main`]).
+pub fn run(cli: Cli) -> Result<i32> {
+    match cli.command {
+        Command::Quickstart { out } => super::quickstart::run(&out)?,
+        Command::List => return list(),
+        Command::Stability { out } => {
+            super::stability::run(&out)?;
+        }
         Command::Relief {
             out,
             quick,
@@ -310,11 +299,13 @@ pub fn main() {
             no_gpu,
         } => {
             let gpu = (!no_gpu).then(|| adapter_preference(adapter.as_deref()));
-            report(super::relief::run(&out, quick, gpu).map(|_| ()))
+            super::relief::run(&out, quick, gpu)?;
         }
-        Command::Run { spec, opts } => report(run_one(&spec, &opts, None).map(|_| ())),
-        Command::Check { names, opts } => check(&names, &opts),
-        Command::All { opts } => report((|| {
+        Command::Run { spec, opts } => {
+            run_one(&spec, &opts, None)?;
+        }
+        Command::Check { names, opts } => return check(&names, &opts),
+        Command::All { opts } => {
             for p in discover::spec_paths()? {
                 let parent = opts.out.clone();
                 run_one(&p, &opts, parent.as_deref())?;
@@ -322,28 +313,23 @@ pub fn main() {
             // The command-made results beside the specs' (same root).
             let root = |name: &str| opts.options(name, opts.out.as_deref()).out;
             super::quickstart::run(&root("quickstart"))?;
-            crate::sampling::report::run(&root("sampling"))
-                .map_err(|e| format!("sampling: {e}"))?;
+            super::sampling_report::run(&root("sampling")).map_err(|e| e.context("sampling"))?;
             let adapter = adapter_preference(opts.adapter.as_deref());
             super::relief::run(&root("relief"), opts.quick, Some(adapter))?;
-            super::stability::run(&root("stability")).map(|_| ())
-        })()),
-        Command::Plots { names, quick, dir } => report(plots(&names, quick, dir.as_deref())),
+            super::stability::run(&root("stability"))?;
+        }
+        Command::Plots { names, quick, dir } => plots(&names, quick, dir.as_deref())?,
         Command::Named(args) => {
             let name = args.first().cloned().unwrap_or_default();
             let parsed = NamedRun::try_parse_from(
                 std::iter::once(format!("experiment {name}")).chain(args.into_iter().skip(1)),
             )
             .unwrap_or_else(|e| e.exit());
-            report(discover::find(&name).and_then(|p| run_one(&p, &parsed.opts, None).map(|_| ())))
+            run_one(&discover::find(&name)?, &parsed.opts, None)?;
         }
-        Command::Sampling { out } => match crate::sampling::report::run(&out) {
-            Ok(()) => 0,
-            Err(e) => {
-                eprintln!("sampling: {e}");
-                1
-            }
-        },
-    };
-    std::process::exit(code);
+        Command::Sampling { out } => {
+            super::sampling_report::run(&out).map_err(|e| e.context("sampling"))?
+        }
+    }
+    Ok(0)
 }

@@ -1,6 +1,7 @@
 //! Finding specs by name: `experiments/NAME.json`, in `$VISFIELD_EXPERIMENTS`, else
 //! `experiments/` under the current folder, else under the crate root.
 
+use super::{Error, Result};
 use std::path::{Path, PathBuf};
 
 /// The environment variable naming the spec folder.
@@ -19,9 +20,9 @@ pub fn experiments_dir() -> PathBuf {
 }
 
 /// Every `*.json` in the spec folder, sorted by name.
-pub fn spec_paths() -> Result<Vec<PathBuf>, String> {
+pub fn spec_paths() -> Result<Vec<PathBuf>> {
     let dir = experiments_dir();
-    let entries = std::fs::read_dir(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let entries = std::fs::read_dir(&dir).map_err(Error::io(&dir))?;
     let mut v: Vec<PathBuf> = entries
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| p.extension().is_some_and(|x| x == "json"))
@@ -39,7 +40,7 @@ pub fn name_of(path: &Path) -> String {
 
 /// The spec called `name`, or a path given as such (anything ending in `.json`); an unknown
 /// name lists the known ones.
-pub fn find(name: &str) -> Result<PathBuf, String> {
+pub fn find(name: &str) -> Result<PathBuf> {
     if name.ends_with(".json") {
         return Ok(PathBuf::from(name));
     }
@@ -49,11 +50,14 @@ pub fn find(name: &str) -> Result<PathBuf, String> {
         .cloned()
         .ok_or_else(|| {
             let known: Vec<String> = all.iter().map(|p| name_of(p)).collect();
-            format!(
-                "unknown experiment `{name}` (no {}/{name}.json); known: {}; commands: list, \
-                 run, check, all, plots, quickstart",
-                experiments_dir().display(),
-                known.join(", ")
+            Error::invalid(
+                format!("unknown experiment `{name}`"),
+                format!(
+                    "no {}/{name}.json; known: {}; commands: list, run, check, all, plots, \
+                     quickstart",
+                    experiments_dir().display(),
+                    known.join(", ")
+                ),
             )
         })
 }

@@ -8,6 +8,7 @@ use crate::field::FieldError;
 use crate::geometry::models::ModelError;
 use crate::geometry::GeometryError;
 use crate::gpu::GpuError;
+use crate::sampling::SamplingError;
 use std::path::{Path, PathBuf};
 
 /// An error of the experiment harness.
@@ -37,6 +38,13 @@ pub enum Error {
         #[source]
         source: serde_json::Error,
     },
+    /// An image (PNG) that cannot be encoded or read back.
+    #[error("{}: {source}", path.display())]
+    Image {
+        path: PathBuf,
+        #[source]
+        source: image::ImageError,
+    },
     /// A plot that could not be drawn.
     #[error("{}: {message}", path.display())]
     Plot { path: PathBuf, message: String },
@@ -56,6 +64,13 @@ pub enum Error {
         what: String,
         #[source]
         source: CacheError,
+    },
+    /// A sampling pattern (sphere set, hemisphere layout) with impossible parameters.
+    #[error("{what}: {source}")]
+    Sampling {
+        what: String,
+        #[source]
+        source: SamplingError,
     },
     /// A model from the registry.
     #[error(transparent)]
@@ -108,6 +123,71 @@ impl Error {
         }
     }
 
+    /// An image error on `path`.
+    pub fn image(path: &Path) -> impl Fn(image::ImageError) -> Error + '_ {
+        move |source| Error::Image {
+            path: path.to_path_buf(),
+            source,
+        }
+    }
+
+    /// A plot of `path` that could not be drawn (plotters' errors carry no common type).
+    pub fn plot<E: std::fmt::Display>(path: &Path) -> impl Fn(E) -> Error + '_ {
+        move |e| Error::Plot {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        }
+    }
+
+    /// A field error about `what` (a mesh and its parameters).
+    pub fn field(what: impl Into<String>) -> impl FnOnce(FieldError) -> Error {
+        move |source| Error::Field {
+            what: what.into(),
+            source,
+        }
+    }
+
+    /// A cache error about `what` (a cache file).
+    pub fn cache(what: impl Into<String>) -> impl FnOnce(CacheError) -> Error {
+        move |source| Error::Cache {
+            what: what.into(),
+            source,
+        }
+    }
+
+    /// A geometry error about `what` (a mesh).
+    pub fn geometry(what: impl Into<String>) -> impl FnOnce(GeometryError) -> Error {
+        move |source| Error::Geometry {
+            what: what.into(),
+            source,
+        }
+    }
+
+    /// A sampling error about `what` (a sphere set or layout).
+    pub fn sampling(what: impl Into<String>) -> impl FnOnce(SamplingError) -> Error {
+        move |source| Error::Sampling {
+            what: what.into(),
+            source,
+        }
+    }
+
+    /// The message with every source not already part of it, joined by `: `. The variants
+    /// that wrap a source print it in their own message, so for them this is the message;
+    /// a source whose text is missing (an opaque wrapper) is appended.
+    pub fn chain(&self) -> String {
+        let mut text = self.to_string();
+        let mut source = std::error::Error::source(self);
+        while let Some(s) = source {
+            let t = s.to_string();
+            if !text.contains(&t) {
+                text.push_str(": ");
+                text.push_str(&t);
+            }
+            source = s.source();
+        }
+        text
+    }
+
     /// A refused value.
     pub fn invalid(what: impl Into<String>, message: impl Into<String>) -> Error {
         Error::Invalid {
@@ -134,19 +214,5 @@ pub trait ResultExt<T> {
 impl<T, E: Into<Error>> ResultExt<T> for std::result::Result<T, E> {
     fn context(self, context: impl FnOnce() -> String) -> Result<T> {
         self.map_err(|e| e.into().context(context()))
-    }
-}
-
-// TODO(layering-merge): remove once every harness function returns `Result`.
-impl From<Error> for String {
-    fn from(e: Error) -> String {
-        e.to_string()
-    }
-}
-
-// TODO(layering-merge): remove once every harness function returns `Result`.
-impl From<String> for Error {
-    fn from(message: String) -> Error {
-        Error::invalid("experiment", message)
     }
 }

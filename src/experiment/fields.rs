@@ -7,6 +7,7 @@
 
 use super::progress;
 use super::scenes::LoadedMesh;
+use super::{Error, Result};
 use crate::field::bake::{bake, BakeOptions, BakeStats};
 use crate::field::cache::{self, CacheKey};
 use crate::field::{FieldParams, Precision, Storage, VisibilityField};
@@ -82,7 +83,7 @@ impl FieldSupply {
 
     /// The field of `mesh` with `params`: from the cache when a valid entry exists, else baked
     /// (with a progress bar) and cached when small enough.
-    pub fn obtain(&self, mesh: &LoadedMesh, params: FieldParams) -> Result<Supplied, String> {
+    pub fn obtain(&self, mesh: &LoadedMesh, params: FieldParams) -> Result<Supplied> {
         let label = format!(
             "bake {} {} × {}² {}",
             mesh.label,
@@ -115,7 +116,7 @@ impl FieldSupply {
             memory_limit: self.memory_limit,
             progress: Some(&pb),
         };
-        let (field, stats) = bake(&mesh.mesh, params, &opts).map_err(|e| e.to_string())?;
+        let (field, stats) = bake(&mesh.mesh, params, &opts).map_err(Error::field(&label))?;
         pb.finish_and_clear();
         let seconds = stats.seconds + stats.bvh_seconds;
         eprintln!(
@@ -146,8 +147,8 @@ fn save(
     key: &CacheKey,
     field: &VisibilityField,
     stats: &BakeStats,
-) -> Result<(), String> {
-    cache::save(path, key, field).map_err(|e| e.to_string())?;
+) -> Result<()> {
+    cache::save(path, key, field).map_err(Error::cache("field cache"))?;
     let record = BakeRecord {
         seconds: stats.seconds,
         bvh_seconds: stats.bvh_seconds,
@@ -157,7 +158,7 @@ fn save(
     };
     let rp = record_path(path);
     let json = serde_json::to_vec_pretty(&record).expect("record serialises");
-    crate::io::write_atomic(&rp, &json).map_err(|e| format!("{}: {e}", rp.display()))
+    crate::io::write_atomic(&rp, &json).map_err(Error::io(&rp))
 }
 
 /// The field `f32` stored at precision `to`. Bit-identical to baking at `to`: the bake stores

@@ -24,6 +24,7 @@ use super::outputs::{read_csv, FieldSweepRow, Row, SweepRow};
 use super::plan::selection_name;
 use super::plot::{image_grid, xy_plot, Axes, HLine, Series};
 use super::spec::Backend;
+use super::{Error, Result};
 use crate::render::image::GrayImage;
 use std::path::Path;
 
@@ -69,14 +70,14 @@ fn key(rows: &[Row], r: &Row, skip: &[&str]) -> String {
 }
 
 /// Redraws every plot of the run in `out`.
-pub fn draw_all(out: &Path, title: &str) -> Result<(), String> {
-    let rows: Vec<Row> = read_csv(&out.join("table.csv"))?;
+pub fn draw_all(out: &Path, title: &str) -> Result<()> {
+    let rows: Vec<Row> = read_table(&out.join("table.csv"))?;
     if rows.is_empty() {
         return Ok(());
     }
     let sweep_path = out.join("raycast_sweep.csv");
     let sweep: Vec<SweepRow> = if sweep_path.exists() {
-        read_csv(&sweep_path)?
+        read_table(&sweep_path)?
     } else {
         Vec::new()
     };
@@ -175,7 +176,7 @@ fn pareto_same_rays(
     sweep: &[SweepRow],
     m: fn(&Row) -> Option<f64>,
     m_label: &str,
-) -> Result<(), String> {
+) -> Result<()> {
     let mut series: Vec<Series> = Vec::new();
     for r in rows {
         let label = format!(
@@ -214,15 +215,10 @@ fn pareto_same_rays(
 /// The error-against-time plot against the converged reference: every field setting (with
 /// more rays per point where `field_sweep.csv` has them), ray casting at every swept ray count,
 /// and the reference's own noise floor.
-fn pareto_vs_truth(
-    out: &Path,
-    title: &str,
-    rows: &[Row],
-    sweep: &[SweepRow],
-) -> Result<(), String> {
+fn pareto_vs_truth(out: &Path, title: &str, rows: &[Row], sweep: &[SweepRow]) -> Result<()> {
     let fs_path = out.join("field_sweep.csv");
     let field_sweep: Vec<FieldSweepRow> = if fs_path.exists() {
-        read_csv(&fs_path)?
+        read_table(&fs_path)?
     } else {
         Vec::new()
     };
@@ -341,10 +337,13 @@ fn raycast_series(sweep: &[SweepRow], y: impl Fn(&SweepRow) -> Option<f64>) -> V
     series
 }
 
-fn load_png(path: &Path) -> Result<GrayImage, String> {
-    let img = image::open(path)
-        .map_err(|e| format!("{}: {e}", path.display()))?
-        .to_luma8();
+/// The rows of one of the run's tables.
+fn read_table<T: serde::de::DeserializeOwned>(path: &Path) -> Result<Vec<T>> {
+    read_csv(path)
+}
+
+fn load_png(path: &Path) -> Result<GrayImage> {
+    let img = image::open(path).map_err(Error::image(path))?.to_luma8();
     Ok(GrayImage {
         width: img.width(),
         height: img.height(),
@@ -360,7 +359,7 @@ fn grids(
     rows: &[Row],
     sweep: &[SweepRow],
     m: fn(&Row) -> Option<f64>,
-) -> Result<(), String> {
+) -> Result<()> {
     let with_images: Vec<&Row> = rows.iter().filter(|r| !r.image.is_empty()).collect();
     if with_images.is_empty() {
         return Ok(());

@@ -4,7 +4,8 @@
 //! field baked once, the reference once per scene and ray set, fields released as soon as their
 //! cells are done) → the runner ([`run`]) with fields from the cache or the bake ([`fields`]) on
 //! a backend ([`backend`]) → metrics ([`metrics`]), tables ([`outputs`]), plots ([`figures`]) and
-//! thresholds ([`check`]).
+//! thresholds ([`check`]). `experiment sampling` measures the sampling patterns alone
+//! ([`sampling_report`]).
 
 pub mod backend;
 pub mod backend_gpu;
@@ -24,6 +25,7 @@ pub mod progress;
 pub mod quickstart;
 pub mod relief;
 pub mod run;
+pub mod sampling_report;
 pub mod scenes;
 pub mod spec;
 pub mod stability;

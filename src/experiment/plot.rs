@@ -1,13 +1,15 @@
 //! Plots (plotters, PNG, with the DejaVu Sans font shipped in `assets/fonts`, so no system fonts
 //! are needed): error-against-time Pareto plots, line plots and captioned image grids.
 
+use super::{Error, Result};
 use crate::render::image::GrayImage;
 use plotters::prelude::*;
 use std::path::Path;
 
 static FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
 
-/// Registers the shipped font as "sans-serif" (once per process).
+/// Registers the shipped font as "sans-serif" (once per process): the one registration of
+/// every plot the harness draws (these, the figures, relief and the sampling report).
 pub fn register_font() {
     static ONCE: std::sync::Once = std::sync::Once::new();
     ONCE.call_once(|| {
@@ -16,11 +18,7 @@ pub fn register_font() {
     });
 }
 
-type PlotResult = Result<(), String>;
-
-fn err<E: std::fmt::Display>(path: &Path) -> impl Fn(E) -> String + '_ {
-    move |e| format!("{}: {e}", path.display())
-}
+type PlotResult = Result<()>;
 
 /// One labelled series of (x, y) points.
 #[derive(Clone, Debug)]
@@ -82,7 +80,7 @@ pub fn xy_plot(path: &Path, axes: &Axes, series: &[Series], hlines: &[HLine]) ->
     let mut buf = vec![0u8; width as usize * 700 * 3];
     {
         let root = BitMapBackend::with_buffer(&mut buf, (width, 700)).into_drawing_area();
-        root.fill(&WHITE).map_err(err(path))?;
+        root.fill(&WHITE).map_err(Error::plot(path))?;
         let (plot, side) = root.split_horizontally(1000);
         macro_rules! draw {
             ($chart:expr) => {{
@@ -96,7 +94,7 @@ pub fn xy_plot(path: &Path, axes: &Axes, series: &[Series], hlines: &[HLine]) ->
                     .y_label_formatter(&|v| tick(*v))
                     .light_line_style(BLACK.mix(0.04))
                     .draw()
-                    .map_err(err(path))?;
+                    .map_err(Error::plot(path))?;
                 for (i, s) in series.iter().enumerate() {
                     let color = Palette99::pick(i).to_rgba();
                     let mut pts = s.points.clone();
@@ -105,11 +103,11 @@ pub fn xy_plot(path: &Path, axes: &Axes, series: &[Series], hlines: &[HLine]) ->
                         pts.sort_by(|a, b| a.0.total_cmp(&b.0));
                         chart
                             .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))
-                            .map_err(err(path))?;
+                            .map_err(Error::plot(path))?;
                     }
                     chart
                         .draw_series(pts.iter().map(|&p| Circle::new(p, 5, color.filled())))
-                        .map_err(err(path))?
+                        .map_err(Error::plot(path))?
                         .label(s.label.as_str())
                         .legend(move |(x, y)| Circle::new((x + 10, y), 5, color.filled()));
                 }
@@ -122,7 +120,7 @@ pub fn xy_plot(path: &Path, axes: &Axes, series: &[Series], hlines: &[HLine]) ->
                             6,
                             style,
                         ))
-                        .map_err(err(path))?
+                        .map_err(Error::plot(path))?
                         .label(h.label.as_str())
                         .legend(move |(x, y)| {
                             PathElement::new(vec![(x, y), (x + 20, y)], BLACK.mix(0.6))
@@ -136,7 +134,7 @@ pub fn xy_plot(path: &Path, axes: &Axes, series: &[Series], hlines: &[HLine]) ->
                         .label_font(("sans-serif", 15))
                         .position(legend_corner.clone())
                         .draw()
-                        .map_err(err(path))?;
+                        .map_err(Error::plot(path))?;
                 }
             }};
         }
@@ -154,9 +152,9 @@ pub fn xy_plot(path: &Path, axes: &Axes, series: &[Series], hlines: &[HLine]) ->
                 } else {
                     side.draw(&PathElement::new(vec![(2, y), (22, y)], BLACK.mix(0.6)))
                 }
-                .map_err(err(path))?;
+                .map_err(Error::plot(path))?;
                 side.draw(&Text::new(label.as_str(), (26, y - 9), ("sans-serif", 15)))
-                    .map_err(err(path))?;
+                    .map_err(Error::plot(path))?;
             }
         }
         let mut builder = ChartBuilder::on(&plot);
@@ -168,20 +166,20 @@ pub fn xy_plot(path: &Path, axes: &Axes, series: &[Series], hlines: &[HLine]) ->
         match (axes.log_x, axes.log_y) {
             (true, true) => draw!(builder
                 .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
-                .map_err(err(path))?),
+                .map_err(Error::plot(path))?),
             (true, false) => draw!(builder
                 .build_cartesian_2d((x0..x1).log_scale(), y0..y1)
-                .map_err(err(path))?),
+                .map_err(Error::plot(path))?),
             (false, true) => draw!(builder
                 .build_cartesian_2d(x0..x1, (y0..y1).log_scale())
-                .map_err(err(path))?),
+                .map_err(Error::plot(path))?),
             (false, false) => {
                 draw!(builder
                     .build_cartesian_2d(x0..x1, y0..y1)
-                    .map_err(err(path))?)
+                    .map_err(Error::plot(path))?)
             }
         }
-        root.present().map_err(err(path))?;
+        root.present().map_err(Error::plot(path))?;
     }
     write_rgb_png(path, width, 700, buf)
 }
@@ -242,12 +240,14 @@ fn tick(v: f64) -> String {
     }
 }
 
-fn write_rgb_png(path: &Path, w: u32, h: u32, buf: Vec<u8>) -> PlotResult {
-    let img = image::RgbImage::from_raw(w, h, buf).ok_or("buffer size mismatch")?;
+/// Encodes a `w × h` RGB buffer as PNG and writes it to `path` atomically.
+pub fn write_rgb_png(path: &Path, w: u32, h: u32, buf: Vec<u8>) -> PlotResult {
+    let img = image::RgbImage::from_raw(w, h, buf)
+        .ok_or_else(|| Error::plot(path)("buffer size mismatch"))?;
     let mut out = std::io::Cursor::new(Vec::new());
     img.write_to(&mut out, image::ImageFormat::Png)
-        .map_err(err(path))?;
-    crate::io::write_atomic(path, &out.into_inner()).map_err(err(path))
+        .map_err(Error::image(path))?;
+    crate::io::write_atomic(path, &out.into_inner()).map_err(Error::io(path))
 }
 
 /// A captioned grid of grey images (the papers' figure layout: numbers under each image).
@@ -286,17 +286,17 @@ pub fn image_grid(
         let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
         let font = ("sans-serif", 22).into_font().color(&BLACK);
         root.draw_text(title, &font, (pad as i32, 10))
-            .map_err(err(path))?;
+            .map_err(Error::plot(path))?;
         let small = ("sans-serif", 15).into_font().color(&BLACK);
         for (i, (_, caption)) in cells.iter().enumerate() {
             let x0 = pad + (i % columns) as u32 * (cw + pad);
             let y0 = title_h + (i / columns) as u32 * (ch + caption_h + pad) + ch + 4;
             for (l, line) in caption.iter().enumerate() {
                 root.draw_text(line, &small, (x0 as i32, (y0 + 20 * l as u32) as i32))
-                    .map_err(err(path))?;
+                    .map_err(Error::plot(path))?;
             }
         }
-        root.present().map_err(err(path))?;
+        root.present().map_err(Error::plot(path))?;
     }
     write_rgb_png(path, w, h, buf)
 }

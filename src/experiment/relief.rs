@@ -15,9 +15,10 @@
 //! (the paper's 512²); the "angel" map is replaced by the procedural `relief` map.
 
 use super::plot::{image_grid, xy_plot, Axes, Series};
-use crate::experiment::metrics::rms_u8 as rms_255;
+use super::{Error, Result, ResultExt};
+use crate::experiment::metrics::rms_u8;
 use crate::gpu::{AdapterPreference, GpuContext, GpuError, ReliefKernel};
-use crate::relief::view::{render, render_gpu, Frame, View};
+use crate::relief::view::{render, render_gpu, ReliefFrame, View};
 use crate::relief::{CastParams, Dataset, SafetyZones, PAPER_BOXES};
 use crate::render::image::GrayImage;
 use serde::Serialize;
@@ -31,7 +32,7 @@ pub const ANGLES: [f32; 6] = [0.0, 15.0, 30.0, 45.0, 60.0, 75.0];
 
 /// One rendering.
 #[derive(Clone, Debug, Serialize)]
-pub struct Row {
+pub struct ReliefRow {
     /// `angles` (Tables 1–2) or `rates` (Table 3).
     pub table: &'static str,
     pub dataset: &'static str,
@@ -69,7 +70,7 @@ pub struct Row {
     pub gpu_time_speedup: Option<f64>,
 }
 
-/// The GPU columns of a [`Row`].
+/// The GPU columns of a [`ReliefRow`].
 #[derive(Clone, Debug, Default)]
 struct GpuCells {
     adapter: Option<String>,
@@ -146,16 +147,16 @@ fn view(angle: f32, size: u32, close_up: bool) -> View {
 
 /// Mean fetches over the pixels whose ray entered the prism (those with at least one fetch),
 /// and their count.
-fn fetches_per_entering_pixel(f: &Frame) -> (f64, usize) {
+fn fetches_per_entering_pixel(f: &ReliefFrame) -> (f64, usize) {
     let entering: Vec<u32> = f.fetches.iter().copied().filter(|&c| c > 0).collect();
     let mean = entering.iter().map(|&c| c as f64).sum::<f64>() / entering.len().max(1) as f64;
     (mean, entering.len())
 }
 
 /// RMS (0–255) of `a` against `b` over the pixels hit by either, and the pixels hit by one only.
-fn compare_frames(a: &Frame, b_image: &GrayImage, b_hit: &[bool]) -> (f64, usize) {
+fn compare_frames(a: &ReliefFrame, b_image: &GrayImage, b_hit: &[bool]) -> (f64, usize) {
     let mask: Vec<bool> = a.hit.iter().zip(b_hit).map(|(x, y)| *x || *y).collect();
-    let rms = rms_255(&a.image.data, &b_image.data, Some(&mask));
+    let rms = rms_u8(&a.image.data, &b_image.data, Some(&mask));
     let mismatches = a.hit.iter().zip(b_hit).filter(|(x, y)| x != y).count();
     (rms, mismatches)
 }
@@ -170,7 +171,7 @@ fn measure(
     exact: &(GrayImage, Vec<bool>),
     repeats: usize,
     gpu: Option<(&ReliefKernel, &str)>,
-) -> Result<Measured, String> {
+) -> Result<Measured> {
     let mut best = f64::INFINITY;
     let mut frame = None;
     for _ in 0..repeats.max(1) {
@@ -188,8 +189,7 @@ fn measure(
         let mut gpu_frame = None;
         // At least twice: the first dispatch of a kernel also pays its driver-side compile.
         for _ in 0..repeats.max(2) {
-            let (g, timing) =
-                render_gpu(kernel, map, v, p).map_err(|e| format!("relief on the GPU: {e}"))?;
+            let (g, timing) = render_gpu(kernel, map, v, p).context(|| "relief".into())?;
             if let Some(k) = timing.kernel {
                 let k = k.as_secs_f64();
                 kernel_s = Some(kernel_s.map_or(k, |b| b.min(k)));
@@ -220,7 +220,7 @@ fn measure(
 
 /// The GPU device for the relief columns: `None` when not asked for, or (with a note) when
 /// no Vulkan driver is installed; other failures are errors.
-fn gpu_context(pref: Option<AdapterPreference>) -> Result<Option<GpuContext>, String> {
+fn gpu_context(pref: Option<AdapterPreference>) -> Result<Option<GpuContext>> {
     let Some(pref) = pref else { return Ok(None) };
     match GpuContext::new(pref) {
         Ok(c) => Ok(Some(c)),
@@ -231,22 +231,22 @@ fn gpu_context(pref: Option<AdapterPreference>) -> Result<Option<GpuContext>, St
             );
             Ok(None)
         }
-        Err(e) => Err(format!("relief: GPU: {e}")),
+        Err(e) => Err(Error::Gpu(e).context("relief")),
     }
 }
 
 /// Runs the tables at `size`² pixels (`quick`: 64², one timing) and writes `out/`; with `gpu`,
 /// every setting also runs on that adapter (the `gpu_*` columns).
-pub fn run(out: &Path, quick: bool, gpu: Option<AdapterPreference>) -> Result<Vec<Row>, String> {
+pub fn run(out: &Path, quick: bool, gpu: Option<AdapterPreference>) -> Result<Vec<ReliefRow>> {
     crate::experiment::run::ensure_writable(out)?;
     let mut meta = crate::experiment::meta::RunMeta::collect(None);
     let ctx = gpu_context(gpu)?;
     let adapter = ctx.as_ref().map(|c| c.adapter_label());
     meta.gpu_adapter = adapter.clone();
     let (size, repeats) = if quick { (64, 1) } else { (256, 3) };
-    let mut rows: Vec<Row> = Vec::new();
+    let mut rows: Vec<ReliefRow> = Vec::new();
     let mut grid: Vec<(GrayImage, Vec<String>)> = Vec::new();
-    let push = |rows: &mut Vec<Row>, mut r: Row| {
+    let push = |rows: &mut Vec<ReliefRow>, mut r: ReliefRow| {
         if let Some(base) = rows.iter().rev().find(|b| {
             b.skips == 0
                 && (
@@ -273,9 +273,7 @@ pub fn run(out: &Path, quick: bool, gpu: Option<AdapterPreference>) -> Result<Ve
         let map = dset.map(MAP_RES);
         let zones = SafetyZones::new(&map, &PAPER_BOXES);
         let kernel = match &ctx {
-            Some(c) => {
-                Some(ReliefKernel::new(c, &map, &zones).map_err(|e| format!("relief: GPU: {e}"))?)
-            }
+            Some(c) => Some(ReliefKernel::new(c, &map, &zones).context(|| "relief".into())?),
             None => None,
         };
         let gpu = kernel.as_ref().zip(adapter.as_deref());
@@ -283,8 +281,8 @@ pub fn run(out: &Path, quick: bool, gpu: Option<AdapterPreference>) -> Result<Ve
                              angles: &[f32],
                              settings: &[(f32, u32)],
                              close_up: bool,
-                             rows: &mut Vec<Row>|
-         -> Result<(), String> {
+                             rows: &mut Vec<ReliefRow>|
+         -> Result<()> {
             for &angle in angles {
                 let v = view(angle, size, close_up);
                 let ex = render(&map, None, &v, None);
@@ -314,7 +312,7 @@ pub fn run(out: &Path, quick: bool, gpu: Option<AdapterPreference>) -> Result<Ve
                         );
                         push(
                             rows,
-                            Row {
+                            ReliefRow {
                                 table,
                                 dataset: dset.name(),
                                 view_deg: angle,
@@ -361,15 +359,15 @@ pub fn run(out: &Path, quick: bool, gpu: Option<AdapterPreference>) -> Result<Ve
         &cells,
         3,
     )?;
-    crate::io::write_atomic(&out.join("run.json"), meta.to_json().as_bytes())
-        .map_err(|e| format!("{}: {e}", out.join("run.json").display()))?;
+    let json = out.join("run.json");
+    crate::io::write_atomic(&json, meta.to_json().as_bytes()).map_err(Error::io(&json))?;
     println!("relief: {} row(s) -> {}", rows.len(), out.display());
     Ok(rows)
 }
 
 /// The paper's gains beside ours (its "angel" against our `relief`; its perpendicular and
 /// tangential views against our 0° and 75°).
-fn compare(rows: &[Row]) -> Vec<Comparison> {
+fn compare(rows: &[ReliefRow]) -> Vec<Comparison> {
     let find = |table: &str, d: &str, angle: f32, rate: f32, b: u32, skips: u32| {
         rows.iter().find(|r| {
             (
@@ -441,8 +439,8 @@ fn compare(rows: &[Row]) -> Vec<Comparison> {
     out
 }
 
-fn plots(out: &Path, rows: &[Row], size: u32) -> Result<(), String> {
-    let series = |f: &dyn Fn(&Row) -> f64| -> Vec<Series> {
+fn plots(out: &Path, rows: &[ReliefRow], size: u32) -> Result<()> {
+    let series = |f: &dyn Fn(&ReliefRow) -> f64| -> Vec<Series> {
         let mut s = Vec::new();
         for d in Dataset::ALL {
             for skips in 0..=2u32 {

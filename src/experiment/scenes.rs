@@ -7,6 +7,7 @@
 //! the intra-object path of the lookup, and by its own triangles in the reference.
 
 use super::spec::{MeshSource, Spec, SpecError, TransformSpec};
+use super::{Error, Result};
 use crate::geometry::procedural::{self, Supershape};
 use crate::geometry::rebase::{centred_mesh, rebase, to_frame, PlacedMesh, Placement, Rebased};
 use crate::geometry::{models, Mesh, Scene, Similarity};
@@ -117,12 +118,11 @@ impl Scenes {
                 let m = match sources.iter().position(|s| s == &inst.mesh) {
                     Some(m) => m,
                     None => {
-                        let mesh =
-                            build_mesh(&inst.mesh).map_err(|message| SpecError::Invalid {
-                                file: file.to_path_buf(),
-                                field: at.clone(),
-                                message,
-                            })?;
+                        let mesh = build_mesh(&inst.mesh).map_err(|e| SpecError::Invalid {
+                            file: file.to_path_buf(),
+                            field: at.clone(),
+                            message: e.chain(),
+                        })?;
                         let (mesh, model_origin) = centred_mesh(mesh);
                         sources.push(inst.mesh.clone());
                         out.meshes.push(LoadedMesh {
@@ -156,9 +156,9 @@ impl Scenes {
 }
 
 /// Loads or generates a mesh.
-pub fn build_mesh(src: &MeshSource) -> Result<Mesh, String> {
+pub fn build_mesh(src: &MeshSource) -> Result<Mesh> {
     let r = match src {
-        MeshSource::Model(name) => return models::load_model(name).map_err(|e| e.to_string()),
+        MeshSource::Model(name) => return Ok(models::load_model(name)?),
         MeshSource::Corner { n } => procedural::corner(*n),
         MeshSource::CubeWithHole { size, hole } => procedural::cube_with_hole(*size, *hole),
         MeshSource::Supershape { triangles } => {
@@ -171,7 +171,7 @@ pub fn build_mesh(src: &MeshSource) -> Result<Mesh, String> {
         } => procedural::uv_sphere(*radius, *stacks, *slices),
         MeshSource::Plane { size, n } => procedural::plane(*size, *n),
     };
-    r.map_err(|e| e.to_string())
+    r.map_err(Error::geometry(src.label()))
 }
 
 /// The placement described by `t` (see [`TransformSpec`]) of `mesh`, whose model-space points

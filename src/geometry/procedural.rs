@@ -113,11 +113,11 @@ pub fn uv_sphere(radius: f32, stacks: usize, slices: usize) -> Result<Mesh, Geom
     })
 }
 
-/// The embedded default scene (`experiment quickstart`): the default [`Supershape`] (10,000
-/// triangles) as a caster floating inside the [`corner`] receiver (n = 33), scaled so that its
-/// minimal bounding sphere has radius 0.35 and centred at (0.5, 0.45, 0.5), slightly tilted. The
-/// sphere stays clear of the corner's three planes, so the caster's field is valid everywhere on
-/// the receiver.
+/// The embedded default scene (the quickstart's, needing no files): the default [`Supershape`]
+/// (10,000 triangles) as a caster floating inside the [`corner`] receiver (n = 33), scaled so
+/// that its minimal bounding sphere has radius 0.35 and centred at (0.5, 0.45, 0.5), slightly
+/// tilted. The sphere stays clear of the corner's three planes, so the caster's field is valid
+/// everywhere on the receiver.
 pub fn default_scene() -> Scene {
     let shape = supershape(&Supershape::default(), 10_000).expect("default supershape is valid");
     over_corner(shape, Quat::from_euler(glam::EulerRot::YXZ, 0.4, 0.25, 0.0))

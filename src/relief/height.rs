@@ -1,5 +1,5 @@
 //! Displacement maps M : [0, 1]² → [0, 1] (Kolb and Rezk-Salama, VMV 2005, §2.1), sampled
-//! bilinearly, and the procedural maps of the experiments.
+//! bilinearly, and the procedural maps standing in for the paper's.
 
 use glam::Vec2;
 
@@ -75,7 +75,7 @@ impl HeightMap {
     }
 }
 
-/// The procedural displacement maps of the relief experiments.
+/// The procedural displacement maps of the paper's tables.
 ///
 /// Deviation from the paper: its "angel" map is a scanned relief we do not have; `Relief` is a
 /// seeded sum of Gaussian bumps of several sizes with terraced steps, a map with the same mix

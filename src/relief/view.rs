@@ -56,7 +56,7 @@ pub fn clip_to_prism(o: Vec3, d: Vec3) -> Option<(Vec3, Vec3)> {
 }
 
 /// One rendered image: shading (0 background), hit mask, and fetches per pixel.
-pub struct Frame {
+pub struct ReliefFrame {
     pub image: GrayImage,
     pub hit: Vec<bool>,
     pub fetches: Vec<u32>,
@@ -80,7 +80,7 @@ pub fn render(
     zones: Option<&SafetyZones>,
     view: &View,
     params: Option<&CastParams>,
-) -> Frame {
+) -> ReliefFrame {
     let (w, h) = (view.width, view.height);
     let px: Vec<(f32, bool, u32)> = (0..w * h)
         .into_par_iter()
@@ -108,7 +108,7 @@ pub fn render_gpu(
     map: &HeightMap,
     view: &View,
     params: &CastParams,
-) -> Result<(Frame, GpuTiming), GpuError> {
+) -> Result<(ReliefFrame, GpuTiming), GpuError> {
     let (w, h) = (view.width, view.height);
     let pixels: Vec<(u32, (Vec3, Vec3))> = (0..w * h)
         .filter_map(|k| view.segment(k).map(|s| (k, s)))
@@ -139,8 +139,8 @@ fn shade_pixel(
     }
 }
 
-fn assemble(view: &View, px: Vec<(f32, bool, u32)>) -> Frame {
-    Frame {
+fn assemble(view: &View, px: Vec<(f32, bool, u32)>) -> ReliefFrame {
+    ReliefFrame {
         image: GrayImage {
             width: view.width,
             height: view.height,

@@ -22,9 +22,9 @@
 //! oriented; a touching triangle of another object wound the same way as the point's own
 //! surface counts as the point's own surface (a limitation: such contacts go unreported).
 //!
-//! `offset` and `tolerance` scale with the scene (the experiments use
-//! [`super::ao::scene_epsilon`] for both). Crease points are reported apart from interior points
-//! in the experiment tables.
+//! `offset` and `tolerance` scale with the scene ([`super::ao::scene_epsilon`] suits both).
+//! [`separate_contacts`] tells the crease points apart so that their errors can be reported
+//! apart from the interior points'.
 
 use glam::Vec3;
 use std::collections::HashMap;

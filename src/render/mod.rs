@@ -71,7 +71,6 @@ impl Visibility for Tracer {
 pub mod camera;
 pub mod contact;
 pub mod estimator;
-pub mod floor;
 pub mod image;
 pub mod points;
 pub mod primary;

@@ -15,7 +15,7 @@
 //! (libm-free square coordinates with a certificate), `texel_table` (a certified
 //! concentric texel table over the disk) and `texel_measure` (closed-form texel
 //! solid angles); `warp` (square/disk/hemisphere maps); `frame`; `rays`; `approx` (cheap
-//! atan/floor with stated error bounds); `report` and `report_plots` (`experiment sampling`).
+//! atan/floor with stated error bounds).
 //!
 //! Every `nearest` is exact — the grid's answer is the brute-force search's index itself, the
 //! analytic queries equal it up to exact ties — and every used layout texel round-trips
@@ -31,8 +31,6 @@ mod layout_fast;
 mod mesh;
 mod owner_grid;
 pub mod rays;
-pub mod report;
-mod report_plots;
 mod rings;
 mod sphere;
 mod texel_measure;

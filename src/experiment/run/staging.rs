@@ -8,16 +8,17 @@
 //! folder never mixes two runs' images; top-level files other than the run's are kept. Folders
 //! left by killed runs (their process gone) are removed by the next run.
 
+use crate::experiment::{Error, Result};
 use std::path::{Path, PathBuf};
 
 const PREFIX: &str = ".partial-";
 
 /// The staging folder of this process for results in `out` (created empty).
-pub fn create(out: &Path) -> Result<PathBuf, String> {
+pub fn create(out: &Path) -> Result<PathBuf> {
     remove_stale(out);
     let dir = out.join(format!("{PREFIX}{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    std::fs::create_dir_all(&dir).map_err(Error::io(&dir))?;
     Ok(dir)
 }
 
@@ -43,33 +44,32 @@ fn remove_stale(out: &Path) {
 
 /// Moves every file of `staging` (recursively) over its counterpart in `out`, removes files
 /// of `out`'s subfolders that `staging` did not have, then removes `staging`.
-pub fn publish(staging: &Path, out: &Path) -> Result<(), String> {
+pub fn publish(staging: &Path, out: &Path) -> Result<()> {
     move_tree(staging, out, false)?;
-    std::fs::remove_dir_all(staging).map_err(|e| format!("{}: {e}", staging.display()))
+    std::fs::remove_dir_all(staging).map_err(Error::io(staging))
 }
 
-fn move_tree(from: &Path, to: &Path, owned: bool) -> Result<(), String> {
+fn move_tree(from: &Path, to: &Path, owned: bool) -> Result<()> {
     if owned {
         // Files of the previous run that this one did not write.
         if let Ok(old) = std::fs::read_dir(to) {
             for e in old.flatten() {
                 let is_file = e.file_type().map(|t| t.is_file()).unwrap_or(false);
                 if is_file && !from.join(e.file_name()).exists() {
-                    std::fs::remove_file(e.path())
-                        .map_err(|err| format!("{}: {err}", e.path().display()))?;
+                    std::fs::remove_file(e.path()).map_err(Error::io(&e.path()))?;
                 }
             }
         }
     }
-    std::fs::create_dir_all(to).map_err(|e| format!("{}: {e}", to.display()))?;
-    let entries = std::fs::read_dir(from).map_err(|e| format!("{}: {e}", from.display()))?;
+    std::fs::create_dir_all(to).map_err(Error::io(to))?;
+    let entries = std::fs::read_dir(from).map_err(Error::io(from))?;
     for e in entries {
-        let e = e.map_err(|e| format!("{}: {e}", from.display()))?;
+        let e = e.map_err(Error::io(from))?;
         let (src, dst) = (e.path(), to.join(e.file_name()));
         if e.file_type().map(|t| t.is_dir()).unwrap_or(false) {
             move_tree(&src, &dst, true)?;
         } else {
-            std::fs::rename(&src, &dst).map_err(|e| format!("{}: {e}", dst.display()))?;
+            std::fs::rename(&src, &dst).map_err(Error::io(&dst))?;
         }
     }
     Ok(())

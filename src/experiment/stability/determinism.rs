@@ -2,7 +2,7 @@
 //! are bit-identical (all randomness is a function of point, sample index and seed).
 
 use super::scene_ao::{bake_field, field_ao, raycast_ao, scene};
-use super::Row;
+use super::StabilityRow;
 use crate::geometry::Similarity;
 use crate::render::primary::{gbuffer, shade_vertex_ao, PrimaryScene};
 use crate::render::receivers::Receivers;
@@ -40,7 +40,7 @@ fn outputs() -> Vec<(&'static str, Vec<u8>)> {
 }
 
 /// Runs [`outputs`] on pools of 1 and 2 threads and counts differing bytes per output.
-pub fn threads() -> Vec<Row> {
+pub fn threads() -> Vec<StabilityRow> {
     let on = |n: usize| {
         rayon::ThreadPoolBuilder::new()
             .num_threads(n)
@@ -54,7 +54,7 @@ pub fn threads() -> Vec<Row> {
         .map(|((what, a), (_, b))| {
             let differ =
                 a.len().abs_diff(b.len()) + a.iter().zip(b).filter(|(x, y)| x != y).count();
-            Row::new(
+            StabilityRow::new(
                 "thread_determinism",
                 format!(
                     "{what}: bytes differing between 1 and 2 threads (of {})",

@@ -21,7 +21,7 @@
 use super::scene_ao::{
     bake_field, field_ao, max_diff, options, raycast_ao, rms_255, scene, Placed,
 };
-use super::Row;
+use super::StabilityRow;
 use crate::geometry::{procedural, Mesh, Scene, Similarity};
 use crate::render::receivers::Receivers;
 use crate::sampling::rays::RaySet;
@@ -48,7 +48,7 @@ type ClosedForm = dyn Fn(DVec3, DVec3) -> f64;
 
 /// Rows comparing ray cast and field AO of `placed` against `closed` (with k = 32) or, without
 /// one, against f64 brute force on the same rays (k = 16).
-fn compare(case: &str, placed: &[Placed], closed: Option<&ClosedForm>) -> Vec<Row> {
+fn compare(case: &str, placed: &[Placed], closed: Option<&ClosedForm>) -> Vec<StabilityRow> {
     let sc = scene(placed, Similarity::default());
     let k = if closed.is_some() { 32 } else { 16 };
     let ray = raycast_ao(&sc, k);
@@ -73,13 +73,13 @@ fn compare(case: &str, placed: &[Placed], closed: Option<&ClosedForm>) -> Vec<Ro
                     f(p.as_dvec3() + offset * nrm, nrm) as f32
                 })
                 .collect();
-            rows.push(Row::new(
+            rows.push(StabilityRow::new(
                 case,
                 format!("ray-cast AO vs closed form, 1024 rays: max |Δ| ({n} vertices)"),
                 max_diff(&ray, &exact),
                 RAYCAST_CLOSED_FORM_MAX,
             ));
-            rows.push(Row::new(
+            rows.push(StabilityRow::new(
                 case,
                 "ray-cast AO vs closed form: RMS (0–255)",
                 rms_255(&ray, &exact),
@@ -89,7 +89,7 @@ fn compare(case: &str, placed: &[Placed], closed: Option<&ClosedForm>) -> Vec<Ro
         }
         None => {
             let exact = brute_force_ao(&sc, k);
-            rows.push(Row::new(
+            rows.push(StabilityRow::new(
                 case,
                 format!("ray-cast AO vs f64 brute force, same 256 rays: max |Δ| ({n} vertices)"),
                 max_diff(&ray, &exact),
@@ -98,13 +98,13 @@ fn compare(case: &str, placed: &[Placed], closed: Option<&ClosedForm>) -> Vec<Ro
             exact
         }
     };
-    rows.push(Row::new(
+    rows.push(StabilityRow::new(
         case,
         "field AO (1090 × 32² u8) vs reference: RMS (0–255)",
         rms_255(&field, &reference),
         FIELD_RMS,
     ));
-    rows.push(Row::new(
+    rows.push(StabilityRow::new(
         case,
         "field AO vs reference: max |Δ|",
         max_diff(&field, &reference),
@@ -199,7 +199,7 @@ fn plane(size: f32, n: usize) -> Mesh {
 
 /// A sphere of radius 0.5 resting on a plane, touching it at the origin (the sphere's pole is a
 /// vertex of the plane): AO 0 at the contact, 1 − a³/(x² + a²)^{3/2} at distance x.
-pub fn touching() -> Vec<Row> {
+pub fn touching() -> Vec<StabilityRow> {
     let a = 0.5;
     compare(
         "receiver_touching_caster",
@@ -214,7 +214,7 @@ pub fn touching() -> Vec<Row> {
 /// A zero-thickness disk (256-segment fan, circumradius r/cos(π/256)) of radius 0.5 at height
 /// 0.25 over a plane: the view factor of a parallel disk,
 /// F = ½ (1 − (h² + ρ² − a²) / √((h² + ρ² + a²)² − 4 a² ρ²)), AO = 1 − F.
-pub fn thin_sheet() -> Vec<Row> {
+pub fn thin_sheet() -> Vec<StabilityRow> {
     let (a, h) = (0.5f64, 0.25f64);
     // A fan whose rim vertices sit on the circumscribed circle a / cos(π/256), in y = 0.
     let segments = 256u32;
@@ -253,7 +253,7 @@ pub fn thin_sheet() -> Vec<Row> {
 
 /// A sphere of radius 1000 centred 2000 above a unit plane, and one of radius 1e-3 centred
 /// 2e-3 above it: closed form for both.
-pub fn extreme_sizes() -> Vec<Row> {
+pub fn extreme_sizes() -> Vec<StabilityRow> {
     let mut rows = Vec::new();
     for (label, a) in [("1000x larger", 1000.0f32), ("1000x smaller", 1e-3)] {
         let c = Vec3::new(0.0, 2.0 * a, 0.0);
@@ -275,7 +275,7 @@ pub fn extreme_sizes() -> Vec<Row> {
 
 /// The cube with a hole (genus 1) over a plane, its tunnel vertical, so that the plane sees the
 /// sky through it: f64 brute force reference.
-pub fn concave() -> Vec<Row> {
+pub fn concave() -> Vec<StabilityRow> {
     let cube = procedural::cube_with_hole(0.6, 0.3).expect("valid cube");
     compare(
         "concave_caster",
@@ -288,7 +288,7 @@ pub fn concave() -> Vec<Row> {
 }
 
 /// Three rotated cubes with holes whose bounding spheres overlap pairwise, over a plane: f64 brute force reference.
-pub fn overlapping_spheres() -> Vec<Row> {
+pub fn overlapping_spheres() -> Vec<StabilityRow> {
     let boxes = [
         (Vec3::new(-0.2, 0.5, 0.0), 0.3f32),
         (Vec3::new(0.2, 0.55, 0.05), 0.7),
@@ -312,7 +312,7 @@ pub fn overlapping_spheres() -> Vec<Row> {
 /// A plane cutting through a caster's bounding sphere: the cube with a hole standing on the
 /// plane, so that the receiver vertices around it lie inside the sphere (intra-object lookups):
 /// f64 brute force reference.
-pub fn inside_sphere() -> Vec<Row> {
+pub fn inside_sphere() -> Vec<StabilityRow> {
     let cube = procedural::cube_with_hole(0.6, 0.3).expect("valid cube");
     compare(
         "receiver_inside_caster_sphere",

@@ -9,7 +9,7 @@
 //! - Quantisation of stored distances 0, just under 1 and exactly 1 at every precision, and the
 //!   1-bit threshold.
 
-use super::{max_of, Row};
+use super::{max_of, StabilityRow};
 use crate::field::storage::{Precision, Storage};
 use crate::sampling::{Frame, HemisphereLayout, LayoutKind, SphereKind, SpherePoints};
 use glam::{DVec2, DVec3, Vec3};
@@ -40,7 +40,7 @@ fn frame_error(n: Vec3) -> f64 {
 
 /// Frames at the poles and axes, near them, with −0 components, and the frames of every map of
 /// the sphere sets (Slater 290, lat-long 1122, Fibonacci 1000).
-pub fn frames() -> Vec<Row> {
+pub fn frames() -> Vec<StabilityRow> {
     let case = "frames_at_poles_and_axes";
     let mut axes = Vec::new();
     for a in 0..3 {
@@ -79,7 +79,7 @@ pub fn frames() -> Vec<Row> {
         }
     }
     vec![
-        Row::new(
+        StabilityRow::new(
             case,
             format!(
                 "poles and axes ± 1e-7, −0: orthonormality (of {})",
@@ -88,7 +88,7 @@ pub fn frames() -> Vec<Row> {
             axis_err,
             FRAME_TOLERANCE,
         ),
-        Row::new(
+        StabilityRow::new(
             case,
             format!("every field frame: orthonormality (of {frames})"),
             field_err,
@@ -243,7 +243,7 @@ fn distance_to_cell(layout: &HemisphereLayout, q: DVec2, t: u32) -> f64 {
 }
 
 /// Every layout at res 1, 2, 3, 8, 32, 255, 256 over [`singular_directions`].
-pub fn texels() -> Vec<Row> {
+pub fn texels() -> Vec<StabilityRow> {
     let case = "layout_singular_directions";
     let mut rows = Vec::new();
     for kind in [
@@ -271,13 +271,13 @@ pub fn texels() -> Vec<Row> {
                 checked += 1;
             }
         }
-        rows.push(Row::new(
+        rows.push(StabilityRow::new(
             case,
             format!("{}: texels out of range or unused (count)", kind.name()),
             bad as f64,
             0.0,
         ));
-        rows.push(Row::new(
+        rows.push(StabilityRow::new(
             case,
             format!(
                 "{}: distance from the f64 square point to the texel's cell (texels, {checked} directions)",
@@ -292,7 +292,7 @@ pub fn texels() -> Vec<Row> {
 
 /// Stored distances 0, 1e-30, just under 1 (1 − 2⁻²⁴, 1 − 1/(2L), 1 − 1/L) and exactly 1, plus
 /// values past either end, through every precision.
-pub fn quantisation() -> Vec<Row> {
+pub fn quantisation() -> Vec<StabilityRow> {
     let case = "quantisation_edges";
     let just_under = 1.0f32.next_down();
     let row = [
@@ -321,7 +321,7 @@ pub fn quantisation() -> Vec<Row> {
         let flips = (0..row.len())
             .filter(|&i| hits(i) != (got[i] < 1.0))
             .count();
-        rows.push(Row::new(
+        rows.push(StabilityRow::new(
             case,
             format!(
                 "{}: hits read as misses or misses as hits (count)",
@@ -362,7 +362,7 @@ pub fn quantisation() -> Vec<Row> {
                 ("hits: decoded distance error (of 2R)", e, tol)
             }
         };
-        rows.push(Row::new(
+        rows.push(StabilityRow::new(
             case,
             format!("{}: {quantity}", p.name()),
             err,
@@ -371,7 +371,7 @@ pub fn quantisation() -> Vec<Row> {
         if p != Precision::Bit1 {
             // 0 decodes to exactly 0 and a miss to exactly 1.
             let e = max_of([got[0].abs() as f64, (got[7] as f64 - 1.0).abs()]);
-            rows.push(Row::new(
+            rows.push(StabilityRow::new(
                 case,
                 format!("{}: 0 and 1 exact (error)", p.name()),
                 e,

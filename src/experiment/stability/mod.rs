@@ -1,7 +1,7 @@
 //! `experiment stability`: stiff and extreme cases, each compared against an f64 or closed-form
 //! answer.
 //!
-//! Every case is a function returning [`Row`]s (`case, quantity, max_error, tolerance, pass`);
+//! Every case is a function returning [`StabilityRow`]s (`case, quantity, max_error, tolerance, pass`);
 //! [`CASES`] lists them, [`run`] runs them all and writes `cases.csv` and `run.json`, and
 //! `tests/stability.rs` runs each case as a test. The cases:
 //!
@@ -22,12 +22,13 @@ pub mod scale;
 pub mod scene_ao;
 pub mod sphere;
 
+use super::{Error, Result};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 /// One measured quantity of a case.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Row {
+pub struct StabilityRow {
     /// The case (a function in [`CASES`]).
     pub case: String,
     /// What was measured, with its unit.
@@ -40,10 +41,15 @@ pub struct Row {
     pub pass: bool,
 }
 
-impl Row {
+impl StabilityRow {
     /// A row; `pass` is `max_error <= tolerance` with a NaN error failing.
-    pub fn new(case: &str, quantity: impl Into<String>, max_error: f64, tolerance: f64) -> Row {
-        Row {
+    pub fn new(
+        case: &str,
+        quantity: impl Into<String>,
+        max_error: f64,
+        tolerance: f64,
+    ) -> StabilityRow {
+        StabilityRow {
             case: case.to_string(),
             quantity: quantity.into(),
             max_error,
@@ -54,7 +60,7 @@ impl Row {
 }
 
 /// A case: its name and the function that measures it.
-pub type Case = (&'static str, fn() -> Vec<Row>);
+pub type Case = (&'static str, fn() -> Vec<StabilityRow>);
 
 /// Every case of `experiment stability`, in output order.
 pub const CASES: &[Case] = &[
@@ -77,7 +83,7 @@ pub const CASES: &[Case] = &[
 
 /// Runs every case and writes `out/cases.csv` and `out/run.json` (atomically). Returns the
 /// rows; the error names the failing rows when any case fails (the files are written first).
-pub fn run(out: &Path) -> Result<Vec<Row>, String> {
+pub fn run(out: &Path) -> Result<Vec<StabilityRow>> {
     crate::experiment::run::ensure_writable(out)?;
     let meta = crate::experiment::meta::RunMeta::collect(None);
     let mut rows = Vec::new();
@@ -93,8 +99,8 @@ pub fn run(out: &Path) -> Result<Vec<Row>, String> {
         rows.extend(r);
     }
     crate::experiment::outputs::write_csv(&out.join("cases.csv"), &rows)?;
-    crate::io::write_atomic(&out.join("run.json"), meta.to_json().as_bytes())
-        .map_err(|e| format!("{}: {e}", out.join("run.json").display()))?;
+    let json = out.join("run.json");
+    crate::io::write_atomic(&json, meta.to_json().as_bytes()).map_err(Error::io(&json))?;
     let failed: Vec<String> = rows
         .iter()
         .filter(|r| !r.pass)
@@ -114,7 +120,10 @@ pub fn run(out: &Path) -> Result<Vec<Row>, String> {
     if failed.is_empty() {
         Ok(rows)
     } else {
-        Err(format!("failing cases:\n  {}", failed.join("\n  ")))
+        Err(Error::invalid(
+            "stability",
+            format!("failing cases:\n  {}", failed.join("\n  ")),
+        ))
     }
 }
 

@@ -14,7 +14,7 @@
 use super::scene_ao::{
     bake_field, field_ao, flattened, raycast_ao, raycast_ao_with, rebased_scene, scene, Placed,
 };
-use super::Row;
+use super::StabilityRow;
 use crate::geometry::{procedural, Similarity};
 use glam::{DVec3, Quat, Vec3};
 use std::sync::Arc;
@@ -68,15 +68,15 @@ pub fn translated() -> Vec<Placement> {
 }
 
 /// The scale case: [`scaled`].
-pub fn scale() -> Vec<Row> {
+pub fn scale() -> Vec<StabilityRow> {
     compare("scale", scaled())
 }
 
 /// The position case: [`translated`], and a mesh whose own coordinates lie at 1e4
 /// ([`far_mesh_coordinates`]).
-pub fn position() -> Vec<Row> {
+pub fn position() -> Vec<StabilityRow> {
     let mut rows = compare("position", translated());
-    rows.push(Row::new(
+    rows.push(StabilityRow::new(
         "position",
         "mesh coordinates at 1e4: ray-cast AO, max difference from the same mesh moved back",
         far_mesh_coordinates(),
@@ -126,7 +126,7 @@ pub fn far_mesh_coordinates() -> f64 {
 ///
 /// Every placement is composed in f64 and rebased ([`crate::geometry::rebase`]), as the
 /// experiment runner builds its scenes, and compared with the unit scene directly.
-fn compare(case: &str, placements: Vec<Placement>) -> Vec<Row> {
+fn compare(case: &str, placements: Vec<Placement>) -> Vec<StabilityRow> {
     let placed = unit_scene();
     let k = 16;
     let unit = scene(&placed, Similarity::default());
@@ -144,7 +144,7 @@ fn compare(case: &str, placements: Vec<Placement>) -> Vec<Row> {
             field_ao(&sc, &fields, k),
             field_ao(&unit, &fields, k),
         );
-        rows.push(Row::new(
+        rows.push(StabilityRow::new(
             case,
             format!(
                 "{label}: ray-cast AO, max difference from unit scale ({} vertices)",
@@ -153,7 +153,7 @@ fn compare(case: &str, placements: Vec<Placement>) -> Vec<Row> {
             super::scene_ao::max_diff(&ray, &ray_ref),
             AO_TOLERANCE,
         ));
-        rows.push(Row::new(
+        rows.push(StabilityRow::new(
             case,
             format!("{label}: field AO, max difference from unit scale"),
             super::scene_ao::max_diff(&field, &field_ref),

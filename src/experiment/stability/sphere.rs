@@ -9,7 +9,7 @@
 //! requirement is 1e-5 R. The f32 exit point is not accurate for far origins (1.2e-4 R for
 //! tangent rays from 1e3 R), which is why the lookup uses the f64 entry point outside.
 
-use super::{max_of, Row};
+use super::{max_of, StabilityRow};
 use crate::field::lookup::sphere_crossing;
 use crate::sampling::rays::seeded_sphere_direction;
 use glam::{DVec3, Vec3};
@@ -92,8 +92,8 @@ impl Tally {
         }
     }
 
-    fn rows(self, case: &str, what: &str, with_entry: bool, with_exit: bool) -> Vec<Row> {
-        let mut rows = vec![Row::new(
+    fn rows(self, case: &str, what: &str, with_entry: bool, with_exit: bool) -> Vec<StabilityRow> {
+        let mut rows = vec![StabilityRow::new(
             case,
             format!(
                 "{what}: hit/miss disagreements with f64 (count of {})",
@@ -103,7 +103,7 @@ impl Tally {
             0.0,
         )];
         if with_entry {
-            rows.push(Row::new(
+            rows.push(StabilityRow::new(
                 case,
                 format!("{what}: entry point error (R, {} hits)", self.entry.len()),
                 max_of(self.entry),
@@ -111,7 +111,7 @@ impl Tally {
             ));
         }
         if with_exit {
-            rows.push(Row::new(
+            rows.push(StabilityRow::new(
                 case,
                 format!("{what}: exit point error (R, {} hits)", self.exit.len()),
                 max_of(self.exit),
@@ -132,7 +132,7 @@ fn spheres() -> [(Vec3, f32); 2] {
 
 /// Origins from 1e-3 R to 1e6 R from the centre. Outside: aimed at points within 0.95 R of the
 /// centre (clear hits; entry point checked). Inside: random directions (exit point checked).
-pub fn far_and_near() -> Vec<Row> {
+pub fn far_and_near() -> Vec<StabilityRow> {
     let case = "ray_sphere_far_and_near";
     let (mut outside, mut inside) = (Tally::default(), Tally::default());
     let distances = [
@@ -169,7 +169,7 @@ fn uniform(key: u64) -> f32 {
 /// perpendicular offset is exactly R, next_up(R) or next_down(R) and the f64 answer is exact),
 /// from 2 R and 1e3 R away; then seeded tangent rays in general position. The exactly tangent
 /// ray and the one an ulp inside must hit, the one an ulp outside must miss.
-pub fn grazing() -> Vec<Row> {
+pub fn grazing() -> Vec<StabilityRow> {
     let case = "ray_sphere_grazing";
     let mut axis = Tally::default();
     let mut general = Tally::default();
@@ -216,7 +216,7 @@ pub fn grazing() -> Vec<Row> {
 
 /// Origins on the sphere (rounded to f32, so a hair inside or outside) and 2⁻²⁴ R, 2⁻²⁰ R and
 /// 2⁻¹⁰ R inside it, with random directions: entry and exit points.
-pub fn on_and_inside() -> Vec<Row> {
+pub fn on_and_inside() -> Vec<StabilityRow> {
     let case = "ray_sphere_on_and_inside";
     let mut t = Tally::default();
     for (c, r) in spheres() {

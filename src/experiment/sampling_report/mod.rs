@@ -7,14 +7,17 @@
 //! over five passes of 2·10⁵ seeded queries (the machine is shared, the minimum is the least
 //! disturbed pass).
 
-use super::report_plots::{plot_layout_solid_angle, plot_sphere_points, PlotError};
-use super::{rays::seeded_sphere_direction, HemisphereLayout, LayoutKind, SamplingError};
-use super::{SphereKind, SpherePoints};
+use super::{Error, Result};
 use crate::io::write_atomic;
+use crate::sampling::rays::seeded_sphere_direction;
+use crate::sampling::{HemisphereLayout, LayoutKind, SphereKind, SpherePoints};
 use glam::Vec3;
+use plots::{plot_layout_solid_angle, plot_sphere_points};
 use std::hint::black_box;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
+
+mod plots;
 
 /// Seed of the report's query directions.
 const SEED: u64 = 0x5a4d_9e37;
@@ -43,22 +46,6 @@ const SPHERE_SETS: [(SphereKind, usize); 13] = [
 ];
 
 const LAYOUT_RESOLUTIONS: [u32; 4] = [32, 64, 128, 256];
-
-/// What can go wrong while writing the report.
-#[derive(Debug, thiserror::Error)]
-pub enum ReportError {
-    #[error("writing {path}: {source}")]
-    Io {
-        path: PathBuf,
-        source: std::io::Error,
-    },
-    #[error("building {path}: {source}")]
-    Csv { path: PathBuf, source: csv::Error },
-    #[error(transparent)]
-    Plot(#[from] PlotError),
-    #[error(transparent)]
-    Sampling(#[from] SamplingError),
-}
 
 #[derive(serde::Serialize)]
 struct SphereRow {
@@ -103,9 +90,9 @@ struct MeasureRow {
 }
 
 /// Runs the report into `out` (created if missing).
-pub fn run(out: &Path) -> Result<(), ReportError> {
+pub fn run(out: &Path) -> Result<()> {
     // Timings depend on what else runs on the machine: the metadata records the load average.
-    let meta = crate::experiment::meta::RunMeta::collect(None);
+    let meta = super::meta::RunMeta::collect(None);
     let dirs: Vec<Vec3> = (0..CHECK_DIRECTIONS as u64)
         .map(|i| seeded_sphere_direction(i, SEED))
         .collect();
@@ -114,8 +101,9 @@ pub fn run(out: &Path) -> Result<(), ReportError> {
     let mut sphere_rows = Vec::new();
     let mut keinert_rows = Vec::new();
     for (kind, count) in SPHERE_SETS {
-        let set = SpherePoints::new(kind, count)?;
-        let spacing = set.spacing()?;
+        let what = || format!("sphere set {} {count}", kind.name());
+        let set = SpherePoints::new(kind, count).map_err(Error::sampling(what()))?;
+        let spacing = set.spacing().map_err(Error::sampling(what()))?;
         let mismatches = set.nearest_mismatches(&dirs);
         let nearest_ns = time_per_query(timing, |&d| set.nearest(d));
         eprintln!(
@@ -146,7 +134,8 @@ pub fn run(out: &Path) -> Result<(), ReportError> {
     let mut measure_rows = Vec::new();
     for kind in LayoutKind::ALL {
         for res in LAYOUT_RESOLUTIONS {
-            let layout = HemisphereLayout::try_new(kind, res)?;
+            let layout = HemisphereLayout::try_new(kind, res)
+                .map_err(Error::sampling(format!("layout {} {res}", kind.name())))?;
             let n = layout.texel_count() as u32;
             let roundtrip_mismatches = (0..n)
                 .filter(|&t| {
@@ -175,12 +164,16 @@ pub fn run(out: &Path) -> Result<(), ReportError> {
         (SphereKind::LatLong, 1122),
         (SphereKind::Fibonacci, 1090),
     ] {
-        let set = SpherePoints::new(kind, count)?;
+        let set = SpherePoints::new(kind, count).map_err(Error::sampling(format!(
+            "sphere set {} {count}",
+            kind.name()
+        )))?;
         let path = out.join(format!("sphere_points_{}_{count}.png", kind.name()));
         plot_sphere_points(&path, &set)?;
     }
     for kind in LayoutKind::ALL {
-        let layout = HemisphereLayout::try_new(kind, 32)?;
+        let layout = HemisphereLayout::try_new(kind, 32)
+            .map_err(Error::sampling(format!("layout {} 32", kind.name())))?;
         let path = out.join(format!("layout_solid_angle_{}_32.png", kind.name()));
         plot_layout_solid_angle(&path, &layout)?;
     }
@@ -195,7 +188,7 @@ pub fn run(out: &Path) -> Result<(), ReportError> {
     });
     let path = out.join("run.json");
     let text = serde_json::to_string_pretty(&run).unwrap_or_default() + "\n";
-    write_atomic(&path, text.as_bytes()).map_err(|source| ReportError::Io { path, source })?;
+    write_atomic(&path, text.as_bytes()).map_err(Error::io(&path))?;
     eprintln!("sampling: report written to {}", out.display());
     Ok(())
 }
@@ -258,22 +251,15 @@ fn time_per_query<T>(items: &[T], f: impl Fn(&T) -> usize) -> f64 {
     best
 }
 
-fn write_csv<R: serde::Serialize>(path: &Path, rows: &[R]) -> Result<(), ReportError> {
-    let csv_err = |source| ReportError::Csv {
-        path: path.to_path_buf(),
-        source,
-    };
+fn write_csv<R: serde::Serialize>(path: &Path, rows: &[R]) -> Result<()> {
     let mut w = csv::Writer::from_writer(Vec::new());
     for r in rows {
-        w.serialize(r).map_err(csv_err)?;
+        w.serialize(r).map_err(Error::csv(path))?;
     }
     let bytes = w
         .into_inner()
-        .map_err(|e| csv_err(csv::Error::from(e.into_error())))?;
-    write_atomic(path, &bytes).map_err(|source| ReportError::Io {
-        path: path.to_path_buf(),
-        source,
-    })
+        .map_err(|e| Error::csv(path)(csv::Error::from(e.into_error())))?;
+    write_atomic(path, &bytes).map_err(Error::io(path))
 }
 
 #[cfg(test)]

@@ -2,68 +2,35 @@
 //! texel solid angles as heat maps. Rendered into memory with plotters, encoded with `image`
 //! and written atomically.
 
-use super::{HemisphereLayout, LayoutKind, SpherePoints};
-use crate::io::write_atomic;
+use crate::experiment::plot::{register_font, write_rgb_png};
+use crate::experiment::{Error, Result};
+use crate::sampling::{HemisphereLayout, LayoutKind, SphereKind, SpherePoints};
 use plotters::prelude::*;
 use plotters::style::colors::colormaps::ViridisRGB;
-use std::path::{Path, PathBuf};
-use std::sync::OnceLock;
-
-/// A plot could not be drawn, encoded or written.
-#[derive(Debug, thiserror::Error)]
-#[error("plotting {path}: {msg}")]
-pub struct PlotError {
-    pub path: PathBuf,
-    pub msg: String,
-}
-
-/// Registers the bundled DejaVu Sans as plotters' "sans-serif" (no system fonts are used).
-fn ensure_font() -> Result<(), String> {
-    static FONT: OnceLock<Result<(), String>> = OnceLock::new();
-    FONT.get_or_init(|| {
-        plotters::style::register_font(
-            "sans-serif",
-            FontStyle::Normal,
-            include_bytes!("../../assets/fonts/DejaVuSans.ttf"),
-        )
-        .map_err(|_| "assets/fonts/DejaVuSans.ttf is not a valid font".to_string())
-    })
-    .clone()
-}
+use std::path::Path;
 
 /// Draws into a `w × h` RGB buffer with `draw`, then writes it to `path` as PNG.
 fn render(
     path: &Path,
     (w, h): (u32, u32),
-    draw: impl FnOnce(DrawingArea<BitMapBackend, plotters::coord::Shift>) -> Result<(), String>,
-) -> Result<(), PlotError> {
-    let err = |msg: String| PlotError {
-        path: path.to_path_buf(),
-        msg,
-    };
-    ensure_font().map_err(err)?;
+    draw: impl FnOnce(DrawingArea<BitMapBackend, plotters::coord::Shift>) -> Result<()>,
+) -> Result<()> {
+    register_font();
     let mut buf = vec![0u8; (w * h * 3) as usize];
     {
         let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| err(e.to_string()))?;
-        draw(root.clone()).map_err(err)?;
-        root.present().map_err(|e| err(e.to_string()))?;
+        root.fill(&WHITE).map_err(Error::plot(path))?;
+        draw(root.clone())?;
+        root.present().map_err(Error::plot(path))?;
     }
-    let img = image::RgbImage::from_raw(w, h, buf).ok_or_else(|| err("bad buffer size".into()))?;
-    let mut bytes = Vec::new();
-    img.write_to(
-        &mut std::io::Cursor::new(&mut bytes),
-        image::ImageFormat::Png,
-    )
-    .map_err(|e| err(e.to_string()))?;
-    write_atomic(path, &bytes).map_err(|e| err(e.to_string()))
+    write_rgb_png(path, w, h, buf)
 }
 
 fn title_of(set: &SpherePoints) -> String {
     let name = match set.kind {
-        super::SphereKind::Slater => "Slater hemisphere subdivision",
-        super::SphereKind::LatLong => "Lat-long grid",
-        super::SphereKind::Fibonacci => "Spherical Fibonacci",
+        SphereKind::Slater => "Slater hemisphere subdivision",
+        SphereKind::LatLong => "Lat-long grid",
+        SphereKind::Fibonacci => "Spherical Fibonacci",
     };
     format!(
         "{name}, {} points (Lambert azimuthal equal-area)",
@@ -75,11 +42,11 @@ fn title_of(set: &SpherePoints) -> String {
 /// (x, y) · √(2 / (1 + |z|)), so the hemisphere fills a disk of radius √2 and equal areas on the
 /// sphere stay equal in the plot. The southern view looks through the sphere from above
 /// (x and y keep their signs).
-pub fn plot_sphere_points(path: &Path, set: &SpherePoints) -> Result<(), PlotError> {
+pub fn plot_sphere_points(path: &Path, set: &SpherePoints) -> Result<()> {
     render(path, (1200, 660), |root| {
         let root = root
             .titled(&title_of(set), ("sans-serif", 26))
-            .map_err(|e| e.to_string())?;
+            .map_err(Error::plot(path))?;
         let halves = root.split_evenly((1, 2));
         for (area, north) in halves.iter().zip([true, false]) {
             let caption = if north {
@@ -94,7 +61,7 @@ pub fn plot_sphere_points(path: &Path, set: &SpherePoints) -> Result<(), PlotErr
                 .x_label_area_size(40)
                 .y_label_area_size(50)
                 .build_cartesian_2d(-1.5f64..1.5, -1.5f64..1.5)
-                .map_err(|e| e.to_string())?;
+                .map_err(Error::plot(path))?;
             chart
                 .configure_mesh()
                 .x_desc("projected x")
@@ -103,14 +70,14 @@ pub fn plot_sphere_points(path: &Path, set: &SpherePoints) -> Result<(), PlotErr
                 .axis_desc_style(("sans-serif", 16))
                 .light_line_style(WHITE)
                 .draw()
-                .map_err(|e| e.to_string())?;
+                .map_err(Error::plot(path))?;
             let rim = (0..=360).map(|a| {
                 let t = (a as f64).to_radians();
                 (r * t.cos(), r * t.sin())
             });
             chart
                 .draw_series(LineSeries::new(rim, BLACK.stroke_width(1)))
-                .map_err(|e| e.to_string())?;
+                .map_err(Error::plot(path))?;
             let pts = set
                 .points()
                 .iter()
@@ -121,7 +88,7 @@ pub fn plot_sphere_points(path: &Path, set: &SpherePoints) -> Result<(), PlotErr
                 });
             chart
                 .draw_series(pts.map(|c| Circle::new(c, 2, BLUE.filled())))
-                .map_err(|e| e.to_string())?;
+                .map_err(Error::plot(path))?;
         }
         Ok(())
     })
@@ -142,7 +109,7 @@ fn layout_title(layout: &HemisphereLayout) -> String {
 }
 
 /// Heat map of each texel's solid angle (viridis, own colour bar; unused texels grey).
-pub fn plot_layout_solid_angle(path: &Path, layout: &HemisphereLayout) -> Result<(), PlotError> {
+pub fn plot_layout_solid_angle(path: &Path, layout: &HemisphereLayout) -> Result<()> {
     let res = layout.res;
     let n = layout.texel_count() as u32;
     let omega: Vec<f64> = (0..n).map(|t| layout.solid_angle(t)).collect();
@@ -162,14 +129,14 @@ pub fn plot_layout_solid_angle(path: &Path, layout: &HemisphereLayout) -> Result
     render(path, (900, 760), |root| {
         let root = root
             .titled(&layout_title(layout), ("sans-serif", 24))
-            .map_err(|e| e.to_string())?;
+            .map_err(Error::plot(path))?;
         let (map, bar) = root.split_horizontally(760);
         let mut chart = ChartBuilder::on(&map)
             .margin(12)
             .x_label_area_size(45)
             .y_label_area_size(55)
             .build_cartesian_2d(0f64..res as f64, 0f64..res as f64)
-            .map_err(|e| e.to_string())?;
+            .map_err(Error::plot(path))?;
         chart
             .configure_mesh()
             .disable_mesh()
@@ -180,7 +147,7 @@ pub fn plot_layout_solid_angle(path: &Path, layout: &HemisphereLayout) -> Result
             .label_style(("sans-serif", 14))
             .axis_desc_style(("sans-serif", 16))
             .draw()
-            .map_err(|e| e.to_string())?;
+            .map_err(Error::plot(path))?;
         let grey = RGBColor(200, 200, 200);
         chart
             .draw_series((0..n).map(|t| {
@@ -193,7 +160,7 @@ pub fn plot_layout_solid_angle(path: &Path, layout: &HemisphereLayout) -> Result
                 let (c, r) = (c as f64, r as f64);
                 Rectangle::new([(c, r), (c + 1.0, r + 1.0)], colour.filled())
             }))
-            .map_err(|e| e.to_string())?;
+            .map_err(Error::plot(path))?;
         let mut scale = ChartBuilder::on(&bar)
             .margin_top(12)
             .margin_bottom(57)
@@ -201,7 +168,7 @@ pub fn plot_layout_solid_angle(path: &Path, layout: &HemisphereLayout) -> Result
             .y_label_area_size(80)
             .caption("sr", ("sans-serif", 16))
             .build_cartesian_2d(0f64..1.0, lo..hi)
-            .map_err(|e| e.to_string())?;
+            .map_err(Error::plot(path))?;
         scale
             .configure_mesh()
             .disable_mesh()
@@ -209,7 +176,7 @@ pub fn plot_layout_solid_angle(path: &Path, layout: &HemisphereLayout) -> Result
             .y_label_formatter(&|v| format!("{v:.2e}"))
             .label_style(("sans-serif", 13))
             .draw()
-            .map_err(|e| e.to_string())?;
+            .map_err(Error::plot(path))?;
         let steps = 200;
         scale
             .draw_series((0..steps).map(|i| {
@@ -218,7 +185,7 @@ pub fn plot_layout_solid_angle(path: &Path, layout: &HemisphereLayout) -> Result
                 let colour = ViridisRGB::get_color_normalized(0.5 * (a + b), lo, hi);
                 Rectangle::new([(0.0, a), (1.0, b)], colour.filled())
             }))
-            .map_err(|e| e.to_string())?;
+            .map_err(Error::plot(path))?;
         Ok(())
     })
 }

@@ -1,5 +1,6 @@
 //! Cost floors for the lookup-versus-ray-casting comparison (`benches/field.rs`,
-//! `examples/ao_cost.rs`): two [`Visibility`] backends that do strictly less work than any field
+//! `examples/ao_cost.rs`, tested by `tests/floor.rs`, each including this file with
+//! `#[path = "…/benches/support/floor.rs"] mod floor;`): two [`Visibility`] backends that do strictly less work than any field
 //! lookup must do on the same rays, so that "ray casting time / floor time" bounds the speed-up
 //! that any field lookup can reach there.
 //!
@@ -12,12 +13,13 @@
 //!   lookup also moves each ray into the field's model space), without choosing a map or a
 //!   texel and without reading the field.
 //!
-//! Neither answers visibility; they exist to be timed.
+//! Neither answers visibility; they exist to be timed, which is why they live beside the
+//! benches and not in the library.
 
-use super::Visibility;
-use crate::field::lookup::SphereOrigin;
-use crate::field::scene::{FieldInstance, FieldScene};
 use glam::Vec3;
+use visfield::field::lookup::SphereOrigin;
+use visfield::field::scene::{FieldInstance, FieldScene};
+use visfield::render::Visibility;
 
 /// Every ray free, at no cost ([module docs](self)).
 #[derive(Clone, Copy, Debug, Default)]
@@ -97,56 +99,5 @@ impl Visibility for SphereCull<'_> {
                 *o = *o || Self::entry(inst, &from, origin, d, tmin, tmax).is_some();
             }
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::geometry::{Similarity, Sphere};
-    use std::sync::Arc;
-
-    /// A field of one sphere of radius 1 at (0, 0, 5) (its texels do not matter here).
-    fn scene() -> FieldScene {
-        let bounds = Sphere {
-            center: Vec3::new(0.0, 0.0, 5.0),
-            radius: 1.0,
-        };
-        let field = crate::field::constant_field(1.0, bounds);
-        FieldScene {
-            instances: vec![FieldInstance::new(Arc::new(field), Similarity::default())],
-            options: Default::default(),
-        }
-    }
-
-    #[test]
-    fn sphere_cull_answers_whether_the_segment_meets_the_sphere() {
-        let fs = scene();
-        let cull = SphereCull(&fs);
-        let o = Vec3::ZERO;
-        let toward = Vec3::Z;
-        let past = Vec3::new(0.3, 0.0, 1.0).normalize(); // 5·0.3/1.04 ≈ 1.44 > 1 from the centre
-        let grazing_in = Vec3::new(0.19, 0.0, 1.0).normalize(); // ≈ 0.93 from the centre
-        assert_eq!(cull.hit_distance(o, toward, 0.0, 10.0), Some(4.0));
-        assert!(!cull.occluded(o, past, 0.0, 10.0));
-        assert!(cull.occluded(o, grazing_in, 0.0, 10.0));
-        assert!(
-            !cull.occluded(o, toward, 0.0, 3.9),
-            "segment ends before the sphere"
-        );
-        assert!(
-            !cull.occluded(o, -toward, 0.0, 10.0),
-            "sphere behind the ray"
-        );
-        assert_eq!(
-            cull.hit_distance(Vec3::new(0.0, 0.0, 5.0), Vec3::X, 0.0, 1.0),
-            Some(0.0)
-        );
-        let dirs = [toward, past, grazing_in, -toward];
-        let mut out = [true; 4];
-        cull.occluded_many(o, &dirs, 0.0, 10.0, &mut out);
-        assert_eq!(out, [true, false, true, false]);
-        NoQuery.occluded_many(o, &dirs, 0.0, 10.0, &mut out);
-        assert_eq!(out, [false; 4]);
     }
 }
