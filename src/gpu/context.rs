@@ -138,7 +138,10 @@ impl GpuContext {
                 ..Default::default()
             })
             .await
-            .map_err(|e| GpuError::Device(e.to_string()))?;
+            .map_err(|source| GpuError::RequestDevice {
+                what: format!("opening a device on adapter {:?}", info.name),
+                source,
+            })?;
         Ok(GpuContext {
             device,
             queue,
@@ -344,13 +347,25 @@ impl GpuContext {
         });
         self.device
             .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| GpuError::Device(e.to_string()))?;
+            .map_err(|source| GpuError::Poll {
+                what: "waiting for a read-back buffer's mapping",
+                source,
+            })?;
         rx.recv()
-            .map_err(|e| GpuError::Device(e.to_string()))?
-            .map_err(|e| GpuError::Device(e.to_string()))?;
+            .map_err(|source| GpuError::MapCallback {
+                what: "mapping a read-back buffer",
+                source,
+            })?
+            .map_err(|source| GpuError::Map {
+                what: "mapping a read-back buffer",
+                source,
+            })?;
         let bytes = buffer
             .get_mapped_range(..)
-            .map_err(|e| GpuError::Device(e.to_string()))?
+            .map_err(|source| GpuError::MappedRange {
+                what: "reading a mapped read-back buffer",
+                source,
+            })?
             .to_vec();
         buffer.unmap();
         Ok(bytes)

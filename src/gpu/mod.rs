@@ -45,8 +45,46 @@ pub enum GpuError {
         requested: String,
         available: String,
     },
-    #[error("device: {0}")]
-    Device(String),
+    /// The adapter refused to open a device with its own limits and features.
+    #[error("{what}: {source}")]
+    RequestDevice {
+        /// The request, with the adapter named.
+        what: String,
+        #[source]
+        source: wgpu::RequestDeviceError,
+    },
+    /// Waiting for the device (`Device::poll`) failed.
+    #[error("{what}: {source}")]
+    Poll {
+        /// What was waited for.
+        what: &'static str,
+        #[source]
+        source: wgpu::PollError,
+    },
+    /// Mapping a read-back buffer failed.
+    #[error("{what}: {source}")]
+    Map {
+        /// The buffer and the operation.
+        what: &'static str,
+        #[source]
+        source: wgpu::BufferAsyncError,
+    },
+    /// The map callback was dropped without answering (the device was lost).
+    #[error("{what}: {source}")]
+    MapCallback {
+        /// The buffer and the operation.
+        what: &'static str,
+        #[source]
+        source: std::sync::mpsc::RecvError,
+    },
+    /// Reading the mapped range of a read-back buffer failed.
+    #[error("{what}: {source}")]
+    MappedRange {
+        /// The buffer and the operation.
+        what: &'static str,
+        #[source]
+        source: wgpu::MapRangeError,
+    },
     #[error("shader {shader}: {message}")]
     Shader { shader: String, message: String },
     #[error("unsupported on the GPU path: {0}")]
