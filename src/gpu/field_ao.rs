@@ -81,16 +81,34 @@ impl Default for FieldGpuOptions {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 struct AoParamsGpu {
-    /// Points, rays per point, instances, threads per dispatch row.
-    counts: [u32; 4],
-    /// Selection (0 nearest, 1 interpolated), rays per invocation, invocations per point,
-    /// trips of the completion loop.
-    mode: [u32; 4],
-    /// Origin offset, tmax, intra-object bias, 1.0 when the bias scales the field's own
-    /// tolerance ([`IntraBias::Auto`]) else 0.0.
-    ray: [f32; 4],
+    /// Receiver points in this dispatch.
+    point_count: u32,
+    /// Rays per point (the base directions).
+    rays_per_point: u32,
+    /// Field instances.
+    instance_count: u32,
+    /// Invocations per row of the dispatch grid.
+    row_stride: u32,
+    /// Selection ([`selection_code`]: 0 nearest, 1 interpolated).
+    selection: u32,
+    /// Rays one invocation traces.
+    rays_per_invocation: u32,
+    /// Invocations per point.
+    invocations_per_point: u32,
+    /// Trips of the completion loop ([`COMPLETION_TRIPS`]).
+    completion_trips: u32,
+    /// Ray origin offset along the normal.
+    origin_offset: f32,
+    /// Largest hit distance.
+    tmax: f32,
+    /// Intra-object bias: a fraction of 2R, or the scale of the field's own tolerance.
+    intra_bias: f32,
+    /// 1 when `intra_bias` scales the field's own tolerance ([`IntraBias::Auto`]), else 0.
+    intra_auto: u32,
 }
 const _: () = assert!(std::mem::size_of::<AoParamsGpu>() == 48);
+const _: () = assert!(std::mem::offset_of!(AoParamsGpu, selection) == 16);
+const _: () = assert!(std::mem::offset_of!(AoParamsGpu, origin_offset) == 32);
 
 /// One lookup as the GPU answers it (see [`FieldAoKernel::probe`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -186,8 +204,10 @@ impl<'a> FieldAoKernel<'a> {
                 for (inst, &fi) in packed.instances.iter_mut().zip(&packed.field_of_instance) {
                     let (tx, per_slice) = tex.tiles(fi);
                     let (tile_w, tile_h) = tex.tile_shape(fi);
-                    inst.tables[3] = tx;
-                    inst.extra = [per_slice, tile_w, tile_h, 0];
+                    inst.tiles_per_row = tx;
+                    inst.tiles_per_slice = per_slice;
+                    inst.tile_width = tile_w;
+                    inst.tile_height = tile_h;
                 }
                 let prelude = tex.prelude(FIXED_BINDINGS);
                 let bytes = tex.bytes();
@@ -202,6 +222,7 @@ impl<'a> FieldAoKernel<'a> {
         let source = [
             prelude.as_str(),
             include_str!("../../shaders/frame.wgsl"),
+            include_str!("../../shaders/receiver.wgsl"),
             include_str!("../../shaders/sphere_points.wgsl"),
             include_str!("../../shaders/layouts.wgsl"),
             include_str!("../../shaders/field_lookup.wgsl"),
@@ -294,29 +315,28 @@ impl<'a> FieldAoKernel<'a> {
             .ctx
             .storage_buffer("ray directions", bytemuck::cast_slice(&base));
         let tmax = opts.max_distance.unwrap_or(f32::MAX).min(f32::MAX);
+        let (intra_bias, intra_auto) = match self.lookup.intra_bias {
+            IntraBias::Auto { scale } => (scale, 1),
+            IntraBias::Fixed(f) => (f, 0),
+        };
         let mut params = AoParamsGpu {
-            counts: [0, base.len() as u32, self.instance_count, 0],
-            mode: [
-                selection_code(self.lookup.selection),
-                0,
-                0,
-                COMPLETION_TRIPS,
-            ],
-            ray: {
-                let (bias, auto) = match self.lookup.intra_bias {
-                    IntraBias::Auto { scale } => (scale, 1.0),
-                    IntraBias::Fixed(f) => (f, 0.0),
-                };
-                [opts.offset, tmax, bias, auto]
-            },
+            rays_per_point: base.len() as u32,
+            instance_count: self.instance_count,
+            selection: selection_code(self.lookup.selection),
+            completion_trips: COMPLETION_TRIPS,
+            origin_offset: opts.offset,
+            tmax,
+            intra_bias,
+            intra_auto,
+            ..Default::default()
         };
         let (ao, kernel, upload) = free_fractions(
             &self.rays_per_invocation,
             base.len() as u32,
             recv.len(),
             |per_invocation, per_point| {
-                params.mode[1] = per_invocation;
-                params.mode[2] = per_point;
+                params.rays_per_invocation = per_invocation;
+                params.invocations_per_point = per_point;
                 self.run(&self.ao, params, &recv, Some(&dirs), per_point, 1)
             },
         )?;
@@ -346,12 +366,14 @@ impl<'a> FieldAoKernel<'a> {
             .iter()
             .zip(dirs)
             .map(|(p, d)| ReceiverGpu {
-                p: p.extend(0.0).to_array(),
-                n: d.extend(0.0).to_array(),
+                position: p.to_array(),
+                normal: d.to_array(),
+                ..Default::default()
             })
             .collect();
         let params = AoParamsGpu {
-            counts: [u.len() as u32, 0, self.instance_count, 0],
+            point_count: u.len() as u32,
+            instance_count: self.instance_count,
             ..Default::default()
         };
         let (words, _, _) = self.run(&self.probe, params, &recv, None, 1, 4)?;
@@ -381,8 +403,8 @@ impl<'a> FieldAoKernel<'a> {
         let shape = (threads_per_item, words_per_thread);
         self.ctx
             .run_batched(pipeline, recv, "receiver", shape, |part, stride, out| {
-                params.counts[0] = part.len() as u32;
-                params.counts[3] = stride;
+                params.point_count = part.len() as u32;
+                params.row_stride = stride;
                 let uniform = self
                     .ctx
                     .uniform_buffer("ao params", bytemuck::bytes_of(&params));
