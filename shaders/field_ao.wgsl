@@ -36,13 +36,12 @@ struct Params {
     intra_auto: u32,
 }
 
+// The kernel's own bindings (src/gpu/field_ao.rs); `tables`, `mesh`, `instances` and the stored
+// distances are the field group's (src/gpu/field_binding.rs).
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<storage, read> receivers: array<Receiver>;
-@group(0) @binding(2) var<storage, read> tables: array<vec4<f32>>;
-@group(0) @binding(3) var<storage, read> mesh: array<vec4<u32>>;
-@group(0) @binding(4) var<storage, read> instances: array<Instance>;
-@group(0) @binding(5) var<storage, read_write> out: array<u32>;
-@group(0) @binding(6) var<storage, read> dirs: array<vec4<f32>>;
+@group(0) @binding(2) var<storage, read_write> out: array<u32>;
+@group(0) @binding(3) var<storage, read> dirs: array<vec4<f32>>;
 
 @compute @workgroup_size(64)
 fn ao_main(@builtin(global_invocation_id) gid: vec3<u32>) {

@@ -161,6 +161,7 @@ impl<'a> ReliefKernel<'a> {
         let packed = start.elapsed();
         let (words, kernel, upload) = ctx.run_batched(
             &self.pipeline,
+            &[],
             &data,
             "relief segment",
             (1, 2),

@@ -260,7 +260,7 @@ impl<'a> GpuTracer<'a> {
         }
         let dir_buf = dirs.map(|d| ctx.storage_buffer("directions", bytemuck::cast_slice(d)));
         let shape = (threads_per_item, words_per_thread);
-        ctx.run_batched(pipeline, records, "ray", shape, |part, stride, out| {
+        ctx.run_batched(pipeline, &[], records, "ray", shape, |part, stride, out| {
             params.ray_count = part.len() as u32;
             params.row_stride = stride;
             params.node_count = self.node_count;
