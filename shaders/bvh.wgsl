@@ -8,25 +8,41 @@
 // through, but the reported triangle may differ from the host's on exact edge hits.
 // Node test: box entry from the ray's tmin (obvhs uses a fixed 1e-4), boxes padded on the host.
 
-// Mirrors `TraceParamsGpu` (src/gpu/tracer.rs).
+// Mirrors `TraceParamsGpu` (src/gpu/tracer.rs), 48 bytes.
 struct Params {
-    // Rays (or points), rays per point, threads per dispatch row, node count.
-    counts: vec4<u32>,
-    // Origin offset along the normal, tmax (AO), unused x2.
-    ray: vec4<f32>,
-    // AO: rays per invocation, invocations per point, trips of the completion loop, unused.
-    split: vec4<u32>,
+    // Rays (or receiver points for AO) in this dispatch.
+    ray_count: u32,
+    // AO: rays per point (the base directions in `dirs`).
+    rays_per_point: u32,
+    // Invocations per row of the dispatch grid (i = gid.x + gid.y * row_stride).
+    row_stride: u32,
+    // CWBVH nodes (0: an empty scene).
+    node_count: u32,
+    // AO: ray origin offset along the normal.
+    origin_offset: f32,
+    // AO: largest hit distance.
+    tmax: f32,
+    _pad0: u32,
+    _pad1: u32,
+    // AO: rays one invocation traces.
+    rays_per_invocation: u32,
+    // AO: invocations per point.
+    invocations_per_point: u32,
+    // AO: trips of the completion loop (loop_budget.wgsl).
+    completion_trips: u32,
+    _pad2: u32,
 }
 
-// Mirrors `RayGpu`: origin and tmin; direction and tmax.
+// One query ray. Mirrors `RayGpu` (src/gpu/tracer.rs), 32 bytes.
 struct Ray {
-    o: vec4<f32>,
-    d: vec4<f32>,
-}
-
-struct Receiver {
-    p: vec4<f32>,
-    n: vec4<f32>,
+    // Origin.
+    origin: vec3<f32>,
+    // Smallest hit distance.
+    tmin: f32,
+    // Direction (unit length).
+    direction: vec3<f32>,
+    // Largest hit distance.
+    tmax: f32,
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
@@ -150,7 +166,7 @@ struct TraceResult {
 
 fn trace_ray(o: vec3<f32>, d: vec3<f32>, tmin: f32, tmax_in: f32, any_hit: bool) -> TraceResult {
     var res = TraceResult(tmax_in, 0xffffffffu);
-    if params.counts.w == 0u || tmin > tmax_in {
+    if params.node_count == 0u || tmin > tmax_in {
         return res;
     }
     let inv_d = vec3<f32>(safe_inverse(d.x), safe_inverse(d.y), safe_inverse(d.z));
@@ -213,56 +229,57 @@ fn original_index(id: u32) -> u32 {
 
 @compute @workgroup_size(64)
 fn any_main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x + gid.y * params.counts.z;
-    if i >= params.counts.x {
+    let i = gid.x + gid.y * params.row_stride;
+    if i >= params.ray_count {
         return;
     }
     let r = rays[i];
-    let h = trace_ray(r.o.xyz, r.d.xyz, r.o.w, r.d.w, true);
+    let h = trace_ray(r.origin, r.direction, r.tmin, r.tmax, true);
     out[i] = select(0u, 1u, h.id != 0xffffffffu);
 }
 
 @compute @workgroup_size(64)
 fn closest_main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x + gid.y * params.counts.z;
-    if i >= params.counts.x {
+    let i = gid.x + gid.y * params.row_stride;
+    if i >= params.ray_count {
         return;
     }
     let r = rays[i];
-    let h = trace_ray(r.o.xyz, r.d.xyz, r.o.w, r.d.w, false);
+    let h = trace_ray(r.origin, r.direction, r.tmin, r.tmax, false);
     out[2u * i] = bitcast<u32>(h.t);
     out[2u * i + 1u] = select(0xffffffffu, original_index(h.id), h.id != 0xffffffffu);
 }
 
-// Vertex AO by ray casting: `rays` holds the receivers (as Receiver records) and `dirs` the
-// base directions, as in shaders/field_ao.wgsl. Each invocation casts one run of a point's rays
-// and writes the number of free rays, or CUT_SHORT when the driver cut its loops short
-// (shaders/loop_budget.wgsl); the host adds up a point's runs.
+// Vertex AO by ray casting: `receivers` holds the points and `dirs` the base directions, as in
+// shaders/field_ao.wgsl. Each invocation casts one run of a point's rays and writes the number
+// of free rays, or CUT_SHORT when the driver cut its loops short (shaders/loop_budget.wgsl); the
+// host adds up a point's runs.
 @group(0) @binding(5) var<storage, read> dirs: array<vec4<f32>>;
+@group(0) @binding(6) var<storage, read> receivers: array<Receiver>;
 
 @compute @workgroup_size(64)
 fn ao_main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x + gid.y * params.counts.z;
-    let per_point = params.split.y;
-    if i >= params.counts.x * per_point {
+    let i = gid.x + gid.y * params.row_stride;
+    let per_point = params.invocations_per_point;
+    if i >= params.ray_count * per_point {
         return;
     }
-    let first = (i % per_point) * params.split.x;
-    let last = min(first + params.split.x, params.counts.y);
-    let rc = rays[i / per_point];
-    let nrm = rc.d.xyz;
-    let cs = rc.o.w;
-    let sn = rc.d.w;
+    let first = (i % per_point) * params.rays_per_invocation;
+    let last = min(first + params.rays_per_invocation, params.rays_per_point);
+    let rc = receivers[i / per_point];
+    let nrm = rc.normal;
+    let cs = rc.rotation_cos;
+    let sn = rc.rotation_sin;
     let frame = frame_from_normal(nrm);
-    let origin = rc.o.xyz + params.ray.x * nrm;
+    let origin = rc.position + params.origin_offset * nrm;
     var free = 0u;
     for (var r = first; r < last; r++) {
         let b = dirs[r].xyz;
         let local = vec3<f32>(cs * b.x - sn * b.y, sn * b.x + cs * b.y, b.z);
         let dir = frame_to_world(frame, local);
-        if trace_ray(origin, dir, 0.0, params.ray.y, true).id == 0xffffffffu {
+        if trace_ray(origin, dir, 0.0, params.tmax, true).id == 0xffffffffu {
             free += 1u;
         }
     }
-    out[i] = select(CUT_SHORT, free, loops_completed(params.split.z));
+    out[i] = select(CUT_SHORT, free, loops_completed(params.completion_trips));
 }

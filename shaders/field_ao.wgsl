@@ -8,56 +8,65 @@
 // `probe_main` answers single lookups (nearest map, texel, both selections) so that the host
 // can compare every stage with the CPU path.
 
-// Mirrors `AoParamsGpu` (src/gpu/field_ao.rs).
+// Mirrors `AoParamsGpu` (src/gpu/field_ao.rs), 48 bytes.
 struct Params {
-    // Points, rays per point, instances, threads per dispatch row.
-    counts: vec4<u32>,
-    // Selection (0 nearest, 1 interpolated), rays per invocation, invocations per point, trips
-    // of the completion loop.
-    mode: vec4<u32>,
-    // Origin offset along the normal, tmax, intra-object bias (a fraction of 2R, or the scale of
-    // the field's own tolerance), 1 when the bias is such a scale (`IntraBias::Auto`).
-    ray: vec4<f32>,
+    // Receiver points in this dispatch.
+    point_count: u32,
+    // Rays per point (the base directions in `dirs`).
+    rays_per_point: u32,
+    // Field instances.
+    instance_count: u32,
+    // Invocations per row of the dispatch grid (i = gid.x + gid.y * row_stride).
+    row_stride: u32,
+    // Selection (SELECT_NEAREST, SELECT_INTERPOLATED).
+    selection: u32,
+    // Rays one invocation traces.
+    rays_per_invocation: u32,
+    // Invocations per point.
+    invocations_per_point: u32,
+    // Trips of the completion loop (loop_budget.wgsl).
+    completion_trips: u32,
+    // Ray origin offset along the normal.
+    origin_offset: f32,
+    // Largest hit distance.
+    tmax: f32,
+    // Intra-object bias: a fraction of 2R, or the scale of the field's own tolerance.
+    intra_bias: f32,
+    // 1 when `intra_bias` scales the field's own tolerance (`IntraBias::Auto`), else 0.
+    intra_auto: u32,
 }
 
-// Mirrors `ReceiverGpu`: position and cos of the point's ray rotation; normal and sin.
-struct Receiver {
-    p: vec4<f32>,
-    n: vec4<f32>,
-}
-
+// The kernel's own bindings (src/gpu/field_ao.rs); `tables`, `mesh`, `instances` and the stored
+// distances are the field group's (src/gpu/field_binding.rs).
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<storage, read> receivers: array<Receiver>;
-@group(0) @binding(2) var<storage, read> tables: array<vec4<f32>>;
-@group(0) @binding(3) var<storage, read> mesh: array<vec4<u32>>;
-@group(0) @binding(4) var<storage, read> instances: array<Instance>;
-@group(0) @binding(5) var<storage, read_write> out: array<u32>;
-@group(0) @binding(6) var<storage, read> dirs: array<vec4<f32>>;
+@group(0) @binding(2) var<storage, read_write> out: array<u32>;
+@group(0) @binding(3) var<storage, read> dirs: array<vec4<f32>>;
 
 @compute @workgroup_size(64)
 fn ao_main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x + gid.y * params.counts.w;
-    let per_point = params.mode.z;
-    if i >= params.counts.x * per_point {
+    let i = gid.x + gid.y * params.row_stride;
+    let per_point = params.invocations_per_point;
+    if i >= params.point_count * per_point {
         return;
     }
-    let first = (i % per_point) * params.mode.y;
-    let last = min(first + params.mode.y, params.counts.y);
+    let first = (i % per_point) * params.rays_per_invocation;
+    let last = min(first + params.rays_per_invocation, params.rays_per_point);
     let rc = receivers[i / per_point];
-    let nrm = rc.n.xyz;
-    let cs = rc.p.w;
-    let sn = rc.n.w;
+    let nrm = rc.normal;
+    let cs = rc.rotation_cos;
+    let sn = rc.rotation_sin;
     let frame = frame_from_normal(nrm);
-    let origin = rc.p.xyz + params.ray.x * nrm;
-    let tmax = params.ray.y;
+    let origin = rc.position + params.origin_offset * nrm;
+    let tmax = params.tmax;
     var free = 0u;
     for (var r = first; r < last; r++) {
         let b = dirs[r].xyz;
         let local = vec3<f32>(cs * b.x - sn * b.y, sn * b.x + cs * b.y, b.z);
         let dir = frame_to_world(frame, local);
         var blocked = false;
-        for (var k = 0u; k < params.counts.z; k++) {
-            if instance_occludes(instances[k], origin, dir, 0.0, tmax, params.mode.x, params.ray.z, params.ray.w != 0.0) {
+        for (var k = 0u; k < params.instance_count; k++) {
+            if instance_occludes(instances[k], origin, dir, 0.0, tmax, params.selection, params.intra_bias, params.intra_auto != 0u) {
                 blocked = true;
                 break;
             }
@@ -66,24 +75,24 @@ fn ao_main(@builtin(global_invocation_id) gid: vec3<u32>) {
             free += 1u;
         }
     }
-    out[i] = select(CUT_SHORT, free, loops_completed(params.mode.w));
+    out[i] = select(CUT_SHORT, free, loops_completed(params.completion_trips));
 }
 
-// Probe i: unit point u = receivers[i].p.xyz and model direction receivers[i].n.xyz on the
+// Probe i: unit point u = receivers[i].position and model direction receivers[i].normal on the
 // field of instance 0; writes (nearest map, texel, nearest sample bits, interpolated bits).
 @compute @workgroup_size(64)
 fn probe_main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x + gid.y * params.counts.w;
-    if i >= params.counts.x {
+    let i = gid.x + gid.y * params.row_stride;
+    if i >= params.point_count {
         return;
     }
     let inst = instances[0];
-    let u = receivers[i].p.xyz;
-    let dir = receivers[i].n.xyz;
-    let pbase = inst.tables.x;
-    let m = nearest_point(u, inst.kind.x, inst.kind.z, pbase);
+    let u = receivers[i].position;
+    let dir = receivers[i].normal;
+    let pbase = inst.point_base;
+    let m = nearest_point(u, inst.sphere_kind, inst.ring_param, pbase);
     let local = frame_to_local(frame_from_normal(-sphere_point(pbase, m)), dir);
-    let t = layout_to_texel(inst.kind.w, inst.data.x, local);
+    let t = layout_to_texel(inst.layout_kind, inst.resolution, local);
     out[4u * i] = m;
     out[4u * i + 1u] = t;
     out[4u * i + 2u] = bitcast<u32>(field_sample(inst, u, dir, SELECT_NEAREST));

@@ -7,26 +7,59 @@
 const SELECT_NEAREST: u32 = 0u;
 const SELECT_INTERPOLATED: u32 = 1u;
 
-// One placed field. Mirrors `FieldInstanceGpu` (src/gpu/field_data.rs).
+// One placed field. Mirrors `FieldInstanceGpu` (src/gpu/field_data.rs), 144 bytes.
 struct Instance {
     // World -> model rotation as a unit quaternion (x, y, z, w).
     rotation: vec4<f32>,
-    // World translation (xyz) and uniform scale (w): world = t + s R model.
-    translation: vec4<f32>,
-    // World-space bounding sphere (centre, radius).
-    world_sphere: vec4<f32>,
-    // Model-space bounding sphere (centre, radius).
-    model_sphere: vec4<f32>,
-    // Sphere kind, map count, ring parameter (Slater n or lat-long rows), layout kind.
-    kind: vec4<u32>,
-    // Resolution, precision, first data word (or first texture tile), first mean (tables index).
-    data: vec4<u32>,
-    // First point (tables index), first triangle (mesh index), walk step cap, tiles per row.
-    tables: vec4<u32>,
-    // Tiles per slice (texture layout), unused.
-    extra: vec4<u32>,
-    // Intra-object tolerance: positional part (model units), directional part (radians), unused.
-    intra: vec4<f32>,
+    // World translation: world = translation + scale R model.
+    translation: vec3<f32>,
+    // Uniform scale.
+    scale: f32,
+    // Centre of the world-space bounding sphere.
+    world_center: vec3<f32>,
+    // Radius of the world-space bounding sphere.
+    world_radius: f32,
+    // Centre of the model-space bounding sphere.
+    model_center: vec3<f32>,
+    // Radius of the model-space bounding sphere.
+    model_radius: f32,
+    // Sphere kind (SPHERE_SLATER, SPHERE_LAT_LONG).
+    sphere_kind: u32,
+    // Number of maps (sphere points).
+    map_count: u32,
+    // Ring parameter: Slater n or lat-long rows.
+    ring_param: u32,
+    // Layout kind (LAYOUT_POLAR, LAYOUT_REJECTION, LAYOUT_CONCENTRIC).
+    layout_kind: u32,
+    // Map resolution (texels a side).
+    resolution: u32,
+    // Precision (PRECISION_F32, _U16, _U8, _BIT1).
+    storage_precision: u32,
+    // First data word (storage layout) or first texture slice (texture layout).
+    data_base: u32,
+    // First 1-bit mean entry in `tables` (four means an entry).
+    mean_base: u32,
+    // First sphere point entry in `tables`.
+    point_base: u32,
+    // First triangle entry in `mesh`.
+    mesh_base: u32,
+    // Step cap of the interpolated selection's triangle walk.
+    walk_steps: u32,
+    // Tiles per row of a texture slice (texture layout).
+    tiles_per_row: u32,
+    // Tiles per texture slice (texture layout).
+    tiles_per_slice: u32,
+    // Tile width in elements (texture layout).
+    tile_width: u32,
+    // Tile height in elements (texture layout).
+    tile_height: u32,
+    _pad0: u32,
+    // Intra-object tolerance, positional part (model units).
+    intra_positional: f32,
+    // Intra-object tolerance, directional part (radians).
+    intra_directional: f32,
+    _pad1: f32,
+    _pad2: f32,
 }
 
 // glam's `Quat::mul_vec3a`: v (w^2 - b.b) + b 2(v.b) + (b x v) 2w.
@@ -69,18 +102,18 @@ fn ray_sphere(o: vec3<f32>, d: vec3<f32>, c: vec3<f32>, r: f32) -> vec3<f32> {
 // Normalised distance D stored for a ray crossing the sphere at unit `u` with model direction
 // `dir` pointing into the sphere.
 fn field_sample(inst: Instance, u: vec3<f32>, dir: vec3<f32>, selection: u32) -> f32 {
-    let kind = inst.kind.x;
-    let n = inst.kind.z;
-    let lay = inst.kind.w;
-    let res = inst.data.x;
-    let pbase = inst.tables.x;
+    let kind = inst.sphere_kind;
+    let n = inst.ring_param;
+    let lay = inst.layout_kind;
+    let res = inst.resolution;
+    let pbase = inst.point_base;
     let m = nearest_point(u, kind, n, pbase);
     if selection == SELECT_NEAREST {
         let local = frame_to_local(frame_from_normal(-sphere_point(pbase, m)), dir);
         return load_distance(inst, m, layout_to_texel(lay, res, local));
     }
     // Interpolated: hits and misses blended as an occupancy (src/field/lookup.rs).
-    let s = surrounding(u, m, pbase, inst.tables.y, inst.tables.z);
+    let s = surrounding(u, m, pbase, inst.mesh_base, inst.walk_steps);
     var occ = 0.0;
     var dist = 0.0;
     for (var k = 0u; k < 3u; k++) {
@@ -113,17 +146,17 @@ fn field_sample(inst: Instance, u: vec3<f32>, dir: vec3<f32>, selection: u32) ->
 fn instance_occludes(inst: Instance, origin: vec3<f32>, dir: vec3<f32>, tmin: f32, tmax: f32,
                      selection: u32, intra_bias: f32, intra_auto: bool) -> bool {
     // World-space sphere test first (src/field/scene.rs).
-    let ws = ray_sphere(origin, dir, inst.world_sphere.xyz, inst.world_sphere.w);
+    let ws = ray_sphere(origin, dir, inst.world_center, inst.world_radius);
     if ws.z == 0.0 || !(ws.y >= tmin && ws.x <= tmax) {
         return false;
     }
-    let scale = inst.translation.w;
-    let o = quat_rotate(inst.rotation, (origin - inst.translation.xyz) / scale);
+    let scale = inst.scale;
+    let o = quat_rotate(inst.rotation, (origin - inst.translation) / scale);
     let d = normalize_exact(quat_rotate(inst.rotation, dir));
     let lmin = tmin / scale;
     let lmax = tmax / scale;
-    let c = inst.model_sphere.xyz;
-    let r = inst.model_sphere.w;
+    let c = inst.model_center;
+    let r = inst.model_radius;
     let rs = ray_sphere(o, d, c, r);
     if rs.z == 0.0 {
         return false;
@@ -169,7 +202,7 @@ fn instance_occludes(inst: Instance, origin: vec3<f32>, dir: vec3<f32>, tmin: f3
     // `IntraBias::model_units` (src/field/lookup.rs): Auto scales the field's own tolerance.
     var tol = intra_bias * diameter;
     if intra_auto {
-        tol = intra_bias * (inst.intra.x + inst.intra.y * t1);
+        tol = intra_bias * (inst.intra_positional + inst.intra_directional * t1);
     }
     return t > lmin + tol && t <= lmax;
 }

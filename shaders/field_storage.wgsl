@@ -11,14 +11,14 @@ const PRECISION_BIT1: u32 = 3u;
 
 // Per-map mean of a 1-bit field: four means per table entry.
 fn bit1_mean(inst: Instance, m: u32) -> f32 {
-    return tables[inst.data.w + m / 4u][m % 4u];
+    return tables[inst.mean_base + m / 4u][m % 4u];
 }
 
 fn load_distance(inst: Instance, m: u32, t: u32) -> f32 {
-    let res = inst.data.x;
+    let res = inst.resolution;
     let texels = res * res;
-    let base = inst.data.z;
-    let prec = inst.data.y;
+    let base = inst.data_base;
+    let prec = inst.storage_precision;
     if prec == PRECISION_F32 {
         return bitcast<f32>(load_word(base + m * texels + t));
     }

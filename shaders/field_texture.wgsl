@@ -1,8 +1,8 @@
 // Field layout 2: maps as tiles of the slices of a 3D texture (the 2010 paper's packing). The
 // host prepends the `field_tex` binding and `load_element(coords) -> u32`, the raw bits of one
 // element: an f32 distance, a u16 or u8 code, or a 32-bit word of a 1-bit map.
-// Instance fields: data.z = first slice, tables.w = tiles per row, extra = (tiles per slice,
-// tile width, tile height, unused).
+// Instance fields: `data_base` is the first slice; `tiles_per_row`, `tiles_per_slice`,
+// `tile_width` and `tile_height` place the maps in it.
 
 const PRECISION_F32: u32 = 0u;
 const PRECISION_U16: u32 = 1u;
@@ -10,23 +10,23 @@ const PRECISION_U8: u32 = 2u;
 const PRECISION_BIT1: u32 = 3u;
 
 fn bit1_mean(inst: Instance, m: u32) -> f32 {
-    return tables[inst.data.w + m / 4u][m % 4u];
+    return tables[inst.mean_base + m / 4u][m % 4u];
 }
 
 // Element `e` of map `m`'s tile.
 fn load_tile(inst: Instance, m: u32, e: u32) -> u32 {
-    let per_slice = inst.extra.x;
-    let tile_w = inst.extra.y;
-    let tile_h = inst.extra.z;
-    let tiles_x = inst.tables.w;
+    let per_slice = inst.tiles_per_slice;
+    let tile_w = inst.tile_width;
+    let tile_h = inst.tile_height;
+    let tiles_x = inst.tiles_per_row;
     let k = m % per_slice;
     let x = (k % tiles_x) * tile_w + e % tile_w;
     let y = (k / tiles_x) * tile_h + e / tile_w;
-    return load_element(vec3<u32>(x, y, inst.data.z + m / per_slice));
+    return load_element(vec3<u32>(x, y, inst.data_base + m / per_slice));
 }
 
 fn load_distance(inst: Instance, m: u32, t: u32) -> f32 {
-    let prec = inst.data.y;
+    let prec = inst.storage_precision;
     if prec == PRECISION_F32 {
         return bitcast<f32>(load_tile(inst, m, t));
     }

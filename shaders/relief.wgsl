@@ -7,19 +7,29 @@
 // CPU's own bilinear and nearest formulas (not texture units), so that GPU and CPU agree ray by
 // ray.
 
+// Mirrors `ReliefParamsGpu` (src/gpu/relief.rs), 64 bytes.
 struct ReliefParams {
-    // Map width and height (texels), rays in this dispatch, invocations per row of the grid.
+    // Map width and height (texels).
     size: vec2<u32>,
+    // Rays in this dispatch.
     count: u32,
+    // Invocations per row of the dispatch grid (ray = gid.x + gid.y * stride).
     stride: u32,
+    // Linear-search samples per unit of segment length.
     samples_per_unit: f32,
+    // Bisection steps after the linear search.
     bisections: u32,
+    // Rounds of safety-zone skips (0: none).
     skips: u32,
+    // Zone channels in use (entries of `deltas`).
     channels: u32,
     // Half-widths δ of the zone channels (texture units).
     deltas: vec4<f32>,
-    // Trips of the completion loop (loop_budget.wgsl), unused.
-    trips: vec4<u32>,
+    // Trips of the completion loop (loop_budget.wgsl).
+    trips: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: ReliefParams;
@@ -136,7 +146,7 @@ fn relief_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let e = segments[2u * ray].xyz;
     let x = segments[2u * ray + 1u].xyz;
     let hit = cast_ray(e, x);
-    results[ray] = vec2<u32>(hit, select(CUT_SHORT, fetches, loops_completed(params.trips.x)));
+    results[ray] = vec2<u32>(hit, select(CUT_SHORT, fetches, loops_completed(params.trips)));
 }
 
 // `intersect`: λ's bits, or MISS; the fetches are left in `fetches`.

@@ -138,7 +138,10 @@ impl GpuContext {
                 ..Default::default()
             })
             .await
-            .map_err(|e| GpuError::Device(e.to_string()))?;
+            .map_err(|source| GpuError::RequestDevice {
+                what: format!("opening a device on adapter {:?}", info.name),
+                source,
+            })?;
         Ok(GpuContext {
             device,
             queue,
@@ -224,12 +227,24 @@ impl GpuContext {
         })
     }
 
-    /// Compiles a WGSL compute shader, returning the validation error instead of panicking.
+    /// Compiles a WGSL compute shader with the layout derived from the shader, returning the
+    /// validation error instead of panicking.
     pub(crate) fn compute_pipeline(
         &self,
         label: &str,
         source: &str,
         entry: &str,
+    ) -> Result<wgpu::ComputePipeline, GpuError> {
+        self.compute_pipeline_with_layout(label, source, entry, None)
+    }
+
+    /// [`Self::compute_pipeline`] with an explicit pipeline layout (`None`: derived).
+    pub(crate) fn compute_pipeline_with_layout(
+        &self,
+        label: &str,
+        source: &str,
+        entry: &str,
+        layout: Option<&wgpu::PipelineLayout>,
     ) -> Result<wgpu::ComputePipeline, GpuError> {
         let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let module = self
@@ -242,7 +257,7 @@ impl GpuContext {
             .device
             .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some(label),
-                layout: None,
+                layout,
                 module: &module,
                 entry_point: Some(entry),
                 compilation_options: Default::default(),
@@ -258,12 +273,13 @@ impl GpuContext {
     }
 
     /// Runs one compute dispatch of `groups` workgroups (split over the y dimension when it
-    /// passes the per-dimension limit: the shader linearises `gid.x + gid.y · stride`), copies
-    /// `output` back and returns its bytes with the kernel's GPU time where timestamps exist.
+    /// passes the per-dimension limit: the shader linearises `gid.x + gid.y · stride`) with
+    /// `bind_groups` as groups 0, 1, …, copies `output` back and returns its bytes with the
+    /// kernel's GPU time where timestamps exist.
     pub(crate) fn dispatch_and_read(
         &self,
         pipeline: &wgpu::ComputePipeline,
-        bind_group: &wgpu::BindGroup,
+        bind_groups: &[&wgpu::BindGroup],
         groups: u32,
         output: &wgpu::Buffer,
     ) -> Result<(Vec<u8>, Option<Duration>), GpuError> {
@@ -312,7 +328,9 @@ impl GpuContext {
                 timestamp_writes,
             });
             pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, bind_group, &[]);
+            for (i, g) in bind_groups.iter().enumerate() {
+                pass.set_bind_group(i as u32, *g, &[]);
+            }
             if groups > 0 {
                 pass.dispatch_workgroups(gx, gy, 1);
             }
@@ -344,13 +362,25 @@ impl GpuContext {
         });
         self.device
             .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| GpuError::Device(e.to_string()))?;
+            .map_err(|source| GpuError::Poll {
+                what: "waiting for a read-back buffer's mapping",
+                source,
+            })?;
         rx.recv()
-            .map_err(|e| GpuError::Device(e.to_string()))?
-            .map_err(|e| GpuError::Device(e.to_string()))?;
+            .map_err(|source| GpuError::MapCallback {
+                what: "mapping a read-back buffer",
+                source,
+            })?
+            .map_err(|source| GpuError::Map {
+                what: "mapping a read-back buffer",
+                source,
+            })?;
         let bytes = buffer
             .get_mapped_range(..)
-            .map_err(|e| GpuError::Device(e.to_string()))?
+            .map_err(|source| GpuError::MappedRange {
+                what: "reading a mapped read-back buffer",
+                source,
+            })?
             .to_vec();
         buffer.unmap();
         Ok(bytes)
@@ -373,10 +403,11 @@ impl GpuContext {
     /// output to fit one binding each; `bind(batch, stride, out)` makes a batch's bind group,
     /// `stride` being the invocations per row of the dispatch grid (the shader linearises
     /// `gid.x + gid.y · stride`) and `out` the buffer the kernel writes. `item` names an item in
-    /// errors.
+    /// errors. `fixed_groups` are bound as groups 1, 2, … of every batch.
     pub(crate) fn run_batched<T: bytemuck::Pod>(
         &self,
         pipeline: &wgpu::ComputePipeline,
+        fixed_groups: &[&wgpu::BindGroup],
         items: &[T],
         item: &str,
         (threads_per_item, words_per_thread): (u32, u32),
@@ -405,7 +436,9 @@ impl GpuContext {
             let out = self.output_buffer("out", out_bytes);
             let bind_group = bind(part, gx * WORKGROUP, &out);
             upload += t.elapsed();
-            let (bytes, k) = self.dispatch_and_read(pipeline, &bind_group, groups, &out)?;
+            let mut bind_groups = vec![&bind_group];
+            bind_groups.extend_from_slice(fixed_groups);
+            let (bytes, k) = self.dispatch_and_read(pipeline, &bind_groups, groups, &out)?;
             kernel = add_kernel(kernel, k);
             words.extend(bytemuck::pod_collect_to_vec::<u8, u32>(
                 &bytes[..out_bytes as usize],
@@ -426,6 +459,34 @@ pub(crate) fn add_kernel(total: Option<Duration>, k: Option<Duration>) -> Option
 /// A bind-group entry.
 pub(crate) fn entry(binding: u32, resource: wgpu::BindingResource<'_>) -> wgpu::BindGroupEntry<'_> {
     wgpu::BindGroupEntry { binding, resource }
+}
+
+/// A compute-stage storage-buffer layout entry.
+pub(crate) fn storage_layout_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+/// A compute-stage uniform-buffer layout entry.
+pub(crate) fn uniform_layout_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
 }
 
 /// Splits `groups` workgroups into (x, y) with x ≤ `max_dim`, x·y ≥ groups.

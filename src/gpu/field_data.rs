@@ -15,25 +15,66 @@ use std::sync::Arc;
 pub struct FieldInstanceGpu {
     /// World → model rotation (the instance rotation's conjugate), (x, y, z, w).
     pub rotation: [f32; 4],
-    /// World translation and uniform scale (w).
-    pub translation: [f32; 4],
-    pub world_sphere: [f32; 4],
-    pub model_sphere: [f32; 4],
-    /// Sphere kind (0 Slater, 1 lat-long), map count, ring parameter, layout kind
-    /// (0 polar, 1 rejection, 2 concentric).
-    pub kind: [u32; 4],
-    /// Resolution, precision (0 f32, 1 u16, 2 u8, 3 bit1), first data word or tile, first
-    /// mean entry in the tables.
-    pub data: [u32; 4],
-    /// First point entry in the tables, first mesh entry, walk step cap, tiles per row.
-    pub tables: [u32; 4],
-    /// Tiles per slice (texture layout), unused ×3.
-    pub extra: [u32; 4],
+    /// World translation: world = translation + scale · R · model.
+    pub translation: [f32; 3],
+    /// Uniform scale.
+    pub scale: f32,
+    /// Centre of the world-space bounding sphere.
+    pub world_center: [f32; 3],
+    /// Radius of the world-space bounding sphere.
+    pub world_radius: f32,
+    /// Centre of the model-space bounding sphere.
+    pub model_center: [f32; 3],
+    /// Radius of the model-space bounding sphere.
+    pub model_radius: f32,
+    /// Sphere kind (0 Slater, 1 lat-long).
+    pub sphere_kind: u32,
+    /// Number of maps (sphere points).
+    pub map_count: u32,
+    /// Ring parameter: Slater n or lat-long rows.
+    pub ring_param: u32,
+    /// Layout kind (0 polar, 1 rejection, 2 concentric).
+    pub layout_kind: u32,
+    /// Map resolution (texels a side).
+    pub resolution: u32,
+    /// Precision (0 f32, 1 u16, 2 u8, 3 bit1).
+    pub storage_precision: u32,
+    /// First data word (storage layout) or first texture slice (texture layout); set by the
+    /// layout ([`PackedFields::set_data_base`]).
+    pub data_base: u32,
+    /// First 1-bit mean entry in the tables (four means an entry).
+    pub mean_base: u32,
+    /// First sphere point entry in the tables.
+    pub point_base: u32,
+    /// First triangle entry in the mesh.
+    pub mesh_base: u32,
+    /// Step cap of the interpolated selection's triangle walk.
+    pub walk_steps: u32,
+    /// Tiles per row of a texture slice (texture layout).
+    pub tiles_per_row: u32,
+    /// Tiles per texture slice (texture layout).
+    pub tiles_per_slice: u32,
+    /// Tile width in elements (texture layout).
+    pub tile_width: u32,
+    /// Tile height in elements (texture layout).
+    pub tile_height: u32,
+    pub _pad0: u32,
     /// The intra-object tolerance ([`crate::field::IntraTolerance`]): positional part (model
-    /// units), directional part (radians), unused ×2.
-    pub intra: [f32; 4],
+    /// units).
+    pub intra_positional: f32,
+    /// The intra-object tolerance's directional part (radians).
+    pub intra_directional: f32,
+    pub _pad1: f32,
+    pub _pad2: f32,
 }
 const _: () = assert!(std::mem::size_of::<FieldInstanceGpu>() == 144);
+const _: () = assert!(std::mem::offset_of!(FieldInstanceGpu, scale) == 28);
+const _: () = assert!(std::mem::offset_of!(FieldInstanceGpu, model_center) == 48);
+const _: () = assert!(std::mem::offset_of!(FieldInstanceGpu, sphere_kind) == 64);
+const _: () = assert!(std::mem::offset_of!(FieldInstanceGpu, resolution) == 80);
+const _: () = assert!(std::mem::offset_of!(FieldInstanceGpu, point_base) == 96);
+const _: () = assert!(std::mem::offset_of!(FieldInstanceGpu, tiles_per_slice) == 112);
+const _: () = assert!(std::mem::offset_of!(FieldInstanceGpu, intra_positional) == 128);
 
 /// Precision code shared with the shaders.
 pub(crate) fn precision_code(s: &Storage) -> u32 {
@@ -86,14 +127,15 @@ pub(crate) struct PackedFields {
 }
 
 impl PackedFields {
-    /// Packs `instances`. The data references (`data[2]`) are left for the layout to fill.
+    /// Packs `instances`. The data references (`data_base`) and the texture tiles are left for
+    /// the layout to fill.
     pub fn new(instances: &[FieldInstance]) -> Result<Self, GpuError> {
         let mut tables: Vec<[f32; 4]> = Vec::new();
         let mut mesh: Vec<[u32; 4]> = Vec::new();
         let mut fields: Vec<Arc<VisibilityField>> = Vec::new();
         let mut field_of_instance = Vec::with_capacity(instances.len());
-        // Per distinct field: (kind, data, tables) words.
-        let mut records: Vec<([u32; 4], [u32; 4], [u32; 4])> = Vec::new();
+        // Per distinct field: its record with the placement left at zero.
+        let mut records: Vec<FieldInstanceGpu> = Vec::new();
         let mut index: HashMap<*const VisibilityField, usize> = HashMap::new();
         for inst in instances {
             let key = Arc::as_ptr(&inst.field);
@@ -121,16 +163,21 @@ impl PackedFields {
                         mesh.push([a[0], a[1], a[2], 0]);
                     }
                     let steps = 64 + 4 * (f.points.len() as f64).sqrt() as u32;
-                    records.push((
-                        [
-                            sphere,
-                            f.params.count as u32,
-                            ring,
-                            layout_code(f.params.layout),
-                        ],
-                        [f.params.res, precision_code(&f.storage), 0, mean_base],
-                        [point_base, mesh_base, steps, 0],
-                    ));
+                    records.push(FieldInstanceGpu {
+                        sphere_kind: sphere,
+                        map_count: f.params.count as u32,
+                        ring_param: ring,
+                        layout_kind: layout_code(f.params.layout),
+                        resolution: f.params.res,
+                        storage_precision: precision_code(&f.storage),
+                        mean_base,
+                        point_base,
+                        mesh_base,
+                        walk_steps: steps,
+                        intra_positional: f.intra.positional(),
+                        intra_directional: f.intra.directional,
+                        ..Default::default()
+                    });
                     fields.push(inst.field.clone());
                     index.insert(key, fields.len() - 1);
                     fields.len() - 1
@@ -144,23 +191,16 @@ impl PackedFields {
             .map(|(inst, &fi)| {
                 let tr = &inst.transform;
                 let q = tr.rotation.inverse();
-                let (kind, data, tabs) = records[fi];
                 let b = &inst.field.bounds;
                 FieldInstanceGpu {
                     rotation: [q.x, q.y, q.z, q.w],
-                    translation: tr.translation.extend(tr.scale).to_array(),
-                    world_sphere: inst.world_center.extend(inst.world_radius).to_array(),
-                    model_sphere: b.center.extend(b.radius).to_array(),
-                    kind,
-                    data,
-                    tables: tabs,
-                    extra: [0; 4],
-                    intra: [
-                        inst.field.intra.positional(),
-                        inst.field.intra.directional,
-                        0.0,
-                        0.0,
-                    ],
+                    translation: tr.translation.to_array(),
+                    scale: tr.scale,
+                    world_center: inst.world_center.to_array(),
+                    world_radius: inst.world_radius,
+                    model_center: b.center.to_array(),
+                    model_radius: b.radius,
+                    ..records[fi]
                 }
             })
             .collect();
@@ -173,10 +213,10 @@ impl PackedFields {
         })
     }
 
-    /// Sets `data[2]` of every instance from a per-field value.
+    /// Sets `data_base` of every instance from a per-field value.
     pub fn set_data_base(&mut self, base_of_field: &[u32]) {
         for (inst, &fi) in self.instances.iter_mut().zip(&self.field_of_instance) {
-            inst.data[2] = base_of_field[fi];
+            inst.data_base = base_of_field[fi];
         }
     }
 }
@@ -375,17 +415,21 @@ mod tests {
         assert_eq!(packed.fields.len(), 2);
         assert_eq!(packed.field_of_instance, vec![0, 1, 0]);
         let i0 = packed.instances[0];
-        assert_eq!(i0.kind, [0, 26, 2, 2]); // Slater, 26 maps, n = 2, concentric
-        assert_eq!(i0.translation, [1.0, 0.0, 0.0, 2.0]);
+        // Slater, 26 maps, n = 2, concentric.
+        assert_eq!(
+            (i0.sphere_kind, i0.map_count, i0.ring_param, i0.layout_kind),
+            (0, 26, 2, 2)
+        );
+        assert_eq!((i0.translation, i0.scale), ([1.0, 0.0, 0.0], 2.0));
         // The rotation is world → model: its conjugate maps model X to world.
         let q = glam::Quat::from_array(i0.rotation).inverse();
         assert!((q * glam::Vec3::X - tr.rotation * glam::Vec3::X).length() < 1e-6);
         // The first field's points come first; the 1-bit field's means follow its points (26
         // means in 7 entries).
-        assert_eq!(i0.tables[0], 0);
+        assert_eq!(i0.point_base, 0);
         let i1 = packed.instances[1];
-        assert_eq!(i1.data[1], 3);
-        assert_eq!(i1.data[3], i1.tables[0] + 26);
+        assert_eq!(i1.storage_precision, 3);
+        assert_eq!(i1.mean_base, i1.point_base + 26);
         assert_eq!(packed.tables.len(), 26 + 26 + 7);
     }
 }

@@ -6,7 +6,9 @@
 //!   with the adapter's own limits, and [`GpuContext::adapter_label`] for result rows.
 //! - [`FieldAoKernel`]: vertex AO by field lookup (inter- and intra-object, nearest or
 //!   interpolated selection), with the CPU path's ray directions and map selection; fields
-//!   bound as storage-buffer windows or as slices of a 3D texture ([`FieldLayout`]).
+//!   bound as storage-buffer windows or as slices of a 3D texture ([`FieldLayout`]) by the
+//!   field binding every field kernel reuses (src/gpu/field_binding.rs: packing, upload, bind
+//!   group 1 and the WGSL of the lookup).
 //! - [`GpuTracer`]: the GPU ray-cast reference, an obvhs CWBVH traversed in WGSL with the
 //!   watertight triangle test, so that GPU lookup is compared with GPU ray casting on the same
 //!   device.
@@ -15,10 +17,12 @@
 //! - [`GpuTiming`]: GPU timestamps (where the adapter has them) and wall time, separately.
 //!
 //! WGSL lives in `shaders/` and is included at compile time; every uniform and storage struct
-//! has a `#[repr(C)]`, `Pod` twin with a compile-time size assertion.
+//! has a `#[repr(C)]`, `Pod` twin with the same named fields (padding spelled out as `_pad*`)
+//! and compile-time size and offset assertions.
 
 mod context;
 mod field_ao;
+mod field_binding;
 mod field_data;
 mod loop_budget;
 mod rays;
@@ -27,7 +31,8 @@ mod texture;
 mod tracer;
 
 pub use context::{AdapterPreference, GpuContext, ADAPTER_ENV};
-pub use field_ao::{FieldAoKernel, FieldGpuOptions, FieldLayout, LookupProbe};
+pub use field_ao::{FieldAoKernel, FieldGpuOptions, LookupProbe};
+pub use field_binding::FieldLayout;
 pub use field_data::FieldInstanceGpu;
 pub use relief::ReliefKernel;
 pub use tracer::{GpuHit, GpuTracer};
@@ -45,8 +50,46 @@ pub enum GpuError {
         requested: String,
         available: String,
     },
-    #[error("device: {0}")]
-    Device(String),
+    /// The adapter refused to open a device with its own limits and features.
+    #[error("{what}: {source}")]
+    RequestDevice {
+        /// The request, with the adapter named.
+        what: String,
+        #[source]
+        source: wgpu::RequestDeviceError,
+    },
+    /// Waiting for the device (`Device::poll`) failed.
+    #[error("{what}: {source}")]
+    Poll {
+        /// What was waited for.
+        what: &'static str,
+        #[source]
+        source: wgpu::PollError,
+    },
+    /// Mapping a read-back buffer failed.
+    #[error("{what}: {source}")]
+    Map {
+        /// The buffer and the operation.
+        what: &'static str,
+        #[source]
+        source: wgpu::BufferAsyncError,
+    },
+    /// The map callback was dropped without answering (the device was lost).
+    #[error("{what}: {source}")]
+    MapCallback {
+        /// The buffer and the operation.
+        what: &'static str,
+        #[source]
+        source: std::sync::mpsc::RecvError,
+    },
+    /// Reading the mapped range of a read-back buffer failed.
+    #[error("{what}: {source}")]
+    MappedRange {
+        /// The buffer and the operation.
+        what: &'static str,
+        #[source]
+        source: wgpu::MapRangeError,
+    },
     #[error("shader {shader}: {message}")]
     Shader { shader: String, message: String },
     #[error("unsupported on the GPU path: {0}")]

@@ -7,14 +7,21 @@ use super::GpuError;
 use crate::sampling::rays::RaySet;
 use glam::Vec3;
 
-/// Twin of WGSL `Receiver`: position with the cos of the point's rotation, normal with the sin.
+/// Twin of WGSL `Receiver` (shaders/receiver.wgsl): a receiver point of the AO kernels.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct ReceiverGpu {
-    pub p: [f32; 4],
-    pub n: [f32; 4],
+    /// Position (world space); the probe kernel's unit sphere position.
+    pub position: [f32; 3],
+    /// Cos of the point's rotation of the shared base directions about its normal.
+    pub rotation_cos: f32,
+    /// Unit normal (world space); the probe kernel's model direction.
+    pub normal: [f32; 3],
+    /// Sin of the point's rotation.
+    pub rotation_sin: f32,
 }
 const _: () = assert!(std::mem::size_of::<ReceiverGpu>() == 32);
+const _: () = assert!(std::mem::offset_of!(ReceiverGpu, normal) == 16);
 
 /// The unrotated cell-centre directions of `rays` ([`RaySet::base_directions`]), padded to
 /// vec4. Jittered sets differ per point and are refused.
@@ -57,8 +64,10 @@ pub(crate) fn receivers(
         .map(|(i, (p, n))| {
             let (c, s) = rotation(rays, i as u32);
             ReceiverGpu {
-                p: p.extend(c).to_array(),
-                n: n.extend(s).to_array(),
+                position: p.to_array(),
+                rotation_cos: c,
+                normal: n.to_array(),
+                rotation_sin: s,
             }
         })
         .collect())

@@ -19,22 +19,36 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use std::time::{Duration, Instant};
 
-/// `ReliefParams` in `shaders/relief.wgsl`.
+/// Twin of WGSL `ReliefParams` (shaders/relief.wgsl).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 struct ReliefParamsGpu {
+    /// Map width and height (texels).
     size: [u32; 2],
+    /// Rays (segments) in this dispatch.
     count: u32,
+    /// Invocations per row of the dispatch grid.
     stride: u32,
+    /// Linear-search samples per unit of segment length.
     samples_per_unit: f32,
+    /// Bisection steps after the linear search.
     bisections: u32,
+    /// Rounds of safety-zone skips (0: none).
     skips: u32,
+    /// Zone channels in use (entries of `deltas`).
     channels: u32,
+    /// Half-widths δ of the zone channels (texture units).
     deltas: [f32; 4],
-    /// Trips of the completion loop (`loops_completed`), then padding.
-    trips: [u32; 4],
+    /// Trips of the completion loop (`loops_completed`).
+    trips: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 const _: () = assert!(std::mem::size_of::<ReliefParamsGpu>() == 64);
+const _: () = assert!(std::mem::offset_of!(ReliefParamsGpu, samples_per_unit) == 16);
+const _: () = assert!(std::mem::offset_of!(ReliefParamsGpu, deltas) == 32);
+const _: () = assert!(std::mem::offset_of!(ReliefParamsGpu, trips) == 48);
 
 const MISS: u32 = u32::MAX;
 
@@ -147,6 +161,7 @@ impl<'a> ReliefKernel<'a> {
         let packed = start.elapsed();
         let (words, kernel, upload) = ctx.run_batched(
             &self.pipeline,
+            &[],
             &data,
             "relief segment",
             (1, 2),
@@ -160,7 +175,10 @@ impl<'a> ReliefKernel<'a> {
                     skips: params.skips,
                     channels: self.channels,
                     deltas: self.deltas,
-                    trips: [COMPLETION_TRIPS, 0, 0, 0],
+                    trips: COMPLETION_TRIPS,
+                    _pad0: 0,
+                    _pad1: 0,
+                    _pad2: 0,
                 };
                 let uniform = ctx.uniform_buffer("relief params", bytemuck::bytes_of(&uniform));
                 let rays = ctx.storage_buffer("segments", bytemuck::cast_slice(part));

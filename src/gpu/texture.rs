@@ -239,18 +239,29 @@ impl FieldTexture {
             .create_view(&wgpu::TextureViewDescriptor::default())
     }
 
-    /// The texture binding and `load_element(coords) -> u32` (raw bits of one element).
-    pub fn prelude(&self, binding: u32) -> String {
+    /// The texture binding (`@group(group) @binding(binding)`) and
+    /// `load_element(coords) -> u32` (raw bits of one element).
+    pub fn prelude(&self, group: u32, binding: u32) -> String {
         if self.format == wgpu::TextureFormat::R32Float {
             format!(
-                "@group(0) @binding({binding}) var field_tex: texture_3d<f32>;\n\
+                "@group({group}) @binding({binding}) var field_tex: texture_3d<f32>;\n\
                  fn load_element(c: vec3<u32>) -> u32 {{ return bitcast<u32>(textureLoad(field_tex, c, 0).x); }}\n"
             )
         } else {
             format!(
-                "@group(0) @binding({binding}) var field_tex: texture_3d<u32>;\n\
+                "@group({group}) @binding({binding}) var field_tex: texture_3d<u32>;\n\
                  fn load_element(c: vec3<u32>) -> u32 {{ return textureLoad(field_tex, c, 0).x; }}\n"
             )
+        }
+    }
+
+    /// The sample type of the texture binding: unfilterable float for r32float (read with
+    /// `textureLoad` only), unsigned integer otherwise.
+    pub fn sample_type(&self) -> wgpu::TextureSampleType {
+        if self.format == wgpu::TextureFormat::R32Float {
+            wgpu::TextureSampleType::Float { filterable: false }
+        } else {
+            wgpu::TextureSampleType::Uint
         }
     }
 }

@@ -17,27 +17,56 @@ use std::time::{Duration, Instant};
 /// The node struct uploaded as is: WGSL reads it as five `vec4<u32>`.
 const _: () = assert!(std::mem::size_of::<CwBvhNode>() == 80);
 
-/// Twin of WGSL `Ray` (shaders/bvh.wgsl): origin and tmin, direction and tmax.
+/// Twin of WGSL `Ray` (shaders/bvh.wgsl): one query ray.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 struct RayGpu {
-    o: [f32; 4],
-    d: [f32; 4],
+    /// Origin.
+    origin: [f32; 3],
+    /// Smallest hit distance.
+    tmin: f32,
+    /// Direction.
+    direction: [f32; 3],
+    /// Largest hit distance.
+    tmax: f32,
 }
 const _: () = assert!(std::mem::size_of::<RayGpu>() == 32);
+const _: () = assert!(std::mem::offset_of!(RayGpu, direction) == 16);
 
 /// Twin of WGSL `Params` (shaders/bvh.wgsl).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 struct TraceParamsGpu {
-    /// Rays or points, rays per point, threads per dispatch row, node count.
-    counts: [u32; 4],
-    /// Origin offset, tmax (AO), unused ×2.
-    ray: [f32; 4],
-    /// AO: rays per invocation, invocations per point, trips of the completion loop, unused.
-    split: [u32; 4],
+    /// Rays (or receiver points for AO) in this dispatch.
+    ray_count: u32,
+    /// AO: rays per point (the base directions).
+    rays_per_point: u32,
+    /// Invocations per row of the dispatch grid.
+    row_stride: u32,
+    /// CWBVH nodes (0: an empty scene).
+    node_count: u32,
+    /// AO: ray origin offset along the normal.
+    origin_offset: f32,
+    /// AO: largest hit distance.
+    tmax: f32,
+    _pad0: u32,
+    _pad1: u32,
+    /// AO: rays one invocation traces.
+    rays_per_invocation: u32,
+    /// AO: invocations per point.
+    invocations_per_point: u32,
+    /// AO: trips of the completion loop ([`COMPLETION_TRIPS`]).
+    completion_trips: u32,
+    _pad2: u32,
 }
 const _: () = assert!(std::mem::size_of::<TraceParamsGpu>() == 48);
+const _: () = assert!(std::mem::offset_of!(TraceParamsGpu, origin_offset) == 16);
+const _: () = assert!(std::mem::offset_of!(TraceParamsGpu, rays_per_invocation) == 32);
+
+/// Binding of the query rays (any / closest hit) in shaders/bvh.wgsl.
+const RAYS_BINDING: u32 = 3;
+/// Binding of the AO receivers in shaders/bvh.wgsl.
+const RECEIVERS_BINDING: u32 = 6;
 
 /// Box padding relative to the scene extent, as the CPU tracer pads (`2^-18`), so that the
 /// quantised node test stays conservative for the watertight triangle test.
@@ -104,6 +133,7 @@ impl<'a> GpuTracer<'a> {
         }
         let source = [
             include_str!("../../shaders/frame.wgsl"),
+            include_str!("../../shaders/receiver.wgsl"),
             include_str!("../../shaders/loop_budget.wgsl"),
             include_str!("../../shaders/bvh.wgsl"),
         ]
@@ -131,7 +161,7 @@ impl<'a> GpuTracer<'a> {
         let start = Instant::now();
         let (words, kernel, upload) = self.dispatch(
             &self.any,
-            &ray_records(rays),
+            (&ray_records(rays), RAYS_BINDING),
             1,
             1,
             None,
@@ -149,7 +179,7 @@ impl<'a> GpuTracer<'a> {
         let start = Instant::now();
         let (words, kernel, upload) = self.dispatch(
             &self.closest,
-            &ray_records(rays),
+            (&ray_records(rays), RAYS_BINDING),
             1,
             2,
             None,
@@ -180,33 +210,38 @@ impl<'a> GpuTracer<'a> {
         let start = Instant::now();
         let base = base_directions(rays)?;
         let recv = receivers(points, normals, rays)?;
-        let records: Vec<RayGpu> = recv.iter().map(|r| RayGpu { o: r.p, d: r.n }).collect();
         let tmax = opts.max_distance.unwrap_or(f32::MAX).min(f32::MAX);
         let rays_n = base.len() as u32;
         let (ao, kernel, upload) = free_fractions(
             &self.rays_per_invocation,
             rays_n,
-            records.len(),
+            recv.len(),
             |per_invocation, per_point| {
                 let params = TraceParamsGpu {
-                    counts: [0, rays_n, 0, self.node_count],
-                    ray: [opts.offset, tmax, 0.0, 0.0],
-                    split: [per_invocation, per_point, COMPLETION_TRIPS, 0],
+                    rays_per_point: rays_n,
+                    origin_offset: opts.offset,
+                    tmax,
+                    rays_per_invocation: per_invocation,
+                    invocations_per_point: per_point,
+                    completion_trips: COMPLETION_TRIPS,
+                    ..Default::default()
                 };
-                self.dispatch(&self.ao, &records, per_point, 1, Some(&base), params)
+                let records = (&recv[..], RECEIVERS_BINDING);
+                self.dispatch(&self.ao, records, per_point, 1, Some(&base), params)
             },
         )?;
         Ok((ao, timing(kernel, upload, start)))
     }
 
-    /// Dispatches `threads_per_item` threads per record, each writing `words_per_thread`
-    /// words, and reads the words back, record-major; records go in batches small enough for
-    /// their buffer and the output to fit one binding each. `params` gives everything but the
-    /// batch's record count and the dispatch row (set here).
-    fn dispatch(
+    /// Dispatches `threads_per_item` threads per record (`records`: the records and their
+    /// binding), each writing `words_per_thread` words, and reads the words back, record-major;
+    /// records go in batches small enough for their buffer and the output to fit one binding
+    /// each. `params` gives everything but the batch's record count and the dispatch row (set
+    /// here).
+    fn dispatch<T: bytemuck::Pod>(
         &self,
         pipeline: &wgpu::ComputePipeline,
-        records: &[RayGpu],
+        (records, records_binding): (&[T], u32),
         threads_per_item: u32,
         words_per_thread: u32,
         dirs: Option<&[[f32; 4]]>,
@@ -225,17 +260,17 @@ impl<'a> GpuTracer<'a> {
         }
         let dir_buf = dirs.map(|d| ctx.storage_buffer("directions", bytemuck::cast_slice(d)));
         let shape = (threads_per_item, words_per_thread);
-        ctx.run_batched(pipeline, records, "ray", shape, |part, stride, out| {
-            params.counts[0] = part.len() as u32;
-            params.counts[2] = stride;
-            params.counts[3] = self.node_count;
+        ctx.run_batched(pipeline, &[], records, "ray", shape, |part, stride, out| {
+            params.ray_count = part.len() as u32;
+            params.row_stride = stride;
+            params.node_count = self.node_count;
             let uniform = ctx.uniform_buffer("trace params", bytemuck::bytes_of(&params));
-            let rays = ctx.storage_buffer("rays", bytemuck::cast_slice(part));
+            let records = ctx.storage_buffer("records", bytemuck::cast_slice(part));
             let mut entries = vec![
                 entry(0, uniform.as_entire_binding()),
                 entry(1, self.nodes.as_entire_binding()),
                 entry(2, self.tris.as_entire_binding()),
-                entry(3, rays.as_entire_binding()),
+                entry(records_binding, records.as_entire_binding()),
                 entry(4, out.as_entire_binding()),
             ];
             if let Some(b) = &dir_buf {
@@ -253,8 +288,10 @@ impl<'a> GpuTracer<'a> {
 fn ray_records(rays: &[RayQuery]) -> Vec<RayGpu> {
     rays.iter()
         .map(|r| RayGpu {
-            o: r.origin.extend(r.tmin).to_array(),
-            d: r.dir.extend(r.tmax.min(f32::MAX)).to_array(),
+            origin: r.origin.to_array(),
+            tmin: r.tmin,
+            direction: r.dir.to_array(),
+            tmax: r.tmax.min(f32::MAX),
         })
         .collect()
 }

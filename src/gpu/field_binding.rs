@@ -1,0 +1,376 @@
+//! One field binding that every field kernel reuses: a set of [`FieldInstance`]s packed and
+//! uploaded once, in either [`FieldLayout`], and bound as bind group [`FIELD_GROUP`] (Gaitatzes
+//! et al., WSCG 2008 / WSCG 2010: the lookup of placed presampled visibility fields).
+//!
+//! [`FieldBinding`] owns everything the WGSL lookup (`instance_occludes`, `field_sample` in
+//! shaders/field_lookup.wgsl) reads:
+//!
+//! - the per-instance records ([`super::FieldInstanceGpu`]), the shared tables (sphere points,
+//!   1-bit means) and the sphere triangulations ([`PackedFields`]);
+//! - the stored distances: storage-buffer windows of at most the adapter's binding size, or the
+//!   tiles of one 3D texture ([`FieldTexture`]);
+//! - the bind-group layout and the bind group of group [`FIELD_GROUP`] holding them;
+//! - the WGSL text of the lookup: the group's declarations and the layout's `load_word` /
+//!   `load_element`, then frame, sphere points, layouts, lookup and the layout's
+//!   `load_distance` ([`FieldBinding::shader_source`]).
+//!
+//! A field kernel (AO today, [`super::FieldAoKernel`]) builds a `FieldBinding`, declares only
+//! its own bindings in group 0 and its entry points, compiles with
+//! [`FieldBinding::pipeline_layout`], and binds [`FieldBinding::bind_group`] at
+//! [`FIELD_GROUP`].
+//!
+//! Group [`FIELD_GROUP`]'s bindings: 0 `tables`, 1 `mesh`, 2 `instances`, then the windows
+//! `win0`, `win1`, … (storage layout) or `field_tex` (texture layout).
+
+use super::context::{entry, storage_layout_entry, GpuContext};
+use super::field_data::{field_words, PackedFields};
+use super::texture::FieldTexture;
+use super::GpuError;
+use crate::field::scene::FieldInstance;
+
+/// The bind group the field bindings occupy; group 0 is the kernel's own.
+pub(crate) const FIELD_GROUP: u32 = 1;
+
+/// Bindings of the field group before the stored distances (tables, mesh, instances).
+const FIRST_STORE_BINDING: u32 = 3;
+
+/// How the stored distances are bound.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FieldLayout {
+    /// The stored words as they are on the host, in storage buffers bound in windows of at
+    /// most the adapter's `max_storage_buffer_binding_size`.
+    StorageBuffers,
+    /// The 2010 paper's packing: maps as tiles of the slices of a 3D texture (r32float, r16uint,
+    /// r8uint by precision; 1-bit maps as r32uint words), several maps per slice.
+    Texture3d,
+}
+
+/// How a [`FieldBinding`] lays out and sizes the stored distances.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct FieldBindingOptions {
+    pub layout: FieldLayout,
+    /// Largest window in bytes (storage layout); `None`: the adapter's binding limit.
+    pub window_bytes: Option<u64>,
+    /// Largest texture depth (texture layout); `None`: the adapter's limit.
+    pub max_texture_depth: Option<u32>,
+    /// Storage buffers the kernel binds itself (group 0): the windows get what is left of the
+    /// adapter's `max_storage_buffers_per_shader_stage`.
+    pub kernel_storage_buffers: u32,
+}
+
+/// The fields' stored distances on the device.
+enum FieldStore {
+    /// Storage windows of `window_words` words each (the last may be shorter).
+    Windows {
+        buffers: Vec<wgpu::Buffer>,
+        window_words: usize,
+    },
+    /// One 3D texture and its view.
+    Texture {
+        texture: Box<FieldTexture>,
+        view: wgpu::TextureView,
+    },
+}
+
+/// The field group's resources on the device.
+struct FieldResources {
+    tables: wgpu::Buffer,
+    mesh: wgpu::Buffer,
+    instances: wgpu::Buffer,
+    store: FieldStore,
+}
+
+impl FieldResources {
+    /// Layout entries of the field group.
+    fn layout_entries(&self) -> Vec<wgpu::BindGroupLayoutEntry> {
+        let mut entries: Vec<_> = (0..FIRST_STORE_BINDING)
+            .map(|b| storage_layout_entry(b, true))
+            .collect();
+        match &self.store {
+            FieldStore::Windows { buffers, .. } => entries.extend(
+                (0..buffers.len() as u32)
+                    .map(|i| storage_layout_entry(FIRST_STORE_BINDING + i, true)),
+            ),
+            FieldStore::Texture { texture, .. } => entries.push(wgpu::BindGroupLayoutEntry {
+                binding: FIRST_STORE_BINDING,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: texture.sample_type(),
+                    view_dimension: wgpu::TextureViewDimension::D3,
+                    multisampled: false,
+                },
+                count: None,
+            }),
+        }
+        entries
+    }
+
+    /// Bind-group entries of the field group, in the order of [`Self::layout_entries`].
+    fn entries(&self) -> Vec<wgpu::BindGroupEntry<'_>> {
+        let mut entries = vec![
+            entry(0, self.tables.as_entire_binding()),
+            entry(1, self.mesh.as_entire_binding()),
+            entry(2, self.instances.as_entire_binding()),
+        ];
+        match &self.store {
+            FieldStore::Windows { buffers, .. } => {
+                for (i, w) in buffers.iter().enumerate() {
+                    entries.push(entry(FIRST_STORE_BINDING + i as u32, w.as_entire_binding()));
+                }
+            }
+            FieldStore::Texture { view, .. } => entries.push(entry(
+                FIRST_STORE_BINDING,
+                wgpu::BindingResource::TextureView(view),
+            )),
+        }
+        entries
+    }
+
+    /// The generated WGSL (the group's declarations and the layout's element loader) and the
+    /// layout's `load_distance` source.
+    fn prelude(&self) -> (String, &'static str) {
+        match &self.store {
+            FieldStore::Windows {
+                buffers,
+                window_words,
+            } => (
+                group_prelude() + &window_prelude(buffers.len(), *window_words),
+                include_str!("../../shaders/field_storage.wgsl"),
+            ),
+            FieldStore::Texture { texture, .. } => (
+                group_prelude() + &texture.prelude(FIELD_GROUP, FIRST_STORE_BINDING),
+                include_str!("../../shaders/field_texture.wgsl"),
+            ),
+        }
+    }
+}
+
+/// A set of field instances on the device, bound as group [`FIELD_GROUP`] (see the module
+/// documentation).
+pub(crate) struct FieldBinding {
+    resources: FieldResources,
+    instance_count: u32,
+    /// Group declarations and the layout's element loader (generated).
+    prelude: String,
+    /// The layout's `load_distance` (shaders/field_storage.wgsl or field_texture.wgsl).
+    layout_source: &'static str,
+    field_bytes: u64,
+    group_layout: wgpu::BindGroupLayout,
+    bind_group: wgpu::BindGroup,
+}
+
+impl FieldBinding {
+    /// Packs `instances` (their distinct fields once each), uploads them in `opts.layout` and
+    /// makes the field group's layout and bind group.
+    ///
+    /// Errors: [`GpuError::Unsupported`] for fields the GPU lookup cannot read (Fibonacci point
+    /// sets; mixed precisions in one texture), [`GpuError::TooLarge`] when the fields pass the
+    /// adapter's storage bindings or texture size.
+    pub fn new(
+        ctx: &GpuContext,
+        instances: &[FieldInstance],
+        opts: &FieldBindingOptions,
+    ) -> Result<FieldBinding, GpuError> {
+        let mut packed = PackedFields::new(instances)?;
+        let (store, field_bytes) = match opts.layout {
+            FieldLayout::StorageBuffers => upload_windows(ctx, &mut packed, opts)?,
+            FieldLayout::Texture3d => upload_texture(ctx, &mut packed, opts)?,
+        };
+        let resources = FieldResources {
+            tables: ctx.storage_buffer("tables", bytemuck::cast_slice(&packed.tables)),
+            mesh: ctx.storage_buffer("sphere mesh", bytemuck::cast_slice(&packed.mesh)),
+            instances: ctx.storage_buffer("instances", bytemuck::cast_slice(&packed.instances)),
+            store,
+        };
+        let (prelude, layout_source) = resources.prelude();
+        let group_layout = ctx
+            .device
+            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("field group"),
+                entries: &resources.layout_entries(),
+            });
+        let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("field group"),
+            layout: &group_layout,
+            entries: &resources.entries(),
+        });
+        Ok(FieldBinding {
+            resources,
+            instance_count: packed.instances.len() as u32,
+            prelude,
+            layout_source,
+            field_bytes,
+            group_layout,
+            bind_group,
+        })
+    }
+
+    /// WGSL of the field lookup followed by `kernel` (the kernel's own sources, in order): the
+    /// group's declarations, the layout's element loader, frame, sphere points, layouts, the
+    /// lookup and the layout's `load_distance`.
+    pub fn shader_source(&self, kernel: &[&str]) -> String {
+        let mut parts = vec![
+            self.prelude.as_str(),
+            include_str!("../../shaders/frame.wgsl"),
+            include_str!("../../shaders/sphere_points.wgsl"),
+            include_str!("../../shaders/layouts.wgsl"),
+            include_str!("../../shaders/field_lookup.wgsl"),
+            self.layout_source,
+        ];
+        parts.extend_from_slice(kernel);
+        parts.concat()
+    }
+
+    /// The pipeline layout of a kernel whose own bindings (group 0) are `kernel_group`.
+    pub fn pipeline_layout(
+        &self,
+        ctx: &GpuContext,
+        kernel_group: &wgpu::BindGroupLayout,
+    ) -> wgpu::PipelineLayout {
+        ctx.device
+            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("field kernel"),
+                bind_group_layouts: &[Some(kernel_group), Some(&self.group_layout)],
+                immediate_size: 0,
+            })
+    }
+
+    /// The bind group of group [`FIELD_GROUP`].
+    pub fn bind_group(&self) -> &wgpu::BindGroup {
+        &self.bind_group
+    }
+
+    /// Field instances bound.
+    pub fn instance_count(&self) -> u32 {
+        self.instance_count
+    }
+
+    /// Bytes of stored distances on the device.
+    pub fn field_bytes(&self) -> u64 {
+        self.field_bytes
+    }
+
+    /// Storage windows the fields occupy (storage layout), `None` for the texture layout.
+    pub fn storage_windows(&self) -> Option<usize> {
+        match &self.resources.store {
+            FieldStore::Windows { buffers, .. } => Some(buffers.len()),
+            FieldStore::Texture { .. } => None,
+        }
+    }
+
+    /// Slices of the field texture (texture layout), `None` for the storage layout.
+    pub fn texture_depth(&self) -> Option<u32> {
+        match &self.resources.store {
+            FieldStore::Windows { .. } => None,
+            FieldStore::Texture { texture, .. } => Some(texture.depth()),
+        }
+    }
+}
+
+/// The stored words in windows of at most the binding limit (and `opts.window_bytes`).
+fn upload_windows(
+    ctx: &GpuContext,
+    packed: &mut PackedFields,
+    opts: &FieldBindingOptions,
+) -> Result<(FieldStore, u64), GpuError> {
+    let (words, bases) = field_words(&packed.fields);
+    packed.set_data_base(&bases);
+    let max_binding = ctx.max_binding();
+    let window_bytes = opts.window_bytes.unwrap_or(max_binding).min(max_binding);
+    let window_words = ((window_bytes / 4) / 64 * 64).max(64) as usize;
+    let windows_needed = words.len().div_ceil(window_words).max(1);
+    let max_windows =
+        ctx.limits()
+            .max_storage_buffers_per_shader_stage
+            .saturating_sub(opts.kernel_storage_buffers + FIRST_STORE_BINDING) as usize;
+    if windows_needed > max_windows {
+        return Err(GpuError::TooLarge {
+            what: format!("fields in {windows_needed} storage windows"),
+            need: words.len() as u64 * 4,
+            limit: max_windows as u64 * window_words as u64 * 4,
+            limit_name: "max_storage_buffer_binding_size × free storage bindings",
+        });
+    }
+    let buffers = (0..windows_needed)
+        .map(|w| {
+            let lo = (w * window_words).min(words.len());
+            let hi = ((w + 1) * window_words).min(words.len());
+            ctx.storage_buffer("field window", bytemuck::cast_slice(&words[lo..hi]))
+        })
+        .collect();
+    let store = FieldStore::Windows {
+        buffers,
+        window_words,
+    };
+    Ok((store, words.len() as u64 * 4))
+}
+
+/// The maps as tiles of one 3D texture; the instances learn their tiles.
+fn upload_texture(
+    ctx: &GpuContext,
+    packed: &mut PackedFields,
+    opts: &FieldBindingOptions,
+) -> Result<(FieldStore, u64), GpuError> {
+    let texture = FieldTexture::new(ctx, &packed.fields, opts.max_texture_depth)?;
+    packed.set_data_base(texture.first_tiles());
+    for (inst, &fi) in packed.instances.iter_mut().zip(&packed.field_of_instance) {
+        let (tiles_per_row, tiles_per_slice) = texture.tiles(fi);
+        let (tile_width, tile_height) = texture.tile_shape(fi);
+        inst.tiles_per_row = tiles_per_row;
+        inst.tiles_per_slice = tiles_per_slice;
+        inst.tile_width = tile_width;
+        inst.tile_height = tile_height;
+    }
+    let bytes = texture.bytes();
+    let view = texture.view();
+    let texture = Box::new(texture);
+    Ok((FieldStore::Texture { texture, view }, bytes))
+}
+
+/// The declarations of the field group's tables, mesh and instances.
+fn group_prelude() -> String {
+    format!(
+        "// Field group (src/gpu/field_binding.rs): sphere points and 1-bit means, sphere\n\
+         // triangulations, placed fields.\n\
+         @group({FIELD_GROUP}) @binding(0) var<storage, read> tables: array<vec4<f32>>;\n\
+         @group({FIELD_GROUP}) @binding(1) var<storage, read> mesh: array<vec4<u32>>;\n\
+         @group({FIELD_GROUP}) @binding(2) var<storage, read> instances: array<Instance>;\n"
+    )
+}
+
+/// `WINDOW_WORDS`, the window bindings and `load_word` for `n` windows.
+fn window_prelude(n: usize, window_words: usize) -> String {
+    let mut s = format!("const WINDOW_WORDS: u32 = {window_words}u;\n");
+    for i in 0..n {
+        s += &format!(
+            "@group({FIELD_GROUP}) @binding({}) var<storage, read> win{i}: array<u32>;\n",
+            FIRST_STORE_BINDING as usize + i
+        );
+    }
+    s += "fn load_word(address: u32) -> u32 {\n    let i = address % WINDOW_WORDS;\n    switch address / WINDOW_WORDS {\n";
+    for i in 0..n {
+        s += &format!("        case {i}u: {{ return win{i}[i]; }}\n");
+    }
+    s += "        default: { return 0u; }\n    }\n}\n";
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn window_prelude_declares_every_window_once() {
+        let s = group_prelude() + &window_prelude(3, 1024);
+        assert!(s.contains("const WINDOW_WORDS: u32 = 1024u;"));
+        for b in 0..FIRST_STORE_BINDING + 3 {
+            let decl = format!("@group({FIELD_GROUP}) @binding({b})");
+            assert_eq!(s.matches(&decl).count(), 1, "binding {b}");
+        }
+        for i in 0..3 {
+            assert!(s.contains(&format!("case {i}u: {{ return win{i}[i]; }}")));
+        }
+        assert!(!s.contains("win3"));
+    }
+}
