@@ -518,7 +518,7 @@ impl<P: Fn(usize) -> u64> GroupPlanner<'_, P> {
                     params
                         .check_memory(self.limits.memory_limit)
                         .map_err(|source| Error::Field {
-                            what: format!("bake of {}", self.scenes.meshes[*m].label),
+                            what: format!("caster {}", self.scenes.meshes[*m].label),
                             source,
                         })?;
                     self.steps.push(Step::Bake {

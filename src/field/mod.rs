@@ -32,7 +32,7 @@ pub enum FieldError {
     Sampling(#[from] crate::sampling::SamplingError),
     #[error(
         "a field of {maps} maps × {res}² texels at {precision:?} needs {need} but the memory \
-         limit is {limit} (raise it with --max-memory, or lower the counts)"
+         limit is {limit} (raise it with --max-memory-mib, or lower the counts)"
     )]
     TooLarge {
         maps: usize,

@@ -112,7 +112,7 @@ mod tests {
     fn the_ao_estimator_is_ao_at_points_bit_for_bit_through_dyn_visibility() {
         // A ceiling over a row of points: the estimate through `&dyn Visibility` is the
         // generic path's, bit for bit, so moving a kind onto the seam changes no result.
-        let tracer = Tracer::new(&square(3.0, 0.4));
+        let tracer = Tracer::new(&square(1.0, 0.4));
         let points: Vec<Vec3> = (0..50)
             .map(|i| Vec3::new(0.05 * i as f32 - 1.2, 0.03 * i as f32 - 0.7, 0.0))
             .collect();
