@@ -875,3 +875,50 @@ fn the_quickstart_is_an_embedded_spec() {
     assert!(plan.steps.iter().any(|s| matches!(s, Step::Truth { .. })));
     assert_eq!(scenes.scenes[0].receiver_vertices(), 3 * 33 * 33);
 }
+
+/// Cameras that cannot see are refused naming the field, and a camera that sees no receiver
+/// fails the run naming the scene, before any field is baked (an error over no point would be
+/// no measurement).
+#[test]
+fn cameras_are_validated_and_an_image_without_receivers_is_an_error() {
+    let image = |camera: &str| {
+        tiny(ONE_FIELD, "").replace(
+            r#""render": { "rays_per_point": 16, "image": { "width": 32, "height": 32 } }"#,
+            &format!(
+                r#""render": {{ "what": "image_ao", "rays_per_point": 16, "image": {{ "width": 32, "height": 32, "camera": {camera} }} }}"#
+            ),
+        )
+    };
+    let cam = |eye: &str, target: &str, fov: &str| {
+        format!(r#"{{ "eye": {eye}, "target": {target}, "fov_y_deg": {fov} }}"#)
+    };
+    let ok = image(&cam("[2, 2, 2]", "[0.4, 0.3, 0.4]", "40"));
+    assert!(parse(&ok).is_ok(), "{:?}", parse(&ok).err());
+    let e = error_of(&image(&cam("[1, 1, 1]", "[1, 1, 1]", "40")));
+    assert!(
+        e.contains("render.image.camera.target") && e.contains("nowhere"),
+        "{e}"
+    );
+    let e = error_of(&image(&cam("[2, 2, 2]", "[0.4, 0.3, 0.4]", "180")));
+    assert!(e.contains("render.image.camera.fov_y_deg"), "{e}");
+    let e = error_of(&image(&cam("[0, 3, 0]", "[0, 0, 0]", "40")));
+    assert!(
+        e.contains("render.image.camera.up") && e.contains("along the view"),
+        "{e}"
+    );
+    let e = error_of(&image(&cam("[1e39, 0, 0]", "[0, 0, 0]", "40")).replace("1e39", "1e300"));
+    assert!(e.contains("render.image.camera"), "{e}");
+
+    // Looking away from the scene: no receiver pixel.
+    let dir = tempfile::tempdir().unwrap();
+    let away = image(&cam("[5, 5, 5]", "[10, 10, 10]", "20"));
+    let ls = loaded(dir.path(), &away);
+    let e = run(&ls, &options(dir.path().join("out")))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("scene tiny") && e.contains("sees no receiver"),
+        "{e}"
+    );
+    assert!(!dir.path().join("out/table.csv").exists());
+}

@@ -146,6 +146,12 @@ impl Ctx<'_> {
                     ));
                 }
             }
+            if let Some(cam) = &img.camera {
+                let path = format!("{}.camera", p.image);
+                camera_problem(cam).map_or(Ok(()), |(field, message)| {
+                    Err(self.err(&format!("{path}.{field}"), message))
+                })?;
+            }
         }
         let kind = super::kind::of(&s.render);
         if kind.needs().view && s.render.image().is_none() {
@@ -419,6 +425,32 @@ impl Ctx<'_> {
         }
         Ok(())
     }
+}
+
+/// What is wrong with a camera, if anything: (its field, why). A camera must be finite, look
+/// somewhere (eye ≠ target), have an up hint not along the view, and a field of view in
+/// (0°, 180°).
+fn camera_problem(cam: &crate::render::camera::Camera) -> Option<(&'static str, String)> {
+    for (field, v) in [("eye", cam.eye), ("target", cam.target), ("up", cam.up)] {
+        if !v.is_finite() {
+            return Some((field, format!("{v} is not finite")));
+        }
+    }
+    let view = cam.target - cam.eye;
+    if !(view.length() > 0.0 && (view / view.length()).is_finite()) {
+        return Some(("target", "equals the eye: the camera looks nowhere".into()));
+    }
+    let side = view.normalize().cross(cam.up);
+    if !(side.length() > 1e-6 && side.normalize().is_finite()) {
+        return Some(("up", format!("{} is zero or along the view", cam.up)));
+    }
+    if !(cam.fov_y_deg > 0.0 && cam.fov_y_deg < 180.0) {
+        return Some((
+            "fov_y_deg",
+            format!("{} is outside (0, 180) degrees", cam.fov_y_deg),
+        ));
+    }
+    None
 }
 
 /// Up to two valid counts of `kind` on either side of `count`.

@@ -97,13 +97,31 @@ impl<'a> Runner<'a> {
         self.states[s].get_or_insert_with(|| SceneState::new(kind, &scenes.scenes[s]))
     }
 
+    /// Builds scene `s`'s state and fails, naming the scene, when its kind has no point to
+    /// evaluate there (an image that sees no receiver, a scene without receiver vertices): an
+    /// error over no point is no measurement.
+    fn has_points(&mut self, s: usize) -> Result<()> {
+        if !self.scene(s).at.is_empty() {
+            return Ok(());
+        }
+        let what = match self.kind.image() {
+            Some(_) if self.kind.needs().view => "the image sees no receiver point",
+            _ => "no receiver vertex",
+        };
+        Err(Error::invalid(
+            format!("scene {}", self.scenes.scenes[s].name),
+            format!("{what}: {} has nothing to evaluate", self.kind.name()),
+        ))
+    }
+
     /// Executes one step.
     pub(super) fn step(&mut self, step: &Step) -> Result<()> {
         match step {
-            Step::Primary { scene, .. } => {
-                self.scene(*scene);
+            Step::Primary { scene, .. } => self.has_points(*scene)?,
+            Step::Truth { scene, .. } => {
+                self.has_points(*scene)?;
+                self.truth(*scene)?
             }
-            Step::Truth { scene, .. } => self.truth(*scene)?,
             Step::Reference { scene, k, .. } => self.reference(*scene, *k)?,
             Step::Sweep { scene, k, .. } => self.raycast(*scene, *k, Backend::Cpu)?,
             Step::Raycast {
