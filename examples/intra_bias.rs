@@ -6,7 +6,7 @@
 //! `cargo run --release --example intra_bias` writes `results/intra_bias/table.csv` and
 //! `run.json` (Igea, the bunny and the tree; pass model names to choose others).
 use std::sync::Arc;
-use visfield::experiment::metrics::rms_unquantised as rms_vertex;
+use visfield::experiment::metrics::rms_unquantised;
 use visfield::field::bake::{bake, BakeOptions};
 use visfield::field::lookup::{IntraBias, LookupOptions};
 use visfield::field::scene::{FieldInstance, FieldScene};
@@ -88,7 +88,7 @@ fn study(name: &str, csv: &mut String) {
                     };
                     let ao = ao_at_points(&fs, &pts, &nrm, &rays, &opts);
                     let mean = ao.iter().sum::<f32>() / ao.len() as f32;
-                    let rms = rms_vertex(&ao, &reference);
+                    let rms = rms_unquantised(&ao, &reference);
                     println!("{count:>6} x {res:>3} {sel:?} {bias:?}: rms {rms:.2} mean {mean:.3}");
                     let (kind, scale) = match bias {
                         IntraBias::Auto { scale } => ("auto", scale),

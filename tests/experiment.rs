@@ -922,3 +922,21 @@ fn cameras_are_validated_and_an_image_without_receivers_is_an_error() {
     );
     assert!(!dir.path().join("out/table.csv").exists());
 }
+
+/// Hostile spec text: a byte-order mark is skipped, text after the JSON is an error, and a
+/// Fibonacci count out of range is answered with the valid end of the range, not itself.
+#[test]
+fn spec_text_is_read_whole_and_count_hints_are_valid() {
+    let good = tiny(ONE_FIELD, "");
+    assert!(parse(&format!("\u{feff}{good}")).is_ok());
+    let e = error_of(&format!("{good} }}}} garbage"));
+    assert!(e.contains("text after the spec"), "{e}");
+    let e = error_of(&tiny(
+        r#"{ "spheres": ["fibonacci"], "counts": [999999999], "resolutions": [16] }"#,
+        "",
+    ));
+    assert!(
+        e.contains("fields[0].counts[0]") && e.contains("[262144]"),
+        "{e}"
+    );
+}

@@ -101,25 +101,24 @@ fn receivers(inst: &FieldInstance) -> (Vec<Vec3>, Vec<Vec3>) {
 /// Per-vertex and image statistics of a parity comparison on the 0–255 scale.
 struct Parity {
     max_diff: f32,
-    rms_255: f64,
+    /// RMS of the unrounded differences (`experiment::metrics::rms_unquantised`).
+    rms_unquantised: f64,
     over_one_step: usize,
 }
 
 fn parity(gpu: &[f32], cpu: &[f32]) -> Parity {
     let mut max_diff = 0.0f32;
-    let mut sq = 0.0f64;
     let mut over = 0;
     for (g, c) in gpu.iter().zip(cpu) {
         let d = (g - c).abs();
         max_diff = max_diff.max(d);
-        sq += (255.0 * d as f64).powi(2);
         if d > 1.0 / 255.0 + 1e-6 {
             over += 1;
         }
     }
     Parity {
         max_diff,
-        rms_255: (sq / gpu.len().max(1) as f64).sqrt(),
+        rms_unquantised: visfield::experiment::metrics::rms_unquantised(gpu, cpu),
         over_one_step: over,
     }
 }
@@ -316,11 +315,11 @@ fn field_ao_matches_the_cpu_for_every_precision_layout_and_selection() {
                     q.max_diff,
                     255.0 * q.max_diff,
                     q.over_one_step,
-                    q.rms_255,
+                    q.rms_unquantised,
                     timing.kernel,
                     timing.wall
                 );
-                if q.over_one_step > 0 || q.rms_255 > 0.5 {
+                if q.over_one_step > 0 || q.rms_unquantised > 0.5 {
                     let path = dump_ao(&label.replace(' ', "_"), &gpu, &cpu);
                     failures.push(format!("{label}: see {}", path.display()));
                 }
@@ -505,9 +504,9 @@ fn windows_tiles_and_mixed_fields_give_the_cpu_answer() {
             "mixed fields {selection:?}: max |Δ| {:.2}/255, {} over 1/255, RMS {:.4}/255",
             255.0 * q.max_diff,
             q.over_one_step,
-            q.rms_255
+            q.rms_unquantised
         );
-        if q.over_one_step > 0 || q.rms_255 > 0.5 {
+        if q.over_one_step > 0 || q.rms_unquantised > 0.5 {
             let path = dump_ao(&format!("mixed_{selection:?}"), &gpu, &cpu);
             panic!("mixed fields {selection:?}: see {}", path.display());
         }
@@ -536,7 +535,7 @@ fn windows_tiles_and_mixed_fields_give_the_cpu_answer() {
     let cpu = ao_at_points(&scene, &p, &n, &rays, &ao_opts);
     let (gpu, _) = kernel.vertex_ao(&p, &n, &rays, &ao_opts).unwrap();
     let q = parity(&gpu, &cpu);
-    if q.over_one_step > 0 || q.rms_255 > 0.5 {
+    if q.over_one_step > 0 || q.rms_unquantised > 0.5 {
         let path = dump_ao("tiled", &gpu, &cpu);
         panic!("tiled texture: see {}", path.display());
     }
@@ -720,11 +719,11 @@ fn gpu_ray_cast_ao_matches_the_cpu_and_serves_as_field_reference() {
         rays.len(),
         255.0 * q.max_diff,
         q.over_one_step,
-        q.rms_255,
+        q.rms_unquantised,
         timing.kernel,
         timing.wall
     );
-    if q.over_one_step > 0 || q.rms_255 > 0.5 {
+    if q.over_one_step > 0 || q.rms_unquantised > 0.5 {
         let path = dump_ao("raycast_ao", &gpu, &cpu);
         panic!(
             "GPU ray-cast AO disagrees with the CPU; see {}",
@@ -746,9 +745,9 @@ fn gpu_ray_cast_ao_matches_the_cpu_and_serves_as_field_reference() {
     eprintln!(
         "field (290 maps, 16², u8, nearest) vs ray casting on the GPU: RMS {:.2}/255 (corner \
          receivers {:.2}, caster receivers {:.2}), max {:.1}/255",
-        e.rms_255,
-        ec.rms_255,
-        eo.rms_255,
+        e.rms_unquantised,
+        ec.rms_unquantised,
+        eo.rms_unquantised,
         255.0 * e.max_diff
     );
     let mean = |v: &[f32]| v.iter().sum::<f32>() / v.len().max(1) as f32;
@@ -757,7 +756,7 @@ fn gpu_ray_cast_ao_matches_the_cpu_and_serves_as_field_reference() {
         mean(&lookup[corner_count..]),
         mean(&reference[corner_count..])
     );
-    assert!(e.rms_255.is_finite());
+    assert!(e.rms_unquantised.is_finite());
 }
 
 /// Field AO at 4096 rays per point (k = 64, the top of figure 6's field sweep): the GPU gives
@@ -799,7 +798,7 @@ fn field_ao_at_4096_rays_per_point_matches_the_cpu() {
                 p.len(),
                 255.0 * q.max_diff,
                 q.over_one_step,
-                q.rms_255,
+                q.rms_unquantised,
                 timing.kernel,
                 timing.wall
             );
@@ -842,7 +841,7 @@ fn gpu_ray_cast_ao_at_4096_rays_per_point_matches_the_cpu() {
         p.len(),
         255.0 * q.max_diff,
         q.over_one_step,
-        q.rms_255,
+        q.rms_unquantised,
         timing.kernel,
         timing.wall
     );

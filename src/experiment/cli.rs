@@ -136,18 +136,9 @@ struct NamedRun {
 
 impl RunArgs {
     /// Options for the spec called `name`; `parent` replaces `results` (for `all`/`check`).
-    fn options(&self, name: &str, parent: Option<&Path>) -> RunOptions {
-        let default_root = if self.quick {
-            PathBuf::from("results/quick")
-        } else {
-            PathBuf::from("results")
-        };
-        let out = match (parent, &self.out) {
-            (Some(p), _) => p.join(name),
-            (None, Some(o)) => o.clone(),
-            (None, None) => default_root.join(name),
-        };
-        let mut o = RunOptions::new(out);
+    /// A size flag whose bytes overflow is an error naming the flag.
+    fn options(&self, name: &str, parent: Option<&Path>) -> Result<RunOptions> {
+        let mut o = RunOptions::new(self.out(name, parent));
         o.quick = self.quick;
         o.dry_run = self.dry_run;
         o.adapter = adapter_preference(self.adapter.as_deref());
@@ -161,19 +152,44 @@ impl RunArgs {
                         .unwrap_or_else(super::fields::default_cache_dir),
                 )
             },
-            cache_limit: self.cache_limit_mib << 20,
-            memory_limit: self
-                .max_memory_mib
-                .map_or_else(crate::field::default_memory_limit, |m| m << 20),
+            cache_limit: mib_to_bytes(self.cache_limit_mib, "--cache-limit-mib")?,
+            memory_limit: match self.max_memory_mib {
+                Some(m) => mib_to_bytes(m, "--max-memory-mib")?,
+                None => crate::field::default_memory_limit(),
+            },
         };
-        o
+        Ok(o)
     }
+
+    /// The output folder of the spec called `name` (see [`Self::options`]).
+    fn out(&self, name: &str, parent: Option<&Path>) -> PathBuf {
+        let default_root = if self.quick {
+            PathBuf::from("results/quick")
+        } else {
+            PathBuf::from("results")
+        };
+        match (parent, &self.out) {
+            (Some(p), _) => p.join(name),
+            (None, Some(o)) => o.clone(),
+            (None, None) => default_root.join(name),
+        }
+    }
+}
+
+/// `mib` MiB in bytes, or the error naming `flag` when that overflows.
+fn mib_to_bytes(mib: u64, flag: &str) -> Result<u64> {
+    mib.checked_mul(1 << 20).ok_or_else(|| {
+        super::Error::invalid(
+            flag,
+            format!("{mib} MiB is more bytes than 64 bits can count"),
+        )
+    })
 }
 
 /// Runs one spec file; prints the plan on a dry run.
 fn run_one(path: &Path, args: &RunArgs, parent: Option<&Path>) -> Result<super::run::RunReport> {
     let ls = LoadedSpec::load(path)?;
-    let report = super::run::run(&ls, &args.options(&ls.name, parent))?;
+    let report = super::run::run(&ls, &args.options(&ls.name, parent)?)?;
     if args.dry_run {
         print!("{}", report.plan_text);
     }
@@ -310,8 +326,13 @@ pub fn run(cli: Cli) -> Result<i32> {
                 let parent = opts.out.clone();
                 run_one(&p, &opts, parent.as_deref())?;
             }
+            if opts.dry_run {
+                // The command-made results have no plan to print: a dry run stops here.
+                println!("dry run: quickstart, sampling, relief and stability not run");
+                return Ok(0);
+            }
             // The command-made results beside the specs' (same root).
-            let root = |name: &str| opts.options(name, opts.out.as_deref()).out;
+            let root = |name: &str| opts.out(name, opts.out.as_deref());
             super::quickstart::run(&root("quickstart"))?;
             super::sampling_report::run(&root("sampling")).map_err(|e| e.context("sampling"))?;
             let adapter = adapter_preference(opts.adapter.as_deref());

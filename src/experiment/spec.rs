@@ -654,15 +654,22 @@ impl Spec {
     }
 
     /// Parses and validates spec text; `file` names it in errors.
+    /// A UTF-8 byte-order mark before the JSON is skipped; any text after it is an error.
     pub fn parse(text: &str, file: &Path) -> Result<Spec, SpecError> {
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         let de = &mut serde_json::Deserializer::from_str(text);
-        let spec: Spec = serde_path_to_error::deserialize(de).map_err(|e| {
-            let path = e.path().to_string();
-            SpecError::Parse {
-                file: file.to_path_buf(),
-                path: if path.is_empty() { ".".into() } else { path },
-                message: e.into_inner().to_string(),
-            }
+        let parse_error = |path: String, message: String| SpecError::Parse {
+            file: file.to_path_buf(),
+            path: if path.is_empty() { ".".into() } else { path },
+            message,
+        };
+        let spec: Spec = serde_path_to_error::deserialize(&mut *de)
+            .map_err(|e| parse_error(e.path().to_string(), e.into_inner().to_string()))?;
+        de.end().map_err(|e| {
+            parse_error(
+                ".".into(),
+                format!("text after the spec's closing brace ({e})"),
+            )
         })?;
         super::validate::validate(&spec, file)?;
         Ok(spec)

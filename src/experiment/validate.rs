@@ -453,10 +453,12 @@ fn camera_problem(cam: &crate::render::camera::Camera) -> Option<(&'static str, 
     None
 }
 
-/// Up to two valid counts of `kind` on either side of `count`.
+/// Up to two valid counts of `kind` on either side of `count` (for the Fibonacci set, whose
+/// every count in its range is valid, the nearest end of that range).
 fn nearest_valid_counts(kind: SphereKind, count: usize) -> Vec<usize> {
     if kind == SphereKind::Fibonacci {
-        return vec![count.clamp(4, 1 << 24)];
+        use crate::sampling::{MAX_FIBONACCI, MIN_FIBONACCI};
+        return vec![count.clamp(MIN_FIBONACCI, MAX_FIBONACCI)];
     }
     let all = SpherePoints::valid_counts(kind, 5000);
     let i = all.partition_point(|&c| c < count);

@@ -39,7 +39,7 @@ pub mod warp;
 
 pub use frame::Frame;
 pub use layout::{HemisphereLayout, LayoutKind};
-pub use sphere::{OwnerCell, Spacing, SphereKind, SpherePoints};
+pub use sphere::{OwnerCell, Spacing, SphereKind, SpherePoints, MAX_FIBONACCI, MIN_FIBONACCI};
 pub use texel_table::{TexelCell, TexelTable};
 
 /// Errors from building a sampling pattern with impossible parameters.

@@ -44,9 +44,10 @@ impl SphereKind {
 const MAX_SLATER_N: u64 = 256;
 /// Largest lat-long row count accepted (262 656 points).
 const MAX_LAT_LONG_ROWS: u64 = 512;
-/// Fibonacci sets accept 4 ≤ N ≤ 2¹⁸.
-const MIN_FIBONACCI: usize = 4;
-const MAX_FIBONACCI: usize = 1 << 18;
+/// Fibonacci sets accept 4 ≤ N ≤ 2¹⁸: the smallest count.
+pub const MIN_FIBONACCI: usize = 4;
+/// The largest Fibonacci count.
+pub const MAX_FIBONACCI: usize = 1 << 18;
 
 #[derive(Clone, Debug)]
 enum Index {

@@ -18,10 +18,9 @@
 //!   cell measures 1.3 over an image; single casters here are closer and harder) and every
 //!   vertex within 0.25 of it (no lost or invented occluder).
 
-use super::scene_ao::{
-    bake_field, field_ao, max_diff, options, raycast_ao, rms_255, scene, Placed,
-};
+use super::scene_ao::{bake_field, field_ao, max_diff, options, raycast_ao, scene, Placed};
 use super::StabilityRow;
+use crate::experiment::metrics::rms_u8;
 use crate::geometry::{procedural, Mesh, Scene, Similarity};
 use crate::render::receivers::Receivers;
 use crate::sampling::rays::RaySet;
@@ -82,7 +81,7 @@ fn compare(case: &str, placed: &[Placed], closed: Option<&ClosedForm>) -> Vec<St
             rows.push(StabilityRow::new(
                 case,
                 "ray-cast AO vs closed form: RMS (0–255)",
-                rms_255(&ray, &exact),
+                rms_u8(&ray, &exact, None),
                 RAYCAST_CLOSED_FORM_RMS,
             ));
             exact
@@ -101,7 +100,7 @@ fn compare(case: &str, placed: &[Placed], closed: Option<&ClosedForm>) -> Vec<St
     rows.push(StabilityRow::new(
         case,
         "field AO (1090 × 32² u8) vs reference: RMS (0–255)",
-        rms_255(&field, &reference),
+        rms_u8(&field, &reference, None),
         FIELD_RMS,
     ));
     rows.push(StabilityRow::new(

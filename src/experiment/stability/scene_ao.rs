@@ -146,11 +146,6 @@ pub fn max_diff(a: &[f32], b: &[f32]) -> f64 {
     super::max_of(a.iter().zip(b).map(|(x, y)| (*x as f64 - *y as f64).abs()))
 }
 
-/// RMS difference on the 0–255 scale.
-pub fn rms_255(a: &[f32], b: &[f32]) -> f64 {
-    crate::experiment::metrics::rms_u8(a, b, None)
-}
-
 /// `scene` with every instance's world vertices moved by `shift` (in f32) baked into its mesh,
 /// identity transforms, and the world normals kept as they are: two calls with shifts that
 /// differ by an exact f32 translation give scenes that differ by exactly that translation.
