@@ -2,12 +2,12 @@
 //! threshold check, and every shipped spec.
 
 use glam::{Quat, Vec3};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use visfield::experiment::check::check_rows;
-use visfield::experiment::fields::{requantize, FieldSupply};
+use visfield::experiment::fields::requantize;
 use visfield::experiment::outputs::{paper_vs_ours, read_csv, Row, TABLE_COLUMNS};
 use visfield::experiment::plan::{Plan, PlanLimits, Step};
-use visfield::experiment::run::{run, LoadedSpec, RunOptions};
+use visfield::experiment::run::{run, LoadedSpec};
 use visfield::experiment::scenes::Scenes;
 use visfield::experiment::spec::{PaperCell, PaperNumbers, Spec, SpecError, Threshold};
 use visfield::field::bake::{bake, BakeOptions};
@@ -15,45 +15,8 @@ use visfield::field::{FieldParams, Precision};
 use visfield::geometry::procedural;
 use visfield::sampling::{LayoutKind, SphereKind};
 
-/// A tiny procedural spec: a 2,000-triangle supershape fitted over a 9 × 9 corner, 290 Slater
-/// maps × 16² concentric texels, 16 rays per vertex, a 32 × 32 image. `fields` and
-/// `thresholds` are spliced in as JSON.
-fn tiny(fields: &str, thresholds: &str) -> String {
-    format!(
-        r#"{{
-  "reproduces": "test",
-  "scenes": [{{
-    "name": "tiny",
-    "instances": [
-      {{ "mesh": {{ "corner": {{ "n": 9 }} }}, "receiver": true }},
-      {{ "mesh": {{ "supershape": {{ "triangles": 2000 }} }}, "caster": true,
-         "transform": {{ "fit": {{ "center": [0.5, 0.45, 0.5], "radius": 0.35 }} }} }}
-    ]
-  }}],
-  "fields": [{fields}],
-  "render": {{ "rays_per_point": 16, "image": {{ "width": 32, "height": 32 }} }},
-  "reference": {{ "rays_per_point": 16, "raycast_sweep": [4, 16], "field_rays_sweep": [16, 64] }},
-  "thresholds": [{thresholds}],
-  "quick": {{}}
-}}"#
-    )
-}
-
-/// The tiny spec on both backends, its field sweep reaching 4096 rays per point (past what one
-/// lavapipe invocation can loop).
-fn cpu_gpu_spec() -> String {
-    tiny(ONE_FIELD, "")
-        .replace(
-            r#""reference": {"#,
-            r#""backends": ["cpu", "gpu"], "reference": {"#,
-        )
-        .replace(
-            r#""field_rays_sweep": [16, 64]"#,
-            r#""field_rays_sweep": [16, 4096]"#,
-        )
-}
-
-const ONE_FIELD: &str = r#"{ "counts": [290], "resolutions": [16] }"#;
+mod common;
+use common::{loaded, options, tiny, ONE_FIELD};
 
 fn parse(text: &str) -> Result<Spec, SpecError> {
     Spec::parse(text, Path::new("specs/bad.json"))
@@ -66,23 +29,6 @@ fn error_of(text: &str) -> String {
         .to_string();
     assert!(e.starts_with("specs/bad.json: "), "{e}");
     e
-}
-
-fn options(out: PathBuf) -> RunOptions {
-    let mut o = RunOptions::new(out);
-    o.supply = FieldSupply {
-        cache: None,
-        cache_limit: 0,
-        memory_limit: 1 << 30,
-    };
-    o.repeats = 1;
-    o
-}
-
-fn loaded(dir: &Path, text: &str) -> LoadedSpec {
-    let path = dir.join("tiny.json");
-    std::fs::write(&path, text).unwrap();
-    LoadedSpec::load(&path).unwrap()
 }
 
 #[test]
@@ -594,120 +540,6 @@ fn paper_ratios_are_normalised_to_the_reference_cell() {
     assert_eq!(pv[0].ours_rays_cast, Some(2560));
     // No 4226 row: ours left empty.
     assert_eq!((pv[2].cell.as_str(), pv[2].ours_bake_s), ("", None));
-}
-
-/// The spec's `backends: ["cpu", "gpu"]` yields one row per backend and cell in `table.csv`,
-/// the GPU row naming its adapter, with the CPU row's errors (the same field and rays:
-/// parity), wall and kernel times in their own columns, and a GPU ray-cast time on the same
-/// rays. Skipped only where no Vulkan driver is installed.
-#[test]
-fn cpu_and_gpu_backends_give_one_row_each_with_the_adapter_named() {
-    use visfield::gpu::{AdapterPreference, GpuContext, GpuError};
-    let ctx = match GpuContext::new(AdapterPreference::from_env()) {
-        Ok(c) => c,
-        Err(GpuError::NoAdapter) => {
-            eprintln!("skipped: no Vulkan adapter (install mesa-vulkan-drivers)");
-            return;
-        }
-        Err(e) => panic!("GPU context: {e}"),
-    };
-    let label = ctx.adapter_label();
-    let timestamps = ctx.has_timestamps();
-    drop(ctx);
-    let dir = tempfile::tempdir().unwrap();
-    let text = cpu_gpu_spec();
-    let ls = loaded(dir.path(), &text);
-    let mut o = options(dir.path().join("out"));
-    o.dry_run = true;
-    let plan = run(&ls, &o).unwrap().plan_text;
-    assert!(plan.contains("GPU device: yes"), "{plan}");
-    o.dry_run = false;
-    let report = run(&ls, &o).unwrap();
-    let rows: Vec<Row> = read_csv(&dir.path().join("out/table.csv")).unwrap();
-    assert_eq!(rows, report.rows);
-    assert_eq!(rows.len(), 2, "one cell on two backends");
-    let (cpu, gpu) = (&rows[0], &rows[1]);
-    assert_eq!(cpu.backend.name(), "cpu");
-    assert_eq!(gpu.backend.name(), "gpu");
-    assert_eq!(gpu.adapter, label);
-    assert_ne!(cpu.adapter, gpu.adapter);
-    assert!(gpu.cell.ends_with("-gpu") && cpu.cell.ends_with("-cpu"));
-    // The same field and rays on both backends: the errors against the reference agree
-    // within the parity tolerance (the kernels reproduce the CPU lookup; see tests/gpu.rs).
-    for (c, g) in [
-        (cpu.rms_vertex, gpu.rms_vertex),
-        (cpu.rms_image, gpu.rms_image),
-    ] {
-        let (c, g) = (c.unwrap(), g.unwrap());
-        assert!((c - g).abs() <= 0.5, "cpu {c} gpu {g}");
-    }
-    // Wall times everywhere; kernel times and setup only on the GPU row.
-    assert!(gpu.ao_s > 0.0 && gpu.raycast_s.unwrap() > 0.0);
-    assert_eq!(gpu.ao_kernel_s.is_some(), timestamps);
-    assert_eq!(gpu.raycast_kernel_s.is_some(), timestamps);
-    assert!(gpu.setup_s.unwrap() > 0.0);
-    assert_eq!(
-        (cpu.ao_kernel_s, cpu.raycast_kernel_s, cpu.setup_s),
-        (None, None, None)
-    );
-    // Field rows' pictures are 8-bit PNG only; the ray-cast reference alone keeps an EXR.
-    let out = dir.path().join("out");
-    for r in [cpu, gpu] {
-        assert!(out.join(&r.image).is_file(), "{}", r.image);
-        assert!(!out.join(r.image.replace(".png", ".exr")).exists());
-    }
-    assert!(out.join("images/tiny-reference.exr").is_file());
-    // Both backends sweep the field over every ray count, to the same errors.
-    let fs: Vec<visfield::experiment::outputs::FieldSweepRow> =
-        read_csv(&out.join("field_sweep.csv")).unwrap();
-    for backend in ["cpu", "gpu"] {
-        let n: Vec<u32> = fs
-            .iter()
-            .filter(|f| f.backend.name() == backend)
-            .map(|f| f.rays_per_point)
-            .collect();
-        assert_eq!(n, vec![16, 4096], "{backend}");
-    }
-    for n in [16, 4096] {
-        let e = |b: &str| {
-            fs.iter()
-                .find(|f| f.backend.name() == b && f.rays_per_point == n)
-                .and_then(|f| f.rms_vs_truth)
-                .unwrap()
-        };
-        assert!(
-            (e("cpu") - e("gpu")).abs() <= 0.05,
-            "{n} rays: {} vs {}",
-            e("cpu"),
-            e("gpu")
-        );
-    }
-    // The GPU ray-cast time sits in the sweep too, on the render's rays.
-    let sweep = std::fs::read_to_string(dir.path().join("out/raycast_sweep.csv")).unwrap();
-    assert!(sweep.lines().any(|l| l.contains(",gpu,16,")), "{sweep}");
-    let meta = std::fs::read_to_string(dir.path().join("out/run.json")).unwrap();
-    assert!(meta.contains(&label.replace('\\', "\\\\")), "{meta}");
-}
-
-#[test]
-fn an_unknown_gpu_adapter_is_an_error_naming_the_adapters() {
-    use visfield::gpu::{AdapterPreference, GpuContext, GpuError};
-    if let Err(GpuError::NoAdapter) = GpuContext::new(AdapterPreference::Auto) {
-        eprintln!("skipped: no Vulkan adapter (install mesa-vulkan-drivers)");
-        return;
-    }
-    let dir = tempfile::tempdir().unwrap();
-    let text = cpu_gpu_spec();
-    let ls = loaded(dir.path(), &text);
-    let mut o = options(dir.path().join("out"));
-    o.adapter = AdapterPreference::parse("no-such-adapter-xyz");
-    let e = run(&ls, &o).unwrap_err().to_string();
-    assert!(
-        e.contains("backend \"gpu\"") && e.contains("no-such-adapter-xyz"),
-        "{e}"
-    );
-    assert!(e.contains("available: "), "{e}");
-    assert!(!dir.path().join("out/table.csv").exists());
 }
 
 #[test]

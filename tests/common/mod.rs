@@ -1,0 +1,65 @@
+//! Helpers shared by the integration tests: the tiny procedural spec and its run options.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use visfield::experiment::fields::FieldSupply;
+use visfield::experiment::run::{LoadedSpec, RunOptions};
+
+/// A tiny procedural spec: a 2,000-triangle supershape fitted over a 9 × 9 corner, 290 Slater
+/// maps × 16² concentric texels, 16 rays per vertex, a 32 × 32 image. `fields` and
+/// `thresholds` are spliced in as JSON.
+pub fn tiny(fields: &str, thresholds: &str) -> String {
+    format!(
+        r#"{{
+  "reproduces": "test",
+  "scenes": [{{
+    "name": "tiny",
+    "instances": [
+      {{ "mesh": {{ "corner": {{ "n": 9 }} }}, "receiver": true }},
+      {{ "mesh": {{ "supershape": {{ "triangles": 2000 }} }}, "caster": true,
+         "transform": {{ "fit": {{ "center": [0.5, 0.45, 0.5], "radius": 0.35 }} }} }}
+    ]
+  }}],
+  "fields": [{fields}],
+  "render": {{ "rays_per_point": 16, "image": {{ "width": 32, "height": 32 }} }},
+  "reference": {{ "rays_per_point": 16, "raycast_sweep": [4, 16], "field_rays_sweep": [16, 64] }},
+  "thresholds": [{thresholds}],
+  "quick": {{}}
+}}"#
+    )
+}
+
+/// The tiny spec on both backends, its field sweep reaching 4096 rays per point (past what one
+/// lavapipe invocation can loop).
+pub fn cpu_gpu_spec() -> String {
+    tiny(ONE_FIELD, "")
+        .replace(
+            r#""reference": {"#,
+            r#""backends": ["cpu", "gpu"], "reference": {"#,
+        )
+        .replace(
+            r#""field_rays_sweep": [16, 64]"#,
+            r#""field_rays_sweep": [16, 4096]"#,
+        )
+}
+
+pub const ONE_FIELD: &str = r#"{ "counts": [290], "resolutions": [16] }"#;
+
+/// Run options without a cache, timing each stage once.
+pub fn options(out: PathBuf) -> RunOptions {
+    let mut o = RunOptions::new(out);
+    o.supply = FieldSupply {
+        cache: None,
+        cache_limit: 0,
+        memory_limit: 1 << 30,
+    };
+    o.repeats = 1;
+    o
+}
+
+/// `text` written to `dir/tiny.json` and loaded.
+pub fn loaded(dir: &Path, text: &str) -> LoadedSpec {
+    let path = dir.join("tiny.json");
+    std::fs::write(&path, text).unwrap();
+    LoadedSpec::load(&path).unwrap()
+}
