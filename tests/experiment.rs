@@ -772,3 +772,23 @@ fn spec_text_is_read_whole_and_count_hints_are_valid() {
         "{e}"
     );
 }
+
+/// An unusable field cache fails before any work, naming the cache, and a failed run leaves
+/// no empty output folder behind.
+#[test]
+fn an_unusable_cache_fails_first_and_a_failed_run_leaves_no_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let ls = loaded(dir.path(), &tiny(ONE_FIELD, ""));
+    let file = dir.path().join("a-file");
+    std::fs::write(&file, b"").unwrap();
+    let mut o = options(dir.path().join("out"));
+    o.supply.cache = Some(file.join("cache"));
+    let t = std::time::Instant::now();
+    let e = run(&ls, &o).unwrap_err().to_string();
+    assert!(e.contains("field cache") && e.contains("a-file"), "{e}");
+    assert!(
+        t.elapsed().as_secs_f64() < 1.0,
+        "no work before the refusal"
+    );
+    assert!(!dir.path().join("out").exists(), "an empty folder was left");
+}

@@ -128,23 +128,44 @@ pub fn run(ls: &LoadedSpec, opts: &RunOptions) -> Result<RunReport> {
     let started = std::time::Instant::now();
     let spec = ls.spec.profile(opts.quick);
     let profile = if opts.quick { "quick" } else { "full" };
-    if !opts.dry_run {
-        ensure_writable(&opts.out)?;
+    let out_existed = opts.out.exists();
+    let result = (|| {
+        if !opts.dry_run {
+            ensure_writable(&opts.out)?;
+            if let Some(cache) = &opts.supply.cache {
+                ensure_writable(cache)
+                    .map_err(|e| e.context(format!("field cache {}", cache.display())))?;
+            }
+        }
+        run_checked(ls, opts, &spec, profile, started)
+    })();
+    if result.is_err() && !out_existed {
+        // A failed run leaves no empty output folder behind (only an empty one is removed).
+        let _ = std::fs::remove_dir(&opts.out);
     }
+    result
+}
+
+/// [`run`] once the output folder (and the cache) are known to be writable.
+fn run_checked(
+    ls: &LoadedSpec,
+    opts: &RunOptions,
+    spec: &Spec,
+    profile: &str,
+    started: std::time::Instant,
+) -> Result<RunReport> {
     let scenes_path = if opts.quick && ls.spec.quick.scenes.is_some() {
         "quick.scenes"
     } else {
         "scenes"
     };
     eprintln!("{} ({profile}): {}", ls.name, spec.reproduces);
-    let (scenes, _) = stage("load scenes", || {
-        Scenes::build(&spec, &ls.path, scenes_path)
-    });
+    let (scenes, _) = stage("load scenes", || Scenes::build(spec, &ls.path, scenes_path));
     let scenes = scenes?;
     let limits = PlanLimits {
         memory_limit: opts.supply.memory_limit,
     };
-    let plan = Plan::new(&spec, &scenes, limits).context(|| ls.path.display().to_string())?;
+    let plan = Plan::new(spec, &scenes, limits).context(|| ls.path.display().to_string())?;
     let supply = &opts.supply;
     let plan_text = plan.describe(&ls.name, &scenes, &|m, p| {
         supply.state(&scenes.meshes[m], p)
@@ -167,7 +188,7 @@ pub fn run(ls: &LoadedSpec, opts: &RunOptions) -> Result<RunReport> {
         ..opts.clone()
     };
     let rows = (|| {
-        let mut runner = Runner::new(&spec, &plan, &scenes, &staged)?;
+        let mut runner = Runner::new(spec, &plan, &scenes, &staged)?;
         for step in &plan.steps {
             runner.step(step)?;
         }

@@ -91,6 +91,8 @@ struct MeasureRow {
 
 /// Runs the report into `out` (created if missing).
 pub fn run(out: &Path) -> Result<()> {
+    // An output folder that cannot be written fails before the work, not after it.
+    crate::experiment::run::ensure_writable(out)?;
     // Timings depend on what else runs on the machine: the metadata records the load average.
     let meta = super::meta::RunMeta::collect(None);
     let dirs: Vec<Vec3> = (0..CHECK_DIRECTIONS as u64)
