@@ -69,7 +69,7 @@ pub enum Command {
     },
     /// Run specs and fail, naming the cells, where an RMS passes its threshold.
     Check {
-        /// Specs by name or path (default: every spec).
+        /// Specs by name or path (default: every spec of experiments/ and the embedded quickstart).
         names: Vec<String>,
         #[command(flatten)]
         opts: RunArgs,
@@ -188,8 +188,16 @@ fn mib_to_bytes(mib: u64, flag: &str) -> Result<u64> {
 
 /// Runs one spec file; prints the plan on a dry run.
 fn run_one(path: &Path, args: &RunArgs, parent: Option<&Path>) -> Result<super::run::RunReport> {
-    let ls = LoadedSpec::load(path)?;
-    let report = super::run::run(&ls, &args.options(&ls.name, parent)?)?;
+    run_loaded(&LoadedSpec::load(path)?, args, parent)
+}
+
+/// Runs one loaded spec; prints the plan on a dry run.
+fn run_loaded(
+    ls: &LoadedSpec,
+    args: &RunArgs,
+    parent: Option<&Path>,
+) -> Result<super::run::RunReport> {
+    let report = super::run::run(ls, &args.options(&ls.name, parent)?)?;
     if args.dry_run {
         print!("{}", report.plan_text);
     }
@@ -214,15 +222,24 @@ fn list() -> Result<i32> {
 
 /// Runs the specs and checks their thresholds; exit code 1 naming each failure (a cell past
 /// its threshold or a spec that failed to run).
+/// Every spec by default (the embedded quickstart too), or the ones named.
 fn check(names: &[String], args: &RunArgs) -> Result<i32> {
-    let paths: Vec<PathBuf> = if names.is_empty() {
-        discover::spec_paths()?
+    let mut specs: Vec<Result<LoadedSpec>> = Vec::new();
+    if names.is_empty() {
+        specs.extend(
+            discover::spec_paths()?
+                .iter()
+                .map(|p| Ok(LoadedSpec::load(p)?)),
+        );
+        specs.push(super::quickstart::spec());
     } else {
-        names
-            .iter()
-            .map(|n| discover::find(n))
-            .collect::<Result<_>>()?
-    };
+        for n in names {
+            specs.push(match n.as_str() {
+                "quickstart" => super::quickstart::spec(),
+                _ => discover::find(n).and_then(|p| Ok(LoadedSpec::load(&p)?)),
+            });
+        }
+    }
     let parent = args.out.clone().unwrap_or_else(|| {
         std::env::temp_dir().join(if args.quick {
             "visfield-check-quick"
@@ -231,9 +248,16 @@ fn check(names: &[String], args: &RunArgs) -> Result<i32> {
         })
     });
     let mut failed = Vec::new();
-    for p in &paths {
-        let name = discover::name_of(p);
-        match run_one(p, args, Some(&parent)) {
+    for ls in specs {
+        let ls = match ls {
+            Ok(ls) => ls,
+            Err(e) => {
+                failed.push(format!("error: {e}"));
+                continue;
+            }
+        };
+        let name = ls.name.clone();
+        match run_loaded(&ls, args, Some(&parent)) {
             Ok(report) => {
                 let f = super::check::check_rows(&report.thresholds, &report.rows);
                 println!(
