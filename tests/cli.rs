@@ -203,3 +203,35 @@ fn walk(dir: &Path) -> Vec<std::path::PathBuf> {
     }
     out
 }
+
+/// An adapter asked for by kind that cannot be had fails `relief` as it fails a spec's "gpu"
+/// rows (it once exited 0 with empty GPU columns); only `auto` falls back to the CPU columns.
+#[test]
+fn relief_fails_when_the_adapter_it_was_asked_for_is_missing() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("relief");
+    // No Vulkan driver at all, whatever this machine has.
+    let o = Command::new(env!("CARGO_BIN_EXE_experiment"))
+        .args(["relief", "--quick", "--adapter", "hardware", "--out"])
+        .arg(&out)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .env("VK_ICD_FILENAMES", "/nonexistent.json")
+        .env("VK_DRIVER_FILES", "/nonexistent.json")
+        .output()
+        .unwrap();
+    let t = text(&o);
+    assert!(!o.status.success(), "{t}");
+    assert!(t.contains("no Vulkan adapter"), "{t}");
+}
+
+/// `plots` on a folder whose table is not a run's fails naming the table (it once printed
+/// "redrew" and changed nothing).
+#[test]
+fn plots_refuse_a_table_that_is_not_a_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("table.csv"), "garbage\n").unwrap();
+    let o = experiment(&["plots", "--dir", dir.path().to_str().unwrap()]);
+    let t = text(&o);
+    assert!(!o.status.success(), "{t}");
+    assert!(t.contains("table.csv") && !t.contains("redrew"), "{t}");
+}

@@ -71,9 +71,14 @@ fn key(rows: &[Row], r: &Row, skip: &[&str]) -> String {
 
 /// Redraws every plot of the run in `out`.
 pub fn draw_all(out: &Path, title: &str) -> Result<()> {
-    let rows: Vec<Row> = read_table(&out.join("table.csv"))?;
+    let table = out.join("table.csv");
+    let rows: Vec<Row> = read_table(&table)?;
     if rows.is_empty() {
-        return Ok(());
+        // A run writes one row per cell: a table without any is not a run's.
+        return Err(Error::invalid(
+            table.display().to_string(),
+            "no rows: not a table written by a run, nothing to plot",
+        ));
     }
     let sweep_path = out.join("raycast_sweep.csv");
     let sweep: Vec<SweepRow> = if sweep_path.exists() {

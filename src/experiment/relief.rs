@@ -219,12 +219,14 @@ fn measure(
 }
 
 /// The GPU device for the relief columns: `None` when not asked for, or (with a note) when
-/// no Vulkan driver is installed; other failures are errors.
+/// no Vulkan driver is installed and no adapter was named (`Auto`); an adapter asked for by
+/// name or kind that cannot be had is an error, as it is for a spec's "gpu" rows.
 fn gpu_context(pref: Option<AdapterPreference>) -> Result<Option<GpuContext>> {
     let Some(pref) = pref else { return Ok(None) };
+    let fallback = matches!(pref, AdapterPreference::Auto);
     match GpuContext::new(pref) {
         Ok(c) => Ok(Some(c)),
-        Err(GpuError::NoAdapter) => {
+        Err(GpuError::NoAdapter) if fallback => {
             eprintln!(
                 "relief: no Vulkan adapter, GPU columns left empty ({})",
                 GpuError::NoAdapter
