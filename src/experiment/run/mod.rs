@@ -135,6 +135,8 @@ pub fn run(ls: &LoadedSpec, opts: &RunOptions) -> Result<RunReport> {
             if let Some(cache) = &opts.supply.cache {
                 ensure_writable(cache)
                     .map_err(|e| e.context(format!("field cache {}", cache.display())))?;
+                // Writes of fields or references killed mid-way.
+                crate::io::remove_stale_temporaries(cache);
             }
         }
         run_checked(ls, opts, &spec, profile, started)
