@@ -792,3 +792,34 @@ fn an_unusable_cache_fails_first_and_a_failed_run_leaves_no_folder() {
     );
     assert!(!dir.path().join("out").exists(), "an empty folder was left");
 }
+
+/// A cached field's bake time comes from its record only while the record's checksum holds:
+/// an edited record leaves the time unknown instead of putting its number in the table.
+#[test]
+fn an_edited_bake_record_is_not_believed() {
+    let dir = tempfile::tempdir().unwrap();
+    let ls = loaded(dir.path(), &tiny(ONE_FIELD, ""));
+    let mut o = options(dir.path().join("out"));
+    o.supply.cache = Some(dir.path().join("cache"));
+    o.supply.cache_limit = 1 << 30;
+    let first = run(&ls, &o).unwrap().rows[0].clone();
+    assert!(!first.bake_cached);
+    let second = run(&ls, &o).unwrap().rows[0].clone();
+    assert!(second.bake_cached);
+    let recorded = second.bake_s.unwrap();
+    assert!((recorded - first.bake_s.unwrap()).abs() < 1e-9);
+    let record = std::fs::read_dir(dir.path().join("cache"))
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .find(|p| p.to_string_lossy().ends_with(".bake.json"))
+        .expect("a bake record beside the cached field");
+    let text = std::fs::read_to_string(&record).unwrap();
+    let edited = text.replacen("\"seconds\": ", "\"seconds\": 1e300, \"was\": ", 1);
+    std::fs::write(&record, edited).unwrap();
+    let third = run(&ls, &o).unwrap().rows[0].clone();
+    assert!(third.bake_cached);
+    assert_eq!(third.bake_s, None, "an edited record was believed");
+    // The errors do not depend on where the field came from.
+    assert_eq!(third.rms_vertex, first.rms_vertex);
+}

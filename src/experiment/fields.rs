@@ -41,7 +41,9 @@ pub struct Supplied {
     pub cached: bool,
 }
 
-/// What a cached bake cost, stored beside the field.
+/// What a cached bake cost, stored beside the field, with a checksum that ties it to its field's
+/// cache key: a damaged, edited or misplaced record is not read (the bake time is then unknown,
+/// never a made-up number).
 #[derive(Clone, Debug, Serialize, Deserialize)]
 struct BakeRecord {
     seconds: f64,
@@ -49,6 +51,37 @@ struct BakeRecord {
     rays: u64,
     threads: usize,
     date: String,
+    /// sha256 of the fields above and the field's cache file name.
+    #[serde(default)]
+    sha256: String,
+}
+
+impl BakeRecord {
+    fn digest(&self, key: &CacheKey) -> String {
+        let text = format!(
+            "{:016x}|{:016x}|{}|{}|{}|{}",
+            self.seconds.to_bits(),
+            self.bvh_seconds.to_bits(),
+            self.rays,
+            self.threads,
+            self.date,
+            key.file_name()
+        );
+        crate::io::sha256_hex(text.as_bytes())
+    }
+
+    /// The record of `path`'s field under `key`, or why it is not used.
+    fn load(path: &std::path::Path, key: &CacheKey) -> std::result::Result<BakeRecord, String> {
+        let rp = record_path(path);
+        let bytes = std::fs::read(&rp).map_err(|e| format!("{}: {e}", rp.display()))?;
+        let r: BakeRecord =
+            serde_json::from_slice(&bytes).map_err(|e| format!("{}: {e}", rp.display()))?;
+        let finite = |v: f64| v.is_finite() && v >= 0.0;
+        if r.sha256 != r.digest(key) || !finite(r.seconds) || !finite(r.bvh_seconds) {
+            return Err(format!("{}: checksum or values do not hold", rp.display()));
+        }
+        Ok(r)
+    }
 }
 
 /// Where fields come from.
@@ -96,9 +129,11 @@ impl FieldSupply {
             if path.exists() {
                 match cache::load(path, key) {
                     Ok(field) => {
-                        let record: Option<BakeRecord> = std::fs::read(record_path(path))
-                            .ok()
-                            .and_then(|b| serde_json::from_slice(&b).ok());
+                        let record = BakeRecord::load(path, key)
+                            .inspect_err(|e| {
+                                eprintln!("  bake record not used, bake time unknown: {e}")
+                            })
+                            .ok();
                         eprintln!("  {label:<40} cached ({})", path.display());
                         return Ok(Supplied {
                             bake_s: record.as_ref().map(|r| r.seconds + r.bvh_seconds),
@@ -149,13 +184,15 @@ fn save(
     stats: &BakeStats,
 ) -> Result<()> {
     cache::save(path, key, field).map_err(Error::cache("field cache"))?;
-    let record = BakeRecord {
+    let mut record = BakeRecord {
         seconds: stats.seconds,
         bvh_seconds: stats.bvh_seconds,
         rays: stats.rays,
         threads: rayon::current_num_threads(),
         date: super::meta::utc_now_iso8601(),
+        sha256: String::new(),
     };
+    record.sha256 = record.digest(key);
     let rp = record_path(path);
     let json = serde_json::to_vec_pretty(&record).expect("record serialises");
     crate::io::write_atomic(&rp, &json).map_err(Error::io(&rp))
