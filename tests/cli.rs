@@ -235,3 +235,40 @@ fn plots_refuse_a_table_that_is_not_a_runs() {
     assert!(!o.status.success(), "{t}");
     assert!(t.contains("table.csv") && !t.contains("redrew"), "{t}");
 }
+
+/// Without any Vulkan driver, `check` runs a spec's CPU rows and names the GPU rows it left out
+/// (where they once failed the whole spec); `--require-gpu` makes that a failure.
+#[test]
+fn check_without_vulkan_skips_gpu_rows_loudly_unless_required() {
+    let dir = tempfile::tempdir().unwrap();
+    let spec = tiny_spec(dir.path(), 255.0);
+    let both = std::fs::read_to_string(&spec).unwrap().replace(
+        r#""reference": {"#,
+        r#""backends": ["cpu", "gpu"], "reference": {"#,
+    );
+    std::fs::write(&spec, both).unwrap();
+    let check = |extra: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_experiment"))
+            .args(["check", &spec, "--no-cache", "--out"])
+            .arg(dir.path().join("out"))
+            .args(extra)
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .env("VK_ICD_FILENAMES", "/nonexistent.json")
+            .env("VK_DRIVER_FILES", "/nonexistent.json")
+            .env_remove("VISFIELD_ADAPTER")
+            .output()
+            .unwrap()
+    };
+    let o = check(&[]);
+    let t = text(&o);
+    assert!(o.status.success(), "{t}");
+    assert!(
+        t.contains("SKIPPED the \"gpu\" rows") && t.contains("no Vulkan adapter"),
+        "{t}"
+    );
+    assert!(t.contains("1 cell(s)"), "the CPU row ran: {t}");
+    let o = check(&["--require-gpu"]);
+    let t = text(&o);
+    assert!(!o.status.success(), "{t}");
+    assert!(t.contains("FAIL") && t.contains("cannot run"), "{t}");
+}
