@@ -823,3 +823,28 @@ fn an_edited_bake_record_is_not_believed() {
     // The errors do not depend on where the field came from.
     assert_eq!(third.rms_vertex, first.rms_vertex);
 }
+
+/// Placements past f32 range are refused naming the instance, before any BVH is built (they
+/// once reached the tracer as infinities and panicked).
+#[test]
+fn placements_past_f32_range_are_refused_naming_the_instance() {
+    for transform in [
+        r#""transform": { "translate": [1e39, 0, 0] }"#,
+        r#""transform": { "translate": [1e300, 0, 0] }"#,
+        r#""transform": { "scale": 3e38 }"#,
+    ] {
+        let text = tiny(ONE_FIELD, "").replace(
+            r#""transform": { "fit": { "center": [0.5, 0.45, 0.5], "radius": 0.35 } }"#,
+            transform,
+        );
+        let spec = parse(&text).expect("the values themselves are valid");
+        let e = Scenes::build(&spec, Path::new("specs/bad.json"), "scenes")
+            .err()
+            .unwrap_or_else(|| panic!("{transform} was accepted"))
+            .to_string();
+        assert!(
+            e.contains("scenes[0].instances[1].transform") && e.contains("f32 range"),
+            "{e}"
+        );
+    }
+}

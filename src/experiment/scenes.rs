@@ -16,6 +16,11 @@ use glam::{DVec3, EulerRot, Quat, Vec3};
 use std::path::Path;
 use std::sync::Arc;
 
+/// The largest world coordinate a placed vertex may have in its scene's frame: differences of
+/// two coordinates stay below 2.3e18 and their products, summed three at a time as in a cross
+/// product or a squared length, below 1.6e37, inside f32's 3.4e38.
+pub const MAX_WORLD_COORDINATE: f32 = 1.152_921_5e18; // 2⁶⁰
+
 /// A mesh used by the spec, with the hash that keys its cached fields.
 #[derive(Clone, Debug)]
 pub struct LoadedMesh {
@@ -144,6 +149,23 @@ impl Scenes {
                 mesh_of.push(m);
             }
             let Rebased { scene, origin } = rebase(&instances);
+            // Placements past what f32 geometry can hold (a translation of 1e39, a scale of
+            // 3e38) would reach the tracer as infinities, or overflow in its squares and cross
+            // products: refused here, naming the instance, before any BVH is built.
+            for (ii, inst) in scene.instances.iter().enumerate() {
+                let too_far = |p: &Vec3| !(p.abs().max_element() <= MAX_WORLD_COORDINATE);
+                if let Some(bad) = inst.world_triangles().flatten().find(too_far) {
+                    return Err(SpecError::Invalid {
+                        file: file.to_path_buf(),
+                        field: format!("{path}[{si}].instances[{ii}].transform"),
+                        message: format!(
+                            "places a vertex at {bad}, outside ±{MAX_WORLD_COORDINATE:e}, the \
+                             f32 range in which the geometry's squares and cross products stay \
+                             finite (coordinates in the scene's frame, centred on its instances)"
+                        ),
+                    });
+                }
+            }
             out.scenes.push(BuiltScene {
                 name: sc.name.clone(),
                 scene,
