@@ -153,7 +153,8 @@ impl Scenes {
             // 3e38) would reach the tracer as infinities, or overflow in its squares and cross
             // products: refused here, naming the instance, before any BVH is built.
             for (ii, inst) in scene.instances.iter().enumerate() {
-                let too_far = |p: &Vec3| !(p.abs().max_element() <= MAX_WORLD_COORDINATE);
+                let too_far =
+                    |p: &Vec3| !p.is_finite() || p.abs().max_element() > MAX_WORLD_COORDINATE;
                 if let Some(bad) = inst.world_triangles().flatten().find(too_far) {
                     return Err(SpecError::Invalid {
                         file: file.to_path_buf(),
