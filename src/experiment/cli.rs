@@ -353,7 +353,7 @@ fn adapter_preference(flag: Option<&str>) -> crate::gpu::AdapterPreference {
 
 /// Parses the command line and runs it: the exit code of a command that reports its own
 /// failures (`list`, `check`, 0 elsewhere), or the error for the caller to print
-/// (`src/bin/experiment.rs`, with [`Error::chain`]).
+/// (`src/bin/experiment.rs`, with [`super::Error::chain`]).
 pub fn main() -> Result<i32> {
     run(Cli::parse())
 }

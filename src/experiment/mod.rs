@@ -1,10 +1,11 @@
 //! The experiment harness: specs, planner, runner, metrics, outputs and the CLI.
 //!
-//! `experiments/NAME.json` ([`spec`]) → built scenes ([`scenes`]) → a [`plan`] of steps (each
-//! field baked once, the reference once per scene and ray set, fields released as soon as their
-//! cells are done) → the runner ([`run`]) with fields from the cache or the bake ([`fields`]) on
-//! a backend ([`backend`]) → metrics ([`metrics`]), tables ([`outputs`]), plots ([`figures`]) and
-//! thresholds ([`check`]). `experiment sampling` measures the sampling patterns alone
+//! `experiments/NAME.json` ([`spec`]) and its render kind ([`kind`]: the points and the
+//! estimator) → built scenes ([`scenes`]) → a [`plan`] of steps (each field baked once, the
+//! reference once per scene and ray set, fields released as soon as their cells are done) → the
+//! runner ([`run`]) with fields from the cache or the bake ([`fields`]) on a backend
+//! ([`backend`]) → metrics ([`metrics`]), tables ([`outputs`]), plots ([`figures`]) and
+//! thresholds ([`check`]). Every failure is an [`Error`] naming what it was about. `experiment sampling` measures the sampling patterns alone
 //! ([`sampling_report`]).
 
 pub mod backend;

@@ -43,8 +43,8 @@ pub struct Row {
     /// Stored bytes of every caster's field.
     pub field_bytes: u64,
     /// RMS over the AO points (receiver vertices, or pixels for image AO), unquantised, 0–255,
-    /// of the field's AO against the converged reference (see [`super::truth`]); mean over
-    /// seeds. It includes the reference's own noise: E[rms²] = error² + `truth_stderr`².
+    /// of the field's AO against the converged reference (see [`super::truth_cache`]); mean over
+    /// seeds. It includes the reference's own noise: E\[rms²\] = error² + `truth_stderr`².
     #[serde(default)]
     pub rms_vs_truth: Option<f64>,
     /// RMS over points of the converged reference's standard error (0–255): its noise floor.

@@ -189,8 +189,8 @@ pub struct PlanLimits {
 
 impl Plan {
     /// Plans a spec profile over its built scenes: per scene the reference steps
-    /// ([`scene_steps`]), then per field geometry its bakes, lookups and releases
-    /// ([`GroupPlanner`]).
+    /// (`scene_steps`), then per field geometry its bakes, lookups and releases
+    /// (`GroupPlanner`).
     pub fn new(spec: &Spec, scenes: &Scenes, limits: PlanLimits) -> Result<Plan> {
         let kind = super::kind::of(&spec.render);
         let cells = cells_of(spec);

@@ -4,7 +4,7 @@
 //! visibility is the backend's).
 //!
 //! A render kind supplies
-//! - its evaluation points ([`EvalPoints`]: the receivers' vertices, or the receiver pixels of a
+//! - its evaluation points ([`super::points::EvalPoints`]: the receivers' vertices, or the receiver pixels of a
 //!   G-buffer, [`super::points`]);
 //! - an [`Estimator`]: per point, a value in \[0, 1\] from `k²` seeded rays
 //!   ([`Estimator::estimate`]), and the same quantity converged ([`Estimator::converged`],

@@ -1,6 +1,7 @@
-//! Rendering: one [`Visibility`] interface with ray-cast and field-lookup backends, and the
-//! renderers built on it (vertex AO as in 2008; image-space AO, soft shadows, reflections as in
-//! 2010).
+//! Rendering: one [`Visibility`] interface with ray-cast and field-lookup backends, the
+//! [`estimator`] seam written against it (what a render kind computes per point: AO today; soft
+//! shadows and reflections of the 2010 paper are to follow), the evaluation [`points`] (vertices
+//! as in 2008, G-buffer pixels as in 2010) and the images.
 
 pub mod ao;
 
