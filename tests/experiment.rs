@@ -848,3 +848,45 @@ fn placements_past_f32_range_are_refused_naming_the_instance() {
         );
     }
 }
+
+/// `--out` ownership: a user's file among a previous run's results survives the next run (it
+/// was once deleted); a folder no run wrote is refused before any work unless allowed, and
+/// then its files are kept; the new run.json lists the run's own files.
+#[test]
+fn results_folders_keep_files_the_program_did_not_write() {
+    let dir = tempfile::tempdir().unwrap();
+    let ls = loaded(dir.path(), &tiny(ONE_FIELD, ""));
+    let out = dir.path().join("out");
+    run(&ls, &options(out.clone())).unwrap();
+    std::fs::write(out.join("images/holiday.png"), b"mine").unwrap();
+    run(&ls, &options(out.clone())).unwrap();
+    assert_eq!(
+        std::fs::read(out.join("images/holiday.png")).unwrap(),
+        b"mine"
+    );
+    let meta: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("run.json")).unwrap()).unwrap();
+    let files: Vec<&str> = meta["files"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f.as_str().unwrap())
+        .collect();
+    assert!(
+        files.contains(&"table.csv") && files.contains(&"run.json"),
+        "{files:?}"
+    );
+    assert!(!files.contains(&"images/holiday.png"), "{files:?}");
+
+    let theirs = dir.path().join("theirs");
+    std::fs::create_dir_all(&theirs).unwrap();
+    std::fs::write(theirs.join("thesis.tex"), b"mine").unwrap();
+    let e = run(&ls, &options(theirs.clone())).unwrap_err().to_string();
+    assert!(e.contains("no run.json"), "{e}");
+    assert!(!theirs.join("table.csv").exists());
+    let mut o = options(theirs.clone());
+    o.allow_nonempty_out = true;
+    run(&ls, &o).unwrap();
+    assert!(theirs.join("table.csv").exists());
+    assert_eq!(std::fs::read(theirs.join("thesis.tex")).unwrap(), b"mine");
+}

@@ -130,6 +130,10 @@ pub struct RunArgs {
     /// (default: $VISFIELD_ADAPTER, else auto = hardware where there is one, else lavapipe).
     #[arg(long)]
     pub adapter: Option<String>,
+    /// Run into an output folder that holds files no earlier run wrote (no run.json); its
+    /// files are kept, never deleted.
+    #[arg(long)]
+    pub allow_nonempty_out: bool,
 }
 
 /// Runs the spec experiments/NAME.json (see `experiment list`).
@@ -147,6 +151,7 @@ impl RunArgs {
         o.quick = self.quick;
         o.dry_run = self.dry_run;
         o.adapter = adapter_preference(self.adapter.as_deref());
+        o.allow_nonempty_out = self.allow_nonempty_out;
         o.supply = FieldSupply {
             cache: if self.no_cache {
                 None

@@ -74,6 +74,8 @@ pub struct RunOptions {
     /// The adapter of the "gpu" backend (default: `VISFIELD_ADAPTER`, else hardware where
     /// there is one, else lavapipe); unused unless a spec asks for "gpu".
     pub adapter: AdapterPreference,
+    /// Run into an output folder that holds files no run wrote (they are kept).
+    pub allow_nonempty_out: bool,
 }
 
 impl RunOptions {
@@ -91,6 +93,7 @@ impl RunOptions {
             short_stage_s: 2.0,
             repeats: 3,
             adapter: AdapterPreference::from_env(),
+            allow_nonempty_out: false,
         }
     }
 }
@@ -131,6 +134,7 @@ pub fn run(ls: &LoadedSpec, opts: &RunOptions) -> Result<RunReport> {
     let out_existed = opts.out.exists();
     let result = (|| {
         if !opts.dry_run {
+            staging::check_ownership(&opts.out, opts.allow_nonempty_out)?;
             ensure_writable(&opts.out)?;
             if let Some(cache) = &opts.supply.cache {
                 ensure_writable(cache)
@@ -203,7 +207,10 @@ fn run_checked(
             return Err(e);
         }
     };
-    staging::publish(&staged.out, &opts.out)?;
+    if let Err(e) = staging::publish(&staged.out, &opts.out) {
+        let _ = std::fs::remove_dir_all(&staged.out);
+        return Err(e);
+    }
     let r = report(rows);
     eprintln!(
         "{}: {} cells in {:.1} s -> {}",
