@@ -890,3 +890,52 @@ fn results_folders_keep_files_the_program_did_not_write() {
     assert!(theirs.join("table.csv").exists());
     assert_eq!(std::fs::read(theirs.join("thesis.tex")).unwrap(), b"mine");
 }
+
+/// Sizes that would abort or hang before any check are refused by validation, naming the
+/// field, dry run included (a 10¹² supershape once hung `--dry-run`).
+#[test]
+fn sizes_past_the_limits_are_refused_before_anything_is_built() {
+    let supershape = r#"{ "supershape": { "triangles": 2000 } }"#;
+    for (mesh, field) in [
+        (
+            r#"{ "supershape": { "triangles": 1000000000000 } }"#,
+            "instances[1].mesh",
+        ),
+        (
+            r#"{ "sphere": { "radius": 1, "stacks": 1000000, "slices": 1000000 } }"#,
+            "instances[1].mesh",
+        ),
+    ] {
+        let e = error_of(&tiny(ONE_FIELD, "").replace(supershape, mesh));
+        assert!(e.contains(field) && e.contains("at most"), "{e}");
+    }
+    let e = error_of(&tiny(ONE_FIELD, "").replace(
+        r#"{ "corner": { "n": 9 } }"#,
+        r#"{ "corner": { "n": 100000 } }"#,
+    ));
+    assert!(
+        e.contains("instances[0].mesh") && e.contains("at most"),
+        "{e}"
+    );
+    let e = error_of(&tiny(ONE_FIELD, "").replace(
+        r#""rays_per_point": 16, "image""#,
+        r#""rays_per_point": 999950884, "image""#,
+    ));
+    assert!(
+        e.contains("render.rays_per_point") && e.contains("at most"),
+        "{e}"
+    );
+    let e = error_of(&tiny(ONE_FIELD, "").replace(
+        r#""raycast_sweep": [4, 16]"#,
+        r#""raycast_sweep": [4, 16], "seeds": 4000000000"#,
+    ));
+    assert!(e.contains("reference.seeds"), "{e}");
+    let e = error_of(&tiny(ONE_FIELD, "").replace(
+        r#""field_rays_sweep": [16, 64]"#,
+        r#""field_rays_sweep": [16, 4294836225]"#,
+    ));
+    assert!(
+        e.contains("field_rays_sweep[1]") && e.contains("at most"),
+        "{e}"
+    );
+}

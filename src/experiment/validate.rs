@@ -10,6 +10,18 @@ use crate::geometry::models::ModelRegistry;
 use crate::sampling::{HemisphereLayout, SphereKind, SpherePoints};
 use std::path::Path;
 
+/// The largest procedural mesh a spec may ask for (triangles): sizes past it would abort or
+/// hang before any check could run (a 10¹² supershape, a corner of n = 100000).
+pub const MAX_PROCEDURAL_TRIANGLES: u64 = 1 << 24;
+/// The most rays per point of any render, reference or sweep (k ≤ 256).
+pub const MAX_RAYS_PER_POINT: u32 = 1 << 16;
+/// The most seeds per cell.
+pub const MAX_SEEDS: u32 = 64;
+/// The most rays per point of the converged reference, all batches together.
+pub const MAX_TRUTH_RAYS: u32 = 1 << 20;
+/// The most batches of the converged reference.
+pub const MAX_TRUTH_BATCHES: u32 = 64;
+
 /// Where each replaceable part of a profile lives in the file.
 struct Paths {
     scenes: &'static str,
@@ -124,6 +136,16 @@ impl Ctx<'_> {
                 ),
             ));
         }
+        if t.max_rays > MAX_TRUTH_RAYS || t.batches > MAX_TRUTH_BATCHES {
+            return Err(self.err(
+                p.truth_max_rays,
+                format!(
+                    "{} rays in {} batches: at most {MAX_TRUTH_RAYS} rays and {MAX_TRUTH_BATCHES} \
+                     batches per point",
+                    t.max_rays, t.batches
+                ),
+            ));
+        }
         if (t.max_rays as u64) < 64 * t.batches as u64 {
             return Err(self.err(
                 p.truth_max_rays,
@@ -134,8 +156,11 @@ impl Ctx<'_> {
                 ),
             ));
         }
-        if s.reference.seeds == 0 {
-            return Err(self.err("reference.seeds", "needs at least 1 seed".into()));
+        if !(1..=MAX_SEEDS).contains(&s.reference.seeds) {
+            return Err(self.err(
+                "reference.seeds",
+                format!("{} seeds: needs 1 to {MAX_SEEDS}", s.reference.seeds),
+            ));
         }
         if let Some(img) = s.render.image() {
             for (name, v) in [("width", img.width), ("height", img.height)] {
@@ -300,6 +325,25 @@ impl Ctx<'_> {
     fn mesh(&self, m: &MeshSource, path: &str) -> Result<(), SpecError> {
         let bad = |what: &str| Err(self.err(path, what.to_string()));
         let pos = |x: f32| x > 0.0 && x.is_finite();
+        // Triangles a procedural mesh would have, checked before anything is generated.
+        let grid = |n: usize| 2 * (n as u128).saturating_sub(1).pow(2);
+        let triangles: Option<u128> = match m {
+            MeshSource::Corner { n } => Some(3 * grid(*n)),
+            MeshSource::Plane { n, .. } => Some(grid(*n)),
+            MeshSource::Supershape { triangles } => Some(*triangles as u128),
+            MeshSource::Sphere { stacks, slices, .. } => {
+                Some(2 * *stacks as u128 * *slices as u128)
+            }
+            _ => None,
+        };
+        if let Some(t) = triangles.filter(|&t| t > MAX_PROCEDURAL_TRIANGLES as u128) {
+            return Err(self.err(
+                path,
+                format!(
+                    "{t} triangles: a procedural mesh may have at most {MAX_PROCEDURAL_TRIANGLES}"
+                ),
+            ));
+        }
         match m {
             MeshSource::Model(name) => {
                 let entry = ModelRegistry::embedded()
@@ -373,6 +417,12 @@ impl Ctx<'_> {
     }
 
     fn square(&self, n: u32, path: &str) -> Result<(), SpecError> {
+        if n > MAX_RAYS_PER_POINT {
+            return Err(self.err(
+                path,
+                format!("{n} rays per point: at most {MAX_RAYS_PER_POINT} (256²)"),
+            ));
+        }
         if exact_sqrt(n).is_none() {
             let k = (n as f64).sqrt().floor().max(1.0) as u32;
             return Err(self.err(
