@@ -1,0 +1,112 @@
+//! Extreme finite numbers in every numeric field of a spec: validation either refuses the value
+//! naming the field, or everything before the run's work (scenes, the plan, the reference
+//! tracer over the casters) and the whole run take it without a panic, an abort or a hang.
+
+mod common;
+
+use common::{tiny, ONE_FIELD};
+use std::path::Path;
+use visfield::experiment::plan::{Plan, PlanLimits};
+use visfield::experiment::run::run;
+use visfield::experiment::scenes::Scenes;
+use visfield::experiment::spec::Spec;
+use visfield::trace::Tracer;
+
+/// Numbers a user may type: zeros, signs, tiny and huge magnitudes, the f32 edges.
+const EXTREMES: [&str; 14] = [
+    "0", "-0", "1e-45", "-1e-45", "1e-30", "1e-7", "-1", "0.5", "7", "1e7", "1e30", "3e38",
+    "-3.4e38", "1e300",
+];
+
+/// The tiny spec with camera, transform and render numbers made explicit, so each can be
+/// replaced: `{N}` marks the slots.
+fn slots() -> Vec<String> {
+    let base = tiny(ONE_FIELD, "").replace(
+        r#""render": { "rays_per_point": 16, "image": { "width": 32, "height": 32 } }"#,
+        r#""render": { "what": "image_ao", "rays_per_point": 16, "max_distance": {N}, "image": { "width": 32, "height": 32, "camera": { "eye": [{N}, 2, 2], "target": [0.4, {N}, 0.4], "fov_y_deg": {N} } } }"#,
+    );
+    let fit = r#""transform": { "fit": { "center": [0.5, 0.45, 0.5], "radius": 0.35 } }"#;
+    let variants = [
+        r#""transform": { "fit": { "center": [{N}, 0.45, 0.5], "radius": 0.35 } }"#,
+        r#""transform": { "fit": { "center": [0.5, 0.45, 0.5], "radius": {N} } }"#,
+        r#""transform": { "translate": [{N}, 0, 0] }"#,
+        r#""transform": { "scale": {N} }"#,
+        r#""transform": { "rotate_deg": [{N}, 0, 0], "fit": { "center": [0.5, 0.45, 0.5], "radius": 0.35 } }"#,
+    ];
+    let mut out = Vec::new();
+    // Each slot on its own, the others at a sane value.
+    let sane = ["2", "0.3", "40"];
+    let n_render = base.matches("{N}").count();
+    for i in 0..n_render {
+        let mut k = 0;
+        let mut text = String::new();
+        for (j, part) in base.split("{N}").enumerate() {
+            text.push_str(part);
+            if j < n_render {
+                text.push_str(if k == i { "{N}" } else { sane[k.min(2)] });
+                k += 1;
+            }
+        }
+        out.push(text);
+    }
+    let render_sane = out[0].replacen("{N}", "2", 1);
+    for v in variants {
+        out.push(render_sane.replace(fit, v));
+    }
+    out
+}
+
+#[test]
+fn extreme_numbers_are_refused_or_taken_without_a_panic() {
+    let (mut refused, mut taken) = (0, 0);
+    for template in slots() {
+        for x in EXTREMES {
+            let text = template.replace("{N}", x);
+            let result = std::panic::catch_unwind(|| {
+                let spec = match Spec::parse(&text, Path::new("extreme.json")) {
+                    Ok(s) => s,
+                    Err(e) => {
+                        assert!(e.to_string().starts_with("extreme.json: "), "{e}");
+                        return false;
+                    }
+                };
+                let scenes = match Scenes::build(&spec, Path::new("extreme.json"), "scenes") {
+                    Ok(s) => s,
+                    Err(e) => {
+                        assert!(e.to_string().contains("scenes[0]"), "{e}");
+                        return false;
+                    }
+                };
+                let plan = Plan::new(
+                    &spec,
+                    &scenes,
+                    PlanLimits {
+                        memory_limit: 1 << 30,
+                    },
+                );
+                let plan = plan.expect("a validated spec plans");
+                let _ = plan.describe("extreme", &scenes, &|_, _| "bake");
+                for bs in &scenes.scenes {
+                    let _ = Tracer::new(&bs.scene.caster_triangles());
+                    let _ = bs.bounds();
+                }
+                // The whole run: a result or an error, never a panic.
+                let dir = tempfile::tempdir().unwrap();
+                let ls = common::loaded(dir.path(), &text);
+                let _ = run(&ls, &common::options(dir.path().join("out")));
+                true
+            });
+            match result {
+                Ok(true) => taken += 1,
+                Ok(false) => refused += 1,
+                Err(_) => panic!("a panic on {x} in:\n{template}"),
+            }
+        }
+    }
+    eprintln!("extreme values: {taken} taken, {refused} refused");
+    // Both outcomes occur: the sweep is not all refusals.
+    assert!(
+        taken > 10 && refused > 10,
+        "taken {taken}, refused {refused}"
+    );
+}
