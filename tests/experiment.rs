@@ -201,7 +201,7 @@ fn planner_bakes_each_field_once_and_derives_precisions() {
     assert_eq!(lookups, 4);
     // Peak: the f32 source (290 × 256 × 4 bytes) plus the u8 field (290 × 256 bytes).
     assert_eq!(plan.peak_field_bytes, 290 * 256 * 5);
-    // The reference is planned once: 243 corner vertices × 16 rays.
+    // The reference is planned once: 243 corner vertices × 16 rays on each of the 3 seeds.
     let refs: Vec<u64> = plan
         .steps
         .iter()
@@ -210,7 +210,7 @@ fn planner_bakes_each_field_once_and_derives_precisions() {
             _ => None,
         })
         .collect();
-    assert_eq!(refs, vec![243 * 16]);
+    assert_eq!(refs, vec![243 * 16 * 3]);
 
     // With the f32 field over the memory limit, each precision is baked on its own.
     let small = PlanLimits {
@@ -238,12 +238,18 @@ fn dry_run_lists_steps_with_rays_and_bytes() {
         bake.contains("74240") && bake.contains("72.50 KiB"),
         "{bake}"
     );
-    // Lookup and reference: 243 vertices × 16 rays.
+    // Lookup: 243 vertices × (16 rays × 3 seeds + the field sweep's 64 once) = 27,216;
+    // reference: 243 × 16 × 3 seeds = 11,664.
     let lookup = t
         .lines()
         .find(|l| l.contains("lookup AO tiny-slater-290"))
         .expect(t);
-    assert!(lookup.contains("3888"), "{lookup}");
+    assert!(lookup.contains("27216"), "{lookup}");
+    let reference = t
+        .lines()
+        .find(|l| l.contains("ray-cast reference tiny"))
+        .expect(t);
+    assert!(reference.contains("11664"), "{reference}");
     assert!(t.contains("ray-cast reference tiny, 16 rays/point"), "{t}");
     assert!(
         t.contains("converged reference tiny, at most 16384 rays/point"),

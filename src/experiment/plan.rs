@@ -205,7 +205,7 @@ impl Plan {
             scenes,
             limits,
             points: |scene: usize| kind.max_points(&scenes.scenes[scene]),
-            render_k,
+            rays_per_lookup: rays_per_lookup(spec, render_k),
             steps,
             live: 0,
             peak: 0,
@@ -378,7 +378,8 @@ impl Plan {
         }
         let _ = writeln!(
             out,
-            "  total: {total_rays} rays ({bake_rays} in bakes); peak field memory {}",
+            "  total: {total_rays} rays, every seed and sweep counted ({bake_rays} in bakes); peak \
+             field memory {}",
             ByteSize(self.peak_field_bytes)
         );
         out
@@ -401,7 +402,9 @@ fn scene_steps(
     ref_k: u32,
 ) -> Vec<Step> {
     let pts = kind.max_points(&scenes.scenes[s]);
-    let rays = |k: u32| pts * (k * k) as u64;
+    // Every seed traces its own rays (the same-ray reference and the sweep's errors).
+    let seeds = spec.reference.seeds as u64;
+    let rays = |k: u32| pts * (k * k) as u64 * seeds;
     let mut steps = Vec::new();
     if let Some(img) = kind.image() {
         steps.push(Step::Primary {
@@ -447,6 +450,20 @@ fn scene_steps(
     steps
 }
 
+/// Rays per point of one cell's lookups: the render's k² on every seed, plus each other ray
+/// count of the field sweep once (a count equal to the render's reuses its first seed).
+fn rays_per_lookup(spec: &Spec, render_k: u32) -> u64 {
+    let k2 = (render_k * render_k) as u64;
+    let sweep: u64 = spec
+        .reference
+        .field_rays_sweep
+        .iter()
+        .filter(|&&n| n as u64 != k2)
+        .map(|&n| n as u64)
+        .sum();
+    k2 * spec.reference.seeds as u64 + sweep
+}
+
 /// The cells grouped by field geometry, in first-use order.
 fn field_groups(cells: &[Cell]) -> Vec<(Geometry, Vec<usize>)> {
     let mut groups: Vec<(Geometry, Vec<usize>)> = Vec::new();
@@ -466,7 +483,9 @@ struct GroupPlanner<'a, P: Fn(usize) -> u64> {
     limits: PlanLimits,
     /// The most evaluation points of a scene.
     points: P,
-    render_k: u32,
+    /// Rays per point of one cell: the render's on every seed, and the field sweep's other
+    /// counts once.
+    rays_per_lookup: u64,
     steps: Vec<Step>,
     live: u64,
     peak: u64,
@@ -536,8 +555,7 @@ impl<P: Fn(usize) -> u64> GroupPlanner<'_, P> {
                 .iter()
                 .filter(|&&ci| self.cells[ci].params.precision == p)
             {
-                let k = self.render_k as u64;
-                let rays = (self.points)(self.cells[ci].scene) * k * k;
+                let rays = (self.points)(self.cells[ci].scene) * self.rays_per_lookup;
                 self.steps.push(Step::Lookup { cell: ci, rays });
             }
             self.release(stage_fields);
