@@ -32,6 +32,12 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     })
 }
 
+/// Whether process `pid` runs (this one, or one with an entry in `/proc`): the owner test of the
+/// PID-named leftovers of writes and runs.
+pub fn process_alive(pid: u32) -> bool {
+    pid == std::process::id() || Path::new(&format!("/proc/{pid}")).exists()
+}
+
 /// Removes the temporaries of [`write_atomic`] in `dir` (`.NAME.tmp-PID`) whose process no
 /// longer runs (a write killed mid-way); returns how many. Temporaries of live processes are
 /// kept: they may be writing now.
@@ -49,8 +55,7 @@ pub fn remove_stale_temporaries(dir: &Path) -> usize {
         else {
             continue;
         };
-        let alive = pid == std::process::id() || Path::new(&format!("/proc/{pid}")).exists();
-        if !alive && std::fs::remove_file(e.path()).is_ok() {
+        if !process_alive(pid) && std::fs::remove_file(e.path()).is_ok() {
             removed += 1;
         }
     }

@@ -82,8 +82,7 @@ fn recover(out: &Path) -> Result<()> {
         let Ok(pid) = pid.parse::<u32>() else {
             continue;
         };
-        let alive = pid == std::process::id() || Path::new(&format!("/proc/{pid}")).exists();
-        if alive {
+        if crate::io::process_alive(pid) {
             continue;
         }
         match what {
