@@ -260,8 +260,10 @@ fn check(names: &[String], args: &RunArgs, require_gpu: bool) -> Result<i32> {
         })
     });
     let mut failed = Vec::new();
+    // Opening a device takes a while: probed once, for the first spec with GPU rows.
+    let missing_vulkan = std::cell::OnceCell::new();
     for ls in specs {
-        let ls = match ls {
+        let mut ls = match ls {
             Ok(ls) => ls,
             Err(e) => {
                 failed.push(format!("error: {e}"));
@@ -269,9 +271,8 @@ fn check(names: &[String], args: &RunArgs, require_gpu: bool) -> Result<i32> {
             }
         };
         let name = ls.name.clone();
-        let mut ls = ls;
-        let profile = ls.spec.profile(args.quick);
-        if profile.backends.contains(&Backend::Gpu) && no_vulkan(args) {
+        let gpu = ls.spec.profile(args.quick).backends.contains(&Backend::Gpu);
+        if gpu && *missing_vulkan.get_or_init(|| no_vulkan(args)) {
             let why = "no Vulkan adapter (install mesa-vulkan-drivers for lavapipe)";
             if require_gpu {
                 failed.push(format!("{name}: its \"gpu\" rows cannot run: {why}"));
