@@ -280,8 +280,8 @@ impl RenderKind {
 
 /// What is rendered, one variant per render kind (the tagged form): in JSON an object whose
 /// `what` names the kind and whose other keys are that kind's options ([`RenderWire`] lists
-/// every key any kind reads; a key of another kind is an error). See
-/// [`super::kind`] for what each kind computes.
+/// every key any kind reads; unknown keys are errors). See [`super::kind`] for what each kind
+/// computes.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "RenderWire", into = "RenderWire")]
 pub enum RenderSpec {
@@ -312,7 +312,8 @@ pub struct AoRender {
 }
 
 /// `render` as written in a spec: every key of every kind, unknown keys rejected. Converted to
-/// [`RenderSpec`] on reading, which refuses a key the kind does not read.
+/// [`RenderSpec`] on reading. The two AO kinds read the same keys; a kind with keys of its own
+/// (lights, a glossy lobe) will have its `TryFrom` arm refuse them under another `what`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RenderWire {
