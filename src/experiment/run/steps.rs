@@ -104,9 +104,10 @@ impl<'a> Runner<'a> {
         if !self.scene(s).at.is_empty() {
             return Ok(());
         }
-        let what = match self.kind.image() {
-            Some(_) if self.kind.needs().view => "the image sees no receiver point",
-            _ => "no receiver vertex",
+        let what = if self.kind.needs().view {
+            "the image sees no receiver point"
+        } else {
+            "no receiver vertex"
         };
         Err(Error::invalid(
             format!("scene {}", self.scenes.scenes[s].name),
@@ -117,7 +118,10 @@ impl<'a> Runner<'a> {
     /// Executes one step.
     pub(super) fn step(&mut self, step: &Step) -> Result<()> {
         match step {
-            Step::Primary { scene, .. } => self.has_points(*scene)?,
+            Step::Primary { scene, .. } => {
+                self.scene(*scene);
+            }
+            // Every scene's first step after its G-buffer, before any field is baked.
             Step::Truth { scene, .. } => {
                 self.has_points(*scene)?;
                 self.truth(*scene)?
