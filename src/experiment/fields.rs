@@ -9,7 +9,7 @@ use super::progress;
 use super::scenes::LoadedMesh;
 use super::{Error, Result};
 use crate::field::bake::{bake, BakeOptions, BakeStats};
-use crate::field::cache::{self, CacheKey};
+use crate::field::cache::{self, CacheError, CacheKey};
 use crate::field::{FieldParams, Precision, Storage, VisibilityField};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -71,14 +71,20 @@ impl BakeRecord {
     }
 
     /// The record of `path`'s field under `key`, or why it is not used.
-    fn load(path: &std::path::Path, key: &CacheKey) -> std::result::Result<BakeRecord, String> {
+    fn load(path: &std::path::Path, key: &CacheKey) -> std::result::Result<BakeRecord, CacheError> {
         let rp = record_path(path);
-        let bytes = std::fs::read(&rp).map_err(|e| format!("{}: {e}", rp.display()))?;
-        let r: BakeRecord =
-            serde_json::from_slice(&bytes).map_err(|e| format!("{}: {e}", rp.display()))?;
+        let corrupt = |reason: String| CacheError::Corrupt {
+            path: rp.clone(),
+            reason,
+        };
+        let bytes = std::fs::read(&rp).map_err(|source| CacheError::Io {
+            path: rp.clone(),
+            source,
+        })?;
+        let r: BakeRecord = serde_json::from_slice(&bytes).map_err(|e| corrupt(e.to_string()))?;
         let finite = |v: f64| v.is_finite() && v >= 0.0;
         if r.sha256 != r.digest(key) || !finite(r.seconds) || !finite(r.bvh_seconds) {
-            return Err(format!("{}: checksum or values do not hold", rp.display()));
+            return Err(corrupt("checksum or values do not hold".into()));
         }
         Ok(r)
     }

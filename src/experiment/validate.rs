@@ -136,14 +136,16 @@ impl Ctx<'_> {
                 ),
             ));
         }
-        if t.max_rays > MAX_TRUTH_RAYS || t.batches > MAX_TRUTH_BATCHES {
+        if t.max_rays > MAX_TRUTH_RAYS {
             return Err(self.err(
                 p.truth_max_rays,
-                format!(
-                    "{} rays in {} batches: at most {MAX_TRUTH_RAYS} rays and {MAX_TRUTH_BATCHES} \
-                     batches per point",
-                    t.max_rays, t.batches
-                ),
+                format!("{} rays per point: at most {MAX_TRUTH_RAYS}", t.max_rays),
+            ));
+        }
+        if t.batches > MAX_TRUTH_BATCHES {
+            return Err(self.err(
+                "reference.truth.batches",
+                format!("{} batches: at most {MAX_TRUTH_BATCHES}", t.batches),
             ));
         }
         if (t.max_rays as u64) < 64 * t.batches as u64 {
