@@ -66,17 +66,6 @@ pub trait ComputeBackend {
         est: &'s dyn Estimator,
     ) -> Result<Box<dyn Eval + 's>>;
 
-    /// `est` through the fields, on `rays`.
-    fn field_estimate(
-        &self,
-        fields: &FieldScene,
-        est: &dyn Estimator,
-        at: Points,
-        rays: &RaySet,
-    ) -> Result<Vec<f32>> {
-        Ok(self.fields(fields, est)?.estimate(at, rays)?.values)
-    }
-
     /// `est` by ray casting the casters, on the same rays.
     fn raycast_estimate(
         &self,

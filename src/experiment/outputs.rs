@@ -108,6 +108,22 @@ pub struct Row {
     /// `rms_vs_truth` over the other points.
     #[serde(default)]
     pub rms_vs_truth_interior: Option<f64>,
+    /// RMS over the points of the same-ray reference's occlusion, 255 · (1 − value): the
+    /// signal the errors are measured against (a caster that shades little gives small errors
+    /// whatever the method; `rms_vertex` or `rms_image` over this compares casters).
+    #[serde(default)]
+    pub occlusion_rms: Option<f64>,
+    /// Graininess of the image's error against the reference image, first seed (see
+    /// [`super::metrics::grain`]; none without an image).
+    #[serde(default)]
+    pub grain: Option<f64>,
+    /// Rays per second of the field estimate, millions: points × rays per point / `ao_s` (every
+    /// ray, those that miss a caster's sphere too, as the 2010 paper counts).
+    #[serde(default)]
+    pub ao_mrays_s: Option<f64>,
+    /// The same for ray casting on the same rays (`raycast_s`).
+    #[serde(default)]
+    pub raycast_mrays_s: Option<f64>,
 }
 
 /// The columns `table.csv` starts with, in order.
@@ -183,6 +199,8 @@ pub struct ErrorColumns {
     pub truth_stderr: Option<f64>,
     pub truth_rays: Option<u32>,
     pub raycast_rms_vs_truth: Option<f64>,
+    pub occlusion_rms: Option<f64>,
+    pub grain: Option<f64>,
     /// The image, relative to the output folder (empty without an image).
     pub image: String,
 }
@@ -190,6 +208,7 @@ pub struct ErrorColumns {
 impl Row {
     /// The row of its typed parts.
     pub fn from_parts(c: CellColumns, t: TimeColumns, f: FieldColumns, e: ErrorColumns) -> Row {
+        let rays = c.receiver_points as f64 * c.rays_per_point as f64;
         Row {
             positional_samples: c.positional_samples,
             directional_res: c.directional_res,
@@ -230,8 +249,17 @@ impl Row {
             crease_points: c.crease_points,
             rms_vs_truth_crease: e.rms_vs_truth_crease,
             rms_vs_truth_interior: e.rms_vs_truth_interior,
+            occlusion_rms: e.occlusion_rms,
+            grain: e.grain,
+            ao_mrays_s: mrays_per_s(rays, Some(t.ao_s)),
+            raycast_mrays_s: mrays_per_s(rays, t.raycast_s),
         }
     }
+}
+
+/// Millions of rays per second; none without a time or a positive one.
+fn mrays_per_s(rays: f64, s: Option<f64>) -> Option<f64> {
+    s.filter(|&s| s > 0.0).map(|s| rays / s / 1e6)
 }
 
 /// Ray-cast AO at one ray count, against the reference.

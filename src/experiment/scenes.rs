@@ -193,6 +193,11 @@ pub fn build_mesh(src: &MeshSource) -> Result<Mesh> {
             slices,
         } => procedural::uv_sphere(*radius, *stacks, *slices),
         MeshSource::Plane { size, n } => procedural::plane(*size, *n),
+        MeshSource::Ellipsoid {
+            radii,
+            stacks,
+            slices,
+        } => procedural::ellipsoid(*radii, *stacks, *slices),
     };
     r.map_err(Error::geometry(src.label()))
 }

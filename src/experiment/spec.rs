@@ -138,6 +138,13 @@ pub enum MeshSource {
     },
     /// A square plane of side `size`, n × n vertices, facing +y.
     Plane { size: f32, n: usize },
+    /// A lat-long ellipsoid with semi-axes `radii` (x, y, z) (e.g. [10, 1, 1]: a long thin
+    /// caster).
+    Ellipsoid {
+        radii: Vec3,
+        stacks: usize,
+        slices: usize,
+    },
 }
 
 impl MeshSource {
@@ -150,6 +157,9 @@ impl MeshSource {
             MeshSource::Supershape { triangles } => format!("supershape{triangles}"),
             MeshSource::Sphere { stacks, slices, .. } => format!("sphere{stacks}x{slices}"),
             MeshSource::Plane { n, .. } => format!("plane{n}"),
+            MeshSource::Ellipsoid { radii, .. } => {
+                format!("ellipsoid{}x{}x{}", radii.x, radii.y, radii.z)
+            }
         }
     }
 }

@@ -333,7 +333,8 @@ impl Ctx<'_> {
             MeshSource::Corner { n } => Some(3 * grid(*n)),
             MeshSource::Plane { n, .. } => Some(grid(*n)),
             MeshSource::Supershape { triangles } => Some(*triangles as u128),
-            MeshSource::Sphere { stacks, slices, .. } => {
+            MeshSource::Sphere { stacks, slices, .. }
+            | MeshSource::Ellipsoid { stacks, slices, .. } => {
                 Some(2 * *stacks as u128 * *slices as u128)
             }
             _ => None,
@@ -377,6 +378,13 @@ impl Ctx<'_> {
             }
             MeshSource::Plane { size, n } if !(pos(*size) && *n >= 2) => {
                 bad("plane: needs size > 0 and n >= 2")
+            }
+            MeshSource::Ellipsoid {
+                radii,
+                stacks,
+                slices,
+            } if !(radii.to_array().into_iter().all(pos) && *stacks >= 2 && *slices >= 3) => {
+                bad("ellipsoid: needs radii > 0, stacks >= 2, slices >= 3")
             }
             _ => Ok(()),
         }

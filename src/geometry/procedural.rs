@@ -113,6 +113,35 @@ pub fn uv_sphere(radius: f32, stacks: usize, slices: usize) -> Result<Mesh, Geom
     })
 }
 
+/// A closed lat-long ellipsoid about the origin with semi-axes `radii` (x, y, z), tessellated as
+/// [`uv_sphere`] (the unit sphere's lat-long grid scaled per axis: the same counts, outward
+/// oriented). With radii (10, 1, 1) it is the long thin caster of the 2010 paper's stated
+/// limitation (§6, elongated models).
+pub fn ellipsoid(radii: Vec3, stacks: usize, slices: usize) -> Result<Mesh, GeometryError> {
+    let name = format!(
+        "ellipsoid({}, {}, {}; {stacks}, {slices})",
+        radii.x, radii.y, radii.z
+    );
+    for (field, r) in [
+        ("radii.x", radii.x),
+        ("radii.y", radii.y),
+        ("radii.z", radii.z),
+    ] {
+        check_positive(&name, field, r)?;
+    }
+    if stacks < 2 || slices < 3 {
+        return Err(GeometryError::invalid(
+            &name,
+            format!("need stacks >= 2 and slices >= 3, got {stacks} and {slices}"),
+        ));
+    }
+    let r = radii.as_dvec3();
+    latlong(&name, slices, stacks, |theta, phi| {
+        (r * glam::DVec3::new(phi.cos() * theta.cos(), phi.sin(), phi.cos() * theta.sin()))
+            .as_vec3()
+    })
+}
+
 /// The embedded default scene (the quickstart's, needing no files): the default [`Supershape`]
 /// (10,000 triangles) as a caster floating inside the [`corner`] receiver (n = 33), scaled so
 /// that its minimal bounding sphere has radius 0.35 and centred at (0.5, 0.45, 0.5), slightly
@@ -331,6 +360,26 @@ mod tests {
         let volume = s * s * s - h * h * s;
         assert!((m.signed_volume() - volume).abs() < 1e-5 * volume);
         assert!(cube_with_hole(1.0, 1.0).is_err());
+    }
+
+    #[test]
+    fn ellipsoid_is_a_scaled_uv_sphere() {
+        let radii = Vec3::new(10.0, 1.0, 1.0);
+        let e = ellipsoid(radii, 16, 24).unwrap();
+        let s = uv_sphere(1.0, 16, 24).unwrap();
+        assert_eq!(e.vertex_count(), s.vertex_count());
+        assert_eq!(e.triangle_count(), s.triangle_count());
+        for (p, q) in e.positions.iter().zip(&s.positions) {
+            assert!((*p - radii * *q).length() < 1e-5, "{p} vs {q}");
+        }
+        // Every vertex on the ellipsoid; the extent is the radii.
+        for p in &e.positions {
+            assert!(((*p / radii).length() - 1.0).abs() < 1e-5);
+        }
+        let b = e.bounding_sphere();
+        assert!((b.radius - 10.0).abs() < 1e-3, "{b:?}");
+        assert!(ellipsoid(Vec3::new(1.0, 0.0, 1.0), 4, 4).is_err());
+        assert!(ellipsoid(Vec3::ONE, 1, 4).is_err());
     }
 
     #[test]

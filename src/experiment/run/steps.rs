@@ -8,7 +8,7 @@ use super::RunOptions;
 use crate::experiment::backend::{self, Casters, ComputeBackend, CpuBackend};
 use crate::experiment::fields::{derive, Supplied};
 use crate::experiment::kind::Kind;
-use crate::experiment::metrics::{image_errors, vertex_errors, ErrorStats};
+use crate::experiment::metrics::{grain, image_errors, rms_unquantised, vertex_errors, ErrorStats};
 use crate::experiment::outputs::{
     CellColumns, ErrorColumns, FieldColumns, FieldSweepRow, Row, SweepRow, TimeColumns,
 };
@@ -360,14 +360,14 @@ impl<'a> Runner<'a> {
             setup_s: eval.setup_s(),
             ..TimeColumns::default()
         };
-        drop(eval);
-        // The other seeds (untimed).
+        // The other seeds (untimed), on the fields as prepared.
         let mut values = vec![first];
         for &sd in &self.seeds()[1..] {
             let rays = RaySet::new(k, sd);
-            values.push(be.field_estimate(&fields.scene, est, st.at(), &rays)?);
+            values.push(eval.estimate(st.at(), &rays)?.values);
         }
-        // The same fields with more rays per point, against the truth only.
+        // The same fields with more rays per point, against the truth only; timed like the
+        // cell (the preparation, GPU upload and compilation, is not in the time).
         let mut sweep = Vec::new();
         for &n in &spec.reference.field_rays_sweep {
             let kn = exact_sqrt(n).ok_or_else(|| {
@@ -379,7 +379,7 @@ impl<'a> Runner<'a> {
                 let rays = RaySet::new(kn, spec.reference.seed);
                 let msg = format!("  lookup {id}, {n} rays");
                 let (a, s, _) = stage_adaptive(&msg, short, reps, || {
-                    be.field_estimate(&fields.scene, est, st.at(), &rays)
+                    Ok::<_, Error>(eval.estimate(st.at(), &rays)?.values)
                 })?;
                 (Some(a), s)
             };
@@ -398,6 +398,7 @@ impl<'a> Runner<'a> {
                 truth_stderr: st.truth.as_ref().map(|t| t.rms_stderr_255()),
             });
         }
+        drop(eval);
         Ok((Evaluated { values, times }, sweep))
     }
 
@@ -435,6 +436,14 @@ impl<'a> Runner<'a> {
             truth_rays: st.truth.as_ref().map(|t| t.rays_per_point),
             raycast_rms_vs_truth: (!st.reference_vs_truth.is_empty())
                 .then(|| mean_sd(&st.reference_vs_truth).0),
+            occlusion_rms: Some(rms_unquantised(
+                &vec![1.0; st.reference.len()],
+                &st.reference,
+            )),
+            grain: match (first_image, &st.ref_image) {
+                (Some(a), Some((r, mask))) => Some(grain(&a.data, &r.data, mask, a.width as usize)),
+                _ => None,
+            },
             image: String::new(),
         }
     }

@@ -12,13 +12,17 @@
 //!   is `rms_vs_truth` (per point, against the converged reference, log scale) and the
 //!   reference's own noise floor is drawn as a dashed line; otherwise the same-ray RMS;
 //! - `times.png` (several scenes): ray-cast, bake and AO time against caster triangles (2008
-//!   Figure 8), ray-cast and AO time once per backend.
+//!   Figure 8), ray-cast and AO time once per backend;
+//! - `time_vs_rays.png` and `grain_vs_positional.png`: the 2010 per-pixel figures' plots (see
+//!   [`per_pixel`]).
 //!
 //! Every series is labelled with the backend as soon as a run has more than one (CPU and GPU
 //! rows of the same field are different points, never one series).
 //!
 //! The RMS shown is per image pixel when the run has images (the papers' figure), else per
 //! vertex.
+
+mod per_pixel;
 
 use super::outputs::{read_csv, FieldSweepRow, Row, SweepRow};
 use super::plan::selection_name;
@@ -113,8 +117,16 @@ pub fn draw_all(out: &Path, title: &str) -> Result<()> {
     xy_plot(&out.join("rms_vs_positional.png"), &axes, &series, &[])?;
 
     // Error against time: every field setting, and ray casting at several ray counts.
+    let fs_path = out.join("field_sweep.csv");
+    let field_sweep: Vec<FieldSweepRow> = if fs_path.exists() {
+        read_table(&fs_path)?
+    } else {
+        Vec::new()
+    };
+    per_pixel::time_vs_rays(out, title, &rows, &field_sweep, &sweep)?;
+    per_pixel::grain_vs_positional(out, title, &rows)?;
     if rows.iter().all(|r| r.rms_vs_truth.is_some()) {
-        pareto_vs_truth(out, title, &rows, &sweep)?;
+        pareto_vs_truth(out, title, &rows, &sweep, &field_sweep)?;
     } else {
         pareto_same_rays(out, title, &rows, &sweep, m, m_label)?;
     }
@@ -220,13 +232,13 @@ fn pareto_same_rays(
 /// The error-against-time plot against the converged reference: every field setting (with
 /// more rays per point where `field_sweep.csv` has them), ray casting at every swept ray count,
 /// and the reference's own noise floor.
-fn pareto_vs_truth(out: &Path, title: &str, rows: &[Row], sweep: &[SweepRow]) -> Result<()> {
-    let fs_path = out.join("field_sweep.csv");
-    let field_sweep: Vec<FieldSweepRow> = if fs_path.exists() {
-        read_table(&fs_path)?
-    } else {
-        Vec::new()
-    };
+fn pareto_vs_truth(
+    out: &Path,
+    title: &str,
+    rows: &[Row],
+    sweep: &[SweepRow],
+    field_sweep: &[FieldSweepRow],
+) -> Result<()> {
     let mut series: Vec<Series> = Vec::new();
     // One backend's fields (the first, the CPU when it ran): the others give the same errors
     // (GPU parity) at other times, and one series per cell and backend would not fit a legend.
