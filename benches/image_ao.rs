@@ -1,0 +1,163 @@
+//! Per-pixel AO on the 2010 paper's Figure 3 setting (Gaitatzes, Andreadis, Papaioannou,
+//! Chrysanthou, WSCG 2010): stanford-bunny_39k (38,889 triangles) fitted to a bounding sphere
+//! of radius 0.35 centred at (0, 0.266, 0), a caster over a 4 × 4 plane receiver, seen from
+//! (0, 0.75, 1.25) towards (0, 0.25, 0) with a 45° field of view at 256 × 256 pixels; 64
+//! stratified cosine rays at each receiver pixel (`RaySet::new(8, 1)`). Field lookup (Slater
+//! maps × 64² concentric texels, u8, nearest selection; 1090 and 4226 maps) against ray casting
+//! (`Tracer`, any hit) on the same rays, through `ao_at_points` as the harness runs image AO.
+//! Throughput is in rays (receiver pixels × 64).
+//!
+//! The G-buffer is cast once with the reference tracer, as in the harness; bakes are built on
+//! first use (a filter that skips a field row skips its bake), and each field's image RMS
+//! against the ray cast is printed once, for context. `cargo bench --bench image_ao`. The
+//! bunny is found as everywhere else (`$VISFIELD_MODELS`, `data/models/`, `../shared/models/`);
+//! without it the bench prints a note and does nothing.
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use glam::{Quat, Vec3};
+use std::cell::OnceCell;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+use visfield::experiment::metrics::rms_u8;
+use visfield::field::bake::{bake, BakeOptions};
+use visfield::field::lookup::LookupOptions;
+use visfield::field::scene::{FieldInstance, FieldScene};
+use visfield::field::{FieldParams, Precision, Selection};
+use visfield::geometry::{
+    minimal_bounding_sphere, models, procedural, Instance, Scene, Similarity,
+};
+use visfield::render::ao::{ao_at_points, AoOptions};
+use visfield::render::camera::Camera;
+use visfield::render::points::{EvalPoints, GBuffer};
+use visfield::render::primary::{gbuffer, PrimaryScene};
+use visfield::sampling::rays::RaySet;
+use visfield::sampling::{LayoutKind, SphereKind};
+use visfield::trace::Tracer;
+
+const MODEL: &str = "stanford-bunny_39k";
+
+/// The Figure 3 scene: the plane receiver and the fitted bunny caster.
+fn figure3_scene() -> Option<Scene> {
+    let bunny = match models::load_model(MODEL) {
+        Ok(m) => m,
+        Err(e) => {
+            eprintln!("image_ao bench: skipping {MODEL}: {e}");
+            return None;
+        }
+    };
+    let s = bunny.bounding_sphere();
+    let k = 0.35 / s.radius;
+    let fit = Similarity::new(Quat::IDENTITY, Vec3::new(0.0, 0.266, 0.0) - k * s.center, k);
+    let plane = procedural::plane(4.0, 2).expect("plane");
+    Some(Scene {
+        instances: vec![
+            Instance {
+                mesh: Arc::new(plane),
+                transform: Similarity::default(),
+                caster: false,
+                receiver: true,
+            },
+            Instance {
+                mesh: Arc::new(bunny),
+                transform: fit,
+                caster: true,
+                receiver: false,
+            },
+        ],
+    })
+}
+
+fn image_ao(c: &mut Criterion) {
+    let Some(scene) = figure3_scene() else { return };
+    let camera = Camera {
+        eye: Vec3::new(0.0, 0.75, 1.25),
+        target: Vec3::new(0.0, 0.25, 0.0),
+        up: Vec3::Y,
+        fov_y_deg: 45.0,
+    };
+    let (w, h) = (256, 256);
+    let gbuf = GBuffer {
+        hits: gbuffer(&PrimaryScene::new(&scene), &camera, w, h),
+        width: w,
+        height: h,
+    };
+    let world: Vec<Vec3> = scene
+        .instances
+        .iter()
+        .flat_map(|i| i.world_triangles().flatten())
+        .collect();
+    let opts = AoOptions::for_scene(minimal_bounding_sphere(&world));
+    let pts = EvalPoints::pixels(&scene, &gbuf, opts.offset);
+    let rays = RaySet::new(8, 1);
+    eprintln!(
+        "image_ao bench: {} receiver pixels of {w} × {h}, {} rays each",
+        pts.len(),
+        rays.len()
+    );
+    let run = |vis: &dyn visfield::render::Visibility| {
+        ao_at_points(vis, &pts.points, &pts.normals, &rays, &opts)
+    };
+    let tracer = OnceCell::new();
+    let tracer = || tracer.get_or_init(|| Tracer::new(&scene.caster_triangles()));
+    let reference = OnceCell::new();
+    let reference = || {
+        reference.get_or_init(|| {
+            let ao = run(tracer());
+            pts.image(&scene, &gbuf, &ao)
+        })
+    };
+    let caster = &scene.instances[1];
+
+    let mut group = c.benchmark_group(format!("image_ao_{w}x{h}_64_rays/{MODEL}"));
+    group.sample_size(10);
+    group.warm_up_time(Duration::from_secs(1));
+    group.measurement_time(Duration::from_secs(5));
+    group.throughput(Throughput::Elements((pts.len() * rays.len()) as u64));
+    group.bench_function("raycast_anyhit", |b| {
+        let tracer = tracer();
+        b.iter(|| run(tracer))
+    });
+    for count in [1090, 4226] {
+        let params = FieldParams {
+            sphere: SphereKind::Slater,
+            count,
+            layout: LayoutKind::Concentric,
+            res: 64,
+            precision: Precision::U8,
+        };
+        // Baked on first use: criterion calls the closure once per warm-up and sample batch.
+        let field = OnceCell::new();
+        let field = || {
+            field.get_or_init(|| {
+                let t = Instant::now();
+                let (f, stats) = bake(&caster.mesh, params, &BakeOptions::default()).expect("bake");
+                let fs = FieldScene {
+                    instances: vec![FieldInstance::new(Arc::new(f), caster.transform)],
+                    options: LookupOptions {
+                        selection: Selection::Nearest,
+                        ..LookupOptions::default()
+                    },
+                };
+                let (image, _) = pts.image(&scene, &gbuf, &run(&fs));
+                let (expected, mask) = reference();
+                eprintln!(
+                    "image_ao bench: {count} × 64² u8 baked in {:.1} s ({:.1} Mrays/s); image \
+                     RMS against the ray cast {:.3}/255",
+                    t.elapsed().as_secs_f64(),
+                    stats.mrays_per_second(),
+                    rms_u8(&image.data, &expected.data, Some(mask))
+                );
+                fs
+            })
+        };
+        let id = BenchmarkId::new("field_nearest", format!("{count}x64_u8"));
+        group.bench_function(id, |b| {
+            let fs = field();
+            b.iter(|| run(fs))
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, image_ao);
+criterion_main!(benches);
