@@ -517,6 +517,11 @@ fn paper_ratios_are_normalised_to_the_reference_cell() {
         crease_points: 0,
         rms_vs_truth_crease: None,
         rms_vs_truth_interior: None,
+        occlusion_rms: None,
+        grain: None,
+        rays_cast: 0,
+        ao_mrays_s: None,
+        raycast_mrays_s: None,
     };
     let cell = |label: &str, count: usize, pre: f64| PaperCell {
         label: label.into(),
@@ -690,9 +695,15 @@ fn render_specs_are_tagged_by_kind() {
     );
     let e = error_of(&tiny(ONE_FIELD, "").replace(
         r#""render": { "rays_per_point""#,
+        r#""render": { "what": "reflections", "rays_per_point""#,
+    ));
+    assert!(e.contains("at `render`") && e.contains("reflections"), "{e}");
+    // Shadows without lights (their own keys: tests/shadows.rs).
+    let e = error_of(&tiny(ONE_FIELD, "").replace(
+        r#""render": { "rays_per_point""#,
         r#""render": { "what": "shadows", "rays_per_point""#,
     ));
-    assert!(e.contains("at `render`") && e.contains("shadows"), "{e}");
+    assert!(e.contains("at `render`") && e.contains("light"), "{e}");
 }
 
 /// The quickstart is an embedded spec, planned and run by the same runner as the others.

@@ -9,12 +9,13 @@
 //! steps that add a kind.
 
 use super::scenes::BuiltScene;
-use super::spec::{AoRender, ImageSpec, RenderSpec};
+use super::spec::{AoRender, ImageSpec, RenderSpec, ShadowRender};
 use crate::field::lookup::{IntraBias, LookupOptions};
 use crate::field::Selection;
 use crate::render::ao::AoOptions;
 use crate::render::estimator::{AoEstimator, Estimator};
 use crate::render::points::{EvalPoints, GBuffer};
+use crate::render::shadow::{ShadowEstimator, ShadowOptions, SphereLight};
 
 /// What a kind needs built before it can run.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -53,6 +54,11 @@ pub trait Kind: Sync {
     fn columns(&self) -> Columns;
     /// Rays per evaluation point (k²).
     fn rays_per_point(&self) -> u32;
+    /// Rays one evaluation casts per point (k², times the lights for shadows): the count the
+    /// tables' rays per second are of.
+    fn rays_cast_per_point(&self) -> u64 {
+        self.rays_per_point() as u64
+    }
     /// The image, when the spec renders one (a view kind always has one).
     fn image(&self) -> Option<&ImageSpec>;
     /// The most evaluation points a scene can have (the plan's ray counts, before any scene
@@ -63,6 +69,10 @@ pub trait Kind: Sync {
     fn setup(&self, scene: &BuiltScene, view: Option<&GBuffer>) -> Setup;
     /// How fields are read for it, with the cell's map selection.
     fn lookup_options(&self, selection: Selection) -> LookupOptions;
+    /// What is wrong with a built scene for this kind, before any work: (the spec field, why).
+    fn scene_problem(&self, _scene: &BuiltScene) -> Option<(String, String)> {
+        None
+    }
 }
 
 /// The kind of a spec's `render`.
@@ -70,6 +80,7 @@ pub fn of(render: &RenderSpec) -> Box<dyn Kind> {
     match render {
         RenderSpec::VertexAo(a) => Box::new(VertexAo(a.clone())),
         RenderSpec::ImageAo(a) => Box::new(ImageAo(a.clone())),
+        RenderSpec::Shadows(r) => Box::new(Shadows(r.clone())),
     }
 }
 
@@ -82,11 +93,10 @@ fn ao_estimator(a: &AoRender, scene: &BuiltScene) -> AoEstimator {
     AoEstimator { opts }
 }
 
-fn ao_lookup(a: &AoRender, selection: Selection) -> LookupOptions {
+fn lookup(intra_bias: Option<f32>, selection: Selection) -> LookupOptions {
     LookupOptions {
         selection,
-        intra_bias: a
-            .intra_bias
+        intra_bias: intra_bias
             .map(IntraBias::Fixed)
             .unwrap_or(LookupOptions::default().intra_bias),
     }
@@ -132,7 +142,7 @@ impl Kind for VertexAo {
     }
 
     fn lookup_options(&self, selection: Selection) -> LookupOptions {
-        ao_lookup(&self.0, selection)
+        lookup(self.0.intra_bias, selection)
     }
 }
 
@@ -183,6 +193,96 @@ impl Kind for ImageAo {
     }
 
     fn lookup_options(&self, selection: Selection) -> LookupOptions {
-        ao_lookup(&self.0, selection)
+        lookup(self.0.intra_bias, selection)
+    }
+}
+
+/// Soft shadows from spherical lights per pixel (Gaitatzes, Andreadis, Papaioannou,
+/// Chrysanthou, WSCG 2010, §4.2, Figures 7–8): the light fraction of `render::shadow` at every
+/// receiver pixel, its shadow rays answered by ray casting or by the fields.
+pub struct Shadows(pub ShadowRender);
+
+impl Kind for Shadows {
+    fn name(&self) -> &'static str {
+        "shadows"
+    }
+
+    fn needs(&self) -> Needs {
+        Needs {
+            view: true,
+            lights: true,
+            ..Needs::default()
+        }
+    }
+
+    fn columns(&self) -> Columns {
+        Columns { vertex: false }
+    }
+
+    fn rays_per_point(&self) -> u32 {
+        self.0.rays_per_point
+    }
+
+    fn rays_cast_per_point(&self) -> u64 {
+        self.0.rays_per_point as u64 * self.0.lights.len() as u64
+    }
+
+    fn image(&self) -> Option<&ImageSpec> {
+        self.0.image.as_ref()
+    }
+
+    fn max_points(&self, _scene: &BuiltScene) -> u64 {
+        self.0
+            .image
+            .as_ref()
+            .map_or(0, |i| i.width as u64 * i.height as u64)
+    }
+
+    fn setup(&self, scene: &BuiltScene, view: Option<&GBuffer>) -> Setup {
+        let offset = AoOptions::for_scene(scene.bounds()).offset;
+        let view = view.expect("shadows: validation guarantees an image, and so a G-buffer");
+        // The lights in the scene's frame, as the camera.
+        let lights = self
+            .0
+            .lights
+            .iter()
+            .map(|l| SphereLight {
+                center: crate::geometry::rebase::to_frame(scene.origin, l.center),
+                ..*l
+            })
+            .collect();
+        Setup {
+            points: EvalPoints::pixels(&scene.scene, view, offset),
+            estimator: Box::new(ShadowEstimator {
+                opts: ShadowOptions { offset, lights },
+            }),
+            offset,
+        }
+    }
+
+    fn lookup_options(&self, selection: Selection) -> LookupOptions {
+        lookup(self.0.intra_bias, selection)
+    }
+
+    /// A light that overlaps a caster's bounding sphere would sit inside the field's domain
+    /// (and likely inside the caster): refused, naming the light and the instance.
+    fn scene_problem(&self, scene: &BuiltScene) -> Option<(String, String)> {
+        for (i, l) in self.0.lights.iter().enumerate() {
+            let c = crate::geometry::rebase::to_frame(scene.origin, l.center);
+            for (ii, inst) in scene.scene.casters() {
+                let s = inst.world_bounding_sphere();
+                if c.distance(s.center) < s.radius + l.radius {
+                    return Some((
+                        format!("render.lights[{i}]"),
+                        format!(
+                            "overlaps the bounding sphere of caster instance {ii} of scene `{}` \
+                             (centre {}, radius {}): a light must lie outside every caster's sphere",
+                            scene.name, s.center, s.radius
+                        ),
+                    ));
+                }
+            }
+        }
+        None
     }
 }

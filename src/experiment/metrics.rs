@@ -67,7 +67,7 @@ fn rms_of(d: impl Iterator<Item = f64>) -> f64 {
 /// If the lengths differ or are not a multiple of `width`.
 pub fn grain(a: &[f32], b: &[f32], mask: &[bool], width: usize) -> f64 {
     assert!(
-        a.len() == b.len() && a.len() == mask.len() && width > 0 && a.len() % width == 0,
+        a.len() == b.len() && a.len() == mask.len() && width > 0 && a.len().is_multiple_of(width),
         "grain: sizes differ"
     );
     let height = a.len() / width;

@@ -117,8 +117,11 @@ pub struct Row {
     /// [`super::metrics::grain`]; none without an image).
     #[serde(default)]
     pub grain: Option<f64>,
-    /// Rays per second of the field estimate, millions: points × rays per point / `ao_s` (every
-    /// ray, those that miss a caster's sphere too, as the 2010 paper counts).
+    /// Rays of one evaluation: points × rays per point (× lights for shadows; every ray, those
+    /// that miss a caster's sphere too, as the 2010 paper counts).
+    #[serde(default)]
+    pub rays_cast: u64,
+    /// Rays per second of the field estimate, millions: `rays_cast` / `ao_s`.
     #[serde(default)]
     pub ao_mrays_s: Option<f64>,
     /// The same for ray casting on the same rays (`raycast_s`).
@@ -159,6 +162,8 @@ pub struct CellColumns {
     pub backend: Backend,
     pub adapter: String,
     pub rays_per_point: u32,
+    /// Rays of one evaluation: points × rays per point (× lights for shadows).
+    pub rays_cast: u64,
     pub receiver_points: usize,
     pub crease_points: usize,
     pub caster_triangles: usize,
@@ -208,7 +213,7 @@ pub struct ErrorColumns {
 impl Row {
     /// The row of its typed parts.
     pub fn from_parts(c: CellColumns, t: TimeColumns, f: FieldColumns, e: ErrorColumns) -> Row {
-        let rays = c.receiver_points as f64 * c.rays_per_point as f64;
+        let rays = c.rays_cast as f64;
         Row {
             positional_samples: c.positional_samples,
             directional_res: c.directional_res,
@@ -251,6 +256,7 @@ impl Row {
             rms_vs_truth_interior: e.rms_vs_truth_interior,
             occlusion_rms: e.occlusion_rms,
             grain: e.grain,
+            rays_cast: c.rays_cast,
             ao_mrays_s: mrays_per_s(rays, Some(t.ao_s)),
             raycast_mrays_s: mrays_per_s(rays, t.raycast_s),
         }

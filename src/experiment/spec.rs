@@ -270,7 +270,8 @@ pub enum RenderKind {
     VertexAo,
     /// AO at the surface point of every receiver pixel (2010's image-space AO); needs `image`.
     ImageAo,
-    /// Soft shadows (2010 §4.1): not in this build yet, rejected with a message.
+    /// Soft shadows from spherical lights at every receiver pixel (2010 §4.2); needs `image`
+    /// and `lights`.
     Shadows,
     /// Glossy reflections with normal fields (2010 §4.2): not in this build yet, rejected.
     Reflections,
@@ -290,8 +291,8 @@ impl RenderKind {
 
 /// What is rendered, one variant per render kind (the tagged form): in JSON an object whose
 /// `what` names the kind and whose other keys are that kind's options ([`RenderWire`] lists
-/// every key any kind reads; unknown keys are errors). See [`super::kind`] for what each kind
-/// computes.
+/// every key any kind reads; a key the kind does not read is an error). See [`super::kind`]
+/// for what each kind computes.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "RenderWire", into = "RenderWire")]
 pub enum RenderSpec {
@@ -299,6 +300,9 @@ pub enum RenderSpec {
     VertexAo(AoRender),
     /// `"image_ao"` (2010): AO at every receiver pixel of `image` (required).
     ImageAo(AoRender),
+    /// `"shadows"` (2010): the light fraction of spherical lights at every receiver pixel of
+    /// `image` (required).
+    Shadows(ShadowRender),
 }
 
 /// The options of the AO kinds.
@@ -321,51 +325,100 @@ pub struct AoRender {
     pub intra_bias: Option<f32>,
 }
 
+/// The options of soft shadows (`render::shadow`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ShadowRender {
+    /// Shadow rays per light and point, k² stratified over the cone the light subtends (a
+    /// perfect square; the paper uses 20).
+    pub rays_per_point: u32,
+    /// The image (required).
+    pub image: Option<ImageSpec>,
+    /// The spherical lights (at least one), in the spec's world coordinates.
+    pub lights: Vec<crate::render::shadow::SphereLight>,
+    /// As [`AoRender::intra_bias`], for receivers that shadow themselves.
+    pub intra_bias: Option<f32>,
+}
+
 /// `render` as written in a spec: every key of every kind, unknown keys rejected. Converted to
-/// [`RenderSpec`] on reading. The two AO kinds read the same keys; a kind with keys of its own
-/// (lights, a glossy lobe) will have its `TryFrom` arm refuse them under another `what`.
+/// [`RenderSpec`] on reading, where a key the kind does not read is refused by name.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RenderWire {
-    /// The render kind: "vertex_ao" (2008, default) or "image_ao" (2010).
+    /// The render kind: "vertex_ao" (2008, default), "image_ao" or "shadows" (2010).
     #[serde(default)]
     pub what: RenderKind,
-    /// See [`AoRender::rays_per_point`].
+    /// See [`AoRender::rays_per_point`] and [`ShadowRender::rays_per_point`].
     pub rays_per_point: u32,
     /// See [`AoRender::image`].
     #[serde(default)]
     pub image: Option<ImageSpec>,
-    /// See [`AoRender::max_distance`].
+    /// See [`AoRender::max_distance`] (AO kinds).
     #[serde(default)]
     pub max_distance: Option<f32>,
-    /// See [`AoRender::falloff`].
+    /// See [`AoRender::falloff`] (AO kinds).
     #[serde(default)]
     pub falloff: crate::render::ao::Falloff,
     /// See [`AoRender::intra_bias`].
     #[serde(default)]
     pub intra_bias: Option<f32>,
+    /// See [`ShadowRender::lights`] (shadows).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lights: Option<Vec<crate::render::shadow::SphereLight>>,
 }
 
-/// A `render` whose kind is not in this build.
+/// A `render` that cannot be read: a kind not in this build, or a key its kind does not read.
 #[derive(Debug, thiserror::Error)]
-#[error("`what`: \"{}\" is not in this build yet; use \"vertex_ao\" or \"image_ao\"", .0.name())]
-pub struct UnbuiltKind(pub RenderKind);
+pub enum RenderError {
+    #[error("`what`: \"{}\" is not in this build yet; use \"vertex_ao\", \"image_ao\" or \"shadows\"", .0.name())]
+    Unbuilt(RenderKind),
+    #[error("`{key}`: \"{}\" does not read it", .kind.name())]
+    Foreign { kind: RenderKind, key: &'static str },
+    #[error("`lights`: \"shadows\" needs at least one light")]
+    NoLights,
+}
 
 impl TryFrom<RenderWire> for RenderSpec {
-    type Error = UnbuiltKind;
+    type Error = RenderError;
 
-    fn try_from(w: RenderWire) -> Result<RenderSpec, UnbuiltKind> {
-        let ao = AoRender {
-            rays_per_point: w.rays_per_point,
-            image: w.image,
-            max_distance: w.max_distance,
-            falloff: w.falloff,
-            intra_bias: w.intra_bias,
-        };
+    fn try_from(w: RenderWire) -> Result<RenderSpec, RenderError> {
+        let foreign = |key| RenderError::Foreign { kind: w.what, key };
         match w.what {
-            RenderKind::VertexAo => Ok(RenderSpec::VertexAo(ao)),
-            RenderKind::ImageAo => Ok(RenderSpec::ImageAo(ao)),
-            k @ (RenderKind::Shadows | RenderKind::Reflections) => Err(UnbuiltKind(k)),
+            RenderKind::VertexAo | RenderKind::ImageAo => {
+                if w.lights.is_some() {
+                    return Err(foreign("lights"));
+                }
+                let ao = AoRender {
+                    rays_per_point: w.rays_per_point,
+                    image: w.image,
+                    max_distance: w.max_distance,
+                    falloff: w.falloff,
+                    intra_bias: w.intra_bias,
+                };
+                Ok(if w.what == RenderKind::VertexAo {
+                    RenderSpec::VertexAo(ao)
+                } else {
+                    RenderSpec::ImageAo(ao)
+                })
+            }
+            RenderKind::Shadows => {
+                if w.max_distance.is_some() {
+                    return Err(foreign("max_distance"));
+                }
+                if w.falloff != crate::render::ao::Falloff::Step {
+                    return Err(foreign("falloff"));
+                }
+                let lights = w
+                    .lights
+                    .filter(|l| !l.is_empty())
+                    .ok_or(RenderError::NoLights)?;
+                Ok(RenderSpec::Shadows(ShadowRender {
+                    rays_per_point: w.rays_per_point,
+                    image: w.image,
+                    lights,
+                    intra_bias: w.intra_bias,
+                }))
+            }
+            k @ RenderKind::Reflections => Err(RenderError::Unbuilt(k)),
         }
     }
 }
@@ -373,14 +426,25 @@ impl TryFrom<RenderWire> for RenderSpec {
 impl From<RenderSpec> for RenderWire {
     fn from(r: RenderSpec) -> RenderWire {
         let what = r.kind();
-        let (RenderSpec::VertexAo(a) | RenderSpec::ImageAo(a)) = r;
-        RenderWire {
-            what,
-            rays_per_point: a.rays_per_point,
-            image: a.image,
-            max_distance: a.max_distance,
-            falloff: a.falloff,
-            intra_bias: a.intra_bias,
+        match r {
+            RenderSpec::VertexAo(a) | RenderSpec::ImageAo(a) => RenderWire {
+                what,
+                rays_per_point: a.rays_per_point,
+                image: a.image,
+                max_distance: a.max_distance,
+                falloff: a.falloff,
+                intra_bias: a.intra_bias,
+                lights: None,
+            },
+            RenderSpec::Shadows(s) => RenderWire {
+                what,
+                rays_per_point: s.rays_per_point,
+                image: s.image,
+                max_distance: None,
+                falloff: crate::render::ao::Falloff::Step,
+                intra_bias: s.intra_bias,
+                lights: Some(s.lights),
+            },
         }
     }
 }
@@ -391,40 +455,56 @@ impl RenderSpec {
         match self {
             RenderSpec::VertexAo(_) => RenderKind::VertexAo,
             RenderSpec::ImageAo(_) => RenderKind::ImageAo,
+            RenderSpec::Shadows(_) => RenderKind::Shadows,
         }
     }
 
-    /// The AO options of an AO kind.
-    pub fn ao(&self) -> &AoRender {
+    /// The AO options of an AO kind (none for other kinds).
+    pub fn ao(&self) -> Option<&AoRender> {
         match self {
-            RenderSpec::VertexAo(a) | RenderSpec::ImageAo(a) => a,
-        }
-    }
-
-    fn ao_mut(&mut self) -> &mut AoRender {
-        match self {
-            RenderSpec::VertexAo(a) | RenderSpec::ImageAo(a) => a,
+            RenderSpec::VertexAo(a) | RenderSpec::ImageAo(a) => Some(a),
+            RenderSpec::Shadows(_) => None,
         }
     }
 
     /// Rays per evaluation point (k²).
     pub fn rays_per_point(&self) -> u32 {
-        self.ao().rays_per_point
+        match self {
+            RenderSpec::VertexAo(a) | RenderSpec::ImageAo(a) => a.rays_per_point,
+            RenderSpec::Shadows(s) => s.rays_per_point,
+        }
     }
 
     /// The image, if the spec renders one.
     pub fn image(&self) -> Option<&ImageSpec> {
-        self.ao().image.as_ref()
+        match self {
+            RenderSpec::VertexAo(a) | RenderSpec::ImageAo(a) => a.image.as_ref(),
+            RenderSpec::Shadows(s) => s.image.as_ref(),
+        }
+    }
+
+    /// The intra-object tolerance, if fixed.
+    pub fn intra_bias(&self) -> Option<f32> {
+        match self {
+            RenderSpec::VertexAo(a) | RenderSpec::ImageAo(a) => a.intra_bias,
+            RenderSpec::Shadows(s) => s.intra_bias,
+        }
     }
 
     /// Replaces the rays per point (the quick profile).
     pub fn set_rays_per_point(&mut self, n: u32) {
-        self.ao_mut().rays_per_point = n;
+        match self {
+            RenderSpec::VertexAo(a) | RenderSpec::ImageAo(a) => a.rays_per_point = n,
+            RenderSpec::Shadows(s) => s.rays_per_point = n,
+        }
     }
 
     /// Replaces the image (the quick profile).
     pub fn set_image(&mut self, image: ImageSpec) {
-        self.ao_mut().image = Some(image);
+        match self {
+            RenderSpec::VertexAo(a) | RenderSpec::ImageAo(a) => a.image = Some(image),
+            RenderSpec::Shadows(s) => s.image = Some(image),
+        }
     }
 }
 

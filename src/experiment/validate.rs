@@ -187,30 +187,13 @@ impl Ctx<'_> {
                 format!("\"{}\" computes per pixel and needs an image", kind.name()),
             ));
         }
-        let ao = s.render.ao();
-        if let Some(d) = ao.max_distance {
-            if !(d > 0.0 && d.is_finite()) {
-                return Err(self.err(
-                    "render.max_distance",
-                    format!("{d} must be positive and finite"),
-                ));
-            }
+        if let Some(ao) = s.render.ao() {
+            self.ao_render(ao, s)?;
         }
-        if ao.falloff != crate::render::ao::Falloff::Step {
-            if ao.max_distance.is_none() {
-                return Err(self.err(
-                    "render.falloff",
-                    "a distance falloff needs `render.max_distance`".into(),
-                ));
-            }
-            if s.backends.contains(&super::spec::Backend::Gpu) {
-                return Err(self.err(
-                    "render.falloff",
-                    "the GPU path has binary visibility only; use \"step\" or \"cpu\"".into(),
-                ));
-            }
+        if let super::spec::RenderSpec::Shadows(sh) = &s.render {
+            self.shadows(sh, s)?;
         }
-        if let Some(b) = ao.intra_bias {
+        if let Some(b) = s.render.intra_bias() {
             if !(0.0..1.0).contains(&b) {
                 return Err(self.err("render.intra_bias", format!("{b} is outside [0, 1)")));
             }
@@ -320,6 +303,64 @@ impl Ctx<'_> {
                     ));
                 }
             }
+        }
+        Ok(())
+    }
+
+    /// The AO kinds' options.
+    fn ao_render(&self, ao: &super::spec::AoRender, s: &Spec) -> Result<(), SpecError> {
+        if let Some(d) = ao.max_distance {
+            if !(d > 0.0 && d.is_finite()) {
+                return Err(self.err(
+                    "render.max_distance",
+                    format!("{d} must be positive and finite"),
+                ));
+            }
+        }
+        if ao.falloff != crate::render::ao::Falloff::Step {
+            if ao.max_distance.is_none() {
+                return Err(self.err(
+                    "render.falloff",
+                    "a distance falloff needs `render.max_distance`".into(),
+                ));
+            }
+            if s.backends.contains(&super::spec::Backend::Gpu) {
+                return Err(self.err(
+                    "render.falloff",
+                    "the GPU path has binary visibility only; use \"step\" or \"cpu\"".into(),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Soft shadows: finite lights of positive radius and intensity; no GPU kernel yet.
+    fn shadows(&self, sh: &super::spec::ShadowRender, s: &Spec) -> Result<(), SpecError> {
+        for (i, l) in sh.lights.iter().enumerate() {
+            let at = |f: &str| format!("render.lights[{i}].{f}");
+            if !l.center.is_finite()
+                || l.center.abs().max_element() > super::scenes::MAX_WORLD_COORDINATE
+            {
+                return Err(self.err(
+                    &at("center"),
+                    format!(
+                        "{} must be finite, within ±{:e}",
+                        l.center,
+                        super::scenes::MAX_WORLD_COORDINATE
+                    ),
+                ));
+            }
+            for (f, v) in [("radius", l.radius), ("intensity", l.intensity)] {
+                if !(v > 0.0 && v.is_finite()) {
+                    return Err(self.err(&at(f), format!("{v} must be positive and finite")));
+                }
+            }
+        }
+        if s.backends.contains(&Backend::Gpu) {
+            return Err(self.err(
+                "backends",
+                "\"shadows\" has no GPU kernel in this build; use \"cpu\"".into(),
+            ));
         }
         Ok(())
     }

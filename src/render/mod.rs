@@ -76,4 +76,5 @@ pub mod image;
 pub mod points;
 pub mod primary;
 pub mod receivers;
+pub mod shadow;
 pub mod truth;

@@ -56,7 +56,7 @@ impl Default for TruthOptions {
 /// A converged reference.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Truth {
-    /// AO per point, the mean of the batches.
+    /// The value per point (AO, or the estimator's quantity), the mean of the batches.
     pub ao: Vec<f32>,
     /// Standard error of `ao` per point (0–1 scale).
     pub stderr: Vec<f32>,
@@ -97,14 +97,13 @@ fn batch_seed(seed: u64, k: u32, b: u32) -> u64 {
     mix64(seed ^ mix64(((k as u64) << 32) | b as u64))
 }
 
-/// One round: `batches` independent jittered k² sets per point; (mean, stderr) per point.
-fn round<V: Visibility + ?Sized>(
-    vis: &V,
-    points: &[Vec3],
-    normals: &[Vec3],
-    opts: &AoOptions,
+/// One round: `batches` independent jittered k² sets per point, each estimated by `estimate`;
+/// (mean, stderr) per point.
+fn round(
+    n: usize,
     t: &TruthOptions,
     k: u32,
+    estimate: &impl Fn(&RaySet) -> Vec<f32>,
 ) -> (Vec<f32>, Vec<f32>) {
     let b = t.batches as usize;
     let runs: Vec<Vec<f32>> = (0..t.batches)
@@ -114,10 +113,16 @@ fn round<V: Visibility + ?Sized>(
                 seed: batch_seed(t.seed, k, i),
                 jitter: true,
             };
-            ao_at_points(vis, points, normals, &rays, opts)
+            let r = estimate(&rays);
+            assert_eq!(
+                r.len(),
+                n,
+                "converged: the estimate has one value per point"
+            );
+            r
         })
         .collect();
-    (0..points.len())
+    (0..n)
         .map(|p| {
             let mean = runs.iter().map(|r| r[p] as f64).sum::<f64>() / b as f64;
             let var = runs
@@ -141,13 +146,31 @@ pub fn converged_ao<V: Visibility + ?Sized>(
     opts: &AoOptions,
     t: &TruthOptions,
 ) -> Truth {
-    assert!(t.batches >= 2, "converged_ao: needs at least 2 batches");
-    assert!(t.start_k > 0, "converged_ao: start_k must be positive");
+    assert_eq!(
+        points.len(),
+        normals.len(),
+        "converged_ao: one normal per point"
+    );
+    converged(points.len(), t, |rays| {
+        ao_at_points(vis, points, normals, rays, opts)
+    })
+}
+
+/// Any per-point estimate in \[0, 1\] converged as the AO is (see the module docs):
+/// `estimate` evaluates every one of the `n` points with the given jittered ray set (its `k²`
+/// stratified cells are the estimator's to map: cosine directions for AO, points on a light for
+/// shadows) and must be unbiased for jittered sets.
+///
+/// # Panics
+/// If `t.batches < 2`, `t.start_k == 0`, or `estimate` returns other than `n` values.
+pub fn converged(n: usize, t: &TruthOptions, estimate: impl Fn(&RaySet) -> Vec<f32>) -> Truth {
+    assert!(t.batches >= 2, "converged: needs at least 2 batches");
+    assert!(t.start_k > 0, "converged: start_k must be positive");
     let rays = |k: u32| t.batches as u64 * k as u64 * k as u64;
     let mut k = t.start_k;
     let mut rounds = Vec::new();
     loop {
-        let (ao, stderr) = round(vis, points, normals, opts, t, k);
+        let (ao, stderr) = round(n, t, k, &estimate);
         let rms = rms_stderr_255(&stderr);
         rounds.push((rays(k) as u32, rms));
         if rms <= t.target_stderr_255 || rays(2 * k) > t.max_rays as u64 {

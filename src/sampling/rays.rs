@@ -128,6 +128,30 @@ impl RaySet {
         }
     }
 
+    /// Writes the `k²` stratified square samples of point `point` into `out` (cleared first),
+    /// in the cell order of [`Self::fill`]: cell centres, or jittered inside each cell with the
+    /// same jitter as [`Self::fill`]'s, before any warp or rotation. Estimators that map the
+    /// square elsewhere than the cosine hemisphere (points on a light) start from these.
+    pub fn fill_square(&self, point: u32, out: &mut Vec<Vec2>) {
+        out.clear();
+        let k = self.k;
+        let inv = 1.0 / k as f32;
+        for j in 0..k {
+            for i in 0..k {
+                let cell = j * k + i;
+                let (jx, jy) = if self.jitter {
+                    (
+                        uniform(point, cell, 1, self.seed),
+                        uniform(point, cell, 2, self.seed),
+                    )
+                } else {
+                    (0.5, 0.5)
+                };
+                out.push(Vec2::new((i as f32 + jx) * inv, (j as f32 + jy) * inv));
+            }
+        }
+    }
+
     /// The local directions of receiver point `point`.
     pub fn directions(&self, point: u32) -> Vec<Vec3> {
         let mut v = Vec::with_capacity(self.len());

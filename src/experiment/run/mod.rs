@@ -168,6 +168,15 @@ fn run_checked(
     eprintln!("{} ({profile}): {}", ls.name, spec.reproduces);
     let (scenes, _) = stage("load scenes", || Scenes::build(spec, &ls.path, scenes_path));
     let scenes = scenes?;
+    let kind = crate::experiment::kind::of(&spec.render);
+    if let Some((field, message)) = scenes.scenes.iter().find_map(|bs| kind.scene_problem(bs)) {
+        return Err(crate::experiment::spec::SpecError::Invalid {
+            file: ls.path.clone(),
+            field,
+            message,
+        }
+        .into());
+    }
     let limits = PlanLimits {
         memory_limit: opts.supply.memory_limit,
     };

@@ -483,6 +483,7 @@ impl<'a> Runner<'a> {
             backend: c.backend,
             adapter,
             rays_per_point: self.kind.rays_per_point(),
+            rays_cast: st.at.len() as u64 * self.kind.rays_cast_per_point(),
             receiver_points: st.at.len(),
             crease_points: st.at.crease_count(),
             caster_triangles: bs.caster_triangles(),
