@@ -12,6 +12,11 @@
 //! against the ray cast is printed once, for context. `cargo bench --bench image_ao`. The
 //! bunny is found as everywhere else (`$VISFIELD_MODELS`, `data/models/`, `../shared/models/`);
 //! without it the bench prints a note and does nothing.
+//!
+//! A second group times shadow rays on the same pixels (2010 §4.2): three spherical lights of
+//! radius 0.35 (the `shadows2010_figure7` spec's), 16 stratified shadow rays per light and pixel
+//! (`render::shadow`), through the 1090 × 64² field and by ray casting; throughput in shadow
+//! rays.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use glam::{Quat, Vec3};
@@ -30,6 +35,7 @@ use visfield::render::ao::{ao_at_points, AoOptions};
 use visfield::render::camera::Camera;
 use visfield::render::points::{EvalPoints, GBuffer};
 use visfield::render::primary::{gbuffer, PrimaryScene};
+use visfield::render::shadow::{shadow_at_points, ShadowOptions, SphereLight};
 use visfield::sampling::rays::RaySet;
 use visfield::sampling::{LayoutKind, SphereKind};
 use visfield::trace::Tracer;
@@ -156,6 +162,60 @@ fn image_ao(c: &mut Criterion) {
             b.iter(|| run(fs))
         });
     }
+    group.finish();
+
+    // Shadow rays (2010 §4.2, Figure 7's three lights): 16 per light and pixel to the
+    // spherical lights, through the 1090 × 64² field and by ray casting.
+    let lights = [
+        (Vec3::new(1.2, 2.0, 1.4), 0.35),
+        (Vec3::new(-1.6, 1.8, 0.6), 0.35),
+        (Vec3::new(0.4, 2.4, -1.4), 0.35),
+    ]
+    .map(|(center, radius)| SphereLight {
+        center,
+        radius,
+        intensity: 1.0,
+    });
+    let sopts = ShadowOptions {
+        offset: opts.offset,
+        lights: lights.to_vec(),
+    };
+    let srays = RaySet::new(4, 1);
+    let shadows = |vis: &dyn visfield::render::Visibility| {
+        shadow_at_points(vis, &pts.points, &pts.normals, &srays, &sopts)
+    };
+    let mut group = c.benchmark_group(format!("shadow_{w}x{h}_3x16_rays/{MODEL}"));
+    group.sample_size(10);
+    group.warm_up_time(Duration::from_secs(1));
+    group.measurement_time(Duration::from_secs(5));
+    group.throughput(Throughput::Elements(
+        (pts.len() * srays.len() * lights.len()) as u64,
+    ));
+    group.bench_function("raycast_anyhit", |b| {
+        let tracer = tracer();
+        b.iter(|| shadows(tracer))
+    });
+    let field = OnceCell::new();
+    let field = || {
+        field.get_or_init(|| {
+            let params = FieldParams {
+                sphere: SphereKind::Slater,
+                count: 1090,
+                layout: LayoutKind::Concentric,
+                res: 64,
+                precision: Precision::U8,
+            };
+            let (f, _) = bake(&caster.mesh, params, &BakeOptions::default()).expect("bake");
+            FieldScene {
+                instances: vec![FieldInstance::new(Arc::new(f), caster.transform)],
+                options: LookupOptions::default(),
+            }
+        })
+    };
+    group.bench_function(BenchmarkId::new("field_nearest", "1090x64_u8"), |b| {
+        let fs = field();
+        b.iter(|| shadows(fs))
+    });
     group.finish();
 }
 
