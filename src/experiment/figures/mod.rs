@@ -2,7 +2,8 @@
 //! redraws them without recomputing anything):
 //!
 //! - `images.png`: the figure's image grid with its numbers under each image, as in the paper
-//!   (bake time, AO time, RMS); the reference image opens each scene's first row;
+//!   (bake time, AO time, RMS); the reference image opens each scene's first row; images wider
+//!   than 256 pixels are shown reduced by an integer factor (box filter);
 //! - `differences.png`: the same grid of |field − reference| × 5 images;
 //! - `rms_vs_positional.png`: RMS against positional samples, one series per directional
 //!   resolution (and per other axis the spec varies);
@@ -359,13 +360,42 @@ fn read_table<T: serde::de::DeserializeOwned>(path: &Path) -> Result<Vec<T>> {
     read_csv(path)
 }
 
+/// The widest a grid cell is drawn (pixels): larger images are shown box-filtered by the
+/// smallest integer factor that fits, so that a figure of many 512 × 512 cells stays a
+/// picture of a few MB (the full images are beside it in `images/`).
+const GRID_CELL_MAX: u32 = 256;
+
+/// A run's PNG as a grid cell (see [`GRID_CELL_MAX`]).
 fn load_png(path: &Path) -> Result<GrayImage> {
     let img = image::open(path).map_err(Error::image(path))?.to_luma8();
-    Ok(GrayImage {
+    let full = GrayImage {
         width: img.width(),
         height: img.height(),
         data: img.pixels().map(|p| p.0[0] as f32 / 255.0).collect(),
-    })
+    };
+    Ok(box_down(&full, full.width.div_ceil(GRID_CELL_MAX).max(1)))
+}
+
+/// `img` reduced by the integer factor `f` (the mean of each f × f block; partial blocks at
+/// the right and bottom edges are dropped).
+fn box_down(img: &GrayImage, f: u32) -> GrayImage {
+    if f <= 1 {
+        return img.clone();
+    }
+    let (w, h) = (img.width / f, img.height / f);
+    let mut out = GrayImage::new(w, h, 0.0);
+    for y in 0..h {
+        for x in 0..w {
+            let mut sum = 0.0f32;
+            for yy in y * f..(y + 1) * f {
+                for xx in x * f..(x + 1) * f {
+                    sum += img.data[(yy * img.width + xx) as usize];
+                }
+            }
+            out.data[(y * w + x) as usize] = sum / (f * f) as f32;
+        }
+    }
+    out
 }
 
 /// The image grid and the difference grid: per scene, rows of cells sharing every axis but
@@ -487,4 +517,23 @@ fn grids(
         &refs,
         ncol,
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn box_down_averages_blocks_and_drops_partial_ones() {
+        // 5 × 2 pixels, factor 2: two full 2 × 2 blocks, the fifth column dropped.
+        let img = GrayImage {
+            width: 5,
+            height: 2,
+            data: vec![0.0, 1.0, 0.5, 0.5, 0.9, 1.0, 0.0, 0.5, 0.5, 0.9],
+        };
+        let d = box_down(&img, 2);
+        assert_eq!((d.width, d.height), (2, 1));
+        assert_eq!(d.data, vec![0.5, 0.5]);
+        assert_eq!(box_down(&img, 1), img);
+    }
 }
