@@ -697,7 +697,10 @@ fn render_specs_are_tagged_by_kind() {
         r#""render": { "rays_per_point""#,
         r#""render": { "what": "reflections", "rays_per_point""#,
     ));
-    assert!(e.contains("at `render`") && e.contains("reflections"), "{e}");
+    assert!(
+        e.contains("at `render`") && e.contains("reflections"),
+        "{e}"
+    );
     // Shadows without lights (their own keys: tests/shadows.rs).
     let e = error_of(&tiny(ONE_FIELD, "").replace(
         r#""render": { "rays_per_point""#,
