@@ -81,7 +81,7 @@ fn nothing_in_the_way_is_fully_lit_and_a_point_facing_away_is_unshadowed() {
     // Facing −z, the light is behind the surface: no weight, S = 1 (no light, no shadow),
     // even under a blocker.
     let tracer = Tracer::new(&crate::trace::test_scenes::square(50.0, 5.0));
-    let away = shadow_at_points(&tracer, &p, &vec![-Vec3::Z; 8], &rays, &light_above());
+    let away = shadow_at_points(&tracer, &p, &[-Vec3::Z; 8], &rays, &light_above());
     assert!(away.iter().all(|&v| v == 1.0), "{away:?}");
     // A blocker covering the whole light: every ray is blocked.
     let dark = shadow_at_points(&tracer, &p, &n, &rays, &light_above());
