@@ -102,6 +102,11 @@ fn lookup(intra_bias: Option<f32>, selection: Selection) -> LookupOptions {
     }
 }
 
+/// The pixels of an image (none without one): the most points a per-pixel kind can have.
+fn pixels(image: Option<&ImageSpec>) -> u64 {
+    image.map_or(0, |i| i.width as u64 * i.height as u64)
+}
+
 /// Vertex AO (Gaitatzes, Chrysanthou, Papaioannou, WSCG 2008): AO at the receivers' vertices,
 /// shown Gouraud-interpolated in the image.
 pub struct VertexAo(pub AoRender);
@@ -175,10 +180,7 @@ impl Kind for ImageAo {
     }
 
     fn max_points(&self, _scene: &BuiltScene) -> u64 {
-        self.0
-            .image
-            .as_ref()
-            .map_or(0, |i| i.width as u64 * i.height as u64)
+        pixels(self.0.image.as_ref())
     }
 
     fn setup(&self, scene: &BuiltScene, view: Option<&GBuffer>) -> Setup {
@@ -232,10 +234,7 @@ impl Kind for Shadows {
     }
 
     fn max_points(&self, _scene: &BuiltScene) -> u64 {
-        self.0
-            .image
-            .as_ref()
-            .map_or(0, |i| i.width as u64 * i.height as u64)
+        pixels(self.0.image.as_ref())
     }
 
     fn setup(&self, scene: &BuiltScene, view: Option<&GBuffer>) -> Setup {

@@ -107,24 +107,10 @@ impl RaySet {
     /// Writes the local directions of receiver point `point` into `out` (cleared first).
     pub fn fill(&self, point: u32, out: &mut Vec<Vec3>) {
         out.clear();
-        let k = self.k;
         let (s, c) = self.rotation(point);
-        let inv = 1.0 / k as f32;
-        for j in 0..k {
-            for i in 0..k {
-                let cell = j * k + i;
-                let (jx, jy) = if self.jitter {
-                    (
-                        uniform(point, cell, 1, self.seed),
-                        uniform(point, cell, 2, self.seed),
-                    )
-                } else {
-                    (0.5, 0.5)
-                };
-                let u = Vec2::new((i as f32 + jx) * inv, (j as f32 + jy) * inv);
-                let d = square_to_cosine_hemisphere(u);
-                out.push(Vec3::new(c * d.x - s * d.y, s * d.x + c * d.y, d.z));
-            }
+        for cell in 0..self.k * self.k {
+            let d = square_to_cosine_hemisphere(self.cell_sample(point, cell));
+            out.push(Vec3::new(c * d.x - s * d.y, s * d.x + c * d.y, d.z));
         }
     }
 
@@ -134,22 +120,23 @@ impl RaySet {
     /// square elsewhere than the cosine hemisphere (points on a light) start from these.
     pub fn fill_square(&self, point: u32, out: &mut Vec<Vec2>) {
         out.clear();
-        let k = self.k;
-        let inv = 1.0 / k as f32;
-        for j in 0..k {
-            for i in 0..k {
-                let cell = j * k + i;
-                let (jx, jy) = if self.jitter {
-                    (
-                        uniform(point, cell, 1, self.seed),
-                        uniform(point, cell, 2, self.seed),
-                    )
-                } else {
-                    (0.5, 0.5)
-                };
-                out.push(Vec2::new((i as f32 + jx) * inv, (j as f32 + jy) * inv));
-            }
-        }
+        out.extend((0..self.k * self.k).map(|cell| self.cell_sample(point, cell)));
+    }
+
+    /// The square sample of cell `cell` (row-major, `k` a row) of point `point`.
+    #[inline]
+    fn cell_sample(&self, point: u32, cell: u32) -> Vec2 {
+        let (i, j) = (cell % self.k, cell / self.k);
+        let (jx, jy) = if self.jitter {
+            (
+                uniform(point, cell, 1, self.seed),
+                uniform(point, cell, 2, self.seed),
+            )
+        } else {
+            (0.5, 0.5)
+        };
+        let inv = 1.0 / self.k as f32;
+        Vec2::new((i as f32 + jx) * inv, (j as f32 + jy) * inv)
     }
 
     /// The local directions of receiver point `point`.
