@@ -1,5 +1,5 @@
-//! The batched field query (`Visibility::occluded_many` of a `FieldScene`, used by vertex AO)
-//! against the per-ray query it replaces: bit-identical answers on scenes of one and of several
+//! The batched field queries (`Visibility::occluded_many` of a `FieldScene`, used by AO, and
+//! `occluded_many_to`, used by shadow rays) against the per-ray query they replace: bit-identical answers on scenes of one and of several
 //! overlapping instances, both selections, every precision, for rays from outside every sphere,
 //! from inside spheres (intra-object) and from the caster's surface.
 
@@ -63,7 +63,8 @@ struct Tally {
 }
 
 /// Asserts `occluded_many` == per-ray `occluded` on 256 rays from each origin, for two
-/// segments ([0, ∞) and a short one with tmin > 0); returns what was tested.
+/// segments ([0, ∞) and a short one with tmin > 0), and `occluded_many_to` == per-ray
+/// `occluded` with a far end of its own per ray; returns what was tested.
 fn compare(scene: &FieldScene, origins: &[Vec3]) -> Tally {
     let mut tally = Tally {
         rays: 0,
@@ -92,6 +93,25 @@ fn compare(scene: &FieldScene, origins: &[Vec3]) -> Tally {
                 tally.hits += want as usize;
                 tally.inside_hits += (want && inside) as usize;
             }
+        }
+        // Each ray its own far end (shadow rays to points on a light): `occluded_many_to`.
+        let tmaxs: Vec<f32> = (0..256)
+            .map(|j| match j % 5 {
+                0 => f32::INFINITY,
+                m => 0.15 * m as f32 * (1 + j % 7) as f32,
+            })
+            .collect();
+        scene.occluded_many_to(origin, &dirs, 0.0, &tmaxs, &mut out);
+        for (j, &dir) in dirs.iter().enumerate() {
+            let want = scene.occluded(origin, dir, 0.0, tmaxs[j]);
+            assert_eq!(
+                out[j], want,
+                "{:?}: origin {origin}, dir {dir}, [0, {}] (occluded_many_to)",
+                scene.options.selection, tmaxs[j]
+            );
+            tally.rays += 1;
+            tally.hits += want as usize;
+            tally.inside_hits += (want && inside) as usize;
         }
     }
     tally

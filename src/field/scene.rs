@@ -127,9 +127,9 @@ impl FieldInstance {
         origin: Vec3,
         dirs: &[Vec3],
         tmin: f32,
-        tmax: f32,
+        tmax: impl Fn(usize) -> f32,
         opts: &LookupOptions,
-        candidate: impl Fn(Vec3) -> bool,
+        candidate: impl Fn(usize, Vec3) -> bool,
         out: &mut [bool],
     ) {
         match opts.selection {
@@ -147,9 +147,9 @@ impl FieldInstance {
         origin: Vec3,
         dirs: &[Vec3],
         tmin: f32,
-        tmax: f32,
+        tmax: impl Fn(usize) -> f32,
         opts: &LookupOptions,
-        candidate: impl Fn(Vec3) -> bool,
+        candidate: impl Fn(usize, Vec3) -> bool,
         out: &mut [bool],
     ) {
         const BLOCK: usize = 16;
@@ -157,33 +157,36 @@ impl FieldInstance {
         let field = &*self.field;
         let o = self.local_origin(origin);
         let from = SphereOrigin::new(o, field.bounds.center, field.bounds.radius);
-        let (lmin, lmax) = (tr.to_local_distance(tmin), tr.to_local_distance(tmax));
+        let lmin = tr.to_local_distance(tmin);
         let mut index = [0usize; BLOCK];
+        let mut lmaxs = [0.0f32; BLOCK];
         let mut crossed = [Crossed::default(); BLOCK];
         let mut reads = [R::default(); BLOCK];
         let mut n = 0;
-        let mut resolve = |n: usize, index: &[usize], crossed: &[Crossed], out: &mut [bool]| {
-            R::of_block(field, &crossed[..n], &mut reads[..n]);
-            for k in 0..n {
-                let probe = crossed[k].with_reads(reads[k]);
-                out[index[k]] |= field.finish(&probe, lmin, lmax, opts).is_some();
-            }
-        };
+        let mut resolve =
+            |n: usize, index: &[usize], lmaxs: &[f32], crossed: &[Crossed], out: &mut [bool]| {
+                R::of_block(field, &crossed[..n], &mut reads[..n]);
+                for k in 0..n {
+                    let probe = crossed[k].with_reads(reads[k]);
+                    out[index[k]] |= field.finish(&probe, lmin, lmaxs[k], opts).is_some();
+                }
+            };
         for (i, &dir) in dirs.iter().enumerate() {
-            if out[i] || !candidate(dir) {
+            if out[i] || !candidate(i, dir) {
                 continue;
             }
+            let lmax = tr.to_local_distance(tmax(i));
             let Some(c) = field.cross(&from, o, self.local_dir(dir), lmin, lmax) else {
                 continue;
             };
-            (index[n], crossed[n]) = (i, c);
+            (index[n], lmaxs[n], crossed[n]) = (i, lmax, c);
             n += 1;
             if n == BLOCK {
-                resolve(n, &index, &crossed, out);
+                resolve(n, &index, &lmaxs, &crossed, out);
                 n = 0;
             }
         }
-        resolve(n, &index, &crossed, out);
+        resolve(n, &index, &lmaxs, &crossed, out);
     }
 }
 
@@ -266,6 +269,30 @@ impl FieldScene {
     }
 }
 
+impl FieldScene {
+    /// The batched queries from one origin, ray i ending at `tmax(i)` (see
+    /// [`Visibility::occluded_many`]).
+    fn occluded_from(
+        &self,
+        origin: Vec3,
+        dirs: &[Vec3],
+        tmin: f32,
+        tmax: impl Fn(usize) -> f32 + Copy,
+        out: &mut [bool],
+    ) {
+        out.fill(false);
+        let several = self.instances.len() > 1;
+        for inst in &self.instances {
+            let meet = inst.may_meet_from(origin);
+            let candidate = |i: usize, dir: Vec3| {
+                meet.test(dir, tmin)
+                    && (!several || inst.meets_segment(origin, dir, tmin, tmax(i)).is_some())
+            };
+            inst.occluded_many(origin, dirs, tmin, tmax, &self.options, candidate, out);
+        }
+    }
+}
+
 impl Visibility for FieldScene {
     fn occluded(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> bool {
         let mut hit = false;
@@ -288,16 +315,23 @@ impl Visibility for FieldScene {
             out.len(),
             "occluded_many: dirs and out differ in length"
         );
-        out.fill(false);
-        let several = self.instances.len() > 1;
-        for inst in &self.instances {
-            let meet = inst.may_meet_from(origin);
-            let candidate = |dir: Vec3| {
-                meet.test(dir, tmin)
-                    && (!several || inst.meets_segment(origin, dir, tmin, tmax).is_some())
-            };
-            inst.occluded_many(origin, dirs, tmin, tmax, &self.options, candidate, out);
-        }
+        self.occluded_from(origin, dirs, tmin, |_| tmax, out);
+    }
+
+    /// As [`Self::occluded_many`], each ray with its own far end (shadow rays).
+    fn occluded_many_to(
+        &self,
+        origin: Vec3,
+        dirs: &[Vec3],
+        tmin: f32,
+        tmaxs: &[f32],
+        out: &mut [bool],
+    ) {
+        assert!(
+            dirs.len() == out.len() && dirs.len() == tmaxs.len(),
+            "occluded_many_to: dirs, tmaxs and out differ in length"
+        );
+        self.occluded_from(origin, dirs, tmin, |i| tmaxs[i], out);
     }
 
     fn hit_distance(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<f32> {

@@ -37,6 +37,29 @@ pub trait Visibility: Sync {
             *o = self.occluded(origin, d, tmin, tmax);
         }
     }
+
+    /// [`Self::occluded`] of every unit direction in `dirs` from one `origin`, ray `i` ending at
+    /// `tmaxs[i]` (shadow rays to points on a light): `out[i] = occluded(origin, dirs[i], tmin,
+    /// tmaxs[i])`, bit for bit. Backends override it as [`Self::occluded_many`].
+    ///
+    /// # Panics
+    /// If `dirs`, `tmaxs` and `out` differ in length.
+    fn occluded_many_to(
+        &self,
+        origin: Vec3,
+        dirs: &[Vec3],
+        tmin: f32,
+        tmaxs: &[f32],
+        out: &mut [bool],
+    ) {
+        assert!(
+            dirs.len() == out.len() && dirs.len() == tmaxs.len(),
+            "occluded_many_to: dirs, tmaxs and out differ in length"
+        );
+        for ((o, &d), &t) in out.iter_mut().zip(dirs).zip(tmaxs) {
+            *o = self.occluded(origin, d, tmin, t);
+        }
+    }
 }
 
 /// A [`Visibility`] that forwards only the per-ray queries of another, so that

@@ -68,7 +68,18 @@ pub fn square_to_cone(u: Vec2, cos_max: f32) -> Vec3 {
     Vec3::new(d.x / r * sin, d.y / r * sin, cos)
 }
 
-/// The light fraction at one point (see the module docs); `squares` is scratch.
+/// Reused buffers of [`light_fraction`].
+#[derive(Default)]
+pub struct ShadowScratch {
+    squares: Vec<Vec2>,
+    dirs: Vec<Vec3>,
+    tmaxs: Vec<f32>,
+    weights: Vec<f64>,
+    blocked: Vec<bool>,
+}
+
+/// The light fraction at one point (see the module docs). The shadow rays of all lights go to
+/// [`Visibility::occluded_many_to`] together (one origin, each ray ending at its light).
 pub fn light_fraction<V: Visibility + ?Sized>(
     vis: &V,
     point_index: u32,
@@ -76,13 +87,16 @@ pub fn light_fraction<V: Visibility + ?Sized>(
     normal: Vec3,
     rays: &RaySet,
     opts: &ShadowOptions,
-    squares: &mut Vec<Vec2>,
+    scratch: &mut ShadowScratch,
 ) -> f32 {
     let origin = point + opts.offset * normal;
     let (s, c) = rays.rotation(point_index);
-    rays.fill_square(point_index, squares);
-    let n = squares.len().max(1) as f64;
-    let (mut lit, mut total) = (0.0f64, 0.0f64);
+    let sc = scratch;
+    rays.fill_square(point_index, &mut sc.squares);
+    let n = sc.squares.len().max(1) as f64;
+    sc.dirs.clear();
+    sc.tmaxs.clear();
+    sc.weights.clear();
     for light in &opts.lights {
         let to = light.center - origin;
         let d2 = to.length_squared();
@@ -94,7 +108,7 @@ pub fn light_fraction<V: Visibility + ?Sized>(
         let cos_max = (1.0 - r2 / d2).max(0.0).sqrt();
         let solid_angle = std::f64::consts::TAU * (1.0 - cos_max as f64);
         let frame = Frame::from_normal(axis);
-        for &u in squares.iter() {
+        for &u in sc.squares.iter() {
             let l = square_to_cone(u, cos_max);
             let l = Vec3::new(c * l.x - s * l.y, s * l.x + c * l.y, l.z);
             let dir = frame.to_world(l).normalize();
@@ -102,14 +116,25 @@ pub fn light_fraction<V: Visibility + ?Sized>(
             if cos_n <= 0.0 {
                 continue;
             }
-            let w = light.intensity as f64 * cos_n as f64 * solid_angle / n;
-            total += w;
             // The near side of the light along dir (the ray is inside the cone: it meets it).
             let b = dir.dot(to);
-            let t_light = b - (b * b - (d2 - r2)).max(0.0).sqrt();
-            if !vis.occluded(origin, dir, 0.0, t_light) {
-                lit += w;
-            }
+            sc.dirs.push(dir);
+            sc.tmaxs.push(b - (b * b - (d2 - r2)).max(0.0).sqrt());
+            sc.weights
+                .push(light.intensity as f64 * cos_n as f64 * solid_angle / n);
+        }
+    }
+    if sc.dirs.is_empty() {
+        return 1.0;
+    }
+    sc.blocked.clear();
+    sc.blocked.resize(sc.dirs.len(), false);
+    vis.occluded_many_to(origin, &sc.dirs, 0.0, &sc.tmaxs, &mut sc.blocked);
+    let (mut lit, mut total) = (0.0f64, 0.0f64);
+    for (&w, &b) in sc.weights.iter().zip(&sc.blocked) {
+        total += w;
+        if !b {
+            lit += w;
         }
     }
     if total > 0.0 {
@@ -139,8 +164,8 @@ pub fn shadow_at_points<V: Visibility + ?Sized>(
         .par_iter()
         .zip(normals.par_iter())
         .enumerate()
-        .map_init(Vec::new, |sq, (i, (&p, &n))| {
-            light_fraction(vis, i as u32, p, n, rays, opts, sq)
+        .map_init(ShadowScratch::default, |sc, (i, (&p, &n))| {
+            light_fraction(vis, i as u32, p, n, rays, opts, sc)
         })
         .collect()
 }
