@@ -96,13 +96,14 @@ fn a_light_inside_a_casters_sphere_is_refused_before_any_work() {
     assert!(!out.exists(), "nothing written for a refused spec");
 }
 
-/// A tiny run: one row with the per-pixel columns, `rays_cast` = pixels × k² × lights, and a
-/// same-ray reference equal to the light fraction computed here from the scene alone.
+/// A tiny run: one row with the per-pixel columns, `rays_cast` = pixels × k² × lights, a
+/// same-ray reference equal to the light fraction computed here from the scene alone, and its
+/// shaded picture equal to that fraction times the direct light.
 #[test]
 fn a_shadow_run_measures_the_light_fraction_at_the_receiver_pixels() {
     use visfield::render::camera::Camera;
     use visfield::render::primary::{gbuffer, PrimaryScene};
-    use visfield::render::shadow::{shadow_at_points, ShadowOptions, SphereLight};
+    use visfield::render::shadow::{direct_light, shadow_at_points, ShadowOptions, SphereLight};
     use visfield::sampling::rays::RaySet;
     use visfield::trace::Tracer;
 
@@ -152,4 +153,22 @@ fn a_shadow_run_measures_the_light_fraction_at_the_receiver_pixels() {
             "pixel {i}"
         );
     }
+    // The shaded picture: the light fraction times the unshadowed direct light (normalised to
+    // the brightest pixel), for the reference and for the cell.
+    let direct = direct_light(&pts.points, &pts.normals, &RaySet::new(8, 1), &opts);
+    assert!((direct.iter().copied().fold(0.0f32, f32::max) - 1.0).abs() < 1e-6);
+    let shaded: Vec<f32> = exact.iter().zip(&direct).map(|(v, d)| v * d).collect();
+    let (img, _) = pts.image(&bs.scene, &gbuf, &shaded);
+    let png = image::open(out.join(format!("images/{}-reference-shaded.png", bs.name)))
+        .unwrap()
+        .to_luma8();
+    for (i, px) in png.pixels().enumerate() {
+        assert_eq!(
+            px.0[0],
+            visfield::render::image::GrayImage::to_u8(img.data[i]),
+            "shaded pixel {i}"
+        );
+    }
+    let cell_shaded = r.image.replace(".png", "-shaded.png");
+    assert!(out.join(cell_shaded).exists());
 }

@@ -15,7 +15,8 @@ use crate::field::Selection;
 use crate::render::ao::AoOptions;
 use crate::render::estimator::{AoEstimator, Estimator};
 use crate::render::points::{EvalPoints, GBuffer};
-use crate::render::shadow::{ShadowEstimator, ShadowOptions, SphereLight};
+use crate::render::shadow::{direct_light, ShadowEstimator, ShadowOptions, SphereLight};
+use crate::sampling::rays::RaySet;
 
 /// What a kind needs built before it can run.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -42,6 +43,10 @@ pub struct Setup {
     pub estimator: Box<dyn Estimator>,
     /// How far ray origins move along the normal (model units), for run.json.
     pub offset: f32,
+    /// A per-point factor in \[0, 1\] that turns the kind's values into a shaded picture,
+    /// written beside each value image as `-shaded.png` (shadows: the unshadowed direct light,
+    /// so that value × factor is the shadowed image); none: no such picture.
+    pub shading: Option<Vec<f32>>,
 }
 
 /// A render kind.
@@ -143,6 +148,7 @@ impl Kind for VertexAo {
             points: EvalPoints::vertices(&scene.scene, offset),
             estimator: Box::new(est),
             offset,
+            shading: None,
         }
     }
 
@@ -191,6 +197,7 @@ impl Kind for ImageAo {
             points: EvalPoints::pixels(&scene.scene, view, offset),
             estimator: Box::new(est),
             offset,
+            shading: None,
         }
     }
 
@@ -250,12 +257,15 @@ impl Kind for Shadows {
                 ..*l
             })
             .collect();
+        let points = EvalPoints::pixels(&scene.scene, view, offset);
+        let opts = ShadowOptions { offset, lights };
+        // The direct light on a white diffuse receiver, from 8² centred rays per light.
+        let shading = direct_light(&points.points, &points.normals, &RaySet::new(8, 1), &opts);
         Setup {
-            points: EvalPoints::pixels(&scene.scene, view, offset),
-            estimator: Box::new(ShadowEstimator {
-                opts: ShadowOptions { offset, lights },
-            }),
+            points,
+            estimator: Box::new(ShadowEstimator { opts }),
             offset,
+            shading: Some(shading),
         }
     }
 

@@ -78,20 +78,18 @@ pub struct ShadowScratch {
     blocked: Vec<bool>,
 }
 
-/// The light fraction at one point (see the module docs). The shadow rays of all lights go to
-/// [`Visibility::occluded_many_to`] together (one origin, each ray ending at its light).
-pub fn light_fraction<V: Visibility + ?Sized>(
-    vis: &V,
+/// The shadow rays of one point into `sc` (directions, far ends, weights), every light's, in
+/// light order; returns the ray origin.
+fn shadow_rays(
     point_index: u32,
     point: Vec3,
     normal: Vec3,
     rays: &RaySet,
     opts: &ShadowOptions,
-    scratch: &mut ShadowScratch,
-) -> f32 {
+    sc: &mut ShadowScratch,
+) -> Vec3 {
     let origin = point + opts.offset * normal;
     let (s, c) = rays.rotation(point_index);
-    let sc = scratch;
     rays.fill_square(point_index, &mut sc.squares);
     let n = sc.squares.len().max(1) as f64;
     sc.dirs.clear();
@@ -124,6 +122,22 @@ pub fn light_fraction<V: Visibility + ?Sized>(
                 .push(light.intensity as f64 * cos_n as f64 * solid_angle / n);
         }
     }
+    origin
+}
+
+/// The light fraction at one point (see the module docs). The shadow rays of all lights go to
+/// [`Visibility::occluded_many_to`] together (one origin, each ray ending at its light).
+pub fn light_fraction<V: Visibility + ?Sized>(
+    vis: &V,
+    point_index: u32,
+    point: Vec3,
+    normal: Vec3,
+    rays: &RaySet,
+    opts: &ShadowOptions,
+    scratch: &mut ShadowScratch,
+) -> f32 {
+    let sc = scratch;
+    let origin = shadow_rays(point_index, point, normal, rays, opts, sc);
     if sc.dirs.is_empty() {
         return 1.0;
     }
@@ -167,6 +181,36 @@ pub fn shadow_at_points<V: Visibility + ?Sized>(
         .map_init(ShadowScratch::default, |sc, (i, (&p, &n))| {
             light_fraction(vis, i as u32, p, n, rays, opts, sc)
         })
+        .collect()
+}
+
+/// The unshadowed direct light at every point, normalised to the brightest (in \[0, 1\]): the
+/// light fraction's denominator Σ weight over the shadow directions of `rays` (n·ω-weighted
+/// light reaching the point with nothing in the way), divided by its largest value over the
+/// points. Times the light fraction it is the shadowed image of a white diffuse receiver.
+pub fn direct_light(
+    points: &[Vec3],
+    normals: &[Vec3],
+    rays: &RaySet,
+    opts: &ShadowOptions,
+) -> Vec<f32> {
+    assert_eq!(
+        points.len(),
+        normals.len(),
+        "direct_light: one normal per point"
+    );
+    let raw: Vec<f64> = points
+        .par_iter()
+        .zip(normals.par_iter())
+        .enumerate()
+        .map_init(ShadowScratch::default, |sc, (i, (&p, &n))| {
+            shadow_rays(i as u32, p, n, rays, opts, sc);
+            sc.weights.iter().sum()
+        })
+        .collect();
+    let top = raw.iter().copied().fold(0.0f64, f64::max);
+    raw.iter()
+        .map(|&e| if top > 0.0 { (e / top) as f32 } else { 0.0 })
         .collect()
 }
 

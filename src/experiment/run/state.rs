@@ -24,6 +24,8 @@ pub(super) struct SceneState {
     pub(super) estimator: Box<dyn Estimator>,
     /// The ray offset (model units).
     pub(super) offset: f32,
+    /// The kind's shading factor per point ([`crate::experiment::kind::Setup::shading`]).
+    pub(super) shading: Option<Vec<f32>>,
     pub(super) triangles: Vec<[Vec3; 3]>,
     pub(super) tracer: Tracer,
     /// The G-buffer of the spec's image.
@@ -68,6 +70,7 @@ impl SceneState {
             at: setup.points,
             estimator: setup.estimator,
             offset: setup.offset,
+            shading: setup.shading,
             truth: None,
             truth_source: String::new(),
             seed_refs: Vec::new(),
@@ -90,6 +93,14 @@ impl SceneState {
     /// The image showing `values`, and the mask of the pixels that show them.
     pub(super) fn image(&self, bs: &BuiltScene, values: &[f32]) -> Option<(GrayImage, Vec<bool>)> {
         Some(self.at.image(&bs.scene, self.view.as_ref()?, values))
+    }
+
+    /// The shaded picture of `values` (values × the kind's shading factor), where the kind has
+    /// one and there is an image.
+    pub(super) fn shaded_image(&self, bs: &BuiltScene, values: &[f32]) -> Option<GrayImage> {
+        let f = self.shading.as_ref()?;
+        let shaded: Vec<f32> = values.iter().zip(f).map(|(v, f)| v * f).collect();
+        self.image(bs, &shaded).map(|(img, _)| img)
     }
 
     /// (RMS per vertex, RMS per pixel) of `values` against the same-ray reference: the

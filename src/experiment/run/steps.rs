@@ -184,6 +184,10 @@ impl<'a> Runner<'a> {
             let p = out.join(format!("images/{}-reference.exr", bs.name));
             img.save_exr(&p).map_err(Error::io(&p))?;
         }
+        if let Some(shaded) = st.shaded_image(bs, &st.reference) {
+            let p = out.join(format!("images/{}-reference-shaded.png", bs.name));
+            shaded.save_png(&p).map_err(Error::io(&p))?;
+        }
         let (rms_vertex, rms_image) = (
             self.kind.columns().vertex.then_some(0.0),
             st.ref_image.as_ref().map(|_| 0.0),
@@ -273,6 +277,10 @@ impl<'a> Runner<'a> {
         let img = st.image(bs, &ev.values[0]);
         let errors = self.measure(st, bs, &ev.values, img.as_ref().map(|(i, _)| i));
         let image = self.write_images(&id, img.as_ref(), st)?;
+        if let Some(shaded) = st.shaded_image(bs, &ev.values[0]) {
+            let p = self.opts.out.join(format!("images/{id}-shaded.png"));
+            shaded.save_png(&p).map_err(Error::io(&p))?;
+        }
         let be = self.backends[&c.backend].as_ref();
         let row = Row::from_parts(
             self.cell_columns(&c, &id, st, be.adapter()),
