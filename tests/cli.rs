@@ -48,6 +48,25 @@ fn list_names_the_specs_and_their_figures() {
     let out = String::from_utf8_lossy(&o.stdout);
     let line = out.lines().find(|l| l.starts_with("figure6 ")).expect(&out);
     assert!(line.contains("Figure 6"), "{line}");
+    // The 2010 figures, told apart from the 2008 ones by name and paper.
+    for (name, figure) in [
+        ("ao2010_figure3 ", "Figure 3"),
+        ("ao2010_sponza ", "Figure 6"),
+        ("shadows2010_figure7 ", "Figure 7"),
+    ] {
+        let line = out.lines().find(|l| l.starts_with(name)).expect(&out);
+        assert!(
+            line.contains("WSCG 2010") && line.contains(figure),
+            "{line}"
+        );
+    }
+    // One column for the descriptions, whatever the name's length.
+    let column = |l: &str| {
+        l.find("  ")
+            .map(|i| i + l[i..].len() - l[i..].trim_start().len())
+    };
+    let first = column(out.lines().next().unwrap());
+    assert!(out.lines().all(|l| column(l) == first), "{out}");
 }
 
 #[test]

@@ -217,12 +217,17 @@ fn run_loaded(
 /// Lists the specs; exit code 1 when one is invalid.
 fn list() -> Result<i32> {
     let paths = discover::spec_paths()?;
+    let width = paths
+        .iter()
+        .map(|p| discover::name_of(p).chars().count())
+        .max()
+        .unwrap_or(0);
     let mut code = 0;
     for p in paths {
         match LoadedSpec::load(&p) {
-            Ok(ls) => println!("{:<12} {}", ls.name, ls.spec.reproduces),
+            Ok(ls) => println!("{:<width$}  {}", ls.name, ls.spec.reproduces),
             Err(e) => {
-                println!("{:<12} INVALID: {e}", discover::name_of(&p));
+                println!("{:<width$}  INVALID: {e}", discover::name_of(&p));
                 code = 1;
             }
         }
