@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Packs what a GPU machine without a Rust toolchain needs to run the GPU figures
-# (scripts/device_run.sh): a stripped release `experiment`, the models that figure6 and figure8
-# read, the commit they were built from, and the Vulkan loader packages. Run it here, then on
+# (scripts/device_run.sh): a stripped release `experiment`, the models that figure6, figure8
+# and the 2010 GPU specs (ao2010_figure3, _figure4, _models, _sponza) read, the commit they
+# were built from, and the Vulkan loader packages. Run it here, then on
 # the GPU machine (the device tool; both folders are git-ignored and named in `carry`):
 #   run(command="bash scripts/device_run.sh", carry=[".device", ".gl"], timeout_s=600)
 # Commit first: the packed build records HEAD, and a dirty tree is refused.
@@ -16,7 +17,7 @@ rm -rf .device
 mkdir -p .device/models
 strip -o .device/experiment target/release/experiment
 git rev-parse HEAD >.device/COMMIT
-# The models of figure6 and figure8, from where the project finds models.
+# The models of figure6, figure8 and the 2010 GPU specs, from where the project finds models.
 models_dir=""
 for d in "${VISFIELD_MODELS:-}" data/models ../shared/models; do
   if [ -n "$d" ] && [ -f "$d/stanford-bunny_39k.obj" ]; then models_dir="$d"; break; fi
@@ -25,7 +26,8 @@ if [ -z "$models_dir" ]; then
   echo "device_pack: stanford-bunny_39k.obj not found in \$VISFIELD_MODELS, data/models or ../shared/models" >&2
   exit 1
 fi
-for f in stanford-bunny_39k.obj igea_67k.obj Tree_3.obj Tree_3.mtl; do
+for f in stanford-bunny_39k.obj igea_67k.obj Tree_3.obj Tree_3.mtl elephant.obj dragon.obj \
+  cow.obj sponza.obj; do
   cp "$models_dir/$f" .device/models/
 done
 # The Vulkan loader (the GPU machine has the NVIDIA driver but may lack libvulkan).

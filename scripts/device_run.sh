@@ -9,7 +9,11 @@ cd "$(dirname "$0")/.."
 out="${OUT:-/tmp/device-out}"
 mkdir -p "$out"
 # DEVICE_ADAPTER and DEVICE_ARGS (e.g. lavapipe and --quick) try the script on another machine;
-# DEVICE_SKIP_LOADER=1 leaves its Vulkan loader alone.
+# DEVICE_SKIP_LOADER=1 leaves its Vulkan loader alone. DEVICE_JOBS replaces the jobs (one per
+# line or ";"-separated, each a spec name and its flags), e.g. the 2010 GPU specs:
+#   DEVICE_JOBS="ao2010_figure3; ao2010_figure4; ao2010_models; ao2010_sponza"
+# (their CPU side, the converged references and the 16642 × 128² bake, takes minutes even on
+# 16 cores: run them in a call of their own).
 adapter="${DEVICE_ADAPTER:-hardware}"
 if [ -z "${DEVICE_SKIP_LOADER:-}" ]; then
   for f in .gl/*.deb; do dpkg -x "$f" /; done
@@ -22,7 +26,11 @@ export VISFIELD_MODELS="$PWD/.device/models" VISFIELD_COMMIT="$(cat .device/COMM
 nvidia-smi --query-gpu=name,driver_version --format=csv,noheader | tee "$out/gpu.txt" || true
 exp=.device/experiment
 status=0
-for job in "figure6 --no-cache" "figure8 --no-cache" "relief"; do
+jobs="${DEVICE_JOBS:-figure6 --no-cache; figure8 --no-cache; relief}"
+IFS=$';\n' read -r -d '' -a job_list <<<"$jobs" || true
+for job in "${job_list[@]}"; do
+  job="$(echo "$job" | xargs)"
+  [ -z "$job" ] && continue
   name="${job%% *}"
   echo "== $name"
   # shellcheck disable=SC2086
