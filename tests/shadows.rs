@@ -143,32 +143,30 @@ fn a_shadow_run_measures_the_light_fraction_at_the_receiver_pixels() {
     // Some pixels are in the caster's shadow, some lit.
     assert!(exact.iter().any(|&v| v < 0.5) && exact.contains(&1.0));
     let (img, _) = pts.image(&bs.scene, &gbuf, &exact);
-    let png = image::open(out.join(format!("images/{}-reference.png", bs.name)))
-        .unwrap()
-        .to_luma8();
-    for (i, px) in png.pixels().enumerate() {
-        assert_eq!(
-            px.0[0],
-            visfield::render::image::GrayImage::to_u8(img.data[i]),
-            "pixel {i}"
-        );
-    }
+    assert_png_is(&out.join(format!("images/{}-reference.png", bs.name)), &img);
     // The shaded picture: the light fraction times the unshadowed direct light (normalised to
     // the brightest pixel), for the reference and for the cell.
     let direct = direct_light(&pts.points, &pts.normals, &RaySet::new(8, 1), &opts);
     assert!((direct.iter().copied().fold(0.0f32, f32::max) - 1.0).abs() < 1e-6);
     let shaded: Vec<f32> = exact.iter().zip(&direct).map(|(v, d)| v * d).collect();
     let (img, _) = pts.image(&bs.scene, &gbuf, &shaded);
-    let png = image::open(out.join(format!("images/{}-reference-shaded.png", bs.name)))
-        .unwrap()
-        .to_luma8();
+    assert_png_is(
+        &out.join(format!("images/{}-reference-shaded.png", bs.name)),
+        &img,
+    );
+    let cell_shaded = r.image.replace(".png", "-shaded.png");
+    assert!(out.join(cell_shaded).exists());
+}
+
+/// The PNG at `path` holds exactly `img`'s 8-bit levels.
+fn assert_png_is(path: &Path, img: &visfield::render::image::GrayImage) {
+    let png = image::open(path).unwrap().to_luma8();
     for (i, px) in png.pixels().enumerate() {
         assert_eq!(
             px.0[0],
             visfield::render::image::GrayImage::to_u8(img.data[i]),
-            "shaded pixel {i}"
+            "{}: pixel {i}",
+            path.display()
         );
     }
-    let cell_shaded = r.image.replace(".png", "-shaded.png");
-    assert!(out.join(cell_shaded).exists());
 }
