@@ -28,9 +28,7 @@ use visfield::field::bake::{bake, BakeOptions};
 use visfield::field::lookup::LookupOptions;
 use visfield::field::scene::{FieldInstance, FieldScene};
 use visfield::field::{FieldParams, Precision, Selection};
-use visfield::geometry::{
-    minimal_bounding_sphere, models, procedural, Instance, Scene, Similarity,
-};
+use visfield::geometry::{models, procedural, Instance, Scene, Similarity};
 use visfield::render::ao::{ao_at_points, AoOptions};
 use visfield::render::camera::Camera;
 use visfield::render::points::{EvalPoints, GBuffer};
@@ -87,12 +85,7 @@ fn image_ao(c: &mut Criterion) {
         width: w,
         height: h,
     };
-    let world: Vec<Vec3> = scene
-        .instances
-        .iter()
-        .flat_map(|i| i.world_triangles().flatten())
-        .collect();
-    let opts = AoOptions::for_scene(minimal_bounding_sphere(&world));
+    let opts = AoOptions::for_scene(scene.bounding_sphere());
     let pts = EvalPoints::pixels(&scene, &gbuf, opts.offset);
     let rays = RaySet::new(8, 1);
     eprintln!(

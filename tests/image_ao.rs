@@ -22,7 +22,7 @@ use visfield::field::bake::{bake, BakeOptions};
 use visfield::field::lookup::{ray_sphere, IntraBias, LookupOptions};
 use visfield::field::scene::{FieldInstance, FieldScene};
 use visfield::field::{FieldParams, Precision, Selection, VisibilityField};
-use visfield::geometry::{minimal_bounding_sphere, procedural, Instance, Mesh, Scene, Similarity};
+use visfield::geometry::{procedural, Instance, Mesh, Scene, Similarity};
 use visfield::render::ao::{ao_at_points, AoOptions};
 use visfield::render::camera::Camera;
 use visfield::render::points::{EvalPoints, GBuffer, Support};
@@ -71,12 +71,7 @@ impl View {
             width,
             height,
         };
-        let world: Vec<Vec3> = scene
-            .instances
-            .iter()
-            .flat_map(|i| i.world_triangles().flatten())
-            .collect();
-        let opts = AoOptions::for_scene(minimal_bounding_sphere(&world));
+        let opts = AoOptions::for_scene(scene.bounding_sphere());
         let points = EvalPoints::pixels(&scene, &gbuf, opts.offset);
         View {
             scene,

@@ -92,13 +92,7 @@ impl BuiltScene {
 
     /// The minimal bounding sphere of every instance's world vertices.
     pub fn bounds(&self) -> crate::geometry::Sphere {
-        let pts: Vec<Vec3> = self
-            .scene
-            .instances
-            .iter()
-            .flat_map(|i| i.world_triangles().flatten())
-            .collect();
-        crate::geometry::minimal_bounding_sphere(&pts)
+        self.scene.bounding_sphere()
     }
 }
 

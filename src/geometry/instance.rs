@@ -161,6 +161,17 @@ impl Scene {
             .filter(|(_, i)| i.receiver)
     }
 
+    /// The minimal bounding sphere of every instance's world vertices (the scale of a scene's
+    /// ray offset, `render::ao::AoOptions::for_scene`).
+    pub fn bounding_sphere(&self) -> Sphere {
+        let pts: Vec<Vec3> = self
+            .instances
+            .iter()
+            .flat_map(|i| i.world_triangles().flatten())
+            .collect();
+        super::minimal_bounding_sphere(&pts)
+    }
+
     /// All casters' world triangles, in instance order (the input of a ray-cast reference).
     pub fn caster_triangles(&self) -> Vec<[Vec3; 3]> {
         self.casters()

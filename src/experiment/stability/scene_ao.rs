@@ -6,7 +6,7 @@ use crate::field::lookup::LookupOptions;
 use crate::field::scene::{FieldInstance, FieldScene};
 use crate::field::{FieldParams, Precision, VisibilityField};
 use crate::geometry::rebase::{rebase, PlacedMesh, Placement, Rebased};
-use crate::geometry::{minimal_bounding_sphere, Instance, Mesh, Scene, Similarity, Sphere};
+use crate::geometry::{Instance, Mesh, Scene, Similarity, Sphere};
 use crate::render::ao::{ao_at_points, AoOptions};
 use crate::render::receivers::Receivers;
 use crate::sampling::rays::RaySet;
@@ -55,12 +55,7 @@ pub fn rebased_scene(placed: &[Placed], scale: f32, translation: glam::DVec3) ->
 
 /// The minimal bounding sphere of every instance's world vertices.
 pub fn scene_bounds(scene: &Scene) -> Sphere {
-    let pts: Vec<_> = scene
-        .instances
-        .iter()
-        .flat_map(|i| i.world_triangles().flatten())
-        .collect();
-    minimal_bounding_sphere(&pts)
+    scene.bounding_sphere()
 }
 
 /// AO options of a scene: [`AoOptions::for_scene`] of its bounds.
