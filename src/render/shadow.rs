@@ -158,6 +158,28 @@ pub fn light_fraction<V: Visibility + ?Sized>(
     }
 }
 
+/// `f(scratch, point index, point, normal)` at every point (rayon over points, a scratch per
+/// worker; the same bits on any thread count).
+///
+/// # Panics
+/// If `points` and `normals` differ in length (`what` names the caller).
+fn per_point<T: Send>(
+    what: &str,
+    points: &[Vec3],
+    normals: &[Vec3],
+    f: impl Fn(&mut ShadowScratch, u32, Vec3, Vec3) -> T + Sync,
+) -> Vec<T> {
+    assert_eq!(points.len(), normals.len(), "{what}: one normal per point");
+    points
+        .par_iter()
+        .zip(normals.par_iter())
+        .enumerate()
+        .map_init(ShadowScratch::default, |sc, (i, (&p, &n))| {
+            f(sc, i as u32, p, n)
+        })
+        .collect()
+}
+
 /// [`light_fraction`] at every point (rayon over points; the same bits on any thread count).
 ///
 /// # Panics
@@ -169,45 +191,28 @@ pub fn shadow_at_points<V: Visibility + ?Sized>(
     rays: &RaySet,
     opts: &ShadowOptions,
 ) -> Vec<f32> {
-    assert_eq!(
-        points.len(),
-        normals.len(),
-        "shadow_at_points: one normal per point"
-    );
-    points
-        .par_iter()
-        .zip(normals.par_iter())
-        .enumerate()
-        .map_init(ShadowScratch::default, |sc, (i, (&p, &n))| {
-            light_fraction(vis, i as u32, p, n, rays, opts, sc)
-        })
-        .collect()
+    per_point("shadow_at_points", points, normals, |sc, i, p, n| {
+        light_fraction(vis, i, p, n, rays, opts, sc)
+    })
 }
 
 /// The unshadowed direct light at every point, normalised to the brightest (in \[0, 1\]): the
 /// light fraction's denominator Σ weight over the shadow directions of `rays` (n·ω-weighted
 /// light reaching the point with nothing in the way), divided by its largest value over the
 /// points. Times the light fraction it is the shadowed image of a white diffuse receiver.
+///
+/// # Panics
+/// If `points` and `normals` differ in length.
 pub fn direct_light(
     points: &[Vec3],
     normals: &[Vec3],
     rays: &RaySet,
     opts: &ShadowOptions,
 ) -> Vec<f32> {
-    assert_eq!(
-        points.len(),
-        normals.len(),
-        "direct_light: one normal per point"
-    );
-    let raw: Vec<f64> = points
-        .par_iter()
-        .zip(normals.par_iter())
-        .enumerate()
-        .map_init(ShadowScratch::default, |sc, (i, (&p, &n))| {
-            shadow_rays(i as u32, p, n, rays, opts, sc);
-            sc.weights.iter().sum()
-        })
-        .collect();
+    let raw: Vec<f64> = per_point("direct_light", points, normals, |sc, i, p, n| {
+        shadow_rays(i, p, n, rays, opts, sc);
+        sc.weights.iter().sum()
+    });
     let top = raw.iter().copied().fold(0.0f64, f64::max);
     raw.iter()
         .map(|&e| if top > 0.0 { (e / top) as f32 } else { 0.0 })
