@@ -211,6 +211,20 @@ impl Kind for ImageAo {
 /// receiver pixel, its shadow rays answered by ray casting or by the fields.
 pub struct Shadows(pub ShadowRender);
 
+impl Shadows {
+    /// The lights in the scene's frame (moved as the camera is).
+    fn lights_in_frame(&self, scene: &BuiltScene) -> Vec<SphereLight> {
+        self.0
+            .lights
+            .iter()
+            .map(|l| SphereLight {
+                center: crate::geometry::rebase::to_frame(scene.origin, l.center),
+                ..*l
+            })
+            .collect()
+    }
+}
+
 impl Kind for Shadows {
     fn name(&self) -> &'static str {
         "shadows"
@@ -247,16 +261,7 @@ impl Kind for Shadows {
     fn setup(&self, scene: &BuiltScene, view: Option<&GBuffer>) -> Setup {
         let offset = AoOptions::for_scene(scene.bounds()).offset;
         let view = view.expect("shadows: validation guarantees an image, and so a G-buffer");
-        // The lights in the scene's frame, as the camera.
-        let lights = self
-            .0
-            .lights
-            .iter()
-            .map(|l| SphereLight {
-                center: crate::geometry::rebase::to_frame(scene.origin, l.center),
-                ..*l
-            })
-            .collect();
+        let lights = self.lights_in_frame(scene);
         let points = EvalPoints::pixels(&scene.scene, view, offset);
         let opts = ShadowOptions { offset, lights };
         // The direct light on a white diffuse receiver, from 8² centred rays per light.
@@ -276,11 +281,10 @@ impl Kind for Shadows {
     /// A light that overlaps a caster's bounding sphere would sit inside the field's domain
     /// (and likely inside the caster): refused, naming the light and the instance.
     fn scene_problem(&self, scene: &BuiltScene) -> Option<(String, String)> {
-        for (i, l) in self.0.lights.iter().enumerate() {
-            let c = crate::geometry::rebase::to_frame(scene.origin, l.center);
+        for (i, l) in self.lights_in_frame(scene).iter().enumerate() {
             for (ii, inst) in scene.scene.casters() {
                 let s = inst.world_bounding_sphere();
-                if c.distance(s.center) < s.radius + l.radius {
+                if l.center.distance(s.center) < s.radius + l.radius {
                     return Some((
                         format!("render.lights[{i}]"),
                         format!(
