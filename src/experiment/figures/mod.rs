@@ -136,9 +136,7 @@ pub fn draw_all(out: &Path, title: &str) -> Result<()> {
     let mut names: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
     names.dedup();
     if names.len() > 1 {
-        let mut backends: Vec<Backend> = rows.iter().map(|r| r.backend).collect();
-        backends.sort();
-        backends.dedup();
+        let backends = distinct_backends(rows.iter().map(|r| r.backend));
         // Per backend, the first row of each scene.
         let first = |b: Backend| -> Vec<&Row> {
             names
@@ -323,9 +321,7 @@ fn raycast_series(sweep: &[SweepRow], y: impl Fn(&SweepRow) -> Option<f64>) -> V
             scenes.push(&s.scene);
         }
     }
-    let mut backends: Vec<Backend> = sweep.iter().map(|s| s.backend).collect();
-    backends.sort();
-    backends.dedup();
+    let backends = distinct_backends(sweep.iter().map(|s| s.backend));
     let mut series = Vec::new();
     for sc in scenes {
         for &b in &backends {
@@ -353,6 +349,14 @@ fn raycast_series(sweep: &[SweepRow], y: impl Fn(&SweepRow) -> Option<f64>) -> V
         }
     }
     series
+}
+
+/// The backends among `b`, each once, in order.
+fn distinct_backends(b: impl Iterator<Item = Backend>) -> Vec<Backend> {
+    let mut b: Vec<Backend> = b.collect();
+    b.sort();
+    b.dedup();
+    b
 }
 
 /// The rows of one of the run's tables.

@@ -8,7 +8,7 @@
 //!   the error image ([`crate::experiment::metrics::grain`]) against positional samples, one
 //!   series per scene and other varying axis, when the rows have it.
 
-use super::key;
+use super::{distinct_backends, key};
 use crate::experiment::outputs::{FieldSweepRow, Row, SweepRow};
 use crate::experiment::plot::{xy_plot, Axes, Series};
 use crate::experiment::spec::Backend;
@@ -29,7 +29,7 @@ pub fn time_vs_rays(
     if counts.len() < 2 {
         return Ok(());
     }
-    let backends = distinct_backends(rows);
+    let backends = distinct_backends(rows.iter().map(|r| r.backend));
     let on = |b: Backend| {
         if backends.len() > 1 {
             format!(" ({})", b.name())
@@ -126,13 +126,6 @@ pub fn grain_vs_positional(out: &Path, title: &str, rows: &[Row]) -> Result<()> 
         log_y: false,
     };
     xy_plot(&out.join("grain_vs_positional.png"), &axes, &series, &[])
-}
-
-fn distinct_backends(rows: &[Row]) -> Vec<Backend> {
-    let mut b: Vec<Backend> = rows.iter().map(|r| r.backend).collect();
-    b.sort();
-    b.dedup();
-    b
 }
 
 fn scenes_differ(rows: &[Row]) -> bool {
