@@ -291,3 +291,43 @@ fn check_without_vulkan_skips_gpu_rows_loudly_unless_required() {
     assert!(!o.status.success(), "{t}");
     assert!(t.contains("FAIL") && t.contains("cannot run"), "{t}");
 }
+
+/// A plot that `plots` draws and the run had not listed (a run older than the plot kind)
+/// becomes one of the run's files in its `run.json`, so that the next run into the folder
+/// replaces it rather than keep it as a user's; with nothing new, `run.json` is left as it is.
+#[test]
+fn plots_list_the_plots_they_draw_as_the_runs_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let spec = tiny_spec(dir.path(), 255.0);
+    let out = dir.path().join("out");
+    let o = experiment(&["run", &spec, "--no-cache", "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o));
+    let run_json = out.join("run.json");
+    let listed = |bytes: &[u8]| -> Vec<String> {
+        let v: serde_json::Value = serde_json::from_slice(bytes).unwrap();
+        v["files"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|f| f.as_str().unwrap().to_string())
+            .collect()
+    };
+    let original = std::fs::read(&run_json).unwrap();
+    assert!(listed(&original).contains(&"pareto.png".to_string()));
+    // An older run's list: without pareto.png.
+    let mut v: serde_json::Value = serde_json::from_slice(&original).unwrap();
+    let fewer: Vec<String> = listed(&original)
+        .into_iter()
+        .filter(|f| f != "pareto.png")
+        .collect();
+    v["files"] = serde_json::json!(fewer);
+    std::fs::write(&run_json, serde_json::to_string_pretty(&v).unwrap()).unwrap();
+    let o = experiment(&["plots", "--dir", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o));
+    let after = std::fs::read(&run_json).unwrap();
+    assert_eq!(listed(&after), listed(&original));
+    // Nothing new: the file is not rewritten.
+    let o = experiment(&["plots", "--dir", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert_eq!(std::fs::read(&run_json).unwrap(), after);
+}

@@ -4,7 +4,7 @@ use super::discover;
 use super::fields::FieldSupply;
 use super::run::{LoadedSpec, RunOptions};
 use super::spec::Backend;
-use super::Result;
+use super::{Error, Result};
 use clap::{Args, Parser, Subcommand};
 use std::path::{Path, PathBuf};
 
@@ -339,9 +339,40 @@ fn plots(names: &[String], quick: bool, dir: Option<&Path>) -> Result<()> {
             }
         );
         super::figures::draw_all(&d, &title)?;
+        own_plots(&d, run)?;
         println!("redrew the plots in {}", d.display());
     }
     Ok(())
+}
+
+/// Adds the plots now in `dir` (its top-level PNGs) to the `files` its `run.json` lists, so that
+/// a plot this command drew that the run had not (a newer plot kind) stays the program's file,
+/// replaced or removed by the next run rather than kept as a user's. `run.json` is rewritten,
+/// atomically, only when the list grows.
+fn own_plots(dir: &Path, mut run: serde_json::Value) -> Result<()> {
+    let Some(files) = run.get("files").and_then(|f| f.as_array()) else {
+        return Ok(());
+    };
+    let mut listed: Vec<String> = files
+        .iter()
+        .filter_map(|f| f.as_str().map(String::from))
+        .collect();
+    let before = listed.len();
+    for e in std::fs::read_dir(dir).map_err(Error::io(dir))? {
+        let name = e.map_err(Error::io(dir))?.file_name();
+        let name = name.to_string_lossy();
+        if name.ends_with(".png") && !listed.iter().any(|f| f == name.as_ref()) {
+            listed.push(name.into_owned());
+        }
+    }
+    if listed.len() == before {
+        return Ok(());
+    }
+    listed.sort();
+    run["files"] = serde_json::json!(listed);
+    let path = dir.join("run.json");
+    let text = serde_json::to_string_pretty(&run).expect("run.json serialises");
+    crate::io::write_atomic(&path, text.as_bytes()).map_err(Error::io(&path))
 }
 
 /// The adapter a `--adapter` flag names, else `$VISFIELD_ADAPTER`'s, else auto.
