@@ -5,12 +5,14 @@ use std::sync::Arc;
 use visfield::field::bake::{bake, BakeOptions};
 use visfield::field::lookup::{IntraBias, LookupOptions};
 use visfield::field::scene::{FieldInstance, FieldScene};
-use visfield::field::{FieldParams, Precision, Selection};
+use visfield::field::{Precision, Selection};
 use visfield::geometry::{procedural, Mesh, Similarity};
 use visfield::render::ao::{ao_at_points, AoOptions};
 use visfield::sampling::rays::{uniform, RaySet};
-use visfield::sampling::{LayoutKind, SphereKind};
 use visfield::trace::Tracer;
+
+mod common;
+use common::slater_params as params;
 
 fn box_mesh(half: Vec3) -> Mesh {
     let p = |x: f32, y: f32, z: f32| Vec3::new(x * half.x, y * half.y, z * half.z);
@@ -46,16 +48,6 @@ fn unit(i: u32, seed: u64) -> Vec3 {
     let phi = std::f32::consts::TAU * uniform(i, 0, 1, seed);
     let r = (1.0 - z * z).max(0.0).sqrt();
     Vec3::new(r * phi.cos(), r * phi.sin(), z)
-}
-
-fn params(count: usize, res: u32, precision: Precision) -> FieldParams {
-    FieldParams {
-        sphere: SphereKind::Slater,
-        count,
-        layout: LayoutKind::Concentric,
-        res,
-        precision,
-    }
 }
 
 fn tracer_of(mesh: &Mesh) -> Tracer {

@@ -29,18 +29,11 @@ use visfield::render::points::{EvalPoints, GBuffer, Support};
 use visfield::render::primary::{gbuffer, PrimaryScene};
 use visfield::render::Visibility;
 use visfield::sampling::rays::RaySet;
-use visfield::sampling::{Frame, LayoutKind, SphereKind};
+use visfield::sampling::Frame;
 use visfield::trace::Tracer;
 
-fn params(count: usize, res: u32, precision: Precision) -> FieldParams {
-    FieldParams {
-        sphere: SphereKind::Slater,
-        count,
-        layout: LayoutKind::Concentric,
-        res,
-        precision,
-    }
-}
+mod common;
+use common::slater_params as params;
 
 fn baked(mesh: &Mesh, p: FieldParams) -> Arc<VisibilityField> {
     Arc::new(bake(mesh, p, &BakeOptions::default()).expect("bake").0)

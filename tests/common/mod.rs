@@ -4,6 +4,8 @@
 use std::path::{Path, PathBuf};
 use visfield::experiment::fields::FieldSupply;
 use visfield::experiment::run::{LoadedSpec, RunOptions};
+use visfield::field::{FieldParams, Precision};
+use visfield::sampling::{LayoutKind, SphereKind};
 
 /// A tiny procedural spec: a 2,000-triangle supershape fitted over a 9 × 9 corner, 290 Slater
 /// maps × 16² concentric texels, 16 rays per vertex, a 32 × 32 image. `fields` and
@@ -41,6 +43,17 @@ pub fn cpu_gpu_spec() -> String {
             r#""field_rays_sweep": [16, 64]"#,
             r#""field_rays_sweep": [16, 4096]"#,
         )
+}
+
+/// A field of `count` Slater maps × `res`² concentric texels at `precision` (the papers' sets).
+pub fn slater_params(count: usize, res: u32, precision: Precision) -> FieldParams {
+    FieldParams {
+        sphere: SphereKind::Slater,
+        count,
+        layout: LayoutKind::Concentric,
+        res,
+        precision,
+    }
 }
 
 pub const ONE_FIELD: &str = r#"{ "counts": [290], "resolutions": [16] }"#;
