@@ -403,7 +403,6 @@ fn oversized_field_is_refused_before_allocation() {
 #[test]
 fn normal_field_returns_the_hit_face_normal() {
     use visfield::field::bake::bake_with_normals;
-    use visfield::field::normals::hit_with_normal;
     let mesh = box_mesh(Vec3::new(0.6, 0.35, 0.45));
     let tracer = tracer_of(&mesh);
     let bounds = mesh.bounding_sphere();
@@ -421,12 +420,20 @@ fn normal_field_returns_the_hit_face_normal() {
         let origin = c + r * (1.5 + uniform(i, 1, 0, 8)) * unit(i, 31);
         let aim = c + 0.5 * r * unit(i, 32);
         let dir = (aim - origin).normalize();
-        let (Some(exact), Some((_, p, n))) = (
+        let (Some(exact), Some((t, n))) = (
             tracer.closest_hit(origin, dir, 0.0, f32::INFINITY),
-            hit_with_normal(&field, &normals, origin, dir, 0.0, f32::INFINITY),
+            field.surface_hit(
+                &normals,
+                origin,
+                dir,
+                0.0,
+                f32::INFINITY,
+                &Default::default(),
+            ),
         ) else {
             continue;
         };
+        let p = origin + t * dir;
         both += 1;
         if n.dot(exact.normal) > 0.999 {
             same_normal += 1;

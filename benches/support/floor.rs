@@ -19,7 +19,7 @@
 use glam::Vec3;
 use visfield::field::lookup::SphereOrigin;
 use visfield::field::scene::{FieldInstance, FieldScene};
-use visfield::render::Visibility;
+use visfield::render::{SurfaceHit, Visibility};
 
 /// Every ray free, at no cost ([module docs](self)).
 #[derive(Clone, Copy, Debug, Default)]
@@ -31,6 +31,10 @@ impl Visibility for NoQuery {
     }
 
     fn hit_distance(&self, _: Vec3, _: Vec3, _: f32, _: f32) -> Option<f32> {
+        None
+    }
+
+    fn surface_hit(&self, _: Vec3, _: Vec3, _: f32, _: f32) -> Option<SurfaceHit> {
         None
     }
 
@@ -84,6 +88,26 @@ impl Visibility for SphereCull<'_> {
                 Self::entry(inst, &from, origin, dir, tmin, tmax)
             })
             .min_by(f32::total_cmp)
+    }
+
+    /// The entry point with the sphere's outward normal there.
+    fn surface_hit(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<SurfaceHit> {
+        let t = self.hit_distance(origin, dir, tmin, tmax)?;
+        let p = origin + t * dir;
+        let inst = self
+            .0
+            .instances
+            .iter()
+            .min_by(|a, b| {
+                (a.world_center.distance(p) - a.world_radius)
+                    .abs()
+                    .total_cmp(&(b.world_center.distance(p) - b.world_radius).abs())
+            })
+            .expect("a hit has an instance");
+        Some(SurfaceHit {
+            t,
+            normal: (p - inst.world_center).normalize_or_zero(),
+        })
     }
 
     fn occluded_many(&self, origin: Vec3, dirs: &[Vec3], tmin: f32, tmax: f32, out: &mut [bool]) {

@@ -54,6 +54,31 @@ pub fn bake(
     opts: &BakeOptions,
 ) -> Result<(VisibilityField, BakeStats), FieldError> {
     params.check_memory(opts.memory_limit)?;
+    let (tracer, bounds, bvh_seconds) = mesh_tracer(mesh);
+    let (field, mut stats) = bake_with(&tracer, bounds, params, opts)?;
+    stats.bvh_seconds = bvh_seconds;
+    Ok((field, stats))
+}
+
+/// [`bake`] with the normal field beside the distances ([`bake_with_normals`]): the same
+/// distances, bit for bit, and per texel the hit's normal in 2 × `normal_bits` bits.
+pub fn bake_mesh_with_normals(
+    mesh: &Mesh,
+    params: FieldParams,
+    normal_bits: u32,
+    opts: &BakeOptions,
+) -> Result<(VisibilityField, NormalField, BakeStats), FieldError> {
+    params.check_memory(opts.memory_limit)?;
+    let (tracer, bounds, bvh_seconds) = mesh_tracer(mesh);
+    let (field, normals, mut stats) =
+        bake_with_normals(&tracer, bounds, params, normal_bits, opts)?;
+    stats.bvh_seconds = bvh_seconds;
+    Ok((field, normals, stats))
+}
+
+/// The reference tracer over `mesh` (model space), its minimal bounding sphere, and the BVH
+/// build time in seconds.
+fn mesh_tracer(mesh: &Mesh) -> (Tracer, Sphere, f64) {
     let t = Instant::now();
     let tris: Vec<_> = (0..mesh.triangles.len())
         .map(|i| mesh.triangle(i))
@@ -61,9 +86,7 @@ pub fn bake(
     let tracer = Tracer::new(&tris);
     let bvh_seconds = t.elapsed().as_secs_f64();
     let bounds = crate::geometry::minimal_bounding_sphere(&mesh.positions);
-    let (field, mut stats) = bake_with(&tracer, bounds, params, opts)?;
-    stats.bvh_seconds = bvh_seconds;
-    Ok((field, stats))
+    (tracer, bounds, bvh_seconds)
 }
 
 /// Bakes a field of the geometry behind `tracer`, bounded by `bounds` (which must contain it).

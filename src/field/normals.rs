@@ -44,7 +44,8 @@ pub fn unpack_normal(p: [u32; 2], bits: u32) -> Vec3 {
     oct_decode(Vec2::new(d(p[0]), d(p[1])))
 }
 
-/// Per-texel hit normals of every map, 2 × u16 per texel (row-major like the distances).
+/// Per-texel hit normals of every map, 2 × `bits` bits per texel in a `[u16; 2]` (row-major
+/// like the distances). Misses hold the reverse of the texel's inward direction, never read.
 #[derive(Clone, Debug, PartialEq)]
 pub struct NormalField {
     pub texels: usize,
@@ -59,40 +60,64 @@ impl NormalField {
         let [a, b] = self.data[map * self.texels + texel];
         unpack_normal([a as u32, b as u32], self.bits)
     }
+
+    /// Bytes of the packed normals as a renderer stores them: 2 × `bits` / 8 per texel (the
+    /// 8-bit field is held in 16-bit words here, but counts as 2 bytes a texel, as on a GPU).
+    pub fn bytes(&self) -> u64 {
+        self.data.len() as u64 * 2 * self.bits as u64 / 8
+    }
+
+    /// The same normals at `bits` bits: each normal unpacked and packed again. From 16 to 8
+    /// bits this is within one 8-bit step of packing the exact normal (the 16-bit error is
+    /// 1/257 of an 8-bit step), so a field derived this way stands for an 8-bit bake.
+    pub fn requantized(&self, bits: u32) -> NormalField {
+        let data = self
+            .data
+            .iter()
+            .map(|&[a, b]| {
+                let n = unpack_normal([a as u32, b as u32], self.bits);
+                let [a, b] = pack_normal(n, bits);
+                [a as u16, b as u16]
+            })
+            .collect();
+        NormalField {
+            texels: self.texels,
+            bits,
+            data,
+        }
+    }
 }
 
-/// The approximate hit of a ray through a field and its normal field: the 2010 paper's
-/// reflection query (§4.2), nearest selection. Returns (t, point, unit normal) in model space.
-pub fn hit_with_normal(
-    field: &super::VisibilityField,
-    normals: &NormalField,
-    origin: Vec3,
-    dir: Vec3,
-    tmin: f32,
-    tmax: f32,
-) -> Option<(f32, Vec3, Vec3)> {
-    use super::lookup::{entry_point_relative, ray_sphere};
-    let (c, r) = (field.bounds.center, field.bounds.radius);
-    let (t0, t1) = ray_sphere(origin, dir, c, r)?;
-    let diameter = 2.0 * r;
-    let (u, query_dir, outside) = if t0 >= 0.0 {
-        let q = entry_point_relative(origin, dir, c, r)?;
-        ((q / r as f64).as_vec3(), dir, true)
-    } else {
-        (((origin - c) + t1 * dir).normalize_or_zero(), -dir, false)
-    };
-    let m = field.points.nearest(u);
-    let texel = field.layout.to_texel(field.frames[m].to_local(query_dir)) as usize;
-    let d = field.storage.get(m, texel);
-    if d >= 1.0 {
-        return None;
+impl super::VisibilityField {
+    /// The reflection query of the 2010 paper (§4.2): the field's hit distance of the ray (the
+    /// lookup of [`Self::hit_distance`], with its selection and intra-object test) and the normal
+    /// field's normal there, unit, in model space, unoriented (the side a shader faces it to is
+    /// the caller's). The normal is the one of the map and texel the nearest selection reads,
+    /// also when the distance is interpolated.
+    ///
+    /// # Panics
+    /// If `normals` is not this field's (another texel count or map count).
+    pub fn surface_hit(
+        &self,
+        normals: &NormalField,
+        origin: Vec3,
+        dir: Vec3,
+        tmin: f32,
+        tmax: f32,
+        opts: &super::lookup::LookupOptions,
+    ) -> Option<(f32, Vec3)> {
+        use super::lookup::{NearestRead, Reads, SphereOrigin};
+        assert!(
+            normals.texels == self.params.texels()
+                && normals.data.len() == self.params.count * normals.texels,
+            "surface_hit: the normal field is not this field's"
+        );
+        let t = self.hit_distance(origin, dir, tmin, tmax, opts)?;
+        let from = SphereOrigin::new(origin, self.bounds.center, self.bounds.radius);
+        let c = self.cross(&from, origin, dir, tmin, tmax)?;
+        let read = NearestRead::of(self, c.u, c.dir);
+        Some((t, normals.get(read.map as usize, read.texel as usize)))
     }
-    let t = if outside {
-        t0 + diameter * d
-    } else {
-        t1 - diameter * d
-    };
-    (t >= tmin && t <= tmax).then(|| (t, origin + t * dir, normals.get(m, texel)))
 }
 
 #[cfg(test)]

@@ -4,10 +4,11 @@
 use super::lookup::{
     ray_sphere, BlendReads, Crossed, LookupOptions, NearestRead, Reads, SphereOrigin,
 };
+use super::normals::NormalField;
 use super::Selection;
 use super::VisibilityField;
 use crate::geometry::Similarity;
-use crate::render::Visibility;
+use crate::render::{SurfaceHit, Visibility};
 use glam::{Quat, Vec3};
 use std::sync::Arc;
 
@@ -22,6 +23,9 @@ pub struct FieldInstance {
     /// World-space bounding sphere (centre transformed, radius scaled).
     pub world_center: Vec3,
     pub world_radius: f32,
+    /// The field's normal field, for reflection queries ([`Visibility::surface_hit`]); set by
+    /// [`Self::with_normals`].
+    pub normals: Option<Arc<NormalField>>,
     /// `transform.rotation.inverse()` (the same value `Similarity::to_local_point` computes).
     inv_rotation: Quat,
     /// The part of [`Self::may_meet`]'s margin that does not depend on the ray.
@@ -48,7 +52,57 @@ impl FieldInstance {
             transform,
             world_center: world.center,
             world_radius: world.radius,
+            normals: None,
         }
+    }
+
+    /// This instance with the normal field of its field (2010 §4.2), so that it answers
+    /// [`Visibility::surface_hit`].
+    ///
+    /// # Panics
+    /// If `normals` does not have the field's map and texel counts.
+    pub fn with_normals(mut self, normals: Arc<NormalField>) -> Self {
+        let p = &self.field.params;
+        assert!(
+            normals.texels == p.texels() && normals.data.len() == p.count * p.texels(),
+            "with_normals: the normal field is not this field's"
+        );
+        self.normals = Some(normals);
+        self
+    }
+
+    /// World-space hit distance and world normal through this instance's field and normal
+    /// field.
+    ///
+    /// # Panics
+    /// Without a normal field ([`Self::with_normals`]).
+    #[inline]
+    pub fn surface_hit(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        tmin: f32,
+        tmax: f32,
+        opts: &LookupOptions,
+    ) -> Option<SurfaceHit> {
+        let normals = self
+            .normals
+            .as_deref()
+            .expect("surface_hit: a reflection query needs the instance's normal field");
+        let tr = &self.transform;
+        self.field
+            .surface_hit(
+                normals,
+                self.local_origin(origin),
+                self.local_dir(dir),
+                tr.to_local_distance(tmin),
+                tr.to_local_distance(tmax),
+                opts,
+            )
+            .map(|(t, n)| SurfaceHit {
+                t: t * tr.scale,
+                normal: (tr.rotation * n).normalize(),
+            })
     }
 
     /// A cheap f32 world-space test that is `false` only when [`Self::hit_distance`] is
@@ -332,6 +386,27 @@ impl Visibility for FieldScene {
             "occluded_many_to: dirs, tmaxs and out differ in length"
         );
         self.occluded_from(origin, dirs, tmin, |i| tmaxs[i], out);
+    }
+
+    /// As [`Self::hit_distance`], with the hit instance's normal field's normal.
+    ///
+    /// # Panics
+    /// When an instance the ray reaches has no normal field.
+    fn surface_hit(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<SurfaceHit> {
+        let mut best: Option<SurfaceHit> = None;
+        self.for_each_candidate(origin, dir, tmin, tmax, |t_entry, inst| {
+            if best.is_some_and(|b| t_entry > b.t) {
+                return false;
+            }
+            let limit = best.map_or(tmax, |b| b.t);
+            if let Some(h) = inst.surface_hit(origin, dir, tmin, limit, &self.options) {
+                if best.is_none_or(|b| h.t < b.t) {
+                    best = Some(h);
+                }
+            }
+            true
+        });
+        best
     }
 
     fn hit_distance(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<f32> {

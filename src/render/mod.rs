@@ -1,12 +1,20 @@
 //! Rendering: one [`Visibility`] interface with ray-cast and field-lookup backends, the
-//! [`estimator`] seam written against it (what a render kind computes per point: AO today; soft
-//! shadows and reflections of the 2010 paper are to follow), the evaluation [`points`] (vertices
+//! [`estimator`] seam written against it (what a render kind computes per point: AO, the soft
+//! shadows and the glossy reflections of the 2010 paper), the evaluation [`points`] (vertices
 //! as in 2008, G-buffer pixels as in 2010) and the images.
 
 pub mod ao;
 
 use crate::trace::Tracer;
 use glam::Vec3;
+
+/// The first surface a ray meets: its distance and its unit normal (world space, unoriented:
+/// a shader faces it against the ray).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceHit {
+    pub t: f32,
+    pub normal: Vec3,
+}
 
 /// A visibility oracle. Every renderer is written against this trait so that ray casting and
 /// field lookup run on exactly the same rays.
@@ -20,6 +28,11 @@ pub trait Visibility: Sync {
     /// Distance `t` to the first blocker on the segment, `None` when it is free.
     /// `occluded(..) == hit_distance(..).is_some()`.
     fn hit_distance(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<f32>;
+
+    /// The first surface on the segment with its normal, `None` when it is free (reflection
+    /// rays). `surface_hit(..).map(|h| h.t) == hit_distance(..)`. Ray casting gives the true
+    /// triangle's normal; a field gives its normal field's (which the field must carry).
+    fn surface_hit(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<SurfaceHit>;
 
     /// [`Self::occluded`] of every unit direction in `dirs` from one `origin`:
     /// `out[i] = occluded(origin, dirs[i], tmin, tmax)`, bit for bit. Backends override it to
@@ -77,6 +90,11 @@ impl<V: Visibility + ?Sized> Visibility for PerRay<'_, V> {
     fn hit_distance(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<f32> {
         self.0.hit_distance(origin, dir, tmin, tmax)
     }
+
+    #[inline]
+    fn surface_hit(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<SurfaceHit> {
+        self.0.surface_hit(origin, dir, tmin, tmax)
+    }
 }
 
 /// The ray-cast backend: exact watertight ray casting against the scene's triangles.
@@ -90,6 +108,15 @@ impl Visibility for Tracer {
     fn hit_distance(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<f32> {
         self.closest_hit(origin, dir, tmin, tmax).map(|h| h.t)
     }
+
+    #[inline]
+    fn surface_hit(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<SurfaceHit> {
+        self.closest_hit(origin, dir, tmin, tmax)
+            .map(|h| SurfaceHit {
+                t: h.t,
+                normal: h.normal,
+            })
+    }
 }
 
 pub mod camera;
@@ -99,5 +126,6 @@ pub mod image;
 pub mod points;
 pub mod primary;
 pub mod receivers;
+pub mod reflect;
 pub mod shadow;
 pub mod truth;
