@@ -242,7 +242,7 @@ fn dry_run_lists_steps_with_rays_and_bytes() {
     // reference: 243 × 16 × 3 seeds = 11,664.
     let lookup = t
         .lines()
-        .find(|l| l.contains("lookup AO tiny-slater-290"))
+        .find(|l| l.contains("lookup tiny-slater-290"))
         .expect(t);
     assert!(lookup.contains("27216"), "{lookup}");
     let reference = t
@@ -522,6 +522,9 @@ fn paper_ratios_are_normalised_to_the_reference_cell() {
         rays_cast: 0,
         ao_mrays_s: None,
         raycast_mrays_s: None,
+        normal_bits: None,
+        second_reference: None,
+        rms_image_vs_second: None,
     };
     let cell = |label: &str, count: usize, pre: f64| PaperCell {
         label: label.into(),
@@ -648,8 +651,8 @@ fn image_ao_evaluates_at_the_receiver_pixels_of_the_gbuffer() {
     }
 }
 
-/// The tagged `render`: each kind reads its own keys, refuses the unknown ones and the kinds
-/// not in this build, and writes back what it read.
+/// The tagged `render`: each kind reads its own keys, refuses the unknown ones and the ones it
+/// lacks, and writes back what it read.
 #[test]
 fn render_specs_are_tagged_by_kind() {
     use visfield::experiment::kind;
@@ -678,8 +681,8 @@ fn render_specs_are_tagged_by_kind() {
     assert!(json.contains(r#""what":"image_ao""#), "{json}");
     let back: RenderSpec = serde_json::from_str(&json).unwrap();
     assert_eq!(back, s.render);
-    // A per-pixel kind without an image, a per-vertex threshold on a per-pixel kind, a kind
-    // not in this build: each refused naming the field.
+    // A per-pixel kind without an image, a per-vertex threshold on a per-pixel kind,
+    // reflections without lights: each refused naming the field.
     let e = error_of(&image.replace(r#", "image": { "width": 32, "height": 32 }"#, ""));
     assert!(
         e.contains("field `render.image`") && e.contains("image_ao"),

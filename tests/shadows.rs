@@ -8,7 +8,7 @@ use visfield::experiment::scenes::Scenes;
 use visfield::experiment::spec::{Spec, SpecError};
 
 mod common;
-use common::{loaded, options, tiny, ONE_FIELD};
+use common::{assert_png_is, loaded, options, tiny, ONE_FIELD};
 
 const LIGHTS: &str = r#"[{ "center": [2.5, 2.6, 2.2], "radius": 0.3, "intensity": 1 }, { "center": [-0.5, 3.0, 1.5], "radius": 0.5, "intensity": 2 }]"#;
 
@@ -70,12 +70,9 @@ fn lights_are_read_and_bad_ones_refused_naming_the_field() {
         r#""backends": ["cpu", "gpu"], "reference": {"#,
     ));
     assert!(e.contains("backends") && e.contains("GPU"), "{e}");
-    // Glossy reflections are still not in this build.
+    // Reflections read the lights too, but need the receiver's lobe.
     let e = error_of(&shadows(LIGHTS, "").replace("\"shadows\"", "\"reflections\""));
-    assert!(
-        e.contains("reflections") && e.contains("not in this build"),
-        "{e}"
-    );
+    assert!(e.contains("reflections") && e.contains("gloss"), "{e}");
 }
 
 #[test]
@@ -156,17 +153,4 @@ fn a_shadow_run_measures_the_light_fraction_at_the_receiver_pixels() {
     );
     let cell_shaded = r.image.replace(".png", "-shaded.png");
     assert!(out.join(cell_shaded).exists());
-}
-
-/// The PNG at `path` holds exactly `img`'s 8-bit levels.
-fn assert_png_is(path: &Path, img: &visfield::render::image::GrayImage) {
-    let png = image::open(path).unwrap().to_luma8();
-    for (i, px) in png.pixels().enumerate() {
-        assert_eq!(
-            px.0[0],
-            visfield::render::image::GrayImage::to_u8(img.data[i]),
-            "{}: pixel {i}",
-            path.display()
-        );
-    }
 }

@@ -52,6 +52,7 @@ fn row_cell(r: &Row) -> Cell {
         },
         selection: r.selection,
         backend: r.backend,
+        normal_bits: r.normal_bits,
     }
 }
 

@@ -8,8 +8,9 @@
 use super::progress;
 use super::scenes::LoadedMesh;
 use super::{Error, Result};
-use crate::field::bake::{bake, BakeOptions, BakeStats};
+use crate::field::bake::{bake, bake_mesh_with_normals, BakeOptions, BakeStats};
 use crate::field::cache::{self, CacheError, CacheKey};
+use crate::field::normals::NormalField;
 use crate::field::{FieldParams, Precision, Storage, VisibilityField};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -174,6 +175,64 @@ impl FieldSupply {
             rays: stats.rays,
             cached: false,
         })
+    }
+}
+
+/// A mesh's normal fields at each precision a run reads, beside its distance field.
+pub type NormalFields = Vec<(u32, Arc<NormalField>)>;
+
+impl FieldSupply {
+    /// The field of `mesh` with `params` and its normal fields at each of `bits` (2010 §4.2),
+    /// baked in one pass over the same rays (the distances bit-identical to [`Self::obtain`]'s
+    /// bake): 16-bit normals, the 8-bit ones derived from them
+    /// ([`NormalField::requantized`]). Not read from nor written to the cache (the cache holds
+    /// distances only), so the bake time is always measured.
+    pub fn obtain_with_normals(
+        &self,
+        mesh: &LoadedMesh,
+        params: FieldParams,
+        bits: &[u32],
+    ) -> Result<(Supplied, NormalFields)> {
+        let label = format!(
+            "bake {} {} × {}² {} + normals",
+            mesh.label,
+            params.count,
+            params.res,
+            params.precision.name()
+        );
+        let pb = progress::bar(params.count as u64, &label);
+        let opts = BakeOptions {
+            memory_limit: self.memory_limit,
+            progress: Some(&pb),
+        };
+        let (field, normals16, stats) =
+            bake_mesh_with_normals(&mesh.mesh, params, 16, &opts).map_err(Error::field(&label))?;
+        pb.finish_and_clear();
+        let t = Instant::now();
+        let normals16 = Arc::new(normals16);
+        let normals = bits
+            .iter()
+            .map(|&b| {
+                let n = if b == 16 {
+                    normals16.clone()
+                } else {
+                    Arc::new(normals16.requantized(b))
+                };
+                (b, n)
+            })
+            .collect();
+        let seconds = stats.seconds + stats.bvh_seconds + t.elapsed().as_secs_f64();
+        eprintln!(
+            "  {label:<40} {seconds:>9.3} s  ({:.2} Mrays/s)",
+            stats.mrays_per_second()
+        );
+        let supplied = Supplied {
+            field: Arc::new(field),
+            bake_s: Some(seconds),
+            rays: stats.rays,
+            cached: false,
+        };
+        Ok((supplied, normals))
     }
 }
 

@@ -9,12 +9,13 @@
 //! steps that add a kind.
 
 use super::scenes::BuiltScene;
-use super::spec::{AoRender, ImageSpec, RenderSpec, ShadowRender};
+use super::spec::{AoRender, ImageSpec, ReflectionRender, RenderSpec, ShadowRender};
 use crate::field::lookup::{IntraBias, LookupOptions};
 use crate::field::Selection;
 use crate::render::ao::AoOptions;
 use crate::render::estimator::{AoEstimator, Estimator};
 use crate::render::points::{EvalPoints, GBuffer};
+use crate::render::reflect::{Gloss, ReflectOptions, ReflectionEstimator};
 use crate::render::shadow::{direct_light, ShadowEstimator, ShadowOptions, SphereLight};
 use crate::sampling::rays::RaySet;
 
@@ -47,6 +48,10 @@ pub struct Setup {
     /// written beside each value image as `-shaded.png` (shadows: the unshadowed direct light,
     /// so that value × factor is the shadowed image); none: no such picture.
     pub shading: Option<Vec<f32>>,
+    /// A second reference the cells' images are also measured against (`rms_image_vs_second`):
+    /// its name and its estimator, evaluated once per scene by ray casting on the first seed's
+    /// rays (reflections: the perfect mirror beside the glossy lobe). None: no such column.
+    pub second_reference: Option<(&'static str, Box<dyn Estimator>)>,
 }
 
 /// A render kind.
@@ -78,6 +83,11 @@ pub trait Kind: Sync {
     fn scene_problem(&self, _scene: &BuiltScene) -> Option<(String, String)> {
         None
     }
+    /// The normal field precisions (bits per component) the cells sweep, for a kind that reads
+    /// normal fields ([`Needs::normal_field`]); empty for the others.
+    fn normal_bits(&self) -> Vec<u32> {
+        Vec::new()
+    }
 }
 
 /// The kind of a spec's `render`.
@@ -86,6 +96,7 @@ pub fn of(render: &RenderSpec) -> Box<dyn Kind> {
         RenderSpec::VertexAo(a) => Box::new(VertexAo(a.clone())),
         RenderSpec::ImageAo(a) => Box::new(ImageAo(a.clone())),
         RenderSpec::Shadows(r) => Box::new(Shadows(r.clone())),
+        RenderSpec::Reflections(r) => Box::new(Reflections(r.clone())),
     }
 }
 
@@ -149,6 +160,7 @@ impl Kind for VertexAo {
             estimator: Box::new(est),
             offset,
             shading: None,
+            second_reference: None,
         }
     }
 
@@ -198,6 +210,7 @@ impl Kind for ImageAo {
             estimator: Box::new(est),
             offset,
             shading: None,
+            second_reference: None,
         }
     }
 
@@ -212,17 +225,21 @@ impl Kind for ImageAo {
 pub struct Shadows(pub ShadowRender);
 
 impl Shadows {
-    /// The lights in the scene's frame (moved as the camera is).
+    /// The lights in the scene's frame.
     fn lights_in_frame(&self, scene: &BuiltScene) -> Vec<SphereLight> {
-        self.0
-            .lights
-            .iter()
-            .map(|l| SphereLight {
-                center: crate::geometry::rebase::to_frame(scene.origin, l.center),
-                ..*l
-            })
-            .collect()
+        lights_in_frame(&self.0.lights, scene)
     }
+}
+
+/// Lights in the scene's frame (moved as the camera is).
+fn lights_in_frame(lights: &[SphereLight], scene: &BuiltScene) -> Vec<SphereLight> {
+    lights
+        .iter()
+        .map(|l| SphereLight {
+            center: crate::geometry::rebase::to_frame(scene.origin, l.center),
+            ..*l
+        })
+        .collect()
 }
 
 impl Kind for Shadows {
@@ -271,6 +288,7 @@ impl Kind for Shadows {
             estimator: Box::new(ShadowEstimator { opts }),
             offset,
             shading: Some(shading),
+            second_reference: None,
         }
     }
 
@@ -297,5 +315,92 @@ impl Kind for Shadows {
             }
         }
         None
+    }
+}
+
+/// Glossy reflections per pixel (Gaitatzes, Andreadis, Papaioannou, Chrysanthou, WSCG 2010,
+/// §4.2, Figure 9): the reflected radiance of `render::reflect` at every receiver pixel, its
+/// reflection rays answered with a hit point and normal by ray casting or by the distance and
+/// normal fields; the cells sweep the normal fields' precision, and a glossy lobe is also
+/// measured against the perfect mirror (`second_reference`).
+pub struct Reflections(pub ReflectionRender);
+
+impl Reflections {
+    fn options(&self, scene: &BuiltScene) -> ReflectOptions {
+        let r = &self.0;
+        let image = r.image.as_ref().expect("validation guarantees an image");
+        ReflectOptions {
+            offset: AoOptions::for_scene(scene.bounds()).offset,
+            eye: scene.view_camera(image).eye,
+            gloss: r.gloss,
+            lights: lights_in_frame(&r.lights, scene),
+            albedo: r.albedo,
+            sky: r.sky,
+        }
+    }
+}
+
+impl Kind for Reflections {
+    fn name(&self) -> &'static str {
+        "reflections"
+    }
+
+    fn needs(&self) -> Needs {
+        Needs {
+            view: true,
+            normal_field: true,
+            lights: true,
+        }
+    }
+
+    fn columns(&self) -> Columns {
+        Columns { vertex: false }
+    }
+
+    fn rays_per_point(&self) -> u32 {
+        self.0.rays_per_point
+    }
+
+    /// A mirror casts one ray per point whatever `rays_per_point` says.
+    fn rays_cast_per_point(&self) -> u64 {
+        match self.0.gloss {
+            Gloss::Mirror => 1,
+            Gloss::Phong { .. } => self.0.rays_per_point as u64,
+        }
+    }
+
+    fn image(&self) -> Option<&ImageSpec> {
+        self.0.image.as_ref()
+    }
+
+    fn max_points(&self, _scene: &BuiltScene) -> u64 {
+        pixels(self.0.image.as_ref())
+    }
+
+    fn setup(&self, scene: &BuiltScene, view: Option<&GBuffer>) -> Setup {
+        let opts = self.options(scene);
+        let offset = opts.offset;
+        let view = view.expect("reflections: validation guarantees an image, and so a G-buffer");
+        let second_reference = (opts.gloss != Gloss::Mirror).then(|| {
+            let mirror: Box<dyn Estimator> = Box::new(ReflectionEstimator {
+                opts: opts.mirror(),
+            });
+            ("mirror", mirror)
+        });
+        Setup {
+            points: EvalPoints::pixels(&scene.scene, view, offset),
+            estimator: Box::new(ReflectionEstimator { opts }),
+            offset,
+            shading: None,
+            second_reference,
+        }
+    }
+
+    fn lookup_options(&self, selection: Selection) -> LookupOptions {
+        lookup(self.0.intra_bias, selection)
+    }
+
+    fn normal_bits(&self) -> Vec<u32> {
+        self.0.normal_bits.clone()
     }
 }

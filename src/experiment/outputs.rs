@@ -127,6 +127,18 @@ pub struct Row {
     /// The same for ray casting on the same rays (`raycast_s`).
     #[serde(default)]
     pub raycast_mrays_s: Option<f64>,
+    /// Bits per component of the normal field the cell read (reflections; `field_bytes`
+    /// includes it); empty for kinds that read none.
+    #[serde(default)]
+    pub normal_bits: Option<u32>,
+    /// The name of the kind's second reference (reflections with a glossy lobe: "mirror");
+    /// empty without one.
+    #[serde(default)]
+    pub second_reference: Option<String>,
+    /// RMS per pixel (0–255, as `rms_image`) of the first seed's image against the second
+    /// reference's image, ray cast on the same points.
+    #[serde(default)]
+    pub rms_image_vs_second: Option<f64>,
 }
 
 /// The columns `table.csv` starts with, in order.
@@ -162,6 +174,7 @@ pub struct CellColumns {
     pub backend: Backend,
     pub adapter: String,
     pub rays_per_point: u32,
+    pub normal_bits: Option<u32>,
     /// Rays of one evaluation: points × rays per point (× lights for shadows).
     pub rays_cast: u64,
     pub receiver_points: usize,
@@ -206,6 +219,8 @@ pub struct ErrorColumns {
     pub raycast_rms_vs_truth: Option<f64>,
     pub occlusion_rms: Option<f64>,
     pub grain: Option<f64>,
+    pub second_reference: Option<String>,
+    pub rms_image_vs_second: Option<f64>,
     /// The image, relative to the output folder (empty without an image).
     pub image: String,
 }
@@ -259,6 +274,9 @@ impl Row {
             rays_cast: c.rays_cast,
             ao_mrays_s: mrays_per_s(rays, Some(t.ao_s)),
             raycast_mrays_s: mrays_per_s(rays, t.raycast_s),
+            normal_bits: c.normal_bits,
+            second_reference: e.second_reference,
+            rms_image_vs_second: e.rms_image_vs_second,
         }
     }
 }

@@ -13,7 +13,7 @@
 //!   source after the group, so at most one group's fields are alive at a time.
 //!
 //! Only what the render kind declares ([`super::kind::Needs`]) is planned: a G-buffer where it
-//! has an image, normal fields where it reads them (no kind of this build does), a GPU device
+//! has an image, normal fields where it reads them (reflections), a GPU device
 //! only where a cell's backend is "gpu".
 
 use super::kind::Kind;
@@ -25,7 +25,8 @@ use crate::sampling::{HemisphereLayout, LayoutKind, SphereKind};
 use std::collections::HashSet;
 use std::fmt::Write as _;
 
-/// One evaluated setting: a field on a scene, read with a selection, on a backend.
+/// One evaluated setting: a field on a scene, read with a selection, on a backend (and, for a
+/// kind that reads normal fields, at a normal field precision).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct Cell {
     /// Index into the profile's scenes.
@@ -33,14 +34,18 @@ pub struct Cell {
     pub params: FieldParams,
     pub selection: Selection,
     pub backend: Backend,
+    /// Bits per component of the normal field read (none: the kind reads no normals).
+    pub normal_bits: Option<u32>,
 }
 
 impl Cell {
-    /// A file-name-safe id: `scene-sphere-count-layout-res-precision-selection-backend`.
+    /// A file-name-safe id: `scene-sphere-count-layout-res-precision-selection-backend`, with
+    /// `-n8` / `-n16` after it where the cell reads a normal field.
     pub fn id(&self, scene_name: &str) -> String {
         let p = &self.params;
+        let normals = self.normal_bits.map_or(String::new(), |b| format!("-n{b}"));
         format!(
-            "{scene_name}-{}-{}-{}-{}-{}-{}-{}",
+            "{scene_name}-{}-{}-{}-{}-{}-{}-{}{normals}",
             p.sphere.name(),
             p.count,
             p.layout.name(),
@@ -95,29 +100,45 @@ impl Geometry {
     }
 }
 
-/// The cells of a spec profile: scenes × field settings × backends, duplicates dropped, in spec
-/// order.
+/// The cells of a spec profile: scenes × field settings × backends (× the normal field
+/// precisions of a kind that reads them), duplicates dropped, in spec order.
 pub fn cells_of(spec: &Spec) -> Vec<Cell> {
+    let bits = super::kind::of(&spec.render).normal_bits();
+    let normal_bits: Vec<Option<u32>> = if bits.is_empty() {
+        vec![None]
+    } else {
+        bits.into_iter().map(Some).collect()
+    };
     let mut seen = HashSet::new();
     let mut out = Vec::new();
     for scene in 0..spec.scenes.len() {
         for axes in &spec.fields {
             for (params, selection) in axes.settings() {
                 for &backend in &spec.backends {
-                    let c = Cell {
-                        scene,
-                        params,
-                        selection,
-                        backend,
-                    };
-                    if seen.insert(c) {
-                        out.push(c);
+                    for &nb in &normal_bits {
+                        let c = Cell {
+                            scene,
+                            params,
+                            selection,
+                            backend,
+                            normal_bits: nb,
+                        };
+                        if seen.insert(c) {
+                            out.push(c);
+                        }
                     }
                 }
             }
         }
     }
     out
+}
+
+/// Bytes a mesh's normal fields take in memory at `geometry`: the 16-bit normals of the bake
+/// and each other precision derived from them, 4 bytes a texel each.
+pub fn normal_field_bytes(geometry: &Geometry, precisions: usize) -> u64 {
+    let texels = geometry.with(Precision::F32).texels() as u64;
+    geometry.count as u64 * texels * 4 * precisions as u64
 }
 
 /// One step of a plan.
@@ -143,8 +164,11 @@ pub enum Step {
         k: u32,
         rays: u64,
     },
-    /// Bake (or load from the cache) the field of `mesh`.
+    /// Bake (or load from the cache) the field of `mesh`; with `normals`, bake it with its
+    /// normal fields (2010 §4.2; distance fields with normals are not cached). `bytes` counts
+    /// both.
     Bake {
+        normals: bool,
         mesh: usize,
         params: FieldParams,
         rays: u64,
@@ -174,7 +198,7 @@ pub struct Plan {
     /// Largest sum of live field bytes.
     pub peak_field_bytes: u64,
     pub needs_gpu: bool,
-    /// Whether the render kind reads normal fields (none of this build's kinds does).
+    /// Whether the render kind reads normal fields (reflections).
     pub needs_normal_field: bool,
     /// Receiver rays per point of the render (k).
     pub render_k: u32,
@@ -206,6 +230,12 @@ impl Plan {
             limits,
             points: |scene: usize| kind.max_points(&scenes.scenes[scene]),
             rays_per_lookup: rays_per_lookup(spec, render_k),
+            normal_precisions: if kind.needs().normal_field {
+                kind.normal_bits().len()
+            } else {
+                0
+            },
+            with_normals: HashSet::new(),
             steps,
             live: 0,
             peak: 0,
@@ -273,15 +303,17 @@ impl Plan {
                 params,
                 rays,
                 bytes,
+                normals,
             } => (
                 format!(
-                    "bake {} {} {} × {}² {} {}",
+                    "bake {} {} {} × {}² {} {}{}",
                     scenes.meshes[*mesh].label,
                     params.sphere.name(),
                     params.count,
                     params.res,
                     params.layout.name(),
                     params.precision.name(),
+                    if *normals { " + normal field" } else { "" },
                 ),
                 *rays,
                 Some(*bytes),
@@ -304,7 +336,7 @@ impl Plan {
             ),
             Step::Lookup { cell, rays } => {
                 let c = &self.cells[*cell];
-                (format!("lookup AO {}", c.id(sc(c.scene))), *rays, None)
+                (format!("lookup {}", c.id(sc(c.scene))), *rays, None)
             }
             Step::Release { fields, bytes } => (
                 format!("release {} field(s)", fields.len()),
@@ -359,6 +391,7 @@ impl Plan {
         let (mut total_rays, mut bake_rays) = (0u64, 0u64);
         for (i, step) in self.steps.iter().enumerate() {
             let note = match step {
+                Step::Bake { normals: true, .. } => "bake (fields with normals: not cached)",
                 Step::Bake { mesh, params, .. } => cached(*mesh, params),
                 _ => "",
             };
@@ -486,6 +519,10 @@ struct GroupPlanner<'a, P: Fn(usize) -> u64> {
     /// Rays per point of one cell: the render's on every seed, and the field sweep's other
     /// counts once.
     rays_per_lookup: u64,
+    /// Normal field precisions each bake carries (0: the kind reads no normals).
+    normal_precisions: usize,
+    /// The baked fields that carry normal fields (their bytes are released with them).
+    with_normals: HashSet<(usize, FieldParams)>,
     steps: Vec<Step>,
     live: u64,
     peak: u64,
@@ -505,16 +542,22 @@ impl<P: Fn(usize) -> u64> GroupPlanner<'_, P> {
             .map(|(m, _)| *m)
             .collect();
         let mut group_fields = Vec::new();
+        let normals = self.normal_precisions > 0;
+        let normal_bytes = normal_field_bytes(&geometry, self.normal_precisions);
         for &m in &shared {
             let params = geometry.with(Precision::F32);
             self.steps.push(Step::Bake {
                 mesh: m,
                 params,
                 rays: bake_rays,
-                bytes: f32_bytes,
+                bytes: f32_bytes + normal_bytes,
+                normals,
             });
+            if normals {
+                self.with_normals.insert((m, params));
+            }
             group_fields.push((m, params));
-            self.live += f32_bytes;
+            self.live += f32_bytes + normal_bytes;
         }
         self.peak = self.peak.max(self.live);
         for &p in &precisions {
@@ -544,10 +587,14 @@ impl<P: Fn(usize) -> u64> GroupPlanner<'_, P> {
                         mesh: *m,
                         params,
                         rays: bake_rays,
-                        bytes,
+                        bytes: bytes + normal_bytes,
+                        normals,
                     });
+                    if normals {
+                        self.with_normals.insert((*m, params));
+                    }
                     stage_fields.push((*m, params));
-                    self.live += bytes;
+                    self.live += bytes + normal_bytes;
                 }
             }
             self.peak = self.peak.max(self.live);
@@ -590,7 +637,17 @@ impl<P: Fn(usize) -> u64> GroupPlanner<'_, P> {
         if fields.is_empty() {
             return;
         }
-        let bytes = fields.iter().map(|(_, p)| p.storage_bytes()).sum();
+        let bytes = fields
+            .iter()
+            .map(|f| {
+                let normals = if self.with_normals.contains(f) {
+                    normal_field_bytes(&Geometry::of(&f.1), self.normal_precisions)
+                } else {
+                    0
+                };
+                f.1.storage_bytes() + normals
+            })
+            .sum();
         self.live -= bytes;
         self.steps.push(Step::Release { fields, bytes });
     }

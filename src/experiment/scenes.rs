@@ -46,6 +46,8 @@ pub struct BuiltScene {
     pub origin: DVec3,
     /// Per instance: its mesh's index in [`Scenes::meshes`].
     pub mesh_of: Vec<usize>,
+    /// The scene's own camera (spec world), if it has one.
+    pub camera: Option<Camera>,
 }
 
 impl BuiltScene {
@@ -56,6 +58,13 @@ impl BuiltScene {
             target: to_frame(self.origin, cam.target),
             ..*cam
         }
+    }
+
+    /// The camera of the view of `image` in the scene's frame: the scene's own camera, else the
+    /// image's, else [`Camera::corner`].
+    pub fn view_camera(&self, image: &super::spec::ImageSpec) -> Camera {
+        let cam = self.camera.or(image.camera).unwrap_or_else(Camera::corner);
+        self.camera_in_frame(&cam)
     }
 
     /// Indices of the distinct meshes of the casters, in first-use order.
@@ -166,6 +175,7 @@ impl Scenes {
                 scene,
                 origin,
                 mesh_of,
+                camera: sc.camera,
             });
         }
         Ok(out)

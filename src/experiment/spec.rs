@@ -99,6 +99,10 @@ pub struct SceneSpec {
     pub name: String,
     /// The meshes placed in the scene.
     pub instances: Vec<InstanceSpec>,
+    /// This scene's camera, in place of `render.image.camera` (several views of one scene
+    /// are several scenes).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub camera: Option<Camera>,
 }
 
 /// A mesh placed in the scene.
@@ -273,7 +277,8 @@ pub enum RenderKind {
     /// Soft shadows from spherical lights at every receiver pixel (2010 §4.2); needs `image`
     /// and `lights`.
     Shadows,
-    /// Glossy reflections with normal fields (2010 §4.2): not in this build yet, rejected.
+    /// Glossy reflections through distance and normal fields at every receiver pixel (2010
+    /// §4.2); needs `image`, `lights` and `gloss`.
     Reflections,
 }
 
@@ -303,6 +308,9 @@ pub enum RenderSpec {
     /// `"shadows"` (2010): the light fraction of spherical lights at every receiver pixel of
     /// `image` (required).
     Shadows(ShadowRender),
+    /// `"reflections"` (2010): the reflected radiance of a glossy receiver at every receiver
+    /// pixel of `image` (required), its reflection rays answered with hit point and normal.
+    Reflections(ReflectionRender),
 }
 
 /// The options of the AO kinds.
@@ -339,12 +347,41 @@ pub struct ShadowRender {
     pub intra_bias: Option<f32>,
 }
 
+/// The options of glossy reflections (`render::reflect`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ReflectionRender {
+    /// Reflection rays per point, k² stratified over the lobe (a perfect square; the paper
+    /// uses 4).
+    pub rays_per_point: u32,
+    /// The image (required).
+    pub image: Option<ImageSpec>,
+    /// The lights shading the reflected surfaces (at least one; their centres light the hits).
+    pub lights: Vec<crate::render::shadow::SphereLight>,
+    /// The receiver's lobe: `"mirror"` or `{"phong": {"exponent": e}}`.
+    pub gloss: crate::render::reflect::Gloss,
+    /// Diffuse albedo of the reflected surfaces, in \[0, 1\] (default 0.8).
+    pub albedo: f32,
+    /// Radiance of a reflection ray that meets nothing, in \[0, 1\] (default 0.3).
+    pub sky: f32,
+    /// Normal field precisions, bits per octahedral component (8 and/or 16; default \[16\]):
+    /// a swept axis, one cell per precision.
+    pub normal_bits: Vec<u32>,
+    /// As [`AoRender::intra_bias`], for receivers inside a caster's sphere.
+    pub intra_bias: Option<f32>,
+}
+
+/// The default albedo of reflected surfaces.
+pub const DEFAULT_ALBEDO: f32 = 0.8;
+/// The default sky radiance of reflections.
+pub const DEFAULT_SKY: f32 = 0.3;
+
 /// `render` as written in a spec: every key of every kind, unknown keys rejected. Converted to
 /// [`RenderSpec`] on reading, where a key the kind does not read is refused by name.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RenderWire {
-    /// The render kind: "vertex_ao" (2008, default), "image_ao" or "shadows" (2010).
+    /// The render kind: "vertex_ao" (2008, default), "image_ao", "shadows" or "reflections"
+    /// (2010).
     #[serde(default)]
     pub what: RenderKind,
     /// See [`AoRender::rays_per_point`] and [`ShadowRender::rays_per_point`].
@@ -361,20 +398,32 @@ pub struct RenderWire {
     /// See [`AoRender::intra_bias`].
     #[serde(default)]
     pub intra_bias: Option<f32>,
-    /// See [`ShadowRender::lights`] (shadows).
+    /// See [`ShadowRender::lights`] (shadows, reflections).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub lights: Option<Vec<crate::render::shadow::SphereLight>>,
+    /// See [`ReflectionRender::gloss`] (reflections).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gloss: Option<crate::render::reflect::Gloss>,
+    /// See [`ReflectionRender::albedo`] (reflections).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub albedo: Option<f32>,
+    /// See [`ReflectionRender::sky`] (reflections).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sky: Option<f32>,
+    /// See [`ReflectionRender::normal_bits`] (reflections).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub normal_bits: Option<Vec<u32>>,
 }
 
 /// A `render` that cannot be read: a kind not in this build, or a key its kind does not read.
 #[derive(Debug, thiserror::Error)]
 pub enum RenderError {
-    #[error("`what`: \"{}\" is not in this build yet; use \"vertex_ao\", \"image_ao\" or \"shadows\"", .0.name())]
-    Unbuilt(RenderKind),
     #[error("`{key}`: \"{}\" does not read it", .kind.name())]
     Foreign { kind: RenderKind, key: &'static str },
-    #[error("`lights`: \"shadows\" needs at least one light")]
-    NoLights,
+    #[error("`lights`: \"{}\" needs at least one light", .0.name())]
+    NoLights(RenderKind),
+    #[error("`gloss`: \"reflections\" needs the receiver's lobe: \"mirror\" or {{\"phong\": {{\"exponent\": e}}}}")]
+    NoGloss,
 }
 
 impl TryFrom<RenderWire> for RenderSpec {
@@ -382,6 +431,32 @@ impl TryFrom<RenderWire> for RenderSpec {
 
     fn try_from(w: RenderWire) -> Result<RenderSpec, RenderError> {
         let foreign = |key| RenderError::Foreign { kind: w.what, key };
+        if w.what != RenderKind::Reflections {
+            for (key, set) in [
+                ("gloss", w.gloss.is_some()),
+                ("albedo", w.albedo.is_some()),
+                ("sky", w.sky.is_some()),
+                ("normal_bits", w.normal_bits.is_some()),
+            ] {
+                if set {
+                    return Err(foreign(key));
+                }
+            }
+        }
+        if matches!(w.what, RenderKind::Shadows | RenderKind::Reflections) {
+            if w.max_distance.is_some() {
+                return Err(foreign("max_distance"));
+            }
+            if w.falloff != crate::render::ao::Falloff::Step {
+                return Err(foreign("falloff"));
+            }
+        }
+        let lights = |w: &RenderWire| {
+            w.lights
+                .clone()
+                .filter(|l| !l.is_empty())
+                .ok_or(RenderError::NoLights(w.what))
+        };
         match w.what {
             RenderKind::VertexAo | RenderKind::ImageAo => {
                 if w.lights.is_some() {
@@ -400,25 +475,22 @@ impl TryFrom<RenderWire> for RenderSpec {
                     RenderSpec::ImageAo(ao)
                 })
             }
-            RenderKind::Shadows => {
-                if w.max_distance.is_some() {
-                    return Err(foreign("max_distance"));
-                }
-                if w.falloff != crate::render::ao::Falloff::Step {
-                    return Err(foreign("falloff"));
-                }
-                let lights = w
-                    .lights
-                    .filter(|l| !l.is_empty())
-                    .ok_or(RenderError::NoLights)?;
-                Ok(RenderSpec::Shadows(ShadowRender {
-                    rays_per_point: w.rays_per_point,
-                    image: w.image,
-                    lights,
-                    intra_bias: w.intra_bias,
-                }))
-            }
-            k @ RenderKind::Reflections => Err(RenderError::Unbuilt(k)),
+            RenderKind::Shadows => Ok(RenderSpec::Shadows(ShadowRender {
+                lights: lights(&w)?,
+                rays_per_point: w.rays_per_point,
+                image: w.image,
+                intra_bias: w.intra_bias,
+            })),
+            RenderKind::Reflections => Ok(RenderSpec::Reflections(ReflectionRender {
+                lights: lights(&w)?,
+                gloss: w.gloss.ok_or(RenderError::NoGloss)?,
+                rays_per_point: w.rays_per_point,
+                image: w.image,
+                albedo: w.albedo.unwrap_or(DEFAULT_ALBEDO),
+                sky: w.sky.unwrap_or(DEFAULT_SKY),
+                normal_bits: w.normal_bits.unwrap_or_else(|| vec![16]),
+                intra_bias: w.intra_bias,
+            })),
         }
     }
 }
@@ -435,6 +507,10 @@ impl From<RenderSpec> for RenderWire {
                 falloff: a.falloff,
                 intra_bias: a.intra_bias,
                 lights: None,
+                gloss: None,
+                albedo: None,
+                sky: None,
+                normal_bits: None,
             },
             RenderSpec::Shadows(s) => RenderWire {
                 what,
@@ -444,6 +520,23 @@ impl From<RenderSpec> for RenderWire {
                 falloff: crate::render::ao::Falloff::Step,
                 intra_bias: s.intra_bias,
                 lights: Some(s.lights),
+                gloss: None,
+                albedo: None,
+                sky: None,
+                normal_bits: None,
+            },
+            RenderSpec::Reflections(r) => RenderWire {
+                what,
+                rays_per_point: r.rays_per_point,
+                image: r.image,
+                max_distance: None,
+                falloff: crate::render::ao::Falloff::Step,
+                intra_bias: r.intra_bias,
+                lights: Some(r.lights),
+                gloss: Some(r.gloss),
+                albedo: Some(r.albedo),
+                sky: Some(r.sky),
+                normal_bits: Some(r.normal_bits),
             },
         }
     }
@@ -456,6 +549,7 @@ impl RenderSpec {
             RenderSpec::VertexAo(_) => RenderKind::VertexAo,
             RenderSpec::ImageAo(_) => RenderKind::ImageAo,
             RenderSpec::Shadows(_) => RenderKind::Shadows,
+            RenderSpec::Reflections(_) => RenderKind::Reflections,
         }
     }
 
@@ -463,7 +557,7 @@ impl RenderSpec {
     pub fn ao(&self) -> Option<&AoRender> {
         match self {
             RenderSpec::VertexAo(a) | RenderSpec::ImageAo(a) => Some(a),
-            RenderSpec::Shadows(_) => None,
+            RenderSpec::Shadows(_) | RenderSpec::Reflections(_) => None,
         }
     }
 
@@ -472,6 +566,7 @@ impl RenderSpec {
         match self {
             RenderSpec::VertexAo(a) | RenderSpec::ImageAo(a) => a.rays_per_point,
             RenderSpec::Shadows(s) => s.rays_per_point,
+            RenderSpec::Reflections(r) => r.rays_per_point,
         }
     }
 
@@ -480,6 +575,7 @@ impl RenderSpec {
         match self {
             RenderSpec::VertexAo(a) | RenderSpec::ImageAo(a) => a.image.as_ref(),
             RenderSpec::Shadows(s) => s.image.as_ref(),
+            RenderSpec::Reflections(r) => r.image.as_ref(),
         }
     }
 
@@ -488,6 +584,7 @@ impl RenderSpec {
         match self {
             RenderSpec::VertexAo(a) | RenderSpec::ImageAo(a) => a.intra_bias,
             RenderSpec::Shadows(s) => s.intra_bias,
+            RenderSpec::Reflections(r) => r.intra_bias,
         }
     }
 
@@ -496,6 +593,7 @@ impl RenderSpec {
         match self {
             RenderSpec::VertexAo(a) | RenderSpec::ImageAo(a) => a.rays_per_point = n,
             RenderSpec::Shadows(s) => s.rays_per_point = n,
+            RenderSpec::Reflections(r) => r.rays_per_point = n,
         }
     }
 
@@ -504,6 +602,7 @@ impl RenderSpec {
         match self {
             RenderSpec::VertexAo(a) | RenderSpec::ImageAo(a) => a.image = Some(image),
             RenderSpec::Shadows(s) => s.image = Some(image),
+            RenderSpec::Reflections(r) => r.image = Some(image),
         }
     }
 }

@@ -190,8 +190,10 @@ impl Ctx<'_> {
         if let Some(ao) = s.render.ao() {
             self.ao_render(ao, s)?;
         }
-        if let super::spec::RenderSpec::Shadows(sh) = &s.render {
-            self.shadows(sh, s)?;
+        match &s.render {
+            super::spec::RenderSpec::Shadows(sh) => self.shadows(sh, s)?,
+            super::spec::RenderSpec::Reflections(r) => self.reflections(r, s)?,
+            _ => {}
         }
         if let Some(b) = s.render.intra_bias() {
             if !(0.0..1.0).contains(&b) {
@@ -269,6 +271,11 @@ impl Ctx<'_> {
                     format!("scene `{}` twice", sc.name),
                 ));
             }
+            if let Some(cam) = &sc.camera {
+                camera_problem(cam).map_or(Ok(()), |(field, message)| {
+                    Err(self.err(&format!("{here}.camera.{field}"), message))
+                })?;
+            }
             if !sc.instances.iter().any(|i| i.receiver) {
                 return Err(self.err(&here, "no instance is a receiver".into()));
             }
@@ -336,7 +343,57 @@ impl Ctx<'_> {
 
     /// Soft shadows: finite lights of positive radius and intensity; no GPU kernel yet.
     fn shadows(&self, sh: &super::spec::ShadowRender, s: &Spec) -> Result<(), SpecError> {
-        for (i, l) in sh.lights.iter().enumerate() {
+        self.lights(&sh.lights)?;
+        if s.backends.contains(&Backend::Gpu) {
+            return Err(self.err(
+                "backends",
+                "\"shadows\" has no GPU kernel in this build; use \"cpu\"".into(),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Reflections: the lights as for shadows, a Phong exponent positive and finite, albedo
+    /// and sky in [0, 1], normal precisions 8 or 16 bits, each once; no GPU kernel yet.
+    fn reflections(&self, r: &super::spec::ReflectionRender, s: &Spec) -> Result<(), SpecError> {
+        use crate::render::reflect::Gloss;
+        self.lights(&r.lights)?;
+        if let Gloss::Phong { exponent } = r.gloss {
+            if !(exponent > 0.0 && exponent.is_finite()) {
+                return Err(self.err(
+                    "render.gloss.phong.exponent",
+                    format!("{exponent} must be positive and finite"),
+                ));
+            }
+        }
+        for (f, v) in [("render.albedo", r.albedo), ("render.sky", r.sky)] {
+            if !(0.0..=1.0).contains(&v) {
+                return Err(self.err(f, format!("{v} is outside [0, 1]")));
+            }
+        }
+        if r.normal_bits.is_empty() {
+            return Err(self.err("render.normal_bits", "is empty: list 8 and/or 16".into()));
+        }
+        for (i, &b) in r.normal_bits.iter().enumerate() {
+            if !(b == 8 || b == 16) || r.normal_bits[..i].contains(&b) {
+                return Err(self.err(
+                    &format!("render.normal_bits[{i}]"),
+                    format!("{b}: each of 8 and 16 bits per component at most once"),
+                ));
+            }
+        }
+        if s.backends.contains(&Backend::Gpu) {
+            return Err(self.err(
+                "backends",
+                "\"reflections\" has no GPU kernel in this build; use \"cpu\"".into(),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Lights: finite centres within the world's range, positive finite radius and intensity.
+    fn lights(&self, lights: &[crate::render::shadow::SphereLight]) -> Result<(), SpecError> {
+        for (i, l) in lights.iter().enumerate() {
             let at = |f: &str| format!("render.lights[{i}].{f}");
             if !l.center.is_finite()
                 || l.center.abs().max_element() > super::scenes::MAX_WORLD_COORDINATE
@@ -355,12 +412,6 @@ impl Ctx<'_> {
                     return Err(self.err(&at(f), format!("{v} must be positive and finite")));
                 }
             }
-        }
-        if s.backends.contains(&Backend::Gpu) {
-            return Err(self.err(
-                "backends",
-                "\"shadows\" has no GPU kernel in this build; use \"cpu\"".into(),
-            ));
         }
         Ok(())
     }

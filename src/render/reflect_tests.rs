@@ -127,7 +127,11 @@ fn a_mirror_floor_reflects_the_sphere_where_the_closed_form_says() {
                 }
                 let c = cast.expect("the tessellation is hit where the sphere is");
                 assert!(c.t >= e.t - 1e-5 && c.t <= e.t + sagitta / cos + 1e-5);
-                let nc = if c.normal.dot(d) > 0.0 { -c.normal } else { c.normal };
+                let nc = if c.normal.dot(d) > 0.0 {
+                    -c.normal
+                } else {
+                    c.normal
+                };
                 assert!(angle(nc, e.normal) <= facet_angle + 1e-4);
                 hits += 1;
             }
@@ -204,13 +208,21 @@ fn the_field_reflects_the_sphere_within_its_map_spacing_and_texel() {
         let cos_m = (-dt.dot(pm)).max(1e-3);
         let c = (r - sagitta) / r;
         let chord = r * (cos_m - (cos_m * cos_m - (1.0 - c * c)).max(0.0).sqrt());
-        let chord = if cos_m * cos_m < 1.0 - c * c { 2.0 * r * cos_m } else { chord };
+        let chord = if cos_m * cos_m < 1.0 - c * c {
+            2.0 * r * cos_m
+        } else {
+            chord
+        };
         let tm = h.t - t0;
         assert!(
             tm >= -1e-4 && tm <= chord + 2.0 * r / 65535.0 + 1e-4,
             "ray {i}: moved {tm} past the entry, bound {chord}"
         );
-        let nf = if h.normal.dot(d) > 0.0 { -h.normal } else { h.normal };
+        let nf = if h.normal.dot(d) > 0.0 {
+            -h.normal
+        } else {
+            h.normal
+        };
         let bound = facet_angle + tm.max(0.0) / (r - sagitta) + angle(u, pm) + 2e-4;
         assert!(
             angle(nf, u) <= bound + 1e-4,
@@ -246,7 +258,10 @@ fn lobe_limits_are_the_mirror_and_the_sky() {
         let f = p[i] - CENTRE;
         let dist = (f - f.dot(r) * r).length();
         if (dist - RADIUS).abs() > 0.05 {
-            assert!((a - b).abs() < 0.01, "point {i}: mirror {a}, sharp lobe {b}");
+            assert!(
+                (a - b).abs() < 0.01,
+                "point {i}: mirror {a}, sharp lobe {b}"
+            );
             compared += 1;
         }
     }
@@ -273,7 +288,11 @@ fn tessellation_bounds(tris: &[[Vec3; 3]]) -> (f32, f32) {
             continue;
         }
         let nrm = nrm.normalize();
-        let nrm = if nrm.dot(t[0] - centre.center) < 0.0 { -nrm } else { nrm };
+        let nrm = if nrm.dot(t[0] - centre.center) < 0.0 {
+            -nrm
+        } else {
+            nrm
+        };
         sag = sag.max(centre.radius - nrm.dot(t[0] - centre.center));
         for v in t {
             ang = ang.max(angle(nrm, *v - centre.center));

@@ -76,3 +76,16 @@ pub fn loaded(dir: &Path, text: &str) -> LoadedSpec {
     std::fs::write(&path, text).unwrap();
     LoadedSpec::load(&path).unwrap()
 }
+
+/// The PNG at `path` holds exactly `img`'s 8-bit levels.
+pub fn assert_png_is(path: &Path, img: &visfield::render::image::GrayImage) {
+    let png = image::open(path).unwrap().to_luma8();
+    for (i, px) in png.pixels().enumerate() {
+        assert_eq!(
+            px.0[0],
+            visfield::render::image::GrayImage::to_u8(img.data[i]),
+            "{}: pixel {i}",
+            path.display()
+        );
+    }
+}

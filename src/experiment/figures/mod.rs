@@ -45,12 +45,16 @@ fn metric(rows: &[Row]) -> (fn(&Row) -> Option<f64>, &'static str) {
 /// The values of one axis of a row, as text.
 type AxisFn = fn(&Row) -> String;
 
-const AXES: [(&str, AxisFn); 7] = [
+const AXES: [(&str, AxisFn); 8] = [
     ("scene", |r| r.scene.clone()),
     ("sphere", |r| r.sphere.name().to_string()),
     ("res", |r| format!("{}²", r.directional_res)),
     ("layout", |r| r.layout.name().to_string()),
     ("precision", |r| r.precision.name().to_string()),
+    ("normals", |r| {
+        r.normal_bits
+            .map_or(String::new(), |b| format!("normals {b} bit"))
+    }),
     ("selection", |r| selection_name(r.selection).to_string()),
     ("backend", |r| r.backend.name().to_string()),
 ];
@@ -494,8 +498,11 @@ fn grids(
                     load_png(&out.join(&r.image))?,
                     vec![
                         name.clone(),
-                        format!("bake {bake}, AO {:.3} s", r.ao_s),
-                        format!("RMS {rms}"),
+                        format!("bake {bake}, lookup {:.3} s", r.ao_s),
+                        format!(
+                            "RMS {rms}, {:.1} MiB",
+                            r.field_bytes as f64 / (1u64 << 20) as f64
+                        ),
                     ],
                 ));
                 let diff = out.join(r.image.replace(".png", "-diff_x5.png"));

@@ -6,7 +6,6 @@ use super::super::progress::stage;
 use super::super::scenes::BuiltScene;
 use super::super::spec::Backend;
 use crate::experiment::metrics::{rms_u8, rms_unquantised, rms_unquantised_where};
-use crate::render::camera::Camera;
 use crate::render::estimator::{Estimator, Points};
 use crate::render::image::GrayImage;
 use crate::render::points::{EvalPoints, GBuffer};
@@ -26,6 +25,10 @@ pub(super) struct SceneState {
     pub(super) offset: f32,
     /// The kind's shading factor per point ([`crate::experiment::kind::Setup::shading`]).
     pub(super) shading: Option<Vec<f32>>,
+    /// The kind's second reference ([`crate::experiment::kind::Setup::second_reference`]) and
+    /// its image on the first seed's rays, once the reference step has made it.
+    pub(super) second: Option<(&'static str, Box<dyn Estimator>)>,
+    pub(super) second_image: Option<GrayImage>,
     pub(super) triangles: Vec<[Vec3; 3]>,
     pub(super) tracer: Tracer,
     /// The G-buffer of the spec's image.
@@ -54,7 +57,7 @@ impl SceneState {
             (t, tracer)
         });
         let view = kind.image().map(|img| {
-            let cam = bs.camera_in_frame(&img.camera.unwrap_or_else(Camera::corner));
+            let cam = bs.view_camera(img);
             let ps = PrimaryScene::new(&bs.scene);
             let (hits, _) = stage(&format!("{}: primary visibility", bs.name), || {
                 gbuffer(&ps, &cam, img.width, img.height)
@@ -71,6 +74,8 @@ impl SceneState {
             estimator: setup.estimator,
             offset: setup.offset,
             shading: setup.shading,
+            second: setup.second_reference,
+            second_image: None,
             truth: None,
             truth_source: String::new(),
             seed_refs: Vec::new(),

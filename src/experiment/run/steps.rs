@@ -8,20 +8,24 @@ use super::RunOptions;
 use crate::experiment::backend::{self, Casters, ComputeBackend, CpuBackend};
 use crate::experiment::fields::{derive, Supplied};
 use crate::experiment::kind::Kind;
-use crate::experiment::metrics::{grain, image_errors, rms_unquantised, vertex_errors, ErrorStats};
+use crate::experiment::metrics::{
+    grain, image_errors, rms_u8, rms_unquantised, vertex_errors, ErrorStats,
+};
 use crate::experiment::outputs::{
     CellColumns, ErrorColumns, FieldColumns, FieldSweepRow, Row, SweepRow, TimeColumns,
 };
-use crate::experiment::plan::{Cell, Plan, Step};
+use crate::experiment::plan::{Cell, Geometry, Plan, Step};
 use crate::experiment::progress::stage_adaptive;
 use crate::experiment::scenes::{BuiltScene, Scenes};
 use crate::experiment::spec::{exact_sqrt, Backend, Spec};
 use crate::experiment::{Error, Result};
+use crate::field::normals::NormalField;
 use crate::field::scene::{FieldInstance, FieldScene};
 use crate::field::{FieldParams, Precision};
 use crate::render::image::GrayImage;
 use crate::sampling::rays::RaySet;
 use std::collections::HashMap;
+use std::sync::Arc;
 
 /// The state of a run between steps.
 pub(super) struct Runner<'a> {
@@ -34,6 +38,8 @@ pub(super) struct Runner<'a> {
     pub(super) backends: HashMap<Backend, Box<dyn ComputeBackend>>,
     pub(super) states: Vec<Option<SceneState>>,
     live: HashMap<(usize, FieldParams), Supplied>,
+    /// The live normal fields per (mesh, field geometry, bits), for a kind that reads them.
+    live_normals: HashMap<(usize, Geometry, u32), Arc<NormalField>>,
     pub(super) rows: Vec<(usize, Row)>,
     pub(super) sweep: Vec<SweepRow>,
     pub(super) field_sweep: Vec<FieldSweepRow>,
@@ -78,6 +84,7 @@ impl<'a> Runner<'a> {
             backends,
             states: (0..scenes.scenes.len()).map(|_| None).collect(),
             live: HashMap::new(),
+            live_normals: HashMap::new(),
             rows: Vec::new(),
             sweep: Vec::new(),
             field_sweep: Vec::new(),
@@ -131,12 +138,35 @@ impl<'a> Runner<'a> {
             Step::Raycast {
                 scene, backend, k, ..
             } => self.raycast(*scene, *k, *backend)?,
-            Step::Bake { mesh, params, .. } => {
+            Step::Bake {
+                mesh,
+                params,
+                normals: false,
+                ..
+            } => {
                 let f = self
                     .opts
                     .supply
                     .obtain(&self.scenes.meshes[*mesh], *params)?;
                 self.live.insert((*mesh, *params), f);
+            }
+            Step::Bake {
+                mesh,
+                params,
+                normals: true,
+                ..
+            } => {
+                let bits = self.kind.normal_bits();
+                let (f, normals) = self.opts.supply.obtain_with_normals(
+                    &self.scenes.meshes[*mesh],
+                    *params,
+                    &bits,
+                )?;
+                self.live.insert((*mesh, *params), f);
+                for (b, n) in normals {
+                    self.live_normals
+                        .insert((*mesh, Geometry::of(params), b), n);
+                }
             }
             Step::Derive {
                 mesh, geometry, to, ..
@@ -149,6 +179,12 @@ impl<'a> Runner<'a> {
                 for k in fields {
                     self.live.remove(k);
                 }
+                // Normal fields go with the last distance field of their mesh and geometry.
+                let live = &self.live;
+                self.live_normals.retain(|(m, g, _), _| {
+                    live.keys()
+                        .any(|(lm, lp)| lm == m && Geometry::of(lp) == *g)
+                });
             }
             Step::Lookup { cell, .. } => self.lookup(*cell)?,
         }
@@ -187,6 +223,14 @@ impl<'a> Runner<'a> {
         if let Some(shaded) = st.shaded_image(bs, &st.reference) {
             let p = out.join(format!("images/{}-reference-shaded.png", bs.name));
             shaded.save_png(&p).map_err(Error::io(&p))?;
+        }
+        if let Some((name, est)) = &st.second {
+            let values = cpu.raycast_estimate(&casters, est.as_ref(), st.at(), &rays)?;
+            if let Some((img, _)) = st.image(bs, &values) {
+                let p = out.join(format!("images/{}-reference-{name}.png", bs.name));
+                img.save_png(&p).map_err(Error::io(&p))?;
+                st.second_image = Some(img);
+            }
         }
         let (rms_vertex, rms_image) = (
             self.kind.columns().vertex.then_some(0.0),
@@ -315,10 +359,14 @@ impl<'a> Runner<'a> {
             ..FieldColumns::default()
         };
         let mut bake_s = Some(0.0);
+        let normals = |m: usize| {
+            c.normal_bits
+                .map(|b| self.live_normals[&(m, Geometry::of(&c.params), b)].clone())
+        };
         for m in bs.caster_meshes() {
             let f = &self.live[&(m, c.params)];
             bake_s = bake_s.zip(f.bake_s).map(|(a, b)| a + b);
-            columns.field_bytes += f.field.bytes();
+            columns.field_bytes += f.field.bytes() + normals(m).map_or(0, |n| n.bytes());
             columns.bake_rays += f.rays;
             columns.bake_cached &= f.cached;
         }
@@ -326,8 +374,13 @@ impl<'a> Runner<'a> {
             .scene
             .casters()
             .map(|(i, inst)| {
-                let f = &self.live[&(bs.mesh_of[i], c.params)];
-                FieldInstance::new(f.field.clone(), inst.transform)
+                let m = bs.mesh_of[i];
+                let f = &self.live[&(m, c.params)];
+                let fi = FieldInstance::new(f.field.clone(), inst.transform);
+                match normals(m) {
+                    Some(n) => fi.with_normals(n),
+                    None => fi,
+                }
             })
             .collect();
         CellFields {
@@ -452,6 +505,11 @@ impl<'a> Runner<'a> {
                 (Some(a), Some((r, mask))) => Some(grain(&a.data, &r.data, mask, a.width as usize)),
                 _ => None,
             },
+            second_reference: st.second.as_ref().map(|(n, _)| n.to_string()),
+            rms_image_vs_second: match (first_image, &st.second_image, &st.ref_image) {
+                (Some(a), Some(s), Some((_, mask))) => Some(rms_u8(&a.data, &s.data, Some(mask))),
+                _ => None,
+            },
             image: String::new(),
         }
     }
@@ -491,6 +549,7 @@ impl<'a> Runner<'a> {
             backend: c.backend,
             adapter,
             rays_per_point: self.kind.rays_per_point(),
+            normal_bits: c.normal_bits,
             rays_cast: st.at.len() as u64 * self.kind.rays_cast_per_point(),
             receiver_points: st.at.len(),
             crease_points: st.at.crease_count(),

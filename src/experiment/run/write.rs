@@ -20,6 +20,7 @@ impl Runner<'_> {
                     && ca.geometry() == cb.geometry()
                     && ca.selection == cb.selection
                     && ca.backend == cb.backend
+                    && ca.normal_bits == cb.normal_bits
                     && ca.params.precision != cb.params.precision;
                 if !same {
                     continue;
