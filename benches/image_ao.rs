@@ -16,7 +16,10 @@
 //! A second group times shadow rays on the same pixels (2010 §4.2): three spherical lights of
 //! radius 0.35 (the `shadows2010_figure7` spec's), 16 stratified shadow rays per light and pixel
 //! (`render::shadow`), through the 1090 × 64² field and by ray casting; throughput in shadow
-//! rays.
+//! rays. A third times reflection rays (2010 §4.2, Figure 9): the plane as a glossy floor
+//! (Phong exponent 100, 4 rays per pixel, `render::reflect`), each ray's closest hit and normal
+//! by ray casting or through the 1090 × 64² u16 field and its 16-bit normal field; throughput in
+//! reflection rays.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use glam::{Quat, Vec3};
@@ -24,7 +27,7 @@ use std::cell::OnceCell;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 use visfield::experiment::metrics::rms_u8;
-use visfield::field::bake::{bake, BakeOptions};
+use visfield::field::bake::{bake, bake_mesh_with_normals, BakeOptions};
 use visfield::field::lookup::LookupOptions;
 use visfield::field::scene::{FieldInstance, FieldScene};
 use visfield::field::{FieldParams, Precision, Selection};
@@ -33,6 +36,7 @@ use visfield::render::ao::{ao_at_points, AoOptions};
 use visfield::render::camera::Camera;
 use visfield::render::points::{EvalPoints, GBuffer};
 use visfield::render::primary::{gbuffer, PrimaryScene};
+use visfield::render::reflect::{reflect_at_points, Gloss, ReflectOptions};
 use visfield::render::shadow::{shadow_at_points, ShadowOptions, SphereLight};
 use visfield::sampling::rays::RaySet;
 use visfield::sampling::{LayoutKind, SphereKind};
@@ -209,6 +213,58 @@ fn image_ao(c: &mut Criterion) {
         let fs = field();
         b.iter(|| shadows(fs))
     });
+    group.finish();
+
+    // Reflection rays (2010 §4.2, Figure 9): 4 per pixel in a Phong lobe about the mirror
+    // direction, closest hit and normal by ray casting or through the field and normal field.
+    let ropts = ReflectOptions {
+        offset: opts.offset,
+        eye: camera.eye,
+        gloss: Gloss::Phong { exponent: 100.0 },
+        lights: lights.to_vec(),
+        albedo: 0.8,
+        sky: 0.3,
+    };
+    let rrays = RaySet::new(2, 1);
+    let reflect = |vis: &dyn visfield::render::Visibility| {
+        reflect_at_points(vis, &pts.points, &pts.normals, &rrays, &ropts)
+    };
+    let mut group = c.benchmark_group(format!("reflection_{w}x{h}_4_rays/{MODEL}"));
+    group.sample_size(10);
+    group.warm_up_time(Duration::from_secs(1));
+    group.measurement_time(Duration::from_secs(5));
+    group.throughput(Throughput::Elements((pts.len() * rrays.len()) as u64));
+    group.bench_function("raycast_closest", |b| {
+        let tracer = tracer();
+        b.iter(|| reflect(tracer))
+    });
+    let with_normals = OnceCell::new();
+    let with_normals = || {
+        with_normals.get_or_init(|| {
+            let params = FieldParams {
+                sphere: SphereKind::Slater,
+                count: 1090,
+                layout: LayoutKind::Concentric,
+                res: 64,
+                precision: Precision::U16,
+            };
+            let (f, n, _) =
+                bake_mesh_with_normals(&caster.mesh, params, 16, &BakeOptions::default())
+                    .expect("bake");
+            let inst = FieldInstance::new(Arc::new(f), caster.transform).with_normals(Arc::new(n));
+            FieldScene {
+                instances: vec![inst],
+                options: LookupOptions::default(),
+            }
+        })
+    };
+    group.bench_function(
+        BenchmarkId::new("field_nearest_normals", "1090x64_u16_n16"),
+        |b| {
+            let fs = with_normals();
+            b.iter(|| reflect(fs))
+        },
+    );
     group.finish();
 }
 
