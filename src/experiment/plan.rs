@@ -279,7 +279,7 @@ impl Plan {
                 None,
             ),
             Step::Sweep { scene, k, rays } => (
-                format!("ray-cast AO {}, {} rays/point (cpu)", sc(*scene), k * k),
+                format!("ray cast {}, {} rays/point (cpu)", sc(*scene), k * k),
                 *rays,
                 None,
             ),
@@ -290,7 +290,7 @@ impl Plan {
                 rays,
             } => (
                 format!(
-                    "ray-cast AO {}, {} rays/point ({})",
+                    "ray cast {}, {} rays/point ({})",
                     sc(*scene),
                     k * k,
                     backend.name()

@@ -166,12 +166,12 @@ pub fn draw_all(out: &Path, title: &str) -> Result<()> {
                 String::new()
             };
             s.push(Series {
-                label: format!("ray-cast AO{on}"),
+                label: format!("ray cast{on}"),
                 points: pick(&rs, |r| r.raycast_s),
                 line: false,
             });
             s.push(Series {
-                label: format!("field-lookup AO{on}"),
+                label: format!("field lookup{on}"),
                 points: pick(&rs, |r| Some(r.ao_s)),
                 line: false,
             });

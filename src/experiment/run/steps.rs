@@ -275,7 +275,7 @@ impl<'a> Runner<'a> {
             triangles: &st.triangles,
             tracer: &st.tracer,
         };
-        let msg = format!("{}: ray-cast AO, {} rays ({})", bs.name, k * k, b.name());
+        let msg = format!("{}: ray cast, {} rays ({})", bs.name, k * k, b.name());
         let eval = be.casters(&casters, st.estimator.as_ref())?;
         let mut kernel_s = None;
         let (values, s, _) = stage_adaptive(&msg, short, reps, || {
