@@ -191,7 +191,7 @@ impl Ctx<'_> {
             self.ao_render(ao, s)?;
         }
         if let super::spec::RenderSpec::Shadows(sh) = &s.render {
-            self.shadows(sh, s)?;
+            self.shadows(sh)?;
         }
         if let Some(b) = s.render.intra_bias() {
             if !(0.0..1.0).contains(&b) {
@@ -334,8 +334,8 @@ impl Ctx<'_> {
         Ok(())
     }
 
-    /// Soft shadows: finite lights of positive radius and intensity; no GPU kernel yet.
-    fn shadows(&self, sh: &super::spec::ShadowRender, s: &Spec) -> Result<(), SpecError> {
+    /// Soft shadows: finite lights of positive radius and intensity (both backends).
+    fn shadows(&self, sh: &super::spec::ShadowRender) -> Result<(), SpecError> {
         for (i, l) in sh.lights.iter().enumerate() {
             let at = |f: &str| format!("render.lights[{i}].{f}");
             if !l.center.is_finite()
@@ -355,12 +355,6 @@ impl Ctx<'_> {
                     return Err(self.err(&at(f), format!("{v} must be positive and finite")));
                 }
             }
-        }
-        if s.backends.contains(&Backend::Gpu) {
-            return Err(self.err(
-                "backends",
-                "\"shadows\" has no GPU kernel in this build; use \"cpu\"".into(),
-            ));
         }
         Ok(())
     }
