@@ -22,13 +22,15 @@ struct Params {
     origin_offset: f32,
     // AO: largest hit distance.
     tmax: f32,
-    _pad0: u32,
-    _pad1: u32,
-    // AO: rays one invocation traces.
+    // Shadows: lights (shaders/bvh_shadow.wgsl).
+    light_count: u32,
+    // Shadows: samples per light (k²).
+    cells: u32,
+    // AO, shadows: rays one invocation traces.
     rays_per_invocation: u32,
-    // AO: invocations per point.
+    // AO, shadows: invocations per point.
     invocations_per_point: u32,
-    // AO: trips of the completion loop (loop_budget.wgsl).
+    // AO, shadows: trips of the completion loop (loop_budget.wgsl).
     completion_trips: u32,
     _pad2: u32,
 }

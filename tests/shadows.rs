@@ -64,12 +64,18 @@ fn lights_are_read_and_bad_ones_refused_naming_the_field() {
         &format!(r#""image": {{ "width": 32, "height": 32 }}, "lights": {LIGHTS} }}"#),
     ));
     assert!(e.contains("lights") && e.contains("vertex_ao"), "{e}");
-    // No GPU kernel yet: refused up front, not after the reference.
-    let e = error_of(&shadows(LIGHTS, "").replace(
+    // Both backends are accepted (the GPU's shadow kernels: tests/gpu_shadow.rs); Fibonacci
+    // point sets are still refused with "gpu", as for AO.
+    let both = shadows(LIGHTS, "").replace(
         r#""reference": {"#,
         r#""backends": ["cpu", "gpu"], "reference": {"#,
+    );
+    Spec::parse(&both, Path::new("ok.json")).unwrap();
+    let e = error_of(&both.replace(
+        r#""counts": [290]"#,
+        r#""spheres": ["fibonacci"], "counts": [290]"#,
     ));
-    assert!(e.contains("backends") && e.contains("GPU"), "{e}");
+    assert!(e.contains("fibonacci") && e.contains("gpu"), "{e}");
     // Reflections read the lights too, but need the receiver's lobe.
     let e = error_of(&shadows(LIGHTS, "").replace("\"shadows\"", "\"reflections\""));
     assert!(e.contains("reflections") && e.contains("gloss"), "{e}");

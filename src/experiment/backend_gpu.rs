@@ -1,12 +1,14 @@
 //! The GPU backend of a run (Gaitatzes, Andreadis, Papaioannou, Chrysanthou, WSCG 2010: field
 //! lookup on the GPU, compared there with a GPU BVH ray caster): field-lookup AO through
-//! [`FieldAoKernel`] and ray-cast AO through [`GpuTracer`] (an obvhs CWBVH in WGSL), on the
-//! rays of the CPU path (the same seeded k² cell centres, rotated per point by the same
-//! angles, from the same offset origins).
+//! [`FieldAoKernel`], field-lookup soft shadows (§4.2) through [`FieldShadowKernel`], and
+//! ray-cast AO and shadows through [`GpuTracer`] (an obvhs CWBVH in WGSL), on the rays of the
+//! CPU path (the same seeded k² cell centres, rotated per point by the same angles, from the
+//! same offset origins; for shadows mapped into each light's cone as on the CPU).
 //!
-//! Each estimator runs on the kernel of its quantity: the AO estimators
-//! ([`Estimator::ao_options`]) on the two AO kernels; an estimator without a kernel is refused
-//! with [`GpuError::Unsupported`], naming it.
+//! Each estimator runs on the kernels of its quantity: the AO estimators
+//! ([`Estimator::ao_options`]) on the two AO kernels, the shadow estimators
+//! ([`Estimator::shadow_options`]) on the two shadow kernels; an estimator without a kernel is
+//! refused with [`GpuError::Unsupported`], naming it.
 //!
 //! Times: the runner times [`Eval::estimate`] on the host, which is the call's wall time
 //! (receiver upload, dispatch, wait and read-back); the kernel alone, from GPU timestamps, comes
@@ -18,11 +20,12 @@ use super::spec::Backend;
 use super::Result;
 use crate::field::scene::FieldScene;
 use crate::gpu::{
-    AdapterPreference, FieldAoKernel, FieldGpuOptions, FieldLayout, GpuContext, GpuError,
-    GpuTiming, GpuTracer,
+    AdapterPreference, FieldAoKernel, FieldGpuOptions, FieldLayout, FieldShadowKernel, GpuContext,
+    GpuError, GpuTiming, GpuTracer,
 };
 use crate::render::ao::AoOptions;
 use crate::render::estimator::{Estimator, Points};
+use crate::render::shadow::ShadowOptions;
 use crate::sampling::rays::RaySet;
 
 /// The wgpu device a run's "gpu" cells use, opened once per run.
@@ -56,40 +59,61 @@ fn out(values: Vec<f32>, t: GpuTiming) -> Estimate {
     }
 }
 
-/// The AO options of `est`, or the refusal naming it.
-fn ao_options(est: &dyn Estimator) -> Result<AoOptions> {
-    est.ao_options().copied().ok_or_else(|| {
-        GpuError::Unsupported(format!("no GPU kernel computes \"{}\"", est.name())).into()
-    })
+/// The quantity of an estimator that has GPU kernels.
+#[derive(Clone, Debug)]
+enum Quantity {
+    Ao(AoOptions),
+    Shadow(ShadowOptions),
 }
 
-struct FieldEval<'a> {
-    kernel: FieldAoKernel<'a>,
-    opts: AoOptions,
+/// The quantity `est` computes, or the refusal naming it.
+fn quantity(est: &dyn Estimator) -> Result<Quantity> {
+    if let Some(ao) = est.ao_options() {
+        return Ok(Quantity::Ao(*ao));
+    }
+    if let Some(sh) = est.shadow_options() {
+        return Ok(Quantity::Shadow(sh.clone()));
+    }
+    Err(GpuError::Unsupported(format!("no GPU kernel computes \"{}\"", est.name())).into())
+}
+
+/// Field lookup on the kernel of the estimator's quantity.
+enum FieldEval<'a> {
+    Ao(FieldAoKernel<'a>, AoOptions),
+    Shadow(FieldShadowKernel<'a>, ShadowOptions),
 }
 
 impl Eval for FieldEval<'_> {
     fn estimate(&self, at: Points, rays: &RaySet) -> Result<Estimate> {
-        let (ao, t) = self
-            .kernel
-            .vertex_ao(at.points, at.normals, rays, &self.opts)?;
-        Ok(out(ao, t))
+        let (values, t) = match self {
+            FieldEval::Ao(k, o) => k.vertex_ao(at.points, at.normals, rays, o)?,
+            FieldEval::Shadow(k, o) => k.light_fractions(at.points, at.normals, rays, o)?,
+        };
+        Ok(out(values, t))
     }
 
     fn setup_s(&self) -> Option<f64> {
-        Some(self.kernel.setup_time().as_secs_f64())
+        let setup = match self {
+            FieldEval::Ao(k, _) => k.setup_time(),
+            FieldEval::Shadow(k, _) => k.setup_time(),
+        };
+        Some(setup.as_secs_f64())
     }
 }
 
+/// Ray casting on the GPU tracer, the entry of the estimator's quantity.
 struct TraceEval<'a> {
     tracer: GpuTracer<'a>,
-    opts: AoOptions,
+    quantity: Quantity,
 }
 
 impl Eval for TraceEval<'_> {
     fn estimate(&self, at: Points, rays: &RaySet) -> Result<Estimate> {
-        let (ao, t) = self.tracer.ao(at.points, at.normals, rays, &self.opts)?;
-        Ok(out(ao, t))
+        let (values, t) = match &self.quantity {
+            Quantity::Ao(o) => self.tracer.ao(at.points, at.normals, rays, o)?,
+            Quantity::Shadow(o) => self.tracer.shadows(at.points, at.normals, rays, o)?,
+        };
+        Ok(out(values, t))
     }
 
     fn setup_s(&self) -> Option<f64> {
@@ -112,14 +136,22 @@ impl ComputeBackend for GpuBackend {
         fields: &'s FieldScene,
         est: &'s dyn Estimator,
     ) -> Result<Box<dyn Eval + 's>> {
-        let ao = ao_options(est)?;
+        let quantity = quantity(est)?;
         let opts = FieldGpuOptions {
             lookup: fields.options,
             layout: self.layout,
             ..Default::default()
         };
-        let kernel = FieldAoKernel::new(&self.ctx, &fields.instances, &opts)?;
-        Ok(Box::new(FieldEval { kernel, opts: ao }))
+        let eval = match quantity {
+            Quantity::Ao(ao) => {
+                FieldEval::Ao(FieldAoKernel::new(&self.ctx, &fields.instances, &opts)?, ao)
+            }
+            Quantity::Shadow(sh) => FieldEval::Shadow(
+                FieldShadowKernel::new(&self.ctx, &fields.instances, &opts)?,
+                sh,
+            ),
+        };
+        Ok(Box::new(eval))
     }
 
     fn casters<'s>(
@@ -127,8 +159,8 @@ impl ComputeBackend for GpuBackend {
         casters: &'s Casters<'s>,
         est: &'s dyn Estimator,
     ) -> Result<Box<dyn Eval + 's>> {
-        let ao = ao_options(est)?;
+        let quantity = quantity(est)?;
         let tracer = GpuTracer::new(&self.ctx, casters.triangles)?;
-        Ok(Box::new(TraceEval { tracer, opts: ao }))
+        Ok(Box::new(TraceEval { tracer, quantity }))
     }
 }

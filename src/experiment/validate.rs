@@ -191,7 +191,7 @@ impl Ctx<'_> {
             self.ao_render(ao, s)?;
         }
         match &s.render {
-            super::spec::RenderSpec::Shadows(sh) => self.shadows(sh, s)?,
+            super::spec::RenderSpec::Shadows(sh) => self.lights(&sh.lights)?,
             super::spec::RenderSpec::Reflections(r) => self.reflections(r, s)?,
             _ => {}
         }
@@ -337,18 +337,6 @@ impl Ctx<'_> {
                     "the GPU path has binary visibility only; use \"step\" or \"cpu\"".into(),
                 ));
             }
-        }
-        Ok(())
-    }
-
-    /// Soft shadows: finite lights of positive radius and intensity; no GPU kernel yet.
-    fn shadows(&self, sh: &super::spec::ShadowRender, s: &Spec) -> Result<(), SpecError> {
-        self.lights(&sh.lights)?;
-        if s.backends.contains(&Backend::Gpu) {
-            return Err(self.err(
-                "backends",
-                "\"shadows\" has no GPU kernel in this build; use \"cpu\"".into(),
-            ));
         }
         Ok(())
     }

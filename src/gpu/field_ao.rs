@@ -240,10 +240,7 @@ impl<'a> FieldAoKernel<'a> {
             .ctx
             .storage_buffer("ray directions", bytemuck::cast_slice(&base));
         let tmax = opts.max_distance.unwrap_or(f32::MAX).min(f32::MAX);
-        let (intra_bias, intra_auto) = match self.lookup.intra_bias {
-            IntraBias::Auto { scale } => (scale, 1),
-            IntraBias::Fixed(f) => (f, 0),
-        };
+        let (intra_bias, intra_auto) = intra_terms(self.lookup.intra_bias);
         let mut params = AoParamsGpu {
             rays_per_point: base.len() as u32,
             instance_count: self.field.instance_count(),
@@ -356,7 +353,16 @@ impl<'a> FieldAoKernel<'a> {
     }
 }
 
-fn selection_code(s: Selection) -> u32 {
+/// WGSL `intra_bias` and `intra_auto` of a lookup's intra-object bias.
+pub(super) fn intra_terms(b: IntraBias) -> (f32, u32) {
+    match b {
+        IntraBias::Auto { scale } => (scale, 1),
+        IntraBias::Fixed(f) => (f, 0),
+    }
+}
+
+/// WGSL `selection` of a selection.
+pub(super) fn selection_code(s: Selection) -> u32 {
     match s {
         Selection::Nearest => 0,
         Selection::Interpolated => 1,

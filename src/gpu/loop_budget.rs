@@ -8,12 +8,13 @@
 //! so a field lookup costs about 31 iterations per ray even when the ray misses every field:
 //! one invocation looping over 4096 rays ran out after 2115 of them.
 //!
-//! The AO kernels therefore trace at most `rays_per_invocation` rays per invocation (a point's
-//! rays spread over `ceil(rays / rays_per_invocation)` invocations whose free-ray counts the
-//! host adds up), and each invocation ends with a loop whose trip count only the host knows
-//! (shaders/loop_budget.wgsl): when that loop is cut short the budget was spent, the
-//! invocation writes [`CUT_SHORT`], and [`free_fractions`] halves the rays per invocation and
-//! runs again. Drivers without such a budget never cut anything short.
+//! The AO and shadow kernels therefore trace at most `rays_per_invocation` rays per invocation
+//! (a point's rays spread over `ceil(rays / rays_per_invocation)` invocations whose free-ray
+//! counts, or lit and total weights, the host adds up), and each invocation ends with a loop
+//! whose trip count only the host knows (shaders/loop_budget.wgsl): when that loop is cut short
+//! the budget was spent, the invocation writes [`CUT_SHORT`], and [`complete_runs`] (under
+//! [`free_fractions`] and [`weighted_fractions`]) halves the rays per invocation and runs
+//! again. Drivers without such a budget never cut anything short.
 
 use super::GpuError;
 use std::sync::atomic::{AtomicU32, Ordering};
@@ -34,22 +35,21 @@ pub const DEFAULT_RAYS_PER_INVOCATION: u32 = 256;
 /// One dispatch of an AO kernel: its output words, kernel time, upload time.
 pub(crate) type Dispatched = (Vec<u32>, Option<Duration>, Duration);
 
-/// AO (the fraction of free rays) of `points` points with `rays` rays each, from
-/// `dispatch(rays_per_invocation, invocations_per_point)`, which returns one free-ray count
-/// (or [`CUT_SHORT`]) per invocation, point-major. Starts from `split`'s rays per invocation,
-/// halves them while any invocation is cut short, and keeps the last value in `split` for the
-/// next call. Kernel and upload times add up over the dispatches.
+/// Runs `dispatch(rays_per_invocation, invocations_per_point)`, which returns
+/// `words_per_invocation` words per invocation, point-major, the first of them [`CUT_SHORT`]
+/// where the invocation was cut short, until no invocation is: starts from `split`'s rays per
+/// invocation, halves them while any invocation is cut short, and keeps the last value in
+/// `split` for the next call. Returns the words, the invocations per point, and the kernel and
+/// upload times added up over the dispatches. `rays` must be positive.
 ///
 /// Errors: [`GpuError::Unsupported`] when even one ray per invocation is cut short.
-pub(crate) fn free_fractions(
+pub(crate) fn complete_runs(
     split: &AtomicU32,
     rays: u32,
-    points: usize,
+    words_per_invocation: usize,
     mut dispatch: impl FnMut(u32, u32) -> Result<Dispatched, GpuError>,
-) -> Result<(Vec<f32>, Option<Duration>, Duration), GpuError> {
-    if rays == 0 {
-        return Ok((vec![1.0; points], None, Duration::ZERO));
-    }
+) -> Result<(Vec<u32>, u32, Option<Duration>, Duration), GpuError> {
+    debug_assert!(rays > 0 && words_per_invocation > 0);
     let (mut kernel, mut upload) = (None, Duration::ZERO);
     loop {
         let per_invocation = split.load(Ordering::Relaxed).clamp(1, rays);
@@ -57,13 +57,11 @@ pub(crate) fn free_fractions(
         let (words, k, u) = dispatch(per_invocation, per_point)?;
         kernel = super::context::add_kernel(kernel, k);
         upload += u;
-        debug_assert_eq!(words.len(), points * per_point as usize);
-        if !words.contains(&CUT_SHORT) {
-            let ao = words
-                .chunks_exact(per_point as usize)
-                .map(|w| w.iter().sum::<u32>() as f32 / rays as f32)
-                .collect();
-            return Ok((ao, kernel, upload));
+        if !words
+            .chunks_exact(words_per_invocation)
+            .any(|w| w[0] == CUT_SHORT)
+        {
+            return Ok((words, per_point, kernel, upload));
         }
         if per_invocation == 1 {
             return Err(GpuError::Unsupported(
@@ -74,6 +72,65 @@ pub(crate) fn free_fractions(
         }
         split.store(per_invocation / 2, Ordering::Relaxed);
     }
+}
+
+/// AO (the fraction of free rays) of `points` points with `rays` rays each, from
+/// `dispatch(rays_per_invocation, invocations_per_point)`, which returns one free-ray count
+/// (or [`CUT_SHORT`]) per invocation, point-major ([`complete_runs`]).
+///
+/// Errors: [`GpuError::Unsupported`] when even one ray per invocation is cut short.
+pub(crate) fn free_fractions(
+    split: &AtomicU32,
+    rays: u32,
+    points: usize,
+    dispatch: impl FnMut(u32, u32) -> Result<Dispatched, GpuError>,
+) -> Result<(Vec<f32>, Option<Duration>, Duration), GpuError> {
+    if rays == 0 {
+        return Ok((vec![1.0; points], None, Duration::ZERO));
+    }
+    let (words, per_point, kernel, upload) = complete_runs(split, rays, 1, dispatch)?;
+    debug_assert_eq!(words.len(), points * per_point as usize);
+    let ao = words
+        .chunks_exact(per_point as usize)
+        .map(|w| w.iter().sum::<u32>() as f32 / rays as f32)
+        .collect();
+    Ok((ao, kernel, upload))
+}
+
+/// Light fractions (`render::shadow::light_fraction`) of `points` points with `rays` shadow
+/// rays each, from `dispatch(rays_per_invocation, invocations_per_point)`, which returns two
+/// words per invocation, point-major: the f32 bits of the weight of the invocation's unblocked
+/// rays and of all its rays (or [`CUT_SHORT`] first, [`complete_runs`]). A point's partial sums
+/// are added in f64 and divided as on the host; a point without weight is lit (1).
+///
+/// Errors: [`GpuError::Unsupported`] when even one ray per invocation is cut short.
+pub(crate) fn weighted_fractions(
+    split: &AtomicU32,
+    rays: u32,
+    points: usize,
+    dispatch: impl FnMut(u32, u32) -> Result<Dispatched, GpuError>,
+) -> Result<(Vec<f32>, Option<Duration>, Duration), GpuError> {
+    if rays == 0 {
+        return Ok((vec![1.0; points], None, Duration::ZERO));
+    }
+    let (words, per_point, kernel, upload) = complete_runs(split, rays, 2, dispatch)?;
+    debug_assert_eq!(words.len(), points * 2 * per_point as usize);
+    let fractions = words
+        .chunks_exact(2 * per_point as usize)
+        .map(|w| {
+            let (mut lit, mut total) = (0.0f64, 0.0f64);
+            for run in w.chunks_exact(2) {
+                lit += f32::from_bits(run[0]) as f64;
+                total += f32::from_bits(run[1]) as f64;
+            }
+            if total > 0.0 {
+                (lit / total) as f32
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    Ok((fractions, kernel, upload))
 }
 
 #[cfg(test)]
@@ -146,5 +203,47 @@ mod tests {
         let r = free_fractions(&split, 16, 2, fake(10, 11, 16, 2, &mut calls));
         assert!(matches!(r, Err(GpuError::Unsupported(_))));
         assert_eq!(calls, vec![16, 8, 4, 2, 1]);
+    }
+
+    #[test]
+    fn weighted_runs_are_summed_in_f64_and_cut_short_runs_split() {
+        // 6 rays a point; ray r weighs r + 1, and point p has its rays below p blocked. The
+        // budget allows 2 rays an invocation: 4 → 2.
+        let rays = 6u32;
+        let points = 4usize;
+        let split = AtomicU32::new(4);
+        let mut calls = Vec::new();
+        let dispatch = |per_invocation: u32, per_point: u32| {
+            calls.push(per_invocation);
+            let mut words = Vec::new();
+            for p in 0..points as u32 {
+                for c in 0..per_point {
+                    let (lo, hi) = (c * per_invocation, ((c + 1) * per_invocation).min(rays));
+                    if hi - lo > 2 {
+                        words.extend([CUT_SHORT, 0]);
+                        continue;
+                    }
+                    let w = |r: u32| (r + 1) as f32;
+                    let lit: f32 = (lo..hi).filter(|&r| r >= p).map(w).sum();
+                    let total: f32 = (lo..hi).map(w).sum();
+                    words.extend([lit.to_bits(), total.to_bits()]);
+                }
+            }
+            Ok((words, None, Duration::ZERO))
+        };
+        let (v, _, _) = weighted_fractions(&split, rays, points, dispatch).unwrap();
+        assert_eq!(calls, vec![4, 2]);
+        assert_eq!(split.load(Ordering::Relaxed), 2);
+        for (p, &f) in v.iter().enumerate() {
+            let lit: u32 = (p as u32..rays).map(|r| r + 1).sum();
+            assert_eq!(f, (lit as f64 / 21.0) as f32, "point {p}");
+        }
+        // No rays, or no weight: lit.
+        let (v, _, _) = weighted_fractions(&split, 0, 2, |_, _| unreachable!()).unwrap();
+        assert_eq!(v, vec![1.0; 2]);
+        let (v, _, _) =
+            weighted_fractions(&split, 2, 1, |_, _| Ok((vec![0, 0], None, Duration::ZERO)))
+                .unwrap();
+        assert_eq!(v, vec![1.0]);
     }
 }

@@ -9,9 +9,12 @@
 //!   bound as storage-buffer windows or as slices of a 3D texture ([`FieldLayout`]) by the
 //!   field binding every field kernel reuses (src/gpu/field_binding.rs: packing, upload, bind
 //!   group 1 and the WGSL of the lookup).
+//! - [`FieldShadowKernel`]: soft shadows from spherical lights by field lookup (2010 §4.2), the
+//!   CPU path's shadow rays (cone samples, per-point rotation, per-ray far end at the light)
+//!   answered by the same lookup WGSL, weighted into the light fraction.
 //! - [`GpuTracer`]: the GPU ray-cast reference, an obvhs CWBVH traversed in WGSL with the
 //!   watertight triangle test, so that GPU lookup is compared with GPU ray casting on the same
-//!   device.
+//!   device (any / closest hit, AO, soft shadows).
 //! - [`ReliefKernel`]: the 2005 relief caster (linear search, bisection, safety-zone skips)
 //!   over segments through the prism, for the relief experiment's GPU columns.
 //! - [`GpuTiming`]: GPU timestamps (where the adapter has them) and wall time, separately.
@@ -24,9 +27,11 @@ mod context;
 mod field_ao;
 mod field_binding;
 mod field_data;
+mod field_shadow;
 mod loop_budget;
 mod rays;
 mod relief;
+mod shadow_rays;
 mod texture;
 mod tracer;
 
@@ -34,6 +39,7 @@ pub use context::{AdapterPreference, GpuContext, ADAPTER_ENV};
 pub use field_ao::{FieldAoKernel, FieldGpuOptions, LookupProbe};
 pub use field_binding::FieldLayout;
 pub use field_data::FieldInstanceGpu;
+pub use field_shadow::FieldShadowKernel;
 pub use relief::ReliefKernel;
 pub use tracer::{GpuHit, GpuTracer};
 

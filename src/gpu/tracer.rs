@@ -1,12 +1,16 @@
 //! The GPU ray-cast reference: an obvhs CWBVH traversed in WGSL (Ylitie, Karras, Laine, HPG
 //! 2017) with the watertight triangle test (Woop, Benthin, Wald, JCGT 2013), so that GPU field
-//! lookup is compared with GPU ray casting on the same device.
+//! lookup is compared with GPU ray casting on the same device: any-hit and closest-hit queries,
+//! vertex AO ([`GpuTracer::ao`]) and soft shadows from spherical lights ([`GpuTracer::shadows`],
+//! Gaitatzes, Andreadis, Papaioannou, Chrysanthou, WSCG 2010, §4.2), on the CPU path's rays.
 
 use super::context::{entry, GpuContext};
-use super::loop_budget::{free_fractions, Dispatched, COMPLETION_TRIPS};
+use super::loop_budget::{free_fractions, weighted_fractions, Dispatched, COMPLETION_TRIPS};
 use super::rays::{base_directions, receivers};
+use super::shadow_rays::{cone_samples, lights};
 use super::{GpuError, GpuTiming};
 use crate::render::ao::AoOptions;
+use crate::render::shadow::ShadowOptions;
 use crate::sampling::rays::RaySet;
 use crate::trace::RayQuery;
 use glam::Vec3;
@@ -49,24 +53,32 @@ struct TraceParamsGpu {
     origin_offset: f32,
     /// AO: largest hit distance.
     tmax: f32,
-    _pad0: u32,
-    _pad1: u32,
-    /// AO: rays one invocation traces.
+    /// Shadows: lights.
+    light_count: u32,
+    /// Shadows: samples per light (k²).
+    cells: u32,
+    /// AO, shadows: rays one invocation traces.
     rays_per_invocation: u32,
-    /// AO: invocations per point.
+    /// AO, shadows: invocations per point.
     invocations_per_point: u32,
-    /// AO: trips of the completion loop ([`COMPLETION_TRIPS`]).
+    /// AO, shadows: trips of the completion loop ([`COMPLETION_TRIPS`]).
     completion_trips: u32,
     _pad2: u32,
 }
 const _: () = assert!(std::mem::size_of::<TraceParamsGpu>() == 48);
 const _: () = assert!(std::mem::offset_of!(TraceParamsGpu, origin_offset) == 16);
+const _: () = assert!(std::mem::offset_of!(TraceParamsGpu, light_count) == 24);
 const _: () = assert!(std::mem::offset_of!(TraceParamsGpu, rays_per_invocation) == 32);
 
 /// Binding of the query rays (any / closest hit) in shaders/bvh.wgsl.
 const RAYS_BINDING: u32 = 3;
-/// Binding of the AO receivers in shaders/bvh.wgsl.
+/// Binding of the AO base directions in shaders/bvh.wgsl.
+const DIRS_BINDING: u32 = 5;
+/// Binding of the AO and shadow receivers in shaders/bvh.wgsl.
 const RECEIVERS_BINDING: u32 = 6;
+/// Bindings of the shadow kernel's cone samples and lights in shaders/bvh_shadow.wgsl.
+const SAMPLES_BINDING: u32 = 7;
+const LIGHTS_BINDING: u32 = 8;
 
 /// Box padding relative to the scene extent, as the CPU tracer pads (`2^-18`), so that the
 /// quantised node test stays conservative for the watertight triangle test.
@@ -90,8 +102,11 @@ pub struct GpuTracer<'a> {
     any: wgpu::ComputePipeline,
     closest: wgpu::ComputePipeline,
     ao: wgpu::ComputePipeline,
+    shadow: wgpu::ComputePipeline,
     /// Rays per AO invocation, as last found to fit (`loop_budget::free_fractions`).
     rays_per_invocation: AtomicU32,
+    /// Rays per shadow invocation, as last found to fit (`loop_budget::weighted_fractions`).
+    shadow_rays_per_invocation: AtomicU32,
     setup: Duration,
 }
 
@@ -136,6 +151,8 @@ impl<'a> GpuTracer<'a> {
             include_str!("../../shaders/receiver.wgsl"),
             include_str!("../../shaders/loop_budget.wgsl"),
             include_str!("../../shaders/bvh.wgsl"),
+            include_str!("../../shaders/shadow_rays.wgsl"),
+            include_str!("../../shaders/bvh_shadow.wgsl"),
         ]
         .concat();
         Ok(GpuTracer {
@@ -146,7 +163,11 @@ impl<'a> GpuTracer<'a> {
             any: ctx.compute_pipeline("bvh_any", &source, "any_main")?,
             closest: ctx.compute_pipeline("bvh_closest", &source, "closest_main")?,
             ao: ctx.compute_pipeline("bvh_ao", &source, "ao_main")?,
+            shadow: ctx.compute_pipeline("bvh_shadow", &source, "shadow_main")?,
             rays_per_invocation: AtomicU32::new(super::loop_budget::DEFAULT_RAYS_PER_INVOCATION),
+            shadow_rays_per_invocation: AtomicU32::new(
+                super::loop_budget::DEFAULT_RAYS_PER_INVOCATION,
+            ),
             setup: start.elapsed(),
         })
     }
@@ -162,9 +183,8 @@ impl<'a> GpuTracer<'a> {
         let (words, kernel, upload) = self.dispatch(
             &self.any,
             (&ray_records(rays), RAYS_BINDING),
-            1,
-            1,
-            None,
+            (1, 1),
+            &[],
             Default::default(),
         )?;
         let hits = words.into_iter().map(|w| w != 0).collect();
@@ -180,9 +200,8 @@ impl<'a> GpuTracer<'a> {
         let (words, kernel, upload) = self.dispatch(
             &self.closest,
             (&ray_records(rays), RAYS_BINDING),
-            1,
-            2,
-            None,
+            (1, 2),
+            &[],
             Default::default(),
         )?;
         let hits = words
@@ -227,39 +246,88 @@ impl<'a> GpuTracer<'a> {
                     ..Default::default()
                 };
                 let records = (&recv[..], RECEIVERS_BINDING);
-                self.dispatch(&self.ao, records, per_point, 1, Some(&base), params)
+                let dirs = [(DIRS_BINDING, bytemuck::cast_slice(&base))];
+                self.dispatch(&self.ao, records, (per_point, 1), &dirs, params)
             },
         )?;
         Ok((ao, timing(kernel, upload, start)))
     }
 
+    /// Soft shadows by ray casting: the light fraction at every point with the same shadow
+    /// rays as [`crate::render::shadow::shadow_at_points`] (each an any-hit query from the
+    /// offset origin to the near side of its light), weighted as there (src/gpu/shadow_rays.rs
+    /// for the f32 weights). A point's rays are spread over several invocations, as in
+    /// [`Self::ao`].
+    pub fn shadows(
+        &self,
+        points: &[Vec3],
+        normals: &[Vec3],
+        rays: &RaySet,
+        opts: &ShadowOptions,
+    ) -> Result<(Vec<f32>, GpuTiming), GpuError> {
+        let start = Instant::now();
+        let samples = cone_samples(rays)?;
+        let light_records = lights(opts);
+        let recv = receivers(points, normals, rays)?;
+        let cells = samples.len() as u32;
+        let rays_n = cells
+            .checked_mul(light_records.len() as u32)
+            .ok_or_else(|| GpuError::Invalid("shadow rays per point overflow u32".into()))?;
+        let (values, kernel, upload) = weighted_fractions(
+            &self.shadow_rays_per_invocation,
+            rays_n,
+            recv.len(),
+            |per_invocation, per_point| {
+                let params = TraceParamsGpu {
+                    origin_offset: opts.offset,
+                    light_count: light_records.len() as u32,
+                    cells,
+                    rays_per_invocation: per_invocation,
+                    invocations_per_point: per_point,
+                    completion_trips: COMPLETION_TRIPS,
+                    ..Default::default()
+                };
+                let records = (&recv[..], RECEIVERS_BINDING);
+                let extra = [
+                    (SAMPLES_BINDING, bytemuck::cast_slice(&samples)),
+                    (LIGHTS_BINDING, bytemuck::cast_slice(&light_records)),
+                ];
+                self.dispatch(&self.shadow, records, (per_point, 2), &extra, params)
+            },
+        )?;
+        Ok((values, timing(kernel, upload, start)))
+    }
+
     /// Dispatches `threads_per_item` threads per record (`records`: the records and their
     /// binding), each writing `words_per_thread` words, and reads the words back, record-major;
     /// records go in batches small enough for their buffer and the output to fit one binding
-    /// each. `params` gives everything but the batch's record count and the dispatch row (set
-    /// here).
+    /// each. `shared` are the buffers every batch binds (binding, bytes). `params` gives
+    /// everything but the batch's record count and the dispatch row (set here).
     fn dispatch<T: bytemuck::Pod>(
         &self,
         pipeline: &wgpu::ComputePipeline,
         (records, records_binding): (&[T], u32),
-        threads_per_item: u32,
-        words_per_thread: u32,
-        dirs: Option<&[[f32; 4]]>,
+        shape: (u32, u32),
+        shared: &[(u32, &[u8])],
         mut params: TraceParamsGpu,
     ) -> Result<Dispatched, GpuError> {
         let ctx = self.ctx;
         let max_binding = ctx.max_binding();
-        let dir_bytes = dirs.map_or(0, |d| d.len() as u64 * 16);
-        if dir_bytes > max_binding {
-            return Err(GpuError::TooLarge {
-                what: format!("{} ray directions", dir_bytes / 16),
-                need: dir_bytes,
-                limit: max_binding,
-                limit_name: "max_storage_buffer_binding_size",
-            });
+        for &(binding, bytes) in shared {
+            let need = bytes.len() as u64;
+            if need > max_binding {
+                return Err(GpuError::TooLarge {
+                    what: format!("the buffer of binding {binding} (ray directions or samples)"),
+                    need,
+                    limit: max_binding,
+                    limit_name: "max_storage_buffer_binding_size",
+                });
+            }
         }
-        let dir_buf = dirs.map(|d| ctx.storage_buffer("directions", bytemuck::cast_slice(d)));
-        let shape = (threads_per_item, words_per_thread);
+        let shared_bufs: Vec<(u32, wgpu::Buffer)> = shared
+            .iter()
+            .map(|&(binding, bytes)| (binding, ctx.storage_buffer("shared", bytes)))
+            .collect();
         ctx.run_batched(pipeline, &[], records, "ray", shape, |part, stride, out| {
             params.ray_count = part.len() as u32;
             params.row_stride = stride;
@@ -273,8 +341,8 @@ impl<'a> GpuTracer<'a> {
                 entry(records_binding, records.as_entire_binding()),
                 entry(4, out.as_entire_binding()),
             ];
-            if let Some(b) = &dir_buf {
-                entries.push(entry(5, b.as_entire_binding()));
+            for (binding, b) in &shared_bufs {
+                entries.push(entry(*binding, b.as_entire_binding()));
             }
             ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("trace"),

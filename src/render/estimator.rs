@@ -63,6 +63,12 @@ pub trait Estimator: Sync {
     fn ao_options(&self) -> Option<&AoOptions> {
         None
     }
+
+    /// The shadow options when this estimator is the light fraction of spherical lights of
+    /// [`super::shadow`]: the GPU's shadow kernels then compute it. `None` for other quantities.
+    fn shadow_options(&self) -> Option<&super::shadow::ShadowOptions> {
+        None
+    }
 }
 
 /// Ambient occlusion at each point (Gaitatzes, Chrysanthou, Papaioannou, WSCG 2008; per pixel:
@@ -134,6 +140,7 @@ mod tests {
         // Some points see the ceiling's edge: the test is not all ones.
         assert!(a.iter().any(|&v| v < 1.0) && a.iter().any(|&v| v > 0.0));
         assert_eq!(est.ao_options(), Some(&opts));
+        assert!(est.shadow_options().is_none());
         assert_eq!(
             serde_json::Value::Object(est.key()),
             serde_json::json!({"offset": 1e-4f32, "max_distance": 2.0, "falloff": "step"})

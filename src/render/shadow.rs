@@ -248,6 +248,10 @@ impl Estimator for ShadowEstimator {
         m.insert("lights".into(), serde_json::json!(self.opts.lights));
         m
     }
+
+    fn shadow_options(&self) -> Option<&ShadowOptions> {
+        Some(&self.opts)
+    }
 }
 
 #[cfg(test)]

@@ -1,0 +1,93 @@
+// Soft shadows from spherical lights by field lookup (Gaitatzes, Andreadis, Papaioannou,
+// Chrysanthou, WSCG 2010, §4.2): each invocation takes one receiver point and a run of its
+// shadow rays (light-major: ray r is sample r % cells of light r / cells, shaders/shadow_rays.wgsl),
+// tests each against the field instances up to the ray's own far end (the near side of its
+// light), stopping at the first occluding instance, and writes the f32 weight of its unblocked
+// rays and of all its rays; the host adds up a point's runs in f64 and divides. An invocation
+// whose loops the driver cut short writes CUT_SHORT first instead (shaders/loop_budget.wgsl).
+
+// Mirrors `ShadowParamsGpu` (src/gpu/field_shadow.rs), 48 bytes.
+struct Params {
+    // Receiver points in this dispatch.
+    point_count: u32,
+    // Samples per light (k², the cone samples in `samples`).
+    cells: u32,
+    // Lights.
+    light_count: u32,
+    // Invocations per row of the dispatch grid (i = gid.x + gid.y * row_stride).
+    row_stride: u32,
+    // Field instances.
+    instance_count: u32,
+    // Selection (SELECT_NEAREST, SELECT_INTERPOLATED).
+    selection: u32,
+    // Rays one invocation traces.
+    rays_per_invocation: u32,
+    // Invocations per point.
+    invocations_per_point: u32,
+    // Trips of the completion loop (loop_budget.wgsl).
+    completion_trips: u32,
+    // Ray origin offset along the normal.
+    origin_offset: f32,
+    // Intra-object bias: a fraction of 2R, or the scale of the field's own tolerance.
+    intra_bias: f32,
+    // 1 when `intra_bias` scales the field's own tolerance (`IntraBias::Auto`), else 0.
+    intra_auto: u32,
+}
+
+// The kernel's own bindings (src/gpu/field_shadow.rs); `tables`, `mesh`, `instances` and the
+// stored distances are the field group's (src/gpu/field_binding.rs).
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var<storage, read> receivers: array<Receiver>;
+@group(0) @binding(2) var<storage, read_write> out: array<u32>;
+@group(0) @binding(3) var<storage, read> samples: array<ConeSample>;
+@group(0) @binding(4) var<storage, read> lights: array<Light>;
+
+// Whether any instance blocks origin + t dir, t in [0, tmax].
+fn field_blocks(origin: vec3<f32>, dir: vec3<f32>, tmax: f32) -> bool {
+    for (var k = 0u; k < params.instance_count; k++) {
+        if instance_occludes(instances[k], origin, dir, 0.0, tmax, params.selection, params.intra_bias, params.intra_auto != 0u) {
+            return true;
+        }
+    }
+    return false;
+}
+
+@compute @workgroup_size(64)
+fn shadow_main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x + gid.y * params.row_stride;
+    let per_point = params.invocations_per_point;
+    if i >= params.point_count * per_point {
+        return;
+    }
+    let cells = params.cells;
+    let first = (i % per_point) * params.rays_per_invocation;
+    let last = min(first + params.rays_per_invocation, cells * params.light_count);
+    let rc = receivers[i / per_point];
+    let nrm = rc.normal;
+    let origin = rc.position + params.origin_offset * nrm;
+    var lit = 0.0;
+    var total = 0.0;
+    var r = first;
+    while r < last {
+        let li = r / cells;
+        let end = min((li + 1u) * cells, last);
+        let cone = light_cone(lights[li], origin, cells);
+        if !cone.outside {
+            r = end;
+            continue;
+        }
+        for (; r < end; r++) {
+            let ray = shadow_ray(cone, samples[r - li * cells], rc.rotation_cos, rc.rotation_sin, nrm);
+            if ray.weight <= 0.0 {
+                continue;
+            }
+            total += ray.weight;
+            if !field_blocks(origin, ray.dir, ray.tmax) {
+                lit += ray.weight;
+            }
+        }
+    }
+    let done = loops_completed(params.completion_trips);
+    out[2u * i] = select(CUT_SHORT, bitcast<u32>(lit), done);
+    out[2u * i + 1u] = bitcast<u32>(total);
+}
