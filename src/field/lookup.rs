@@ -361,6 +361,14 @@ pub struct Probe<R> {
     reads: R,
 }
 
+impl<R> Probe<R> {
+    /// The texels the probe reads.
+    #[inline]
+    pub(super) fn reads(&self) -> &R {
+        &self.reads
+    }
+}
+
 impl VisibilityField {
     /// Normalised distance D stored for a ray crossing the sphere at unit position `u` (relative
     /// to the centre) with model-space direction `dir` pointing into the sphere.

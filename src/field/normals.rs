@@ -112,10 +112,19 @@ impl super::VisibilityField {
                 && normals.data.len() == self.params.count * normals.texels,
             "surface_hit: the normal field is not this field's"
         );
-        let t = self.hit_distance(origin, dir, tmin, tmax, opts)?;
         let from = SphereOrigin::new(origin, self.bounds.center, self.bounds.radius);
-        let c = self.cross(&from, origin, dir, tmin, tmax)?;
-        let read = NearestRead::of(self, c.u, c.dir);
+        let (t, read) = match opts.selection {
+            // The nearest read gives both the distance and the normal's texel.
+            super::Selection::Nearest => {
+                let probe = self.probe::<NearestRead>(&from, origin, dir, tmin, tmax)?;
+                (self.finish(&probe, tmin, tmax, opts)?, *probe.reads())
+            }
+            super::Selection::Interpolated => {
+                let t = self.hit_distance(origin, dir, tmin, tmax, opts)?;
+                let c = self.cross(&from, origin, dir, tmin, tmax)?;
+                (t, NearestRead::of(self, c.u, c.dir))
+            }
+        };
         Some((t, normals.get(read.map as usize, read.texel as usize)))
     }
 }
