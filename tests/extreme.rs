@@ -110,3 +110,53 @@ fn extreme_numbers_are_refused_or_taken_without_a_panic() {
         "taken {taken}, refused {refused}"
     );
 }
+
+/// The whole tiny scene translated by 1e12 or 1e15 gives the untranslated run's values bit for
+/// bit (the rebased frame removes the translation exactly); by 1e20 it is refused, naming the
+/// scene's instances and the ratio f64 can hold. Before the fix 1e12 changed the per-vertex
+/// RMS (12.10 against 12.44) and 1e15 reported AO 1 everywhere with every RMS 0.
+#[test]
+fn a_translated_scene_gives_the_same_values_or_is_refused() {
+    // Vertex AO without an image: a spec camera is f32 and cannot follow the scene that far.
+    let base = tiny(ONE_FIELD, "").replace(r#", "image": { "width": 32, "height": 32 }"#, "");
+    let fit = r#""transform": { "fit": { "center": [0.5, 0.45, 0.5], "radius": 0.35 } }"#;
+    let translated = |t: &str| {
+        base.replace(
+            r#""receiver": true }"#,
+            &format!(r#""receiver": true, "transform": {{ "translate": [{t}, {t}, {t}] }} }}"#),
+        )
+        .replace(
+            fit,
+            &format!(
+                r#""transform": {{ "translate": [{t}, {t}, {t}], "fit": {{ "center": [0.5, 0.45, 0.5], "radius": 0.35 }} }}"#
+            ),
+        )
+    };
+    let values = |text: &str| {
+        let dir = tempfile::tempdir().unwrap();
+        let ls = common::loaded(dir.path(), text);
+        let mut o = common::options(dir.path().join("out"));
+        o.supply.memory_limit = 1 << 30;
+        let r = run(&ls, &o).unwrap();
+        let row = &r.rows[0];
+        (row.rms_vertex, row.rms_vs_truth, row.crease_points)
+    };
+    let here = values(&base);
+    assert!(here.0.unwrap() > 0.0 && here.2 > 0, "{here:?}");
+    for t in ["1e12", "1e15"] {
+        let text = translated(t);
+        assert!(text.matches("translate").count() == 2, "{text}");
+        assert_eq!(values(&text), here, "translated by {t}");
+    }
+    let e = Scenes::build(
+        &Spec::parse(&translated("1e20"), Path::new("far.json")).unwrap(),
+        Path::new("far.json"),
+        "scenes",
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("scenes[0].instances") && e.contains("ratio") && e.contains("1.801e16"),
+        "{e}"
+    );
+}

@@ -9,7 +9,9 @@
 use super::spec::{MeshSource, Spec, SpecError, TransformSpec};
 use super::{Error, Result};
 use crate::geometry::procedural::{self, Supershape};
-use crate::geometry::rebase::{centred_mesh, rebase, to_frame, PlacedMesh, Placement, Rebased};
+use crate::geometry::rebase::{
+    centred_mesh, extent_problem, rebase, to_frame, PlacedMesh, Placement, Rebased,
+};
 use crate::geometry::{models, Mesh, Scene, Similarity};
 use crate::render::camera::Camera;
 use glam::{DVec3, EulerRot, Quat, Vec3};
@@ -151,6 +153,13 @@ impl Scenes {
                 });
                 mesh_of.push(m);
             }
+            if let Some(message) = extent_problem(&instances) {
+                return Err(SpecError::Invalid {
+                    file: file.to_path_buf(),
+                    field: format!("{path}[{si}].instances"),
+                    message,
+                });
+            }
             let Rebased { scene, origin } = rebase(&instances);
             // Placements past what f32 geometry can hold (a translation of 1e39, a scale of
             // 3e38) would reach the tracer as infinities, or overflow in its squares and cross
@@ -232,11 +241,11 @@ pub fn placement(t: &TransformSpec, mesh: &Mesh, model_origin: DVec3) -> Placeme
         }
         None => (Similarity::new(rotation, Vec3::ZERO, 1.0), model_origin),
     };
-    let outer = Placement {
-        rotation: Quat::IDENTITY,
-        translation: t.translate.unwrap_or(DVec3::ZERO),
-        scale: t.scale.unwrap_or(1.0),
-    };
+    let outer = Placement::new(
+        Quat::IDENTITY,
+        t.translate.unwrap_or(DVec3::ZERO),
+        t.scale.unwrap_or(1.0),
+    );
     outer.compose(&inner).after_model_offset(offset)
 }
 

@@ -11,39 +11,59 @@
 //!
 //! The origin is a multiple of a power-of-two step at least four times the scene's radius, so
 //! a scene within two radii of the origin keeps origin 0 (and its exact coordinates), and a
-//! translation by a multiple of the step is removed exactly.
+//! translation by a multiple of the step is removed exactly. A placement keeps its large
+//! translation (the spec's) apart from the small offsets composed onto it (fits, model
+//! offsets), so that `translation − origin` is exact and the offsets are added after it: a
+//! scene translated by any multiple of the step (1e4, 1e12, 1e15, 1e20 for a unit scene) gets
+//! the untranslated scene's f32 coordinates bit for bit. f64 resolves a scene's instances
+//! relative to each other only while its distance from the spec's origin is at most
+//! [`MAX_DISTANCE_TO_EXTENT`] times its half-extent: [`extent_problem`] names a scene past it.
 
 use super::{Instance, Mesh, Scene, Similarity};
 use glam::{DVec3, Quat, Vec3};
 use std::sync::Arc;
 
 /// A placement whose translation is kept in f64 until the scene's origin is known:
-/// world = translation + scale · (rotation · local), as [`Similarity`].
+/// world = (translation + offset) + scale · (rotation · local), as [`Similarity`].
+/// `translation` is the large part (a spec's translate), `offset` the sum of the small ones
+/// composed onto it; they are added only relative to the rebased origin ([`Self::relative_to`]),
+/// where `translation − origin` is exact.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Placement {
     pub rotation: Quat,
     pub translation: DVec3,
     pub scale: f32,
+    /// The offsets composed after `translation` (f64, exact sums of f32 products).
+    pub offset: DVec3,
 }
 
-impl From<Similarity> for Placement {
-    fn from(s: Similarity) -> Placement {
+impl Placement {
+    /// world = translation + scale · (rotation · local), no offset yet.
+    pub fn new(rotation: Quat, translation: DVec3, scale: f32) -> Placement {
         Placement {
-            rotation: s.rotation,
-            translation: s.translation.as_dvec3(),
-            scale: s.scale,
+            rotation,
+            translation,
+            scale,
+            offset: DVec3::ZERO,
         }
     }
 }
 
+impl From<Similarity> for Placement {
+    fn from(s: Similarity) -> Placement {
+        Placement::new(s.rotation, s.translation.as_dvec3(), s.scale)
+    }
+}
+
 impl Placement {
-    /// `self ∘ inner` (applies `inner` first), with the translation summed in f64: the
-    /// rotated inner translation is an f32 vector of the inner placement's size, its scaled
-    /// value is exact in f64, and the sum is rounded only when the placement is rebased.
+    /// `self ∘ inner` (applies `inner` first): the rotated inner translation, an f32 vector of
+    /// the inner placement's size whose scaled value is exact in f64, joins the offset; the
+    /// large translation is left as it is until the placement is rebased.
     pub fn compose(&self, inner: &Similarity) -> Placement {
         Placement {
             rotation: (self.rotation * inner.rotation).normalize(),
-            translation: self.translation
+            translation: self.translation,
+            offset: self.offset
                 + self.scale as f64 * (self.rotation * inner.translation).as_dvec3(),
             scale: self.scale * inner.scale,
         }
@@ -53,22 +73,24 @@ impl Placement {
     /// `−offset` ([`centred_mesh`]), so that it places them where `self` placed the original.
     pub fn after_model_offset(&self, offset: DVec3) -> Placement {
         Placement {
-            translation: self.translation + self.scale as f64 * (self.rotation.as_dquat() * offset),
+            offset: self.offset + self.scale as f64 * (self.rotation.as_dquat() * offset),
             ..*self
         }
     }
 
     /// A model-space point in true world coordinates (f64).
     pub fn to_world_point(&self, p: Vec3) -> DVec3 {
-        self.translation + self.scale as f64 * (self.rotation * p).as_dvec3()
+        self.translation + (self.offset + self.scale as f64 * (self.rotation * p).as_dvec3())
     }
 
     /// The f32 similarity of this placement in the frame whose origin is `origin` (true world
-    /// coordinates): the translation `translation − origin` is formed in f64 and rounded once.
+    /// coordinates): `(translation − origin) + offset`, formed in f64 (the difference exact when
+    /// `origin` is a multiple of a step no finer than the translation's f64 spacing, as
+    /// [`rebase_origin`]'s) and rounded once.
     pub fn relative_to(&self, origin: DVec3) -> Similarity {
         Similarity::new(
             self.rotation,
-            (self.translation - origin).as_vec3(),
+            ((self.translation - origin) + self.offset).as_vec3(),
             self.scale,
         )
     }
@@ -92,8 +114,9 @@ pub fn rebase_origin(spheres: &[(DVec3, f64)]) -> DVec3 {
     if !centre.is_finite() || !half.is_finite() {
         return DVec3::ZERO;
     }
-    // At least the f32 spacing at the centre, so a single-point scene far out still rebases.
-    let floor = centre.abs().max_element() * f32::EPSILON as f64;
+    // At least the f64 spacing at the centre, so a single-point scene far out still rebases
+    // (and the origin is a multiple of the translation's own spacing: see `relative_to`).
+    let floor = centre.abs().max_element() * f64::EPSILON;
     let step = (4.0 * half)
         .max(floor)
         .max(f64::MIN_POSITIVE)
@@ -101,6 +124,56 @@ pub fn rebase_origin(spheres: &[(DVec3, f64)]) -> DVec3 {
         .ceil()
         .exp2();
     (centre / step).round() * step
+}
+
+/// The largest distance from the spec's origin, in half-extents of the scene, at which f64
+/// places its instances relative to each other as finely as f32 resolves the scene itself:
+/// 2⁵⁴ (the rebasing step, four half-extents, is then still the f64 spacing there or coarser).
+pub const MAX_DISTANCE_TO_EXTENT: f64 = 18_014_398_509_481_984.0;
+
+/// Why the placed meshes cannot be rebased faithfully, if they cannot: their distance from the
+/// spec's origin over their half-extent passes [`MAX_DISTANCE_TO_EXTENT`], or a coordinate is
+/// not finite.
+pub fn extent_problem(placed: &[PlacedMesh]) -> Option<String> {
+    let spheres = world_spheres(placed);
+    let &(c0, _) = spheres.first()?;
+    // The extent relative to the first centre: exact differences, where the absolute bounds
+    // would round the scene away at large distances.
+    let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+    for &(c, r) in &spheres {
+        lo = lo.min(c - c0 - r);
+        hi = hi.max(c - c0 + r);
+    }
+    let half = 0.5 * (hi - lo).length();
+    let centre = c0 + 0.5 * (lo + hi);
+    if !centre.is_finite() || !half.is_finite() {
+        return Some(format!(
+            "the scene's placed bounds are not finite (centre {centre}, half-extent {half})"
+        ));
+    }
+    let distance = centre.abs().max_element();
+    (distance > MAX_DISTANCE_TO_EXTENT * half).then(|| {
+        format!(
+            "the scene lies {distance:e} from the origin with a half-extent of {half:e}, a \
+             ratio of {:.3e}: past {MAX_DISTANCE_TO_EXTENT:.3e}, the most at which f64 places \
+             its instances relative to each other as finely as f32 resolves the scene",
+            distance / half
+        )
+    })
+}
+
+/// Each placed mesh's bounding sphere in true world coordinates.
+fn world_spheres(placed: &[PlacedMesh]) -> Vec<(DVec3, f64)> {
+    placed
+        .iter()
+        .map(|p| {
+            let s = p.mesh.bounding_sphere();
+            (
+                p.placement.to_world_point(s.center),
+                s.radius as f64 * p.placement.scale as f64,
+            )
+        })
+        .collect()
 }
 
 /// `mesh` moved next to its model-space origin, and the offset removed: where
@@ -144,17 +217,7 @@ pub fn to_frame(origin: DVec3, p: Vec3) -> Vec3 {
 /// The placed meshes as a scene in the frame of [`rebase_origin`] of their world bounding
 /// spheres.
 pub fn rebase(placed: &[PlacedMesh]) -> Rebased {
-    let spheres: Vec<(DVec3, f64)> = placed
-        .iter()
-        .map(|p| {
-            let s = p.mesh.bounding_sphere();
-            (
-                p.placement.to_world_point(s.center),
-                s.radius as f64 * p.placement.scale as f64,
-            )
-        })
-        .collect();
-    let origin = rebase_origin(&spheres);
+    let origin = rebase_origin(&world_spheres(placed));
     let instances = placed
         .iter()
         .map(|p| Instance {
@@ -225,12 +288,7 @@ mod tests {
         let inner = Similarity::new(Quat::from_rotation_y(0.7), Vec3::new(0.3, 0.2, 0.1), 0.3);
         let place = |t: f64| PlacedMesh {
             mesh: mesh.clone(),
-            placement: Placement {
-                rotation: Quat::IDENTITY,
-                translation: DVec3::splat(t),
-                scale: 1.0,
-            }
-            .compose(&inner),
+            placement: Placement::new(Quat::IDENTITY, DVec3::splat(t), 1.0).compose(&inner),
             caster: true,
             receiver: true,
         };
@@ -243,6 +301,56 @@ mod tests {
         // The f32 composition at 1e4 rounds the translation; the rebased one does not.
         let f32_far = Similarity::new(Quat::IDENTITY, Vec3::splat(1e4), 1.0).compose(&inner);
         assert_ne!(f32_far.translation - Vec3::splat(1e4), inner.translation);
+    }
+
+    /// A two-instance scene (a corner and a fitted box inside it) translated as a whole by up
+    /// to 1e20 keeps the untranslated scene's f32 world triangles bit for bit, as long as the
+    /// translation is a multiple of the rebasing step (these are); before the large translation
+    /// was kept apart from the fit's offsets, 1e12 moved the scene 61,440 away from its origin
+    /// and 1e15 collapsed it. Past 2⁵⁴ half-extents from the origin the scene is refused.
+    #[test]
+    fn far_translations_are_removed_exactly_or_refused() {
+        let corner = Arc::new(procedural::corner(3).unwrap());
+        let cube = Arc::new(procedural::cube_with_hole(1.0, 0.4).unwrap());
+        let fit = Similarity::new(Quat::from_rotation_y(0.7), Vec3::new(0.5, 0.45, 0.5), 0.3);
+        let placed = |t: f64| {
+            let outer = Placement::new(Quat::IDENTITY, DVec3::splat(t), 1.0);
+            vec![
+                PlacedMesh {
+                    mesh: corner.clone(),
+                    placement: outer.compose(&Similarity::default()),
+                    caster: false,
+                    receiver: true,
+                },
+                PlacedMesh {
+                    mesh: cube.clone(),
+                    placement: outer.compose(&fit),
+                    caster: true,
+                    receiver: false,
+                },
+            ]
+        };
+        let tris = |r: &Rebased| {
+            r.scene
+                .instances
+                .iter()
+                .flat_map(|i| i.world_triangles())
+                .collect::<Vec<_>>()
+        };
+        let near = rebase(&placed(0.0));
+        assert_eq!(near.origin, DVec3::ZERO);
+        for t in [1e4, 1e9, 1e12, 1e15, 1e16] {
+            assert!(extent_problem(&placed(t)).is_none(), "{t}");
+            let far = rebase(&placed(t));
+            assert_eq!(far.origin, DVec3::splat(t), "{t}");
+            assert_eq!(tris(&far), tris(&near), "translated by {t}");
+        }
+        for t in [1e17, 1e20, 1e300] {
+            let e = extent_problem(&placed(t)).expect("refused");
+            assert!(e.contains("ratio") && e.contains("1.801e16"), "{e}");
+        }
+        let inf = extent_problem(&placed(f64::INFINITY)).expect("refused");
+        assert!(inf.contains("not finite"), "{inf}");
     }
 
     #[test]

@@ -52,7 +52,8 @@ pub fn scaled() -> Vec<Placement> {
     ]
 }
 
-/// The translated placements: by 1e4 and 1e6 on every axis, and by 1e4 plus an offset that
+/// The translated placements: by 1e4, 1e6, 1e12 and 1e15 on every axis (the rebased frame
+/// removes each exactly, the fit's offsets kept apart from it), and by 1e4 plus an offset that
 /// the rebased frame keeps (the scene then sits at (0.375, −0.25, 0.125) from its origin, so
 /// its f32 coordinates differ from the unit scene's).
 pub fn translated() -> Vec<Placement> {
@@ -64,6 +65,8 @@ pub fn translated() -> Vec<Placement> {
             DVec3::new(1e4 + 0.375, 1e4 - 0.25, 1e4 + 0.125),
         ),
         ("translated 1e6", 1.0, DVec3::splat(1e6)),
+        ("translated 1e12", 1.0, DVec3::splat(1e12)),
+        ("translated 1e15", 1.0, DVec3::splat(1e15)),
     ]
 }
 

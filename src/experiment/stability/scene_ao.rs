@@ -36,11 +36,7 @@ pub fn scene(placed: &[Placed], outer: Similarity) -> Scene {
 /// The placed meshes under the outer placement `translation + scale · p` (composed in f64),
 /// rebased as the experiment runner's scenes are ([`crate::geometry::rebase`]).
 pub fn rebased_scene(placed: &[Placed], scale: f32, translation: glam::DVec3) -> Rebased {
-    let outer = Placement {
-        rotation: glam::Quat::IDENTITY,
-        translation,
-        scale,
-    };
+    let outer = Placement::new(glam::Quat::IDENTITY, translation, scale);
     let meshes: Vec<PlacedMesh> = placed
         .iter()
         .map(|(mesh, t, caster, receiver)| PlacedMesh {
