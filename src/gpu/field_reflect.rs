@@ -37,7 +37,8 @@ use glam::Vec3;
 use std::sync::atomic::AtomicU32;
 use std::time::{Duration, Instant};
 
-/// Twin of WGSL `Params` (shaders/field_reflect.wgsl).
+/// Twin of WGSL `Params` (shaders/field_reflect.wgsl): one dispatch of the reflection lookup
+/// (Gaitatzes et al., WSCG 2010, §4.2).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 struct ReflectParamsGpu {

@@ -13,6 +13,8 @@
 //! invocation on the device (the host sums in f64); the host adds the invocations' sums in
 //! f64 and divides by the kept rays, so the same hits give means within (m − 1)·2⁻²⁴ of each
 //! other (m rays an invocation, radiances at most 1) plus the shading's own rounding.
+//! Deviation from the paper: it does not give its lobe, shading or lights; these are the CPU
+//! path's (`render::reflect`).
 
 use super::GpuError;
 use crate::field::normals::NormalField;
@@ -22,7 +24,10 @@ use crate::sampling::rays::RaySet;
 use std::collections::HashMap;
 use std::sync::Arc;
 
-/// Twin of WGSL `Shading` (shaders/reflect_rays.wgsl): the eye and the shading of the hits.
+/// Twin of WGSL `Shading` (shaders/reflect_rays.wgsl): the eye and the shading of the hits of
+/// reflection rays (Gaitatzes, Andreadis, Papaioannou, Chrysanthou, WSCG 2010, §4.2).
+/// Deviation from the paper: it gives no shading for the reflected surfaces; this is
+/// `render::reflect::shade`'s (a diffuse hit lit by the lights' centres, a constant sky).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub(crate) struct ShadingGpu {
