@@ -1,14 +1,19 @@
 //! The GPU backend of a run (Gaitatzes, Andreadis, Papaioannou, Chrysanthou, WSCG 2010: field
 //! lookup on the GPU, compared there with a GPU BVH ray caster): field-lookup AO through
-//! [`FieldAoKernel`], field-lookup soft shadows (§4.2) through [`FieldShadowKernel`], and
-//! ray-cast AO and shadows through [`GpuTracer`] (an obvhs CWBVH in WGSL), on the rays of the
-//! CPU path (the same seeded k² cell centres, rotated per point by the same angles, from the
-//! same offset origins; for shadows mapped into each light's cone as on the CPU).
+//! [`FieldAoKernel`], field-lookup soft shadows (§4.2) through [`FieldShadowKernel`],
+//! field-lookup glossy reflections (§4.2, with the normal fields) through
+//! [`FieldReflectKernel`], and ray-cast AO, shadows and reflections through [`GpuTracer`] (an
+//! obvhs CWBVH in WGSL), on the rays of the CPU path (the same seeded k² cell centres, rotated
+//! per point by the same angles, from the same offset origins; for shadows mapped into each
+//! light's cone, for reflections into the Phong lobe about the mirror direction, as on the
+//! CPU).
 //!
 //! Each estimator runs on the kernels of its quantity: the AO estimators
 //! ([`Estimator::ao_options`]) on the two AO kernels, the shadow estimators
-//! ([`Estimator::shadow_options`]) on the two shadow kernels; an estimator without a kernel is
-//! refused with [`GpuError::Unsupported`], naming it.
+//! ([`Estimator::shadow_options`]) on the two shadow kernels, the reflection estimators
+//! ([`Estimator::reflect_options`]) on the two reflection kernels (the field kernel needs every
+//! instance's normal field, which the run attaches for reflections); an estimator without a
+//! kernel is refused with [`GpuError::Unsupported`], naming it.
 //!
 //! Times: the runner times [`Eval::estimate`] on the host, which is the call's wall time
 //! (receiver upload, dispatch, wait and read-back); the kernel alone, from GPU timestamps, comes
@@ -20,11 +25,12 @@ use super::spec::Backend;
 use super::Result;
 use crate::field::scene::FieldScene;
 use crate::gpu::{
-    AdapterPreference, FieldAoKernel, FieldGpuOptions, FieldLayout, FieldShadowKernel, GpuContext,
-    GpuError, GpuTiming, GpuTracer,
+    AdapterPreference, FieldAoKernel, FieldGpuOptions, FieldLayout, FieldReflectKernel,
+    FieldShadowKernel, GpuContext, GpuError, GpuTiming, GpuTracer,
 };
 use crate::render::ao::AoOptions;
 use crate::render::estimator::{Estimator, Points};
+use crate::render::reflect::ReflectOptions;
 use crate::render::shadow::ShadowOptions;
 use crate::sampling::rays::RaySet;
 
@@ -64,6 +70,7 @@ fn out(values: Vec<f32>, t: GpuTiming) -> Estimate {
 enum Quantity {
     Ao(AoOptions),
     Shadow(ShadowOptions),
+    Reflect(ReflectOptions),
 }
 
 /// The quantity `est` computes, or the refusal naming it.
@@ -74,6 +81,9 @@ fn quantity(est: &dyn Estimator) -> Result<Quantity> {
     if let Some(sh) = est.shadow_options() {
         return Ok(Quantity::Shadow(sh.clone()));
     }
+    if let Some(r) = est.reflect_options() {
+        return Ok(Quantity::Reflect(r.clone()));
+    }
     Err(GpuError::Unsupported(format!("no GPU kernel computes \"{}\"", est.name())).into())
 }
 
@@ -81,6 +91,7 @@ fn quantity(est: &dyn Estimator) -> Result<Quantity> {
 enum FieldEval<'a> {
     Ao(FieldAoKernel<'a>, AoOptions),
     Shadow(FieldShadowKernel<'a>, ShadowOptions),
+    Reflect(FieldReflectKernel<'a>, ReflectOptions),
 }
 
 impl Eval for FieldEval<'_> {
@@ -88,6 +99,7 @@ impl Eval for FieldEval<'_> {
         let (values, t) = match self {
             FieldEval::Ao(k, o) => k.vertex_ao(at.points, at.normals, rays, o)?,
             FieldEval::Shadow(k, o) => k.light_fractions(at.points, at.normals, rays, o)?,
+            FieldEval::Reflect(k, o) => k.reflections(at.points, at.normals, rays, o)?,
         };
         Ok(out(values, t))
     }
@@ -96,6 +108,7 @@ impl Eval for FieldEval<'_> {
         let setup = match self {
             FieldEval::Ao(k, _) => k.setup_time(),
             FieldEval::Shadow(k, _) => k.setup_time(),
+            FieldEval::Reflect(k, _) => k.setup_time(),
         };
         Some(setup.as_secs_f64())
     }
@@ -112,6 +125,7 @@ impl Eval for TraceEval<'_> {
         let (values, t) = match &self.quantity {
             Quantity::Ao(o) => self.tracer.ao(at.points, at.normals, rays, o)?,
             Quantity::Shadow(o) => self.tracer.shadows(at.points, at.normals, rays, o)?,
+            Quantity::Reflect(o) => self.tracer.reflections(at.points, at.normals, rays, o)?,
         };
         Ok(out(values, t))
     }
@@ -149,6 +163,10 @@ impl ComputeBackend for GpuBackend {
             Quantity::Shadow(sh) => FieldEval::Shadow(
                 FieldShadowKernel::new(&self.ctx, &fields.instances, &opts)?,
                 sh,
+            ),
+            Quantity::Reflect(r) => FieldEval::Reflect(
+                FieldReflectKernel::new(&self.ctx, &fields.instances, &opts)?,
+                r,
             ),
         };
         Ok(Box::new(eval))

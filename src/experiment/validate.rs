@@ -192,7 +192,7 @@ impl Ctx<'_> {
         }
         match &s.render {
             super::spec::RenderSpec::Shadows(sh) => self.lights(&sh.lights)?,
-            super::spec::RenderSpec::Reflections(r) => self.reflections(r, s)?,
+            super::spec::RenderSpec::Reflections(r) => self.reflections(r)?,
             _ => {}
         }
         if let Some(b) = s.render.intra_bias() {
@@ -342,8 +342,9 @@ impl Ctx<'_> {
     }
 
     /// Reflections: the lights as for shadows, a Phong exponent positive and finite, albedo
-    /// and sky in [0, 1], normal precisions 8 or 16 bits, each once; no GPU kernel yet.
-    fn reflections(&self, r: &super::spec::ReflectionRender, s: &Spec) -> Result<(), SpecError> {
+    /// and sky in [0, 1], normal precisions 8 or 16 bits, each once. The GPU backend runs them
+    /// (src/gpu/field_reflect.rs, `GpuTracer::reflections`).
+    fn reflections(&self, r: &super::spec::ReflectionRender) -> Result<(), SpecError> {
         use crate::render::reflect::Gloss;
         self.lights(&r.lights)?;
         if let Gloss::Phong { exponent } = r.gloss {
@@ -369,12 +370,6 @@ impl Ctx<'_> {
                     format!("{b}: each of 8 and 16 bits per component at most once"),
                 ));
             }
-        }
-        if s.backends.contains(&Backend::Gpu) {
-            return Err(self.err(
-                "backends",
-                "\"reflections\" has no GPU kernel in this build; use \"cpu\"".into(),
-            ));
         }
         Ok(())
     }

@@ -110,8 +110,24 @@ pub(crate) fn weighted_fractions(
     points: usize,
     dispatch: impl FnMut(u32, u32) -> Result<Dispatched, GpuError>,
 ) -> Result<(Vec<f32>, Option<Duration>, Duration), GpuError> {
+    weighted_means(split, rays, points, 1.0, dispatch)
+}
+
+/// [`weighted_fractions`] with `empty` for a point without weight: the means of reflected
+/// radiance (`render::reflect::reflect_at_points`), whose invocations write the sum of their
+/// kept rays' radiance and the number of those rays, and whose points without a kept ray
+/// are 0.
+///
+/// Errors: [`GpuError::Unsupported`] when even one ray per invocation is cut short.
+pub(crate) fn weighted_means(
+    split: &AtomicU32,
+    rays: u32,
+    points: usize,
+    empty: f32,
+    dispatch: impl FnMut(u32, u32) -> Result<Dispatched, GpuError>,
+) -> Result<(Vec<f32>, Option<Duration>, Duration), GpuError> {
     if rays == 0 {
-        return Ok((vec![1.0; points], None, Duration::ZERO));
+        return Ok((vec![empty; points], None, Duration::ZERO));
     }
     let (words, per_point, kernel, upload) = complete_runs(split, rays, 2, dispatch)?;
     debug_assert_eq!(words.len(), points * 2 * per_point as usize);
@@ -126,7 +142,7 @@ pub(crate) fn weighted_fractions(
             if total > 0.0 {
                 (lit / total) as f32
             } else {
-                1.0
+                empty
             }
         })
         .collect();

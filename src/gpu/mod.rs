@@ -12,9 +12,13 @@
 //! - [`FieldShadowKernel`]: soft shadows from spherical lights by field lookup (2010 §4.2), the
 //!   CPU path's shadow rays (cone samples, per-point rotation, per-ray far end at the light)
 //!   answered by the same lookup WGSL, weighted into the light fraction.
+//! - [`FieldReflectKernel`]: glossy reflections by field lookup (2010 §4.2), the CPU path's
+//!   reflection rays (mirror or Phong lobe, per-point rotation) answered by the same lookup WGSL
+//!   with the nearest hit over the instances, its normal read from the normal fields, shaded
+//!   and averaged as `render::reflect`.
 //! - [`GpuTracer`]: the GPU ray-cast reference, an obvhs CWBVH traversed in WGSL with the
 //!   watertight triangle test, so that GPU lookup is compared with GPU ray casting on the same
-//!   device (any / closest hit, AO, soft shadows).
+//!   device (any / closest hit, AO, soft shadows, glossy reflections).
 //! - [`ReliefKernel`]: the 2005 relief caster (linear search, bisection, safety-zone skips)
 //!   over segments through the prism, for the relief experiment's GPU columns.
 //! - [`GpuTiming`]: GPU timestamps (where the adapter has them) and wall time, separately.
@@ -27,9 +31,11 @@ mod context;
 mod field_ao;
 mod field_binding;
 mod field_data;
+mod field_reflect;
 mod field_shadow;
 mod loop_budget;
 mod rays;
+mod reflect_rays;
 mod relief;
 mod shadow_rays;
 mod texture;
@@ -39,6 +45,7 @@ pub use context::{AdapterPreference, GpuContext, ADAPTER_ENV};
 pub use field_ao::{FieldAoKernel, FieldGpuOptions, LookupProbe};
 pub use field_binding::FieldLayout;
 pub use field_data::FieldInstanceGpu;
+pub use field_reflect::FieldReflectKernel;
 pub use field_shadow::FieldShadowKernel;
 pub use relief::ReliefKernel;
 pub use tracer::{GpuHit, GpuTracer};

@@ -53,7 +53,12 @@ const _: () = assert!(std::mem::offset_of!(ConeSampleGpu, radius_sq) == 8);
 
 /// The lights of `opts`, as the kernels read them.
 pub(crate) fn lights(opts: &ShadowOptions) -> Vec<LightGpu> {
-    opts.lights
+    light_records(&opts.lights)
+}
+
+/// `lights` as the kernels read them.
+pub(crate) fn light_records(lights: &[SphereLight]) -> Vec<LightGpu> {
+    lights
         .iter()
         .map(|l: &SphereLight| LightGpu {
             center: l.center.to_array(),

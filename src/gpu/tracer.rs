@@ -1,15 +1,20 @@
 //! The GPU ray-cast reference: an obvhs CWBVH traversed in WGSL (Ylitie, Karras, Laine, HPG
 //! 2017) with the watertight triangle test (Woop, Benthin, Wald, JCGT 2013), so that GPU field
 //! lookup is compared with GPU ray casting on the same device: any-hit and closest-hit queries,
-//! vertex AO ([`GpuTracer::ao`]) and soft shadows from spherical lights ([`GpuTracer::shadows`],
-//! Gaitatzes, Andreadis, Papaioannou, Chrysanthou, WSCG 2010, §4.2), on the CPU path's rays.
+//! vertex AO ([`GpuTracer::ao`]), soft shadows from spherical lights ([`GpuTracer::shadows`])
+//! and glossy reflections ([`GpuTracer::reflections`]; Gaitatzes, Andreadis, Papaioannou,
+//! Chrysanthou, WSCG 2010, §4.2), on the CPU path's rays.
 
 use super::context::{entry, GpuContext};
-use super::loop_budget::{free_fractions, weighted_fractions, Dispatched, COMPLETION_TRIPS};
+use super::loop_budget::{
+    free_fractions, weighted_fractions, weighted_means, Dispatched, COMPLETION_TRIPS,
+};
 use super::rays::{base_directions, receivers};
-use super::shadow_rays::{cone_samples, lights};
+use super::reflect_rays::{lobe_directions, rays_per_point, shading};
+use super::shadow_rays::{cone_samples, light_records, lights};
 use super::{GpuError, GpuTiming};
 use crate::render::ao::AoOptions;
+use crate::render::reflect::ReflectOptions;
 use crate::render::shadow::ShadowOptions;
 use crate::sampling::rays::RaySet;
 use crate::trace::RayQuery;
@@ -43,13 +48,13 @@ const _: () = assert!(std::mem::offset_of!(RayGpu, direction) == 16);
 struct TraceParamsGpu {
     /// Rays (or receiver points for AO) in this dispatch.
     ray_count: u32,
-    /// AO: rays per point (the base directions).
+    /// AO: rays per point (the base directions); reflections: reflection rays per point.
     rays_per_point: u32,
     /// Invocations per row of the dispatch grid.
     row_stride: u32,
     /// CWBVH nodes (0: an empty scene).
     node_count: u32,
-    /// AO: ray origin offset along the normal.
+    /// AO, shadows, reflections: ray origin offset along the normal.
     origin_offset: f32,
     /// AO: largest hit distance.
     tmax: f32,
@@ -57,11 +62,11 @@ struct TraceParamsGpu {
     light_count: u32,
     /// Shadows: samples per light (k²).
     cells: u32,
-    /// AO, shadows: rays one invocation traces.
+    /// AO, shadows, reflections: rays one invocation traces.
     rays_per_invocation: u32,
-    /// AO, shadows: invocations per point.
+    /// AO, shadows, reflections: invocations per point.
     invocations_per_point: u32,
-    /// AO, shadows: trips of the completion loop ([`COMPLETION_TRIPS`]).
+    /// AO, shadows, reflections: trips of the completion loop ([`COMPLETION_TRIPS`]).
     completion_trips: u32,
     _pad2: u32,
 }
@@ -78,7 +83,11 @@ const DIRS_BINDING: u32 = 5;
 const RECEIVERS_BINDING: u32 = 6;
 /// Bindings of the shadow kernel's cone samples and lights in shaders/bvh_shadow.wgsl.
 const SAMPLES_BINDING: u32 = 7;
+/// Binding of the lights (shadows and reflections) in shaders/bvh_shadow.wgsl.
 const LIGHTS_BINDING: u32 = 8;
+/// Bindings of the reflection kernel's lobe directions and shading in shaders/bvh_reflect.wgsl.
+const LOBE_BINDING: u32 = 9;
+const SHADING_BINDING: u32 = 10;
 
 /// Box padding relative to the scene extent, as the CPU tracer pads (`2^-18`), so that the
 /// quantised node test stays conservative for the watertight triangle test.
@@ -103,10 +112,13 @@ pub struct GpuTracer<'a> {
     closest: wgpu::ComputePipeline,
     ao: wgpu::ComputePipeline,
     shadow: wgpu::ComputePipeline,
+    reflect: wgpu::ComputePipeline,
     /// Rays per AO invocation, as last found to fit (`loop_budget::free_fractions`).
     rays_per_invocation: AtomicU32,
     /// Rays per shadow invocation, as last found to fit (`loop_budget::weighted_fractions`).
     shadow_rays_per_invocation: AtomicU32,
+    /// Rays per reflection invocation, as last found to fit (`loop_budget::weighted_means`).
+    reflect_rays_per_invocation: AtomicU32,
     setup: Duration,
 }
 
@@ -153,6 +165,8 @@ impl<'a> GpuTracer<'a> {
             include_str!("../../shaders/bvh.wgsl"),
             include_str!("../../shaders/shadow_rays.wgsl"),
             include_str!("../../shaders/bvh_shadow.wgsl"),
+            include_str!("../../shaders/reflect_rays.wgsl"),
+            include_str!("../../shaders/bvh_reflect.wgsl"),
         ]
         .concat();
         Ok(GpuTracer {
@@ -164,8 +178,12 @@ impl<'a> GpuTracer<'a> {
             closest: ctx.compute_pipeline("bvh_closest", &source, "closest_main")?,
             ao: ctx.compute_pipeline("bvh_ao", &source, "ao_main")?,
             shadow: ctx.compute_pipeline("bvh_shadow", &source, "shadow_main")?,
+            reflect: ctx.compute_pipeline("bvh_reflect", &source, "reflect_main")?,
             rays_per_invocation: AtomicU32::new(super::loop_budget::DEFAULT_RAYS_PER_INVOCATION),
             shadow_rays_per_invocation: AtomicU32::new(
+                super::loop_budget::DEFAULT_RAYS_PER_INVOCATION,
+            ),
+            reflect_rays_per_invocation: AtomicU32::new(
                 super::loop_budget::DEFAULT_RAYS_PER_INVOCATION,
             ),
             setup: start.elapsed(),
@@ -293,6 +311,50 @@ impl<'a> GpuTracer<'a> {
                     (LIGHTS_BINDING, bytemuck::cast_slice(&light_records)),
                 ];
                 self.dispatch(&self.shadow, records, (per_point, 2), &extra, params)
+            },
+        )?;
+        Ok((values, timing(kernel, upload, start)))
+    }
+
+    /// Glossy reflections by ray casting: the reflected radiance at every point with the same
+    /// reflection rays as [`crate::render::reflect::reflect_at_points`] (each a closest-hit
+    /// query from the offset origin, the hit shaded with the triangle's unit geometric normal
+    /// as the CPU tracer's `Hit::normal`), averaged as there (src/gpu/reflect_rays.rs for the
+    /// f32 sums). A point's rays are spread over several invocations, as in [`Self::ao`].
+    pub fn reflections(
+        &self,
+        points: &[Vec3],
+        normals: &[Vec3],
+        rays: &RaySet,
+        opts: &ReflectOptions,
+    ) -> Result<(Vec<f32>, GpuTiming), GpuError> {
+        let start = Instant::now();
+        let lobe = lobe_directions(rays, opts.gloss)?;
+        let light_records = light_records(&opts.lights);
+        let shading = shading(opts);
+        let recv = receivers(points, normals, rays)?;
+        let rays_n = rays_per_point(rays, opts.gloss);
+        let (values, kernel, upload) = weighted_means(
+            &self.reflect_rays_per_invocation,
+            rays_n,
+            recv.len(),
+            0.0,
+            |per_invocation, per_point| {
+                let params = TraceParamsGpu {
+                    rays_per_point: rays_n,
+                    origin_offset: opts.offset,
+                    rays_per_invocation: per_invocation,
+                    invocations_per_point: per_point,
+                    completion_trips: COMPLETION_TRIPS,
+                    ..Default::default()
+                };
+                let records = (&recv[..], RECEIVERS_BINDING);
+                let extra = [
+                    (LOBE_BINDING, bytemuck::cast_slice(&lobe)),
+                    (LIGHTS_BINDING, bytemuck::cast_slice(&light_records)),
+                    (SHADING_BINDING, bytemuck::bytes_of(&shading)),
+                ];
+                self.dispatch(&self.reflect, records, (per_point, 2), &extra, params)
             },
         )?;
         Ok((values, timing(kernel, upload, start)))

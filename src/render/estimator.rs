@@ -69,6 +69,13 @@ pub trait Estimator: Sync {
     fn shadow_options(&self) -> Option<&super::shadow::ShadowOptions> {
         None
     }
+
+    /// The reflection options when this estimator is the reflected radiance of
+    /// [`super::reflect`]: the GPU's reflection kernels then compute it. `None` for other
+    /// quantities.
+    fn reflect_options(&self) -> Option<&super::reflect::ReflectOptions> {
+        None
+    }
 }
 
 /// Ambient occlusion at each point (Gaitatzes, Chrysanthou, Papaioannou, WSCG 2008; per pixel:
@@ -141,6 +148,7 @@ mod tests {
         assert!(a.iter().any(|&v| v < 1.0) && a.iter().any(|&v| v > 0.0));
         assert_eq!(est.ao_options(), Some(&opts));
         assert!(est.shadow_options().is_none());
+        assert!(est.reflect_options().is_none());
         assert_eq!(
             serde_json::Value::Object(est.key()),
             serde_json::json!({"offset": 1e-4f32, "max_distance": 2.0, "falloff": "step"})

@@ -218,6 +218,10 @@ impl Estimator for ReflectionEstimator {
         m.insert("sky".into(), serde_json::json!(o.sky));
         m
     }
+
+    fn reflect_options(&self) -> Option<&ReflectOptions> {
+        Some(&self.opts)
+    }
 }
 
 #[cfg(test)]
