@@ -89,8 +89,12 @@ fn image_ao(c: &mut Criterion) {
         width: w,
         height: h,
     };
-    let opts = AoOptions::for_scene(scene.bounding_sphere());
-    let pts = EvalPoints::pixels(&scene, &gbuf, opts.offset);
+    // The points' origins carry each instance's ray offset: the estimators add none.
+    let opts = AoOptions {
+        offset: 0.0,
+        ..AoOptions::for_scene(scene.bounding_sphere())
+    };
+    let pts = EvalPoints::pixels(&scene, &gbuf);
     let rays = RaySet::new(8, 1);
     eprintln!(
         "image_ao bench: {} receiver pixels of {w} × {h}, {} rays each",
@@ -98,7 +102,7 @@ fn image_ao(c: &mut Criterion) {
         rays.len()
     );
     let run = |vis: &dyn visfield::render::Visibility| {
-        ao_at_points(vis, &pts.points, &pts.normals, &rays, &opts)
+        ao_at_points(vis, &pts.origins, &pts.normals, &rays, &opts)
     };
     let tracer = OnceCell::new();
     let tracer = || tracer.get_or_init(|| Tracer::new(&scene.caster_triangles()));
@@ -179,7 +183,7 @@ fn image_ao(c: &mut Criterion) {
     };
     let srays = RaySet::new(4, 1);
     let shadows = |vis: &dyn visfield::render::Visibility| {
-        shadow_at_points(vis, &pts.points, &pts.normals, &srays, &sopts)
+        shadow_at_points(vis, &pts.origins, &pts.normals, &srays, &sopts)
     };
     let mut group = c.benchmark_group(format!("shadow_{w}x{h}_3x16_rays/{MODEL}"));
     group.sample_size(10);
@@ -227,7 +231,7 @@ fn image_ao(c: &mut Criterion) {
     };
     let rrays = RaySet::new(2, 1);
     let reflect = |vis: &dyn visfield::render::Visibility| {
-        reflect_at_points(vis, &pts.points, &pts.normals, &rrays, &ropts)
+        reflect_at_points(vis, &pts.origins, &pts.normals, &rrays, &ropts)
     };
     let mut group = c.benchmark_group(format!("reflection_{w}x{h}_4_rays/{MODEL}"));
     group.sample_size(10);

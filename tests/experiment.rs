@@ -628,15 +628,19 @@ fn image_ao_evaluates_at_the_receiver_pixels_of_the_gbuffer() {
         .count();
     assert_eq!(r.receiver_points, receiver_pixels);
     assert!(receiver_pixels > 100 && receiver_pixels < 32 * 32);
-    let opts = AoOptions::for_scene(bs.bounds());
+    // The points' origins carry each instance's offset: the estimator adds none.
+    let opts = AoOptions {
+        offset: 0.0,
+        ..AoOptions::for_scene(bs.bounds())
+    };
     let view = GBuffer {
         hits,
         width: 32,
         height: 32,
     };
-    let at = EvalPoints::pixels(&bs.scene, &view, opts.offset);
+    let at = EvalPoints::pixels(&bs.scene, &view);
     let tracer = Tracer::new(&bs.scene.caster_triangles());
-    let ao = ao_at_points(&tracer, &at.points, &at.normals, &RaySet::new(4, 1), &opts);
+    let ao = ao_at_points(&tracer, &at.origins, &at.normals, &RaySet::new(4, 1), &opts);
     let (img, mask) = at.image(&bs.scene, &view, &ao);
     assert_eq!(mask.iter().filter(|&&m| m).count(), receiver_pixels);
     let png = image::open(out.join("images/tiny-reference.png"))

@@ -160,3 +160,35 @@ fn a_translated_scene_gives_the_same_values_or_is_refused() {
         "{e}"
     );
 }
+
+/// A distant object leaves the AO where it was: a sphere of radius 0.1 placed 1000 away (a
+/// caster, with its own field) changes neither the receivers' ray offsets (each point's is its
+/// own instance's) nor any reference value. With the offset of the whole scene's radius it
+/// rose from 8.7e-5 to 0.05 and changed the AO at 76 of 243 points by up to 0.375.
+#[test]
+fn a_distant_object_leaves_the_ao_unchanged() {
+    let base = tiny(ONE_FIELD, "").replace(r#", "image": { "width": 32, "height": 32 }"#, "");
+    let far = base.replace(
+        r#""receiver": true }"#,
+        r#""receiver": true },
+      { "mesh": { "sphere": { "radius": 0.1, "stacks": 8, "slices": 16 } }, "caster": true,
+        "transform": { "translate": [1000, 0, 0] } }"#,
+    );
+    assert_ne!(far, base);
+    let reference = |text: &str| {
+        let dir = tempfile::tempdir().unwrap();
+        let ls = common::loaded(dir.path(), text);
+        run(&ls, &common::options(dir.path().join("out"))).unwrap();
+        let csv = std::fs::read_to_string(dir.path().join("out/ao_tiny.csv")).unwrap();
+        let mut lines = csv.lines();
+        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let col = header.iter().position(|&h| h == "reference").unwrap();
+        lines
+            .map(|l| l.split(',').nth(col).unwrap().to_string())
+            .collect::<Vec<_>>()
+    };
+    let (here, with_far) = (reference(&base), reference(&far));
+    assert_eq!(here.len(), 243);
+    assert!(here.iter().any(|v| v != "1"), "some points are occluded");
+    assert_eq!(here, with_far);
+}

@@ -11,8 +11,8 @@
 //!   cosine-weighted hemisphere is open, from ray casting and from the field.
 //!
 //! Each scene is viewed as the harness views an image-AO scene: primary visibility cast with
-//! the reference tracer ([`gbuffer`]), the ray offset of [`AoOptions::for_scene`] on the scene's
-//! bounds, the same [`RaySet`] for every backend.
+//! the reference tracer ([`gbuffer`]), each point moved off its surface by its instance's ray
+//! offset ([`EvalPoints::at`]: the ray origins), the same [`RaySet`] for every backend.
 
 use glam::{Quat, Vec3};
 use std::sync::Arc;
@@ -64,8 +64,12 @@ impl View {
             width,
             height,
         };
-        let opts = AoOptions::for_scene(scene.bounding_sphere());
-        let points = EvalPoints::pixels(&scene, &gbuf, opts.offset);
+        // The points' origins carry the offset: the estimator adds none.
+        let opts = AoOptions {
+            offset: 0.0,
+            ..AoOptions::for_scene(scene.bounding_sphere())
+        };
+        let points = EvalPoints::pixels(&scene, &gbuf);
         View {
             scene,
             gbuf,
@@ -102,12 +106,12 @@ impl View {
 
     fn ao(&self, vis: &dyn Visibility, rays: &RaySet) -> Vec<f32> {
         let p = &self.points;
-        ao_at_points(vis, &p.points, &p.normals, rays, &self.opts)
+        ao_at_points(vis, &p.origins, &p.normals, rays, &self.opts)
     }
 
     /// The ray origin and the world directions of point `i`'s rays, as `ao_at_point` forms them.
     fn rays_of(&self, i: usize, rays: &RaySet) -> (Vec3, Vec<Vec3>) {
-        let (p, n) = (self.points.points[i], self.points.normals[i]);
+        let (p, n) = (self.points.origins[i], self.points.normals[i]);
         let frame = Frame::from_normal(n);
         let dirs = rays.directions(i as u32);
         let dirs = dirs.into_iter().map(|d| frame.to_world(d)).collect();
@@ -411,7 +415,7 @@ fn the_bottom_of_a_bowl_sees_half_the_sky() {
     );
     assert!(!view.points.crease[j]);
     let copies = 8;
-    view.points.points = vec![p; copies];
+    view.points.origins = vec![view.points.origins[j]; copies];
     view.points.normals = vec![n; copies];
     let axis = Vec3::Y;
     let theta0 = std::f64::consts::FRAC_PI_4;

@@ -193,8 +193,9 @@ fn a_reflection_run_measures_the_reflected_radiance_at_the_receiver_pixels() {
         width: 32,
         height: 32,
     };
-    let offset = visfield::render::ao::AoOptions::for_scene(bs.bounds()).offset;
-    let pts = visfield::render::points::EvalPoints::pixels(&bs.scene, &gbuf, offset);
+    // The points' origins carry each instance's ray offset: the estimator adds none.
+    let pts = visfield::render::points::EvalPoints::pixels(&bs.scene, &gbuf);
+    let offset = 0.0;
     assert_eq!(pts.len(), r8.receiver_points);
     let lights: Vec<SphereLight> = serde_json::from_str(LIGHTS).unwrap();
     let opts = ReflectOptions {
@@ -207,12 +208,12 @@ fn a_reflection_run_measures_the_reflected_radiance_at_the_receiver_pixels() {
     };
     let tracer = Tracer::new(&bs.scene.caster_triangles());
     let rays = RaySet::new(2, 1);
-    let exact = reflect_at_points(&tracer, &pts.points, &pts.normals, &rays, &opts);
+    let exact = reflect_at_points(&tracer, &pts.origins, &pts.normals, &rays, &opts);
     // Some pixels reflect the caster, some the sky.
     assert!(exact.iter().any(|&v| v != 0.3) && exact.contains(&0.3));
     let (img, _) = pts.image(&bs.scene, &gbuf, &exact);
     assert_png_is(&out.join(format!("images/{}-reference.png", bs.name)), &img);
-    let mirror = reflect_at_points(&tracer, &pts.points, &pts.normals, &rays, &opts.mirror());
+    let mirror = reflect_at_points(&tracer, &pts.origins, &pts.normals, &rays, &opts.mirror());
     let (img, _) = pts.image(&bs.scene, &gbuf, &mirror);
     assert_png_is(
         &out.join(format!("images/{}-reference-mirror.png", bs.name)),

@@ -42,7 +42,8 @@ pub struct Columns {
 pub struct Setup {
     pub points: EvalPoints,
     pub estimator: Box<dyn Estimator>,
-    /// How far ray origins move along the normal (model units), for run.json.
+    /// The largest distance a ray origin moves along its normal (model units; each point's is
+    /// its instance's, `render::ao::instance_epsilon`), for run.json.
     pub offset: f32,
     /// A per-point factor in \[0, 1\] that turns the kind's values into a shaded picture,
     /// written beside each value image as `-shaded.png` (shadows: the unshadowed direct light,
@@ -100,13 +101,17 @@ pub fn of(render: &RenderSpec) -> Box<dyn Kind> {
     }
 }
 
-/// The AO estimator of an AO spec on a scene: the scene-aware ray offset, the spec's radius and
-/// falloff.
-fn ao_estimator(a: &AoRender, scene: &BuiltScene) -> AoEstimator {
-    let mut opts = AoOptions::for_scene(scene.bounds());
-    opts.max_distance = a.max_distance;
-    opts.falloff = a.falloff;
-    AoEstimator { opts }
+/// The AO estimator of an AO spec: the spec's radius and falloff, and no ray offset of its
+/// own (the points are the ray origins, each moved off its surface by its instance's offset:
+/// [`EvalPoints::at`]).
+fn ao_estimator(a: &AoRender) -> AoEstimator {
+    AoEstimator {
+        opts: AoOptions {
+            max_distance: a.max_distance,
+            offset: 0.0,
+            falloff: a.falloff,
+        },
+    }
 }
 
 fn lookup(intra_bias: Option<f32>, selection: Selection) -> LookupOptions {
@@ -153,12 +158,11 @@ impl Kind for VertexAo {
     }
 
     fn setup(&self, scene: &BuiltScene, _view: Option<&GBuffer>) -> Setup {
-        let est = ao_estimator(&self.0, scene);
-        let offset = est.opts.offset;
+        let points = EvalPoints::vertices(&scene.scene);
         Setup {
-            points: EvalPoints::vertices(&scene.scene, offset),
-            estimator: Box::new(est),
-            offset,
+            offset: points.max_offset(),
+            points,
+            estimator: Box::new(ao_estimator(&self.0)),
             shading: None,
             second_reference: None,
         }
@@ -202,13 +206,12 @@ impl Kind for ImageAo {
     }
 
     fn setup(&self, scene: &BuiltScene, view: Option<&GBuffer>) -> Setup {
-        let est = ao_estimator(&self.0, scene);
-        let offset = est.opts.offset;
         let view = view.expect("image_ao: validation guarantees an image, and so a G-buffer");
+        let points = EvalPoints::pixels(&scene.scene, view);
         Setup {
-            points: EvalPoints::pixels(&scene.scene, view, offset),
-            estimator: Box::new(est),
-            offset,
+            offset: points.max_offset(),
+            points,
+            estimator: Box::new(ao_estimator(&self.0)),
             shading: None,
             second_reference: None,
         }
@@ -276,17 +279,21 @@ impl Kind for Shadows {
     }
 
     fn setup(&self, scene: &BuiltScene, view: Option<&GBuffer>) -> Setup {
-        let offset = AoOptions::for_scene(scene.bounds()).offset;
         let view = view.expect("shadows: validation guarantees an image, and so a G-buffer");
         let lights = self.lights_in_frame(scene);
-        let points = EvalPoints::pixels(&scene.scene, view, offset);
-        let opts = ShadowOptions { offset, lights };
+        let points = EvalPoints::pixels(&scene.scene, view);
+        // The points are the ray origins (EvalPoints::at): no offset of the estimator's own.
+        let opts = ShadowOptions {
+            offset: 0.0,
+            lights,
+        };
         // The direct light on a white diffuse receiver, from 8² centred rays per light.
-        let shading = direct_light(&points.points, &points.normals, &RaySet::new(8, 1), &opts);
+        let at = points.at();
+        let shading = direct_light(at.points, at.normals, &RaySet::new(8, 1), &opts);
         Setup {
+            offset: points.max_offset(),
             points,
             estimator: Box::new(ShadowEstimator { opts }),
-            offset,
             shading: Some(shading),
             second_reference: None,
         }
@@ -330,7 +337,8 @@ impl Reflections {
         let r = &self.0;
         let image = r.image.as_ref().expect("validation guarantees an image");
         ReflectOptions {
-            offset: AoOptions::for_scene(scene.bounds()).offset,
+            // The points are the ray origins (EvalPoints::at).
+            offset: 0.0,
             eye: scene.view_camera(image).eye,
             gloss: r.gloss,
             lights: lights_in_frame(&r.lights, scene),
@@ -379,8 +387,8 @@ impl Kind for Reflections {
 
     fn setup(&self, scene: &BuiltScene, view: Option<&GBuffer>) -> Setup {
         let opts = self.options(scene);
-        let offset = opts.offset;
         let view = view.expect("reflections: validation guarantees an image, and so a G-buffer");
+        let points = EvalPoints::pixels(&scene.scene, view);
         let second_reference = (opts.gloss != Gloss::Mirror).then(|| {
             let mirror: Box<dyn Estimator> = Box::new(ReflectionEstimator {
                 opts: opts.mirror(),
@@ -388,9 +396,9 @@ impl Kind for Reflections {
             ("mirror", mirror)
         });
         Setup {
-            points: EvalPoints::pixels(&scene.scene, view, offset),
+            offset: points.max_offset(),
+            points,
             estimator: Box::new(ReflectionEstimator { opts }),
-            offset,
             shading: None,
             second_reference,
         }

@@ -56,6 +56,14 @@ pub fn scene_epsilon_for(bounds: crate::geometry::Sphere) -> f32 {
     scene_epsilon(bounds.radius).max(magnitude * 2f32.powi(-21))
 }
 
+/// The ray-origin offset of the points on one instance: [`scene_epsilon_for`] of the
+/// instance's own world bounding sphere. Local geometry only: an object elsewhere in the scene,
+/// however large or far, changes nothing (the harness moves each evaluation point off its
+/// surface by its instance's offset, [`super::points::EvalPoints`]).
+pub fn instance_epsilon(inst: &crate::geometry::Instance) -> f32 {
+    scene_epsilon_for(inst.world_bounding_sphere())
+}
+
 /// Options of [`ao_at_points`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AoOptions {

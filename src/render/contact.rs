@@ -94,9 +94,40 @@ pub fn separate_contacts(
     tolerance: f32,
     offset: f32,
 ) -> Contacts {
+    separate(points, normals, triangles, |_| tolerance, |_| offset)
+}
+
+/// [`separate_contacts`] with each point's own tolerance and offset, `offsets[i]` for both
+/// (the ray offset of the point's instance, [`super::ao::instance_epsilon`]).
+///
+/// # Panics
+/// If `points`, `normals` and `offsets` differ in length.
+pub fn separate_contacts_each(
+    points: &[Vec3],
+    normals: &[Vec3],
+    triangles: &[[Vec3; 3]],
+    offsets: &[f32],
+) -> Contacts {
+    assert_eq!(
+        points.len(),
+        offsets.len(),
+        "separate_contacts_each: lengths"
+    );
+    separate(points, normals, triangles, |i| offsets[i], |i| offsets[i])
+}
+
+fn separate(
+    points: &[Vec3],
+    normals: &[Vec3],
+    triangles: &[[Vec3; 3]],
+    tolerance_of: impl Fn(usize) -> f32,
+    offset_of: impl Fn(usize) -> f32,
+) -> Contacts {
     assert_eq!(points.len(), normals.len(), "separate_contacts: lengths");
     let mut touching: Vec<Vec<Vec3>> = vec![Vec::new(); points.len()];
     if !points.is_empty() {
+        // The grid and each triangle's box take the largest tolerance; each point its own.
+        let tolerance = (0..points.len()).map(&tolerance_of).fold(0.0f32, f32::max);
         let grid = PointGrid::new(points, tolerance);
         for t in triangles {
             let m = (t[1] - t[0]).cross(t[2] - t[0]);
@@ -105,7 +136,8 @@ pub fn separate_contacts(
             let hi = t[0].max(t[1]).max(t[2]) + Vec3::splat(tolerance);
             grid.for_each_in(lo, hi, |i| {
                 let p = points[i];
-                if p.distance_squared(closest_point_on_triangle(p, t)) <= tolerance * tolerance
+                let tol = tolerance_of(i);
+                if p.distance_squared(closest_point_on_triangle(p, t)) <= tol * tol
                     && normals[i].dot(m) < SAME_PLANE_COS
                 {
                     touching[i].push(m);
@@ -130,7 +162,7 @@ pub fn separate_contacts(
             }
         }
         for m in distinct {
-            out.points[i] += offset * m;
+            out.points[i] += offset_of(i) * m;
         }
     }
     out

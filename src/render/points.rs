@@ -8,7 +8,8 @@
 //! Both then follow the contact convention of [`super::contact`]: points that lie on another
 //! surface are moved in front of it and marked as crease points.
 
-use super::contact::separate_contacts;
+use super::ao::instance_epsilon;
+use super::contact::separate_contacts_each;
 use super::estimator::Points;
 use super::image::GrayImage;
 use super::primary::{shade_vertex_ao, PixelHit};
@@ -39,60 +40,91 @@ pub struct EvalPoints {
     pub points: Vec<Vec3>,
     /// Unit normals.
     pub normals: Vec<Vec3>,
+    /// The ray offset of each point: its instance's ([`instance_epsilon`]).
+    pub offsets: Vec<f32>,
+    /// The ray origins, `points[i] + offsets[i] · normals[i]`: what an estimator evaluates at
+    /// ([`Self::at`], with an estimator offset of 0).
+    pub origins: Vec<Vec3>,
     /// Whether each point touches another surface ([`super::contact`]).
     pub crease: Vec<bool>,
     pub support: Support,
 }
 
 impl EvalPoints {
-    /// Every receiver vertex of `scene`, separated from touching surfaces by `offset`.
-    pub fn vertices(scene: &Scene, offset: f32) -> EvalPoints {
+    /// Every receiver vertex of `scene`, separated from touching surfaces by its instance's
+    /// offset.
+    pub fn vertices(scene: &Scene) -> EvalPoints {
         let r = Receivers::of(scene);
         let (points, normals) = (r.points.clone(), r.normals.clone());
-        Self::separated(scene, points, normals, Support::Vertices(r), offset)
+        let mut offsets = vec![0.0; points.len()];
+        for &(inst, start, count) in &r.ranges {
+            offsets[start..start + count].fill(instance_epsilon(&scene.instances[inst]));
+        }
+        Self::separated(scene, points, normals, offsets, Support::Vertices(r))
     }
 
     /// The surface point of every pixel of `gbuf` that sees a receiver, separated from
-    /// touching surfaces by `offset`.
-    pub fn pixels(scene: &Scene, gbuf: &GBuffer, offset: f32) -> EvalPoints {
-        let (mut points, mut normals, mut pixels) = (vec![], vec![], vec![]);
+    /// touching surfaces by its instance's offset.
+    pub fn pixels(scene: &Scene, gbuf: &GBuffer) -> EvalPoints {
+        let eps: Vec<Option<f32>> = scene
+            .instances
+            .iter()
+            .map(|i| i.receiver.then(|| instance_epsilon(i)))
+            .collect();
+        let (mut points, mut normals, mut offsets, mut pixels) = (vec![], vec![], vec![], vec![]);
         for (i, h) in gbuf.hits.iter().enumerate() {
-            if let Some(h) = h.filter(|h| scene.instances[h.instance as usize].receiver) {
+            if let Some((h, e)) = h.and_then(|h| Some((h, eps[h.instance as usize]?))) {
                 points.push(h.position);
                 normals.push(h.normal);
+                offsets.push(e);
                 pixels.push(i);
             }
         }
-        Self::separated(scene, points, normals, Support::Pixels(pixels), offset)
+        Self::separated(scene, points, normals, offsets, Support::Pixels(pixels))
     }
 
     fn separated(
         scene: &Scene,
         points: Vec<Vec3>,
         normals: Vec<Vec3>,
+        offsets: Vec<f32>,
         support: Support,
-        offset: f32,
     ) -> EvalPoints {
         let all: Vec<[Vec3; 3]> = scene
             .instances
             .iter()
             .flat_map(|i| i.world_triangles())
             .collect();
-        let contacts = separate_contacts(&points, &normals, &all, offset, offset);
+        let contacts = separate_contacts_each(&points, &normals, &all, &offsets);
+        let origins = contacts
+            .points
+            .iter()
+            .zip(&normals)
+            .zip(&offsets)
+            .map(|((&p, &n), &o)| p + o * n)
+            .collect();
         EvalPoints {
             points: contacts.points,
             normals,
+            offsets,
+            origins,
             crease: contacts.crease,
             support,
         }
     }
 
-    /// The points and normals, for an [`super::estimator::Estimator`].
+    /// The ray origins and normals, for an [`super::estimator::Estimator`] whose offset is 0
+    /// (each point is already moved off its surface by its own instance's offset).
     pub fn at(&self) -> Points<'_> {
         Points {
-            points: &self.points,
+            points: &self.origins,
             normals: &self.normals,
         }
+    }
+
+    /// The largest ray offset of the points (0 without points).
+    pub fn max_offset(&self) -> f32 {
+        self.offsets.iter().copied().fold(0.0, f32::max)
     }
 
     /// The number of points.
