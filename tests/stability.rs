@@ -40,6 +40,7 @@ case_tests!(
     layout_singular_directions,
     quantisation_edges,
     scale,
+    bystanders,
     receiver_touching_caster,
     thin_sheet,
     caster_1000x_larger_and_smaller,

@@ -72,6 +72,7 @@ pub const CASES: &[Case] = &[
     ("quantisation_edges", layouts::quantisation),
     ("scale", scale::scale),
     ("position", scale::position),
+    ("bystanders", scale::bystanders),
     ("receiver_touching_caster", hard::touching),
     ("thin_sheet", hard::thin_sheet),
     ("caster_1000x_larger_and_smaller", hard::extreme_sizes),

@@ -10,6 +10,11 @@
 //! origin offset that does not follow the scale, or that falls below the f32 spacing of the
 //! coordinates (1e-3 at 1e4), shows as self-occlusion. 256 rays per point: one ray changing its
 //! answer moves AO by 1/256, inside the tolerance; two do not.
+//!
+//! Bystanders ([`bystanders`]): the same scene with a small sphere 1000 away (a caster), and with
+//! a receiver plane 1000× the corner's size far below it, evaluated at the harness's points
+//! ([`crate::render::points::EvalPoints`]: each point moved off its surface by its own
+//! instance's offset): the corner's and the cube's AO do not change.
 
 use super::scene_ao::{
     bake_field, field_ao, flattened, raycast_ao, raycast_ao_with, rebased_scene, scene, Placed,
@@ -123,6 +128,64 @@ pub fn far_mesh_coordinates() -> f64 {
     assert_ne!(here.origin, glam::DVec3::ZERO, "the far scene is rebased");
     let back = flattened(&sc, Vec3::splat(-1e4));
     super::scene_ao::max_diff(&raycast_ao(&here.scene, 16), &raycast_ao(&back, 16))
+}
+
+/// The bystanders case: ray-cast AO at the unit scene's receiver vertices, as the harness
+/// evaluates them (per-instance ray offsets, [`crate::render::ao::instance_epsilon`]), with a
+/// sphere of radius 0.1 at 1000 (a caster) and with a 1000-wide receiver plane 2000 below the
+/// corner added, against the unit scene alone: both differences must be 0 (the former
+/// scene-wide offset rose to 0.05 with the far sphere and changed the AO by up to 0.375).
+pub fn bystanders() -> Vec<StabilityRow> {
+    use crate::render::ao::{ao_at_points, AoOptions};
+    use crate::render::points::EvalPoints;
+    use crate::sampling::rays::RaySet;
+    use crate::trace::Tracer;
+    let unit = unit_scene();
+    let ao = |placed: &[Placed]| -> Vec<f32> {
+        let sc = rebased_scene(placed, 1.0, DVec3::ZERO).scene;
+        let pts = EvalPoints::vertices(&sc);
+        let opts = AoOptions {
+            offset: 0.0,
+            ..AoOptions::for_scene_radius(1.0)
+        };
+        let tracer = Tracer::new(&sc.caster_triangles());
+        let at = pts.at();
+        // The unit scene's receivers come first: compare those points only.
+        ao_at_points(&tracer, at.points, at.normals, &RaySet::new(16, 1), &opts)
+    };
+    let reference = ao(&unit);
+    let n = reference.len();
+    let sphere = Arc::new(procedural::uv_sphere(0.1, 8, 16).expect("valid sphere"));
+    let plane = Arc::new(procedural::plane(1000.0, 2).expect("valid plane"));
+    let mut far_sphere = unit.clone();
+    far_sphere.push((
+        sphere,
+        Similarity::new(Quat::IDENTITY, Vec3::new(1000.0, 0.0, 0.0), 1.0),
+        true,
+        false,
+    ));
+    let mut big_receiver = unit.clone();
+    big_receiver.push((
+        plane,
+        Similarity::new(Quat::IDENTITY, Vec3::new(0.0, -2000.0, 0.0), 1.0),
+        false,
+        true,
+    ));
+    [
+        ("a caster sphere of radius 0.1 at 1000", far_sphere),
+        ("a 1000-wide receiver plane 2000 below", big_receiver),
+    ]
+    .into_iter()
+    .map(|(label, placed)| {
+        let with = ao(&placed);
+        StabilityRow::new(
+            "bystanders",
+            format!("{label}: ray-cast AO at the unit scene's {n} vertices, max difference"),
+            super::scene_ao::max_diff(&with[..n], &reference),
+            0.0,
+        )
+    })
+    .collect()
 }
 
 /// The case: ray-cast and field AO of each placement against the unit scene's.
