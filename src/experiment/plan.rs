@@ -222,6 +222,21 @@ impl Plan {
         let ref_k = square_root(spec.reference.rays_per_point, "reference.rays_per_point")?;
         let mut steps = Vec::new();
         for s in 0..scenes.scenes.len() {
+            let bytes = scene_state_bytes(spec, scenes, kind.as_ref(), s);
+            if bytes > limits.memory_limit {
+                return Err(Error::invalid(
+                    format!("scenes[{s}] ({})", scenes.scenes[s].name),
+                    format!(
+                        "its evaluation state (BVHs over {} triangles, {} points with their \
+                         values on every seed and sweep, the G-buffer) needs about {}, over the \
+                         memory limit of {} (--max-memory-mib)",
+                        scenes.scenes[s].scene.triangle_count(),
+                        kind.max_points(&scenes.scenes[s]),
+                        ByteSize(bytes),
+                        ByteSize(limits.memory_limit)
+                    ),
+                ));
+            }
             steps.extend(scene_steps(spec, scenes, kind.as_ref(), s, render_k, ref_k));
         }
         let mut groups = GroupPlanner {
@@ -422,6 +437,28 @@ impl Plan {
 /// `k` with `k² = n`, or the error naming the spec field.
 fn square_root(n: u32, field: &str) -> Result<u32> {
     exact_sqrt(n).ok_or_else(|| Error::invalid(field, format!("{n} is not a perfect square")))
+}
+
+/// A conservative estimate of the bytes a scene's state takes while its cells run, apart from
+/// the fields (which the plan counts step by step): two BVHs over its triangles (primary
+/// visibility and the casters: 128 bytes a triangle each, the triangles included), the
+/// G-buffer, and per evaluation point its position, normal, origin, offset and crease flag
+/// (45 bytes), the converged reference (8 bytes) and one f32 value for each seed of the
+/// reference, each cell's seeds held at once, and each sweep count.
+pub fn scene_state_bytes(spec: &Spec, scenes: &Scenes, kind: &dyn Kind, s: usize) -> u64 {
+    let bs = &scenes.scenes[s];
+    let triangles = bs.scene.triangle_count() as u64;
+    let pixels = kind.image().map_or(0, |i| i.width as u64 * i.height as u64);
+    let gbuffer = pixels * std::mem::size_of::<Option<crate::render::primary::PixelHit>>() as u64;
+    let points = kind.max_points(bs);
+    let r = &spec.reference;
+    let values =
+        2 * r.seeds as u64 + r.raycast_sweep.len() as u64 + r.field_rays_sweep.len() as u64 + 2;
+    let per_point = 45 + 8 + 4 * values;
+    (2 * 128u64)
+        .saturating_mul(triangles)
+        .saturating_add(gbuffer)
+        .saturating_add(points.saturating_mul(per_point))
 }
 
 /// The steps of one scene: its G-buffer (when an image is asked for), the converged

@@ -148,6 +148,11 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// Triangles over every instance.
+    pub fn triangle_count(&self) -> usize {
+        self.instances.iter().map(|i| i.mesh.triangle_count()).sum()
+    }
+
     /// Instances that cast occlusion, with their index in `instances`.
     pub fn casters(&self) -> impl Iterator<Item = (usize, &Instance)> + '_ {
         self.instances.iter().enumerate().filter(|(_, i)| i.caster)
