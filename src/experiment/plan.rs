@@ -222,21 +222,6 @@ impl Plan {
         let ref_k = square_root(spec.reference.rays_per_point, "reference.rays_per_point")?;
         let mut steps = Vec::new();
         for s in 0..scenes.scenes.len() {
-            let bytes = scene_state_bytes(spec, scenes, kind.as_ref(), s);
-            if bytes > limits.memory_limit {
-                return Err(Error::invalid(
-                    format!("scenes[{s}] ({})", scenes.scenes[s].name),
-                    format!(
-                        "its evaluation state (BVHs over {} triangles, {} points with their \
-                         values on every seed and sweep, the G-buffer) needs about {}, over the \
-                         memory limit of {} (--max-memory-mib)",
-                        scenes.scenes[s].scene.triangle_count(),
-                        kind.max_points(&scenes.scenes[s]),
-                        ByteSize(bytes),
-                        ByteSize(limits.memory_limit)
-                    ),
-                ));
-            }
             steps.extend(scene_steps(spec, scenes, kind.as_ref(), s, render_k, ref_k));
         }
         let mut groups = GroupPlanner {
@@ -437,6 +422,31 @@ impl Plan {
 /// `k` with `k² = n`, or the error naming the spec field.
 fn square_root(n: u32, field: &str) -> Result<u32> {
     exact_sqrt(n).ok_or_else(|| Error::invalid(field, format!("{n} is not a perfect square")))
+}
+
+/// Checks every scene's evaluation state ([`scene_state_bytes`]) against the memory limit:
+/// the error names the scene, its size and the flag. The runner calls it beside
+/// [`Plan::new`], dry run included, before any work.
+pub fn check_scene_memory(spec: &Spec, scenes: &Scenes, limits: PlanLimits) -> Result<()> {
+    let kind = super::kind::of(&spec.render);
+    for s in 0..scenes.scenes.len() {
+        let bytes = scene_state_bytes(spec, scenes, kind.as_ref(), s);
+        if bytes > limits.memory_limit {
+            return Err(Error::invalid(
+                format!("scenes[{s}] ({})", scenes.scenes[s].name),
+                format!(
+                    "its evaluation state (BVHs over {} triangles, {} points with their \
+                 values on every seed and sweep, the G-buffer) needs about {}, over the \
+                 memory limit of {} (--max-memory-mib)",
+                    scenes.scenes[s].scene.triangle_count(),
+                    kind.max_points(&scenes.scenes[s]),
+                    ByteSize(bytes),
+                    ByteSize(limits.memory_limit)
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// A conservative estimate of the bytes a scene's state takes while its cells run, apart from

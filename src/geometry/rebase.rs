@@ -126,7 +126,7 @@ pub fn rebase_origin(spheres: &[(DVec3, f64)]) -> DVec3 {
     (centre / step).round() * step
 }
 
-/// The largest distance from the spec's origin, in half-extents of the scene, at which f64
+/// The largest distance from the spec's origin, in half-widths of the scene's box, at which f64
 /// places its instances relative to each other as finely as f32 resolves the scene itself:
 /// 2⁵⁴ (the rebasing step, four half-extents, is then still the f64 spacing there or coarser).
 pub const MAX_DISTANCE_TO_EXTENT: f64 = 18_014_398_509_481_984.0;
@@ -144,11 +144,15 @@ pub fn extent_problem(placed: &[PlacedMesh]) -> Option<String> {
         lo = lo.min(c - c0 - r);
         hi = hi.max(c - c0 + r);
     }
-    let half = 0.5 * (hi - lo).length();
+    // The box's largest half-width (within √3 of its half-diagonal, and finite wherever the
+    // box is: the diagonal's square would overflow past 1e154).
+    let half = 0.5 * (hi - lo).max_element();
     let centre = c0 + 0.5 * (lo + hi);
     if !centre.is_finite() || !half.is_finite() {
         return Some(format!(
-            "the scene's placed bounds are not finite (centre {centre}, half-extent {half})"
+            "the scene's placed bounds are not finite (centre [{:e}, {:e}, {:e}], half-extent \
+             {half:e})",
+            centre.x, centre.y, centre.z
         ));
     }
     let distance = centre.abs().max_element();

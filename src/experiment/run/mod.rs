@@ -180,6 +180,8 @@ fn run_checked(
     let limits = PlanLimits {
         memory_limit: opts.supply.memory_limit,
     };
+    crate::experiment::plan::check_scene_memory(spec, &scenes, limits)
+        .context(|| ls.path.display().to_string())?;
     let plan = Plan::new(spec, &scenes, limits).context(|| ls.path.display().to_string())?;
     let supply = &opts.supply;
     let plan_text = plan.describe(&ls.name, &scenes, &|m, p| {
