@@ -9,12 +9,12 @@
 
 use glam::{Quat, Vec3};
 use std::path::PathBuf;
-use std::sync::{Arc, OnceLock};
+use std::sync::Arc;
 use visfield::field::bake::{bake, BakeOptions};
 use visfield::field::lookup::LookupOptions;
 use visfield::field::scene::{FieldInstance, FieldScene};
 use visfield::field::{FieldParams, Precision, Selection, VisibilityField};
-use visfield::geometry::{procedural, Mesh, Similarity};
+use visfield::geometry::{procedural, Similarity};
 use visfield::gpu::{AdapterPreference, FieldAoKernel, FieldGpuOptions, FieldLayout, GpuContext};
 use visfield::gpu::{GpuError, GpuTracer};
 use visfield::render::ao::{ao_at_points, AoOptions};
@@ -22,26 +22,8 @@ use visfield::sampling::rays::{seeded_sphere_direction, RaySet};
 use visfield::sampling::{LayoutKind, SphereKind};
 
 mod common;
-use common::{cpu_gpu_spec, loaded, options};
+use common::{cpu_gpu_spec, gpu_context as context, loaded, options, supershape_2000 as caster};
 use visfield::trace::{RayQuery, Tracer};
-
-/// The shared device, or `None` (with the skip message) when no Vulkan adapter exists.
-fn context() -> Option<&'static GpuContext> {
-    static CTX: OnceLock<Option<GpuContext>> = OnceLock::new();
-    CTX.get_or_init(|| match GpuContext::new(AdapterPreference::from_env()) {
-        Ok(c) => {
-            eprintln!("adapter: {}", c.adapter_label());
-            Some(c)
-        }
-        Err(GpuError::NoAdapter) => None,
-        Err(e) => panic!("GPU context: {e}"),
-    })
-    .as_ref()
-    .or_else(|| {
-        eprintln!("skipped: no Vulkan adapter (install mesa-vulkan-drivers)");
-        None
-    })
-}
 
 /// Writes `rows` (CSV with `header`) to a fresh temporary folder and returns the file's path.
 fn dump(name: &str, header: &str, rows: impl IntoIterator<Item = String>) -> PathBuf {
@@ -54,14 +36,6 @@ fn dump(name: &str, header: &str, rows: impl IntoIterator<Item = String>) -> Pat
     }
     visfield::io::write_atomic(&path, text.as_bytes()).expect("write failure dump");
     path
-}
-
-/// The caster: the default superformula shape with about 2000 triangles, in model space.
-fn caster() -> &'static Mesh {
-    static MESH: OnceLock<Mesh> = OnceLock::new();
-    MESH.get_or_init(|| {
-        procedural::supershape(&procedural::Supershape::default(), 2000).expect("supershape")
-    })
 }
 
 fn params(count: usize, res: u32, precision: Precision, layout: LayoutKind) -> FieldParams {

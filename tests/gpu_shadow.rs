@@ -26,7 +26,7 @@ use visfield::field::bake::{bake, BakeOptions};
 use visfield::field::lookup::LookupOptions;
 use visfield::field::scene::{FieldInstance, FieldScene};
 use visfield::field::{Precision, Selection, VisibilityField};
-use visfield::geometry::{procedural, Mesh, Similarity};
+use visfield::geometry::Similarity;
 use visfield::gpu::{
     AdapterPreference, FieldGpuOptions, FieldLayout, FieldShadowKernel, GpuContext, GpuError,
     GpuTracer,
@@ -39,33 +39,10 @@ use visfield::sampling::Frame;
 use visfield::trace::Tracer;
 
 mod common;
-use common::{loaded, options, slater_params, tiny, ONE_FIELD};
-
-/// The shared device, or `None` (with the skip message) when no Vulkan adapter exists.
-fn context() -> Option<&'static GpuContext> {
-    static CTX: OnceLock<Option<GpuContext>> = OnceLock::new();
-    CTX.get_or_init(|| match GpuContext::new(AdapterPreference::from_env()) {
-        Ok(c) => {
-            eprintln!("adapter: {}", c.adapter_label());
-            Some(c)
-        }
-        Err(GpuError::NoAdapter) => None,
-        Err(e) => panic!("GPU context: {e}"),
-    })
-    .as_ref()
-    .or_else(|| {
-        eprintln!("skipped: no Vulkan adapter (install mesa-vulkan-drivers)");
-        None
-    })
-}
-
-/// The caster: the default superformula shape with about 2000 triangles, in model space.
-fn caster() -> &'static Mesh {
-    static MESH: OnceLock<Mesh> = OnceLock::new();
-    MESH.get_or_init(|| {
-        procedural::supershape(&procedural::Supershape::default(), 2000).expect("supershape")
-    })
-}
+use common::{
+    gpu_context as context, loaded, options, slater_params, supershape_2000 as caster, tiny,
+    ONE_FIELD,
+};
 
 /// Its field: 290 Slater maps × 16² concentric texels, 8-bit.
 fn field() -> &'static Arc<VisibilityField> {

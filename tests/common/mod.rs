@@ -89,3 +89,35 @@ pub fn assert_png_is(path: &Path, img: &visfield::render::image::GrayImage) {
         );
     }
 }
+
+/// The shared GPU device of a test binary, or `None` (with the skip message) when no Vulkan
+/// adapter exists; any other GPU error fails the test.
+pub fn gpu_context() -> Option<&'static visfield::gpu::GpuContext> {
+    use std::sync::OnceLock;
+    use visfield::gpu::{AdapterPreference, GpuContext, GpuError};
+    static CTX: OnceLock<Option<GpuContext>> = OnceLock::new();
+    CTX.get_or_init(|| match GpuContext::new(AdapterPreference::from_env()) {
+        Ok(c) => {
+            eprintln!("adapter: {}", c.adapter_label());
+            Some(c)
+        }
+        Err(GpuError::NoAdapter) => None,
+        Err(e) => panic!("GPU context: {e}"),
+    })
+    .as_ref()
+    .or_else(|| {
+        eprintln!("skipped: no Vulkan adapter (install mesa-vulkan-drivers)");
+        None
+    })
+}
+
+/// A caster of the GPU parity tests: the default superformula shape with about 2000
+/// triangles, in model space, built once per test binary.
+pub fn supershape_2000() -> &'static visfield::geometry::Mesh {
+    use std::sync::OnceLock;
+    use visfield::geometry::{procedural, Mesh};
+    static MESH: OnceLock<Mesh> = OnceLock::new();
+    MESH.get_or_init(|| {
+        procedural::supershape(&procedural::Supershape::default(), 2000).expect("supershape")
+    })
+}
