@@ -192,3 +192,33 @@ fn a_distant_object_leaves_the_ao_unchanged() {
     assert!(here.iter().any(|v| v != "1"), "some points are occluded");
     assert_eq!(here, with_far);
 }
+
+/// Found by `examples/fuzz_numbers`: a 504,600-triangle corner scaled to 1e-7 beside a caster
+/// 65,536 away stalled the BVH build for minutes (every triangle in one cell of the builder's
+/// Morton grid). An instance below 2⁻²¹ of its scene's radius is now refused, naming it,
+/// before any BVH is built.
+#[test]
+fn an_instance_too_small_for_its_scene_is_refused_before_any_bvh() {
+    let text = tiny(ONE_FIELD, "")
+        .replace(r#""corner": { "n": 9 }"#, r#""corner": { "n": 290 }"#)
+        .replace(
+            r#""receiver": true }"#,
+            r#""receiver": true, "transform": { "scale": 1e-7 } }"#,
+        )
+        .replace(
+            r#""transform": { "fit""#,
+            r#""transform": { "translate": [0, 65536, 0], "fit""#,
+        );
+    assert!(text.contains("1e-7") && text.contains("65536"), "{text}");
+    let spec = Spec::parse(&text, Path::new("small.json")).unwrap();
+    let t = std::time::Instant::now();
+    let e = Scenes::build(&spec, Path::new("small.json"), "scenes")
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(
+        e.contains("scenes[0].instances[0].transform") && e.contains("2⁻²¹"),
+        "{e}"
+    );
+    assert!(t.elapsed().as_secs_f64() < 10.0, "{:?}", t.elapsed());
+}
