@@ -212,10 +212,10 @@ fn an_instance_too_small_for_its_scene_is_refused_before_any_bvh() {
     assert!(text.contains("1e-7") && text.contains("65536"), "{text}");
     let spec = Spec::parse(&text, Path::new("small.json")).unwrap();
     let t = std::time::Instant::now();
-    let e = Scenes::build(&spec, Path::new("small.json"), "scenes")
-        .err()
-        .expect("refused")
-        .to_string();
+    let Err(e) = Scenes::build(&spec, Path::new("small.json"), "scenes") else {
+        panic!("an instance 2.6e-12 of its scene's radius was accepted");
+    };
+    let e = e.to_string();
     assert!(
         e.contains("scenes[0].instances[0].transform") && e.contains("2⁻²¹"),
         "{e}"
