@@ -15,7 +15,7 @@ use visfield::field::lookup::LookupOptions;
 use visfield::field::scene::{FieldInstance, FieldScene};
 use visfield::field::{FieldParams, Precision, Selection, VisibilityField};
 use visfield::geometry::{procedural, Similarity};
-use visfield::gpu::{AdapterPreference, FieldAoKernel, FieldGpuOptions, FieldLayout, GpuContext};
+use visfield::gpu::{FieldAoKernel, FieldGpuOptions, FieldLayout};
 use visfield::gpu::{GpuError, GpuTracer};
 use visfield::render::ao::{ao_at_points, AoOptions};
 use visfield::sampling::rays::{seeded_sphere_direction, RaySet};
@@ -1072,80 +1072,63 @@ fn an_unknown_gpu_adapter_is_an_error_naming_the_adapters() {
 /// The harness: every test above, run where a Vulkan adapter exists and reported as ignored,
 /// with the reason, where none does (a skipped test never shows as passed).
 fn main() {
-    let args = libtest_mimic::Arguments::from_args();
-    let missing = match GpuContext::new(AdapterPreference::from_env()) {
-        Err(GpuError::NoAdapter) => {
-            eprintln!(
-                "gpu tests ignored: no Vulkan adapter (install mesa-vulkan-drivers for lavapipe)"
-            );
-            true
-        }
-        _ => false,
-    };
-    let tests: [(&str, fn()); 14] = [
-        ("adapter_is_labelled", adapter_is_labelled),
-        (
-            "nearest_map_texel_and_samples_agree_with_the_cpu",
-            nearest_map_texel_and_samples_agree_with_the_cpu,
-        ),
-        (
-            "field_ao_matches_the_cpu_for_every_precision_layout_and_selection",
-            field_ao_matches_the_cpu_for_every_precision_layout_and_selection,
-        ),
-        (
-            "image_space_field_ao_matches_the_cpu_for_every_precision",
-            image_space_field_ao_matches_the_cpu_for_every_precision,
-        ),
-        (
-            "windows_tiles_and_mixed_fields_give_the_cpu_answer",
-            windows_tiles_and_mixed_fields_give_the_cpu_answer,
-        ),
-        (
-            "unsupported_inputs_are_refused_not_approximated",
-            unsupported_inputs_are_refused_not_approximated,
-        ),
-        (
-            "gpu_ray_casting_agrees_with_the_cpu_tracer",
-            gpu_ray_casting_agrees_with_the_cpu_tracer,
-        ),
-        (
-            "gpu_ray_cast_ao_matches_the_cpu_and_serves_as_field_reference",
-            gpu_ray_cast_ao_matches_the_cpu_and_serves_as_field_reference,
-        ),
-        (
-            "field_ao_at_4096_rays_per_point_matches_the_cpu",
-            field_ao_at_4096_rays_per_point_matches_the_cpu,
-        ),
-        (
-            "gpu_ray_cast_ao_at_4096_rays_per_point_matches_the_cpu",
-            gpu_ray_cast_ao_at_4096_rays_per_point_matches_the_cpu,
-        ),
-        (
-            "relief_caster_matches_the_cpu",
-            relief_caster_matches_the_cpu,
-        ),
-        (
-            "relief_caster_refuses_settings_past_the_loop_budget",
-            relief_caster_refuses_settings_past_the_loop_budget,
-        ),
-        (
-            "cpu_and_gpu_backends_give_one_row_each_with_the_adapter_named",
-            cpu_and_gpu_backends_give_one_row_each_with_the_adapter_named,
-        ),
-        (
-            "an_unknown_gpu_adapter_is_an_error_naming_the_adapters",
-            an_unknown_gpu_adapter_is_an_error_naming_the_adapters,
-        ),
-    ];
-    let trials = tests
-        .into_iter()
-        .map(|(name, f)| {
-            libtest_mimic::Trial::test(name, move || {
-                f();
-                Ok(())
-            })
-            .with_ignored_flag(missing)
-        })
-        .collect();
-    libtest_mimic::run(&args, trials).exit();
+    common::run_gpu_trials(
+        "gpu",
+        &[
+            ("adapter_is_labelled", adapter_is_labelled),
+            (
+                "nearest_map_texel_and_samples_agree_with_the_cpu",
+                nearest_map_texel_and_samples_agree_with_the_cpu,
+            ),
+            (
+                "field_ao_matches_the_cpu_for_every_precision_layout_and_selection",
+                field_ao_matches_the_cpu_for_every_precision_layout_and_selection,
+            ),
+            (
+                "image_space_field_ao_matches_the_cpu_for_every_precision",
+                image_space_field_ao_matches_the_cpu_for_every_precision,
+            ),
+            (
+                "windows_tiles_and_mixed_fields_give_the_cpu_answer",
+                windows_tiles_and_mixed_fields_give_the_cpu_answer,
+            ),
+            (
+                "unsupported_inputs_are_refused_not_approximated",
+                unsupported_inputs_are_refused_not_approximated,
+            ),
+            (
+                "gpu_ray_casting_agrees_with_the_cpu_tracer",
+                gpu_ray_casting_agrees_with_the_cpu_tracer,
+            ),
+            (
+                "gpu_ray_cast_ao_matches_the_cpu_and_serves_as_field_reference",
+                gpu_ray_cast_ao_matches_the_cpu_and_serves_as_field_reference,
+            ),
+            (
+                "field_ao_at_4096_rays_per_point_matches_the_cpu",
+                field_ao_at_4096_rays_per_point_matches_the_cpu,
+            ),
+            (
+                "gpu_ray_cast_ao_at_4096_rays_per_point_matches_the_cpu",
+                gpu_ray_cast_ao_at_4096_rays_per_point_matches_the_cpu,
+            ),
+            (
+                "relief_caster_matches_the_cpu",
+                relief_caster_matches_the_cpu,
+            ),
+            (
+                "relief_caster_refuses_settings_past_the_loop_budget",
+                relief_caster_refuses_settings_past_the_loop_budget,
+            ),
+            (
+                "cpu_and_gpu_backends_give_one_row_each_with_the_adapter_named",
+                cpu_and_gpu_backends_give_one_row_each_with_the_adapter_named,
+            ),
+            (
+                "an_unknown_gpu_adapter_is_an_error_naming_the_adapters",
+                an_unknown_gpu_adapter_is_an_error_naming_the_adapters,
+            ),
+        ],
+        &[],
+    );
 }

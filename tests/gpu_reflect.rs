@@ -39,10 +39,7 @@ use visfield::field::normals::NormalField;
 use visfield::field::scene::{FieldInstance, FieldScene};
 use visfield::field::{Precision, Selection, VisibilityField};
 use visfield::geometry::Similarity;
-use visfield::gpu::{
-    AdapterPreference, FieldGpuOptions, FieldLayout, FieldReflectKernel, GpuContext, GpuError,
-    GpuTracer,
-};
+use visfield::gpu::{FieldGpuOptions, FieldLayout, FieldReflectKernel, GpuError, GpuTracer};
 use visfield::render::ao::AoOptions;
 use visfield::render::reflect::{reflect_at_points, reflection_rays, Gloss, ReflectOptions};
 use visfield::render::shadow::SphereLight;
@@ -580,52 +577,34 @@ fn a_reflections_run_on_cpu_and_gpu_gives_matching_rows() {
 /// The harness: every test above, run where a Vulkan adapter exists and reported as ignored,
 /// with the reason, where none does (a skipped test never shows as passed).
 fn main() {
-    let args = libtest_mimic::Arguments::from_args();
-    let missing = match GpuContext::new(AdapterPreference::from_env()) {
-        Err(GpuError::NoAdapter) => {
-            eprintln!(
-                "gpu_reflect tests ignored: no Vulkan adapter (install mesa-vulkan-drivers for \
-                 lavapipe)"
-            );
-            true
-        }
-        _ => false,
-    };
-    let gpu: [(&str, fn()); 6] = [
-        (
-            "field_reflections_match_the_cpu",
-            field_reflections_match_the_cpu,
-        ),
-        (
-            "ray_cast_reflections_match_the_cpu_tracer",
-            ray_cast_reflections_match_the_cpu_tracer,
-        ),
-        (
-            "many_rays_split_over_invocations_match_the_cpu",
-            many_rays_split_over_invocations_match_the_cpu,
-        ),
-        (
-            "overlapping_spheres_give_the_nearest_hit_not_the_first",
-            overlapping_spheres_give_the_nearest_hit_not_the_first,
-        ),
-        (
-            "edge_cases_are_those_of_the_cpu",
-            edge_cases_are_those_of_the_cpu,
-        ),
-        (
-            "a_reflections_run_on_cpu_and_gpu_gives_matching_rows",
-            a_reflections_run_on_cpu_and_gpu_gives_matching_rows,
-        ),
-    ];
-    let trials: Vec<_> = gpu
-        .into_iter()
-        .map(|(name, f)| {
-            libtest_mimic::Trial::test(name, move || {
-                f();
-                Ok(())
-            })
-            .with_ignored_flag(missing)
-        })
-        .collect();
-    libtest_mimic::run(&args, trials).exit();
+    common::run_gpu_trials(
+        "gpu_reflect",
+        &[
+            (
+                "field_reflections_match_the_cpu",
+                field_reflections_match_the_cpu,
+            ),
+            (
+                "ray_cast_reflections_match_the_cpu_tracer",
+                ray_cast_reflections_match_the_cpu_tracer,
+            ),
+            (
+                "many_rays_split_over_invocations_match_the_cpu",
+                many_rays_split_over_invocations_match_the_cpu,
+            ),
+            (
+                "overlapping_spheres_give_the_nearest_hit_not_the_first",
+                overlapping_spheres_give_the_nearest_hit_not_the_first,
+            ),
+            (
+                "edge_cases_are_those_of_the_cpu",
+                edge_cases_are_those_of_the_cpu,
+            ),
+            (
+                "a_reflections_run_on_cpu_and_gpu_gives_matching_rows",
+                a_reflections_run_on_cpu_and_gpu_gives_matching_rows,
+            ),
+        ],
+        &[],
+    );
 }

@@ -27,10 +27,7 @@ use visfield::field::lookup::LookupOptions;
 use visfield::field::scene::{FieldInstance, FieldScene};
 use visfield::field::{Precision, Selection, VisibilityField};
 use visfield::geometry::Similarity;
-use visfield::gpu::{
-    AdapterPreference, FieldGpuOptions, FieldLayout, FieldShadowKernel, GpuContext, GpuError,
-    GpuTracer,
-};
+use visfield::gpu::{FieldGpuOptions, FieldLayout, FieldShadowKernel, GpuError, GpuTracer};
 use visfield::render::ao::AoOptions;
 use visfield::render::shadow::{shadow_at_points, square_to_cone, ShadowOptions, SphereLight};
 use visfield::render::Visibility;
@@ -506,55 +503,33 @@ fn a_shadows_run_on_cpu_and_gpu_gives_matching_rows() {
 /// with the reason, where none does (a skipped test never shows as passed). The CPU-only check
 /// runs everywhere.
 fn main() {
-    let args = libtest_mimic::Arguments::from_args();
-    let missing = match GpuContext::new(AdapterPreference::from_env()) {
-        Err(GpuError::NoAdapter) => {
-            eprintln!(
-                "gpu_shadow tests ignored: no Vulkan adapter (install mesa-vulkan-drivers for \
-                 lavapipe)"
-            );
-            true
-        }
-        _ => false,
-    };
-    let gpu: [(&str, fn()); 5] = [
-        (
-            "field_shadows_match_the_cpu_for_both_selections_and_layouts",
-            field_shadows_match_the_cpu_for_both_selections_and_layouts,
-        ),
-        (
-            "ray_cast_shadows_match_the_cpu_tracer",
-            ray_cast_shadows_match_the_cpu_tracer,
-        ),
-        (
-            "many_rays_split_over_invocations_across_lights_match_the_cpu",
-            many_rays_split_over_invocations_across_lights_match_the_cpu,
-        ),
-        (
-            "edge_cases_are_those_of_the_cpu",
-            edge_cases_are_those_of_the_cpu,
-        ),
-        (
-            "a_shadows_run_on_cpu_and_gpu_gives_matching_rows",
-            a_shadows_run_on_cpu_and_gpu_gives_matching_rows,
-        ),
-    ];
-    let mut trials: Vec<_> = gpu
-        .into_iter()
-        .map(|(name, f)| {
-            libtest_mimic::Trial::test(name, move || {
-                f();
-                Ok(())
-            })
-            .with_ignored_flag(missing)
-        })
-        .collect();
-    trials.push(libtest_mimic::Trial::test(
-        "the_copied_shadow_rays_are_the_cpu_path",
-        || {
-            the_copied_shadow_rays_are_the_cpu_path();
-            Ok(())
-        },
-    ));
-    libtest_mimic::run(&args, trials).exit();
+    common::run_gpu_trials(
+        "gpu_shadow",
+        &[
+            (
+                "field_shadows_match_the_cpu_for_both_selections_and_layouts",
+                field_shadows_match_the_cpu_for_both_selections_and_layouts,
+            ),
+            (
+                "ray_cast_shadows_match_the_cpu_tracer",
+                ray_cast_shadows_match_the_cpu_tracer,
+            ),
+            (
+                "many_rays_split_over_invocations_across_lights_match_the_cpu",
+                many_rays_split_over_invocations_across_lights_match_the_cpu,
+            ),
+            (
+                "edge_cases_are_those_of_the_cpu",
+                edge_cases_are_those_of_the_cpu,
+            ),
+            (
+                "a_shadows_run_on_cpu_and_gpu_gives_matching_rows",
+                a_shadows_run_on_cpu_and_gpu_gives_matching_rows,
+            ),
+        ],
+        &[(
+            "the_copied_shadow_rays_are_the_cpu_path",
+            the_copied_shadow_rays_are_the_cpu_path,
+        )],
+    );
 }

@@ -51,6 +51,25 @@ pub struct FieldGpuOptions {
     pub max_texture_depth: Option<u32>,
 }
 
+impl FieldGpuOptions {
+    /// The field binding of a kernel with these options and `kernel_storage_buffers` storage
+    /// buffers of its own (every field kernel binds its fields this way).
+    pub(super) fn binding_options(&self, kernel_storage_buffers: u32) -> FieldBindingOptions {
+        FieldBindingOptions {
+            layout: self.layout,
+            window_bytes: self.window_bytes,
+            max_texture_depth: self.max_texture_depth,
+            kernel_storage_buffers,
+        }
+    }
+
+    /// The rays one invocation starts with over `instances` instances: `rays_per_invocation`
+    /// shared among them, at least 1.
+    pub(super) fn start_rays_per_invocation(&self, instances: usize) -> AtomicU32 {
+        AtomicU32::new((self.rays_per_invocation / instances.max(1) as u32).max(1))
+    }
+}
+
 impl Default for FieldGpuOptions {
     fn default() -> Self {
         FieldGpuOptions {
@@ -146,12 +165,7 @@ impl<'a> FieldAoKernel<'a> {
         let field = FieldBinding::new(
             ctx,
             instances,
-            &FieldBindingOptions {
-                layout: opts.layout,
-                window_bytes: opts.window_bytes,
-                max_texture_depth: opts.max_texture_depth,
-                kernel_storage_buffers: KERNEL_STORAGE_BUFFERS,
-            },
+            &opts.binding_options(KERNEL_STORAGE_BUFFERS),
         )?;
         let group_layout = ctx
             .device
@@ -177,9 +191,7 @@ impl<'a> FieldAoKernel<'a> {
             ao: compile("field_ao", "ao_main")?,
             probe: compile("field_probe", "probe_main")?,
             group_layout,
-            rays_per_invocation: AtomicU32::new(
-                (opts.rays_per_invocation / instances.len().max(1) as u32).max(1),
-            ),
+            rays_per_invocation: opts.start_rays_per_invocation(instances.len()),
             field,
             upload: start.elapsed(),
             lookup: opts.lookup,

@@ -23,7 +23,7 @@
 
 use super::context::{entry, storage_layout_entry, uniform_layout_entry, GpuContext};
 use super::field_ao::{intra_terms, selection_code, FieldGpuOptions};
-use super::field_binding::{FieldBinding, FieldBindingOptions};
+use super::field_binding::FieldBinding;
 use super::loop_budget::{weighted_means, Dispatched, COMPLETION_TRIPS};
 use super::rays::{receivers, ReceiverGpu};
 use super::reflect_rays::{lobe_directions, normal_words, rays_per_point, shading};
@@ -118,12 +118,7 @@ impl<'a> FieldReflectKernel<'a> {
         let field = FieldBinding::new(
             ctx,
             instances,
-            &FieldBindingOptions {
-                layout: opts.layout,
-                window_bytes: opts.window_bytes,
-                max_texture_depth: opts.max_texture_depth,
-                kernel_storage_buffers: KERNEL_STORAGE_BUFFERS,
-            },
+            &opts.binding_options(KERNEL_STORAGE_BUFFERS),
         )?;
         let group_layout = ctx
             .device
@@ -158,9 +153,7 @@ impl<'a> FieldReflectKernel<'a> {
             ctx,
             pipeline,
             group_layout,
-            rays_per_invocation: AtomicU32::new(
-                (opts.rays_per_invocation / instances.len().max(1) as u32).max(1),
-            ),
+            rays_per_invocation: opts.start_rays_per_invocation(instances.len()),
             field,
             normals,
             normal_bytes: words.len() as u64 * 4,

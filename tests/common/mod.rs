@@ -121,3 +121,38 @@ pub fn supershape_2000() -> &'static visfield::geometry::Mesh {
         procedural::supershape(&procedural::Supershape::default(), 2000).expect("supershape")
     })
 }
+
+/// The harness of a GPU test binary (`harness = false`): the `gpu` tests run where a Vulkan
+/// adapter exists and are reported as ignored, with the reason printed, where none does (a
+/// skipped test never shows as passed); the `always` tests run everywhere.
+pub fn run_gpu_trials(
+    binary: &str,
+    gpu: &[(&'static str, fn())],
+    always: &[(&'static str, fn())],
+) -> ! {
+    use visfield::gpu::{AdapterPreference, GpuContext, GpuError};
+    let args = libtest_mimic::Arguments::from_args();
+    let missing = match GpuContext::new(AdapterPreference::from_env()) {
+        Err(GpuError::NoAdapter) => {
+            eprintln!(
+                "{binary} tests ignored: no Vulkan adapter (install mesa-vulkan-drivers for \
+                 lavapipe)"
+            );
+            true
+        }
+        _ => false,
+    };
+    let trial = |(name, f): (&'static str, fn()), ignored: bool| {
+        libtest_mimic::Trial::test(name, move || {
+            f();
+            Ok(())
+        })
+        .with_ignored_flag(ignored)
+    };
+    let trials = gpu
+        .iter()
+        .map(|&t| trial(t, missing))
+        .chain(always.iter().map(|&t| trial(t, false)))
+        .collect();
+    libtest_mimic::run(&args, trials).exit()
+}
