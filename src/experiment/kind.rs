@@ -227,13 +227,6 @@ impl Kind for ImageAo {
 /// receiver pixel, its shadow rays answered by ray casting or by the fields.
 pub struct Shadows(pub ShadowRender);
 
-impl Shadows {
-    /// The lights in the scene's frame.
-    fn lights_in_frame(&self, scene: &BuiltScene) -> Vec<SphereLight> {
-        lights_in_frame(&self.0.lights, scene)
-    }
-}
-
 /// Lights in the scene's frame (moved as the camera is).
 fn lights_in_frame(lights: &[SphereLight], scene: &BuiltScene) -> Vec<SphereLight> {
     lights
@@ -280,7 +273,7 @@ impl Kind for Shadows {
 
     fn setup(&self, scene: &BuiltScene, view: Option<&GBuffer>) -> Setup {
         let view = view.expect("shadows: validation guarantees an image, and so a G-buffer");
-        let lights = self.lights_in_frame(scene);
+        let lights = lights_in_frame(&self.0.lights, scene);
         let points = EvalPoints::pixels(&scene.scene, view);
         // The points are the ray origins (EvalPoints::at): no offset of the estimator's own.
         let opts = ShadowOptions {
@@ -306,7 +299,7 @@ impl Kind for Shadows {
     /// A light that overlaps a caster's bounding sphere would sit inside the field's domain
     /// (and likely inside the caster): refused, naming the light and the instance.
     fn scene_problem(&self, scene: &BuiltScene) -> Option<(String, String)> {
-        for (i, l) in self.lights_in_frame(scene).iter().enumerate() {
+        for (i, l) in lights_in_frame(&self.0.lights, scene).iter().enumerate() {
             for (ii, inst) in scene.scene.casters() {
                 let s = inst.world_bounding_sphere();
                 if l.center.distance(s.center) < s.radius + l.radius {

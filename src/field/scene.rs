@@ -393,33 +393,52 @@ impl Visibility for FieldScene {
     /// # Panics
     /// When an instance the ray reaches has no normal field.
     fn surface_hit(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<SurfaceHit> {
-        let mut best: Option<SurfaceHit> = None;
-        self.for_each_candidate(origin, dir, tmin, tmax, |t_entry, inst| {
-            if best.is_some_and(|b| t_entry > b.t) {
-                return false;
-            }
-            let limit = best.map_or(tmax, |b| b.t);
-            if let Some(h) = inst.surface_hit(origin, dir, tmin, limit, &self.options) {
-                if best.is_none_or(|b| h.t < b.t) {
-                    best = Some(h);
-                }
-            }
-            true
-        });
-        best
+        self.nearest(
+            origin,
+            dir,
+            tmin,
+            tmax,
+            |h: &SurfaceHit| h.t,
+            |inst, limit| inst.surface_hit(origin, dir, tmin, limit, &self.options),
+        )
     }
 
     fn hit_distance(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<f32> {
-        // Spheres may overlap, so a later entry can still hold a nearer surface: keep the
-        // nearest hit, stopping once no remaining sphere starts before it.
-        let mut best: Option<f32> = None;
+        self.nearest(
+            origin,
+            dir,
+            tmin,
+            tmax,
+            |&t| t,
+            |inst, limit| inst.hit_distance(origin, dir, tmin, limit, &self.options),
+        )
+    }
+}
+
+impl FieldScene {
+    /// The nearest of the instances' hits on the segment, `hit(instance, limit)` answering for
+    /// one instance within [tmin, limit] and `t_of` giving a hit's distance. Spheres may overlap,
+    /// so a later entry can still hold a nearer surface: every instance is asked, each up to the
+    /// nearest hit so far, stopping once no remaining sphere starts before it.
+    fn nearest<H: Copy>(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        tmin: f32,
+        tmax: f32,
+        t_of: impl Fn(&H) -> f32,
+        hit: impl Fn(&FieldInstance, f32) -> Option<H>,
+    ) -> Option<H> {
+        let mut best: Option<H> = None;
         self.for_each_candidate(origin, dir, tmin, tmax, |t_entry, inst| {
-            if best.is_some_and(|b| t_entry > b) {
+            let limit = best.as_ref().map_or(tmax, &t_of);
+            if best.is_some() && t_entry > limit {
                 return false;
             }
-            let limit = best.unwrap_or(tmax);
-            if let Some(t) = inst.hit_distance(origin, dir, tmin, limit, &self.options) {
-                best = Some(best.map_or(t, |b| b.min(t)));
+            if let Some(h) = hit(inst, limit) {
+                if best.is_none() || t_of(&h) < limit {
+                    best = Some(h);
+                }
             }
             true
         });

@@ -75,6 +75,27 @@ pub trait Visibility: Sync {
     }
 }
 
+/// `f(scratch, point index, point, normal)` at every point (rayon over points, a scratch per
+/// worker; the same bits on any thread count).
+///
+/// # Panics
+/// If `points` and `normals` differ in length (`what` names the caller).
+pub(crate) fn per_point<S: Default + Send, T: Send>(
+    what: &str,
+    points: &[Vec3],
+    normals: &[Vec3],
+    f: impl Fn(&mut S, u32, Vec3, Vec3) -> T + Sync,
+) -> Vec<T> {
+    use rayon::prelude::*;
+    assert_eq!(points.len(), normals.len(), "{what}: one normal per point");
+    points
+        .par_iter()
+        .zip(normals.par_iter())
+        .enumerate()
+        .map_init(S::default, |sc, (i, (&p, &n))| f(sc, i as u32, p, n))
+        .collect()
+}
+
 /// A [`Visibility`] that forwards only the per-ray queries of another, so that
 /// [`Visibility::occluded_many`] takes the trait's per-ray default: the reference that batched
 /// implementations are tested and benchmarked against.

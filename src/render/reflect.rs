@@ -30,11 +30,10 @@
 use super::estimator::{Estimator, Points};
 use super::shadow::SphereLight;
 use super::truth::{converged, Truth, TruthOptions};
-use super::{SurfaceHit, Visibility};
+use super::{per_point, SurfaceHit, Visibility};
 use crate::sampling::rays::RaySet;
 use crate::sampling::Frame;
 use glam::{Vec2, Vec3};
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// The reflective receiver's lobe.
@@ -158,30 +157,22 @@ pub fn reflect_at_points<V: Visibility + ?Sized>(
     rays: &RaySet,
     opts: &ReflectOptions,
 ) -> Vec<f32> {
-    assert_eq!(
-        points.len(),
-        normals.len(),
-        "reflect_at_points: one normal per point"
-    );
-    points
-        .par_iter()
-        .zip(normals.par_iter())
-        .enumerate()
-        .map_init(
-            || (Vec::new(), Vec::new()),
-            |(squares, dirs), (i, (&p, &n))| {
-                let o = reflection_rays(i as u32, p, n, rays, opts, squares, dirs);
-                if dirs.is_empty() {
-                    return 0.0;
-                }
-                let sum: f64 = dirs
-                    .iter()
-                    .map(|&d| shade(o, d, vis.surface_hit(o, d, 0.0, f32::INFINITY), opts) as f64)
-                    .sum();
-                (sum / dirs.len() as f64) as f32
-            },
-        )
-        .collect()
+    per_point(
+        "reflect_at_points",
+        points,
+        normals,
+        |(squares, dirs): &mut (Vec<Vec2>, Vec<Vec3>), i, p, n| {
+            let o = reflection_rays(i, p, n, rays, opts, squares, dirs);
+            if dirs.is_empty() {
+                return 0.0;
+            }
+            let sum: f64 = dirs
+                .iter()
+                .map(|&d| shade(o, d, vis.surface_hit(o, d, 0.0, f32::INFINITY), opts) as f64)
+                .sum();
+            (sum / dirs.len() as f64) as f32
+        },
+    )
 }
 
 /// The reflected radiance of a glossy receiver at each point (Gaitatzes et al. 2010, §4.2):

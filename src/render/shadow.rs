@@ -24,12 +24,11 @@
 
 use super::estimator::{Estimator, Points};
 use super::truth::{converged, Truth, TruthOptions};
-use super::Visibility;
+use super::{per_point, Visibility};
 use crate::sampling::rays::RaySet;
 use crate::sampling::warp::square_to_concentric_disk;
 use crate::sampling::Frame;
 use glam::{Vec2, Vec3};
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// A spherical area light of uniform radiance.
@@ -158,28 +157,6 @@ pub fn light_fraction<V: Visibility + ?Sized>(
     }
 }
 
-/// `f(scratch, point index, point, normal)` at every point (rayon over points, a scratch per
-/// worker; the same bits on any thread count).
-///
-/// # Panics
-/// If `points` and `normals` differ in length (`what` names the caller).
-fn per_point<T: Send>(
-    what: &str,
-    points: &[Vec3],
-    normals: &[Vec3],
-    f: impl Fn(&mut ShadowScratch, u32, Vec3, Vec3) -> T + Sync,
-) -> Vec<T> {
-    assert_eq!(points.len(), normals.len(), "{what}: one normal per point");
-    points
-        .par_iter()
-        .zip(normals.par_iter())
-        .enumerate()
-        .map_init(ShadowScratch::default, |sc, (i, (&p, &n))| {
-            f(sc, i as u32, p, n)
-        })
-        .collect()
-}
-
 /// [`light_fraction`] at every point (rayon over points; the same bits on any thread count).
 ///
 /// # Panics
@@ -191,9 +168,12 @@ pub fn shadow_at_points<V: Visibility + ?Sized>(
     rays: &RaySet,
     opts: &ShadowOptions,
 ) -> Vec<f32> {
-    per_point("shadow_at_points", points, normals, |sc, i, p, n| {
-        light_fraction(vis, i, p, n, rays, opts, sc)
-    })
+    per_point(
+        "shadow_at_points",
+        points,
+        normals,
+        |sc: &mut ShadowScratch, i, p, n| light_fraction(vis, i, p, n, rays, opts, sc),
+    )
 }
 
 /// The unshadowed direct light at every point, normalised to the brightest (in \[0, 1\]): the
@@ -209,10 +189,15 @@ pub fn direct_light(
     rays: &RaySet,
     opts: &ShadowOptions,
 ) -> Vec<f32> {
-    let raw: Vec<f64> = per_point("direct_light", points, normals, |sc, i, p, n| {
-        shadow_rays(i, p, n, rays, opts, sc);
-        sc.weights.iter().sum()
-    });
+    let raw: Vec<f64> = per_point(
+        "direct_light",
+        points,
+        normals,
+        |sc: &mut ShadowScratch, i, p, n| {
+            shadow_rays(i, p, n, rays, opts, sc);
+            sc.weights.iter().sum()
+        },
+    );
     let top = raw.iter().copied().fold(0.0f64, f64::max);
     raw.iter()
         .map(|&e| if top > 0.0 { (e / top) as f32 } else { 0.0 })
