@@ -124,13 +124,7 @@ impl FieldSupply {
     /// The field of `mesh` with `params`: from the cache when a valid entry exists, else baked
     /// (with a progress bar) and cached when small enough.
     pub fn obtain(&self, mesh: &LoadedMesh, params: FieldParams) -> Result<Supplied> {
-        let label = format!(
-            "bake {} {} × {}² {}",
-            mesh.label,
-            params.count,
-            params.res,
-            params.precision.name()
-        );
+        let label = bake_label(mesh, &params);
         let entry = self.cache_path(mesh, &params);
         if let Some((path, key)) = &entry {
             if path.exists() {
@@ -153,13 +147,8 @@ impl FieldSupply {
                 }
             }
         }
-        let pb = progress::bar(params.count as u64, &label);
-        let opts = BakeOptions {
-            memory_limit: self.memory_limit,
-            progress: Some(&pb),
-        };
-        let (field, stats) = bake(&mesh.mesh, params, &opts).map_err(Error::field(&label))?;
-        pb.finish_and_clear();
+        let (field, stats) =
+            self.with_progress(&label, params.count, |opts| bake(&mesh.mesh, params, opts))?;
         let seconds = stats.seconds + stats.bvh_seconds;
         eprintln!(
             "  {label:<40} {seconds:>9.3} s  ({:.2} Mrays/s)",
@@ -193,21 +182,10 @@ impl FieldSupply {
         params: FieldParams,
         bits: &[u32],
     ) -> Result<(Supplied, NormalFields)> {
-        let label = format!(
-            "bake {} {} × {}² {} + normals",
-            mesh.label,
-            params.count,
-            params.res,
-            params.precision.name()
-        );
-        let pb = progress::bar(params.count as u64, &label);
-        let opts = BakeOptions {
-            memory_limit: self.memory_limit,
-            progress: Some(&pb),
-        };
-        let (field, normals16, stats) =
-            bake_mesh_with_normals(&mesh.mesh, params, 16, &opts).map_err(Error::field(&label))?;
-        pb.finish_and_clear();
+        let label = format!("{} + normals", bake_label(mesh, &params));
+        let (field, normals16, stats) = self.with_progress(&label, params.count, |opts| {
+            bake_mesh_with_normals(&mesh.mesh, params, 16, opts)
+        })?;
         let t = Instant::now();
         let normals16 = Arc::new(normals16);
         let normals = bits
@@ -234,6 +212,37 @@ impl FieldSupply {
         };
         Ok((supplied, normals))
     }
+}
+
+impl FieldSupply {
+    /// `bake` under the supply's memory limit with a progress bar of `maps` steps labelled
+    /// `label`; its error names the label.
+    fn with_progress<T>(
+        &self,
+        label: &str,
+        maps: usize,
+        bake: impl FnOnce(&BakeOptions) -> std::result::Result<T, crate::field::FieldError>,
+    ) -> Result<T> {
+        let pb = progress::bar(maps as u64, label);
+        let opts = BakeOptions {
+            memory_limit: self.memory_limit,
+            progress: Some(&pb),
+        };
+        let out = bake(&opts).map_err(Error::field(label))?;
+        pb.finish_and_clear();
+        Ok(out)
+    }
+}
+
+/// The progress and log label of a bake: "bake MESH COUNT × RES² PRECISION".
+fn bake_label(mesh: &LoadedMesh, params: &FieldParams) -> String {
+    format!(
+        "bake {} {} × {}² {}",
+        mesh.label,
+        params.count,
+        params.res,
+        params.precision.name()
+    )
 }
 
 fn record_path(path: &std::path::Path) -> PathBuf {
