@@ -31,4 +31,5 @@ pub mod io;
 pub mod relief;
 pub mod render;
 pub mod sampling;
+pub mod simd;
 pub mod trace;

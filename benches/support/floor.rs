@@ -9,7 +9,8 @@
 //! - [`SphereCull`]: occluded wherever the segment meets a caster's bounding sphere. Every field
 //!   lookup decides this first (2008 Algorithm 2 starts from the ray's entry into the sphere):
 //!   the same cheap cull ([`FieldInstance::may_meet`]) and the same exact f64 crossing
-//!   ([`SphereOrigin`]), shared per origin as in the batched lookup, taken in world space (the
+//!   ([`SphereOrigin`]), shared per origin and eight rays at a time as in the batched lookup
+//!   ([`lanes`]), taken in world space (the
 //!   lookup also moves each ray into the field's model space), without choosing a map or a
 //!   texel and without reading the field.
 //!
@@ -17,6 +18,7 @@
 //! benches and not in the library.
 
 use glam::Vec3;
+use visfield::field::lanes::{self, Isa};
 use visfield::field::lookup::SphereOrigin;
 use visfield::field::scene::{FieldInstance, FieldScene};
 use visfield::render::{SurfaceHit, Visibility};
@@ -110,17 +112,41 @@ impl Visibility for SphereCull<'_> {
         })
     }
 
+    /// The lookup's own batched cull and crossing ([`lanes`]), window by window.
     fn occluded_many(&self, origin: Vec3, dirs: &[Vec3], tmin: f32, tmax: f32, out: &mut [bool]) {
         assert_eq!(
             dirs.len(),
             out.len(),
             "occluded_many: dirs and out differ in length"
         );
+        const WINDOW: usize = 64;
         out.fill(false);
+        let isa = Isa::detect();
+        let mut idx = [0u32; WINDOW];
+        let mut picked = [Vec3::ZERO; WINDOW];
+        let mut hits = [None; WINDOW];
         for inst in &self.0.instances {
+            let meet = inst.may_meet_from(origin);
             let from = SphereOrigin::new(origin, inst.world_center, inst.world_radius);
-            for (o, &d) in out.iter_mut().zip(dirs) {
-                *o = *o || Self::entry(inst, &from, origin, d, tmin, tmax).is_some();
+            for start in (0..dirs.len()).step_by(WINDOW) {
+                let end = (start + WINDOW).min(dirs.len());
+                let n = lanes::cull(
+                    isa,
+                    &meet,
+                    &dirs[start..end],
+                    tmin,
+                    &out[start..end],
+                    &mut idx,
+                );
+                for k in 0..n {
+                    picked[k] = dirs[start + idx[k] as usize];
+                }
+                lanes::crossings(isa, &from, &picked[..n], &mut hits[..n]);
+                for k in 0..n {
+                    if let Some(c) = hits[k] {
+                        out[start + idx[k] as usize] = c.t1 >= tmin && c.t0 <= tmax;
+                    }
+                }
             }
         }
     }

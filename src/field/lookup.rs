@@ -74,6 +74,12 @@ impl SphereOrigin {
         }
     }
 
+    /// origin − centre, the radius and |origin − centre|² − radius², in f64.
+    #[inline]
+    pub fn terms(&self) -> (DVec3, f64, f64) {
+        (self.f, self.r, self.c)
+    }
+
     /// [`sphere_crossing`] of the ray from this origin along `dir`.
     #[inline]
     pub fn crossing(&self, dir: Vec3) -> Option<SphereCrossing> {
@@ -439,9 +445,22 @@ impl VisibilityField {
         tmin: f32,
         tmax: f32,
     ) -> Option<Crossed> {
+        self.cross_at(from.crossing(dir)?, origin, dir, tmin, tmax)
+    }
+
+    /// [`Self::cross`] of a ray whose sphere crossing `hit` is known (from
+    /// [`super::lanes::crossings`]).
+    #[inline]
+    pub fn cross_at(
+        &self,
+        hit: SphereCrossing,
+        origin: Vec3,
+        dir: Vec3,
+        tmin: f32,
+        tmax: f32,
+    ) -> Option<Crossed> {
         let c = self.bounds.center;
         let r = self.bounds.radius;
-        let hit = from.crossing(dir)?;
         let (t0, t1) = (hit.t0, hit.t1);
         if t1 < tmin {
             return None; // sphere behind the ray

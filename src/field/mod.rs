@@ -16,6 +16,7 @@
 
 pub mod bake;
 pub mod cache;
+pub mod lanes;
 pub mod lookup;
 pub mod normals;
 pub mod scene;

@@ -1,8 +1,10 @@
 //! Several instanced fields answering one [`Visibility`] query (2008 Algorithm 2 over all
 //! occluders; 2010 §3.2).
 
+use super::lanes::{self, Isa, MayMeetFrom};
 use super::lookup::{
-    ray_sphere, BlendReads, Crossed, LookupOptions, NearestRead, Reads, SphereOrigin,
+    ray_sphere, BlendReads, Crossed, LookupOptions, NearestRead, Reads, SphereCrossing,
+    SphereOrigin,
 };
 use super::normals::NormalField;
 use super::Selection;
@@ -118,7 +120,7 @@ impl FieldInstance {
 
     /// The terms of [`Self::may_meet`] that depend only on the origin.
     #[inline]
-    fn may_meet_from(&self, origin: Vec3) -> MayMeetFrom {
+    pub fn may_meet_from(&self, origin: Vec3) -> MayMeetFrom {
         MayMeetFrom {
             f: self.world_center - origin,
             reach: self.world_radius
@@ -169,12 +171,14 @@ impl FieldInstance {
         (t1 >= tmin && t0 <= tmax).then_some(t0)
     }
 
-    /// [`Self::hit_distance`]`(..).is_some()` of every ray from `origin` along `dirs[i]` whose
-    /// `candidate(dirs[i])` holds, ORed into `out[i]`; rays already marked in `out` are skipped.
+    /// [`Self::hit_distance`]`(..).is_some()` of every ray from `origin` along `dirs[i]` that
+    /// passes `meet` (this instance's [`Self::may_meet_from`]`(origin)`) and `also(i, dirs[i])`,
+    /// ORed into `out[i]`; rays already marked in `out` are skipped.
     ///
     /// The direction-independent work (model-space origin, the sphere crossing's origin terms)
-    /// is done once; each block of rays computes its texel addresses and prefetches them before
-    /// any is read, so that the storage's cache misses overlap instead of adding up.
+    /// is done once; the cull and the sphere crossings run [`lanes::LANES`] rays at a time
+    /// ([`lanes`]); each block of crossings computes its texel addresses and prefetches them
+    /// before any is read, so that the storage's cache misses overlap instead of adding up.
     #[allow(clippy::too_many_arguments)]
     fn occluded_many(
         &self,
@@ -183,14 +187,16 @@ impl FieldInstance {
         tmin: f32,
         tmax: impl Fn(usize) -> f32,
         opts: &LookupOptions,
-        candidate: impl Fn(usize, Vec3) -> bool,
+        also: impl Fn(usize, Vec3) -> bool,
         out: &mut [bool],
     ) {
         match opts.selection {
-            Selection::Nearest => self
-                .occluded_many_with::<NearestRead>(origin, dirs, tmin, tmax, opts, candidate, out),
-            Selection::Interpolated => self
-                .occluded_many_with::<BlendReads>(origin, dirs, tmin, tmax, opts, candidate, out),
+            Selection::Nearest => {
+                self.occluded_many_with::<NearestRead>(origin, dirs, tmin, tmax, opts, also, out)
+            }
+            Selection::Interpolated => {
+                self.occluded_many_with::<BlendReads>(origin, dirs, tmin, tmax, opts, also, out)
+            }
         }
     }
 
@@ -203,15 +209,23 @@ impl FieldInstance {
         tmin: f32,
         tmax: impl Fn(usize) -> f32,
         opts: &LookupOptions,
-        candidate: impl Fn(usize, Vec3) -> bool,
+        also: impl Fn(usize, Vec3) -> bool,
         out: &mut [bool],
     ) {
+        /// Rays culled and crossed per window.
+        const WINDOW: usize = 64;
+        /// Crossings whose reads are staged together.
         const BLOCK: usize = 16;
+        let isa = Isa::detect();
+        let meet = self.may_meet_from(origin);
         let tr = &self.transform;
         let field = &*self.field;
         let o = self.local_origin(origin);
         let from = SphereOrigin::new(o, field.bounds.center, field.bounds.radius);
         let lmin = tr.to_local_distance(tmin);
+        let mut idx = [0u32; WINDOW];
+        let mut local = [Vec3::ZERO; WINDOW];
+        let mut hits: [Option<SphereCrossing>; WINDOW] = [None; WINDOW];
         let mut index = [0usize; BLOCK];
         let mut lmaxs = [0.0f32; BLOCK];
         let mut crossed = [Crossed::default(); BLOCK];
@@ -225,42 +239,44 @@ impl FieldInstance {
                     out[index[k]] |= field.finish(&probe, lmin, lmaxs[k], opts).is_some();
                 }
             };
-        for (i, &dir) in dirs.iter().enumerate() {
-            if out[i] || !candidate(i, dir) {
-                continue;
+        for start in (0..dirs.len()).step_by(WINDOW) {
+            let end = (start + WINDOW).min(dirs.len());
+            let culled = lanes::cull(
+                isa,
+                &meet,
+                &dirs[start..end],
+                tmin,
+                &out[start..end],
+                &mut idx,
+            );
+            let mut kept = 0;
+            for k in 0..culled {
+                let i = start + idx[k] as usize;
+                if also(i, dirs[i]) {
+                    idx[kept] = idx[k];
+                    local[kept] = self.local_dir(dirs[i]);
+                    kept += 1;
+                }
             }
-            let lmax = tr.to_local_distance(tmax(i));
-            let Some(c) = field.cross(&from, o, self.local_dir(dir), lmin, lmax) else {
-                continue;
-            };
-            (index[n], lmaxs[n], crossed[n]) = (i, lmax, c);
-            n += 1;
-            if n == BLOCK {
-                resolve(n, &index, &lmaxs, &crossed, out);
-                n = 0;
+            lanes::crossings(isa, &from, &local[..kept], &mut hits[..kept]);
+            for k in 0..kept {
+                let i = start + idx[k] as usize;
+                let Some(hit) = hits[k] else {
+                    continue;
+                };
+                let lmax = tr.to_local_distance(tmax(i));
+                let Some(c) = field.cross_at(hit, o, local[k], lmin, lmax) else {
+                    continue;
+                };
+                (index[n], lmaxs[n], crossed[n]) = (i, lmax, c);
+                n += 1;
+                if n == BLOCK {
+                    resolve(n, &index, &lmaxs, &crossed, out);
+                    n = 0;
+                }
             }
         }
         resolve(n, &index, &lmaxs, &crossed, out);
-    }
-}
-
-/// [`FieldInstance::may_meet`] for rays from one origin.
-#[derive(Clone, Copy, Debug)]
-struct MayMeetFrom {
-    /// Sphere centre − origin.
-    f: Vec3,
-    /// The sphere's radius plus the rounding margin.
-    reach: f32,
-}
-
-impl MayMeetFrom {
-    #[inline]
-    fn test(&self, dir: Vec3, tmin: f32) -> bool {
-        let (f, reach) = (self.f, self.reach);
-        let b = f.dot(dir);
-        let l = f - b * dir;
-        // Line misses: |l| > R. Sphere behind: every point of it has t ≤ b + R < tmin.
-        l.length_squared() <= reach * reach && b + reach >= tmin
     }
 }
 
@@ -337,12 +353,10 @@ impl FieldScene {
         out.fill(false);
         let several = self.instances.len() > 1;
         for inst in &self.instances {
-            let meet = inst.may_meet_from(origin);
-            let candidate = |i: usize, dir: Vec3| {
-                meet.test(dir, tmin)
-                    && (!several || inst.meets_segment(origin, dir, tmin, tmax(i)).is_some())
+            let also = |i: usize, dir: Vec3| {
+                !several || inst.meets_segment(origin, dir, tmin, tmax(i)).is_some()
             };
-            inst.occluded_many(origin, dirs, tmin, tmax, &self.options, candidate, out);
+            inst.occluded_many(origin, dirs, tmin, tmax, &self.options, also, out);
         }
     }
 }

@@ -115,8 +115,7 @@ pub fn ao_at_point<V: Visibility + ?Sized>(
         (normal.length() - 1.0).abs() < 1e-3,
         "normal must be unit, got {normal}"
     );
-    rays.fill(point_index, scratch);
-    if scratch.is_empty() {
+    if rays.set.is_empty() {
         return 1.0;
     }
     let frame = Frame::from_normal(normal);
@@ -124,9 +123,7 @@ pub fn ao_at_point<V: Visibility + ?Sized>(
     let tmax = opts.max_distance.unwrap_or(f32::INFINITY);
     match opts.falloff {
         Falloff::Step => {
-            for d in scratch.iter_mut() {
-                *d = frame.to_world(*d);
-            }
+            rays.fill_world(point_index, &frame, scratch);
             // All rays share the origin: one batched query per block of directions.
             let mut blocked = [false; 256];
             let mut free = 0;
@@ -139,6 +136,7 @@ pub fn ao_at_point<V: Visibility + ?Sized>(
         }
         Falloff::Linear => {
             debug_assert!(tmax.is_finite(), "a linear falloff needs a max distance");
+            rays.fill(point_index, scratch);
             let visible: f32 = scratch
                 .iter()
                 .map(|&local| {

@@ -1,7 +1,9 @@
 //! Seeded receiver ray sets. Randomness is a pure function of (point index, sample index, seed)
 //! (the pbrt-v4 habit), so one thread and many threads give bit-identical results.
 
+use super::frame::Frame;
 use super::warp::square_to_cosine_hemisphere;
+use crate::simd::Isa;
 use glam::{Vec2, Vec3};
 
 /// 64-bit finaliser of SplitMix64 / Murmur3 (Steele et al. 2014): a bijective mix.
@@ -171,6 +173,76 @@ impl PreparedRaySet {
             None => self.set.fill(point, out),
         }
     }
+
+    /// [`Self::fill`] followed by `frame.to_world` of every direction, bit for bit: point
+    /// `point`'s directions in world space. Without jitter, eight directions per step with AVX2
+    /// where the CPU has it ([`Isa::detect`]), in the two steps' order of operations.
+    #[inline]
+    pub fn fill_world(&self, point: u32, frame: &Frame, out: &mut Vec<Vec3>) {
+        self.fill_world_with(Isa::detect(), point, frame, out)
+    }
+
+    /// [`Self::fill_world`] on the instruction set `isa` (tests compare them).
+    pub fn fill_world_with(&self, isa: Isa, point: u32, frame: &Frame, out: &mut Vec<Vec3>) {
+        let Some(base) = &self.base else {
+            self.set.fill(point, out);
+            out.iter_mut().for_each(|d| *d = frame.to_world(*d));
+            return;
+        };
+        let (s, c) = self.set.rotation(point);
+        out.clear();
+        out.resize(base.len(), Vec3::ZERO);
+        let done = match isa {
+            Isa::Portable => 0,
+            // SAFETY: `Isa::Avx2` means the CPU has AVX2 (`Isa::detect`); the lengths agree.
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx2 => unsafe { avx2_rotate_to_world(base, (s, c), frame, out) },
+        };
+        for (o, d) in out[done..].iter_mut().zip(&base[done..]) {
+            *o = frame.to_world(Vec3::new(c * d.x - s * d.y, s * d.x + c * d.y, d.z));
+        }
+    }
+}
+
+/// [`PreparedRaySet::fill_world`]'s rotation about z and `frame.to_world` of the whole groups
+/// of eight in `base`, written to `out`; returns how many were done.
+///
+/// # Safety
+/// The CPU must have AVX2; `out` as long as `base`.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn avx2_rotate_to_world(
+    base: &[Vec3],
+    (s, c): (f32, f32),
+    f: &Frame,
+    out: &mut [Vec3],
+) -> usize {
+    use crate::simd::x86::{load3x8, store3x8};
+    use std::arch::x86_64::*;
+    let (mul, add, sub) = (_mm256_mul_ps, _mm256_add_ps, _mm256_sub_ps);
+    let (sv, cv) = (_mm256_set1_ps(s), _mm256_set1_ps(c));
+    let axis = |v: Vec3| {
+        (
+            _mm256_set1_ps(v.x),
+            _mm256_set1_ps(v.y),
+            _mm256_set1_ps(v.z),
+        )
+    };
+    let (fx, fy, fz) = (axis(f.x), axis(f.y), axis(f.z));
+    let whole = base.len() / 8 * 8;
+    for i in (0..whole).step_by(8) {
+        let (x, y, z) = load3x8(base.as_ptr().add(i).cast());
+        // Vec3::new(c x − s y, s x + c y, z), then x·F.x + y·F.y + z·F.z.
+        let (lx, ly) = (sub(mul(cv, x), mul(sv, y)), add(mul(sv, x), mul(cv, y)));
+        let world = |a: __m256, b: __m256, c: __m256| add(add(mul(a, lx), mul(b, ly)), mul(c, z));
+        let (wx, wy, wz) = (
+            world(fx.0, fy.0, fz.0),
+            world(fx.1, fy.1, fz.1),
+            world(fx.2, fy.2, fz.2),
+        );
+        store3x8(out.as_mut_ptr().add(i).cast(), wx, wy, wz);
+    }
+    whole
 }
 
 #[cfg(test)]
@@ -238,6 +310,29 @@ mod tests {
             for p in [0u32, 1, 77, 4_000_000] {
                 prep.fill(p, &mut a);
                 assert_eq!(a, set.directions(p), "jitter {jitter} point {p}");
+            }
+        }
+    }
+
+    #[test]
+    fn world_directions_are_the_two_steps_bit_for_bit() {
+        for (k, jitter) in [(9, false), (16, false), (3, false), (5, true)] {
+            let set = RaySet { k, seed: 3, jitter };
+            let prep = set.prepare();
+            let (mut local, mut got) = (Vec::new(), Vec::new());
+            for p in [0u32, 1, 77, 4_000_000] {
+                let frame = Frame::from_normal(seeded_sphere_direction(p as u64, 2));
+                prep.fill(p, &mut local);
+                let want: Vec<[u32; 3]> = local
+                    .iter()
+                    .map(|&d| frame.to_world(d).to_array().map(f32::to_bits))
+                    .collect();
+                for isa in Isa::all_available() {
+                    prep.fill_world_with(isa, p, &frame, &mut got);
+                    let got: Vec<[u32; 3]> =
+                        got.iter().map(|d| d.to_array().map(f32::to_bits)).collect();
+                    assert_eq!(got, want, "k {k} jitter {jitter} point {p} {isa:?}");
+                }
             }
         }
     }
