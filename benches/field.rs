@@ -4,7 +4,7 @@
 //! tracer's raw closest-hit throughput on the same rays. Field rows go through
 //! `ao_at_points`, which batches each vertex's rays (`Visibility::occluded_many`); the
 //! `*_per_ray` rows run the same lookups one ray at a time (`PerRay`). The `floor_*` rows time
-//! the cost-floor backends of `benches/support/floor.rs` on the same rays: the AO pass with a
+//! the cost-floor backends of `visfield::experiment::performance::floor` on the same rays: the AO pass with a
 //! free query, and with only the bounding-sphere cull and crossing that every lookup starts
 //! with; ray casting's time over theirs bounds the speed-up any field lookup can reach here.
 //! The `entering_*` rows take the same AO rays but only those that enter the caster's bounding
@@ -36,9 +36,7 @@ use visfield::sampling::rays::RaySet;
 use visfield::sampling::{Frame, HemisphereLayout, LayoutKind, SphereKind, SpherePoints};
 use visfield::trace::Tracer;
 
-#[path = "support/floor.rs"]
-mod floor;
-use floor::{NoQuery, SphereCull};
+use visfield::experiment::performance::floor::{NoQuery, SphereCull};
 
 fn casters() -> Vec<(String, Mesh)> {
     let mut v = Vec::new();
@@ -75,7 +73,7 @@ fn ao_lookup_vs_raycast(c: &mut Criterion) {
             let tracer = tracer.get_or_init(|| Tracer::new(&scene_tris()));
             b.iter(|| ao_at_points(tracer, &recv.points, &recv.normals, &rays, &opts))
         });
-        // Cost floor: the AO pass with a query that costs nothing (support/floor.rs).
+        // Cost floor: the AO pass with a query that costs nothing (experiment::performance::floor).
         group.bench_function("floor_no_query", |b| {
             b.iter(|| ao_at_points(&NoQuery, &recv.points, &recv.normals, &rays, &opts))
         });

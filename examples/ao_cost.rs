@@ -7,7 +7,7 @@
 //! - CASTER: `bunny` (stanford-bunny_39k), `dragon` or `supershape` (261,120 triangles).
 //! - BACKEND: `anyhit` (obvhs ray casting), `nearest`, `interpolated` (field lookup, per-ray
 //!   queries) or `nearest-batch`, `interpolated-batch` (the batched per-point entry point);
-//!   and the two cost floors of `benches/support/floor.rs`, below any field lookup: `none`
+//!   and the two cost floors of `visfield::experiment::performance::floor`, below any field lookup: `none`
 //!   (every ray free: building the rays and the AO loop alone) and `sphere` (occluded where the
 //!   ray meets the caster's bounding sphere: the cull and exact crossing every lookup starts
 //!   with, without a map, texel or storage read).
@@ -36,9 +36,7 @@ use visfield::sampling::rays::RaySet;
 use visfield::sampling::{LayoutKind, SphereKind};
 use visfield::trace::Tracer;
 
-#[path = "../benches/support/floor.rs"]
-mod floor;
-use floor::{NoQuery, SphereCull};
+use visfield::experiment::performance::floor::{NoQuery, SphereCull};
 
 fn usage() -> ! {
     eprintln!(

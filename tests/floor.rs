@@ -1,13 +1,10 @@
-//! The cost-floor backends of `benches/support/floor.rs` (shared with `benches/field.rs` and
+//! The cost-floor backends of `visfield::experiment::performance::floor` (shared with `benches/field.rs` and
 //! `examples/ao_cost.rs`): the sphere cull answers exactly whether a segment meets a caster's
 //! bounding sphere, and the free query answers nothing.
 
-#[path = "../benches/support/floor.rs"]
-mod floor;
-
-use floor::{NoQuery, SphereCull};
 use glam::Vec3;
 use std::sync::Arc;
+use visfield::experiment::performance::floor::{NoQuery, SphereCull};
 use visfield::field::scene::{FieldInstance, FieldScene};
 use visfield::field::{FieldParams, Precision, Storage, VisibilityField};
 use visfield::geometry::{Similarity, Sphere};

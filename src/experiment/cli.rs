@@ -59,6 +59,12 @@ pub enum Command {
         #[arg(long, conflicts_with = "adapter")]
         no_gpu: bool,
     },
+    /// Field lookup against ray casting on the same rays, and each one's cost against caster
+    /// triangles, field size and the share of rays entering the caster's sphere.
+    Performance {
+        #[command(flatten)]
+        opts: RunArgs,
+    },
     /// List the experiment specs and the figure or table each reproduces.
     List,
     /// Run a spec file from any path.
@@ -80,7 +86,7 @@ pub enum Command {
         opts: RunArgs,
     },
     /// Regenerate every result (results/NAME, or results/quick/NAME with --quick): every spec,
-    /// then quickstart, sampling, relief and stability.
+    /// then quickstart, sampling, relief, stability and performance.
     All {
         #[command(flatten)]
         opts: RunArgs,
@@ -420,6 +426,10 @@ pub fn run(cli: Cli) -> Result<i32> {
         Command::Run { spec, opts } => {
             run_one(&spec, &opts, None)?;
         }
+        Command::Performance { opts } => {
+            let o = opts.options("performance", None)?;
+            super::performance::run(&o.out, o.quick, &o.supply)?;
+        }
         Command::Check {
             names,
             require_gpu,
@@ -432,7 +442,9 @@ pub fn run(cli: Cli) -> Result<i32> {
             }
             if opts.dry_run {
                 // The command-made results have no plan to print: a dry run stops here.
-                println!("dry run: quickstart, sampling, relief and stability not run");
+                println!(
+                    "dry run: quickstart, sampling, relief, stability and performance not run"
+                );
                 return Ok(0);
             }
             // The command-made results beside the specs' (same root).
@@ -442,6 +454,8 @@ pub fn run(cli: Cli) -> Result<i32> {
             let adapter = adapter_preference(opts.adapter.as_deref());
             super::relief::run(&root("relief"), opts.quick, Some(adapter))?;
             super::stability::run(&root("stability"))?;
+            let perf = opts.options("performance", opts.out.as_deref())?;
+            super::performance::run(&perf.out, perf.quick, &perf.supply)?;
         }
         Command::Plots { names, quick, dir } => plots(&names, quick, dir.as_deref())?,
         Command::Named(args) => {

@@ -20,6 +20,7 @@ pub mod kind;
 pub mod meta;
 pub mod metrics;
 pub mod outputs;
+pub mod performance;
 pub mod plan;
 pub mod plot;
 pub mod progress;

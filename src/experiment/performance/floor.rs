@@ -1,8 +1,7 @@
-//! Cost floors for the lookup-versus-ray-casting comparison (`benches/field.rs`,
-//! `examples/ao_cost.rs`, tested by `tests/floor.rs`, each including this file with
-//! `#[path = "…/benches/support/floor.rs"] mod floor;`): two [`Visibility`] backends that do strictly less work than any field
-//! lookup must do on the same rays, so that "ray casting time / floor time" bounds the speed-up
-//! that any field lookup can reach there.
+//! Cost floors for the lookup-versus-ray-casting comparison (`experiment performance`,
+//! `benches/field.rs`, `examples/ao_cost.rs`; tested by `tests/floor.rs`): two [`Visibility`]
+//! backends that do strictly less work than any field lookup must do on the same rays, so that
+//! "ray casting time / floor time" bounds the speed-up that any field lookup can reach there.
 //!
 //! - [`NoQuery`]: every ray free. What remains is the caller's own cost: building the rays and
 //!   reducing the answers (the AO loop).
@@ -14,14 +13,14 @@
 //!   lookup also moves each ray into the field's model space), without choosing a map or a
 //!   texel and without reading the field.
 //!
-//! Neither answers visibility; they exist to be timed, which is why they live beside the
-//! benches and not in the library.
+//! Neither answers visibility; they exist to be timed, which is why they live in the harness
+//! and not in the core.
 
+use crate::field::lanes::{self, Isa};
+use crate::field::lookup::SphereOrigin;
+use crate::field::scene::{FieldInstance, FieldScene};
+use crate::render::{SurfaceHit, Visibility};
 use glam::Vec3;
-use visfield::field::lanes::{self, Isa};
-use visfield::field::lookup::SphereOrigin;
-use visfield::field::scene::{FieldInstance, FieldScene};
-use visfield::render::{SurfaceHit, Visibility};
 
 /// Every ray free, at no cost ([module docs](self)).
 #[derive(Clone, Copy, Debug, Default)]

@@ -1,0 +1,566 @@
+//! `experiment performance`: field lookup against ray casting on the same rays, and how each
+//! one's cost grows, in one run (`results/performance/`).
+//!
+//! The rays are the field bench's: a caster over the corner, 256 stratified cosine rays at each
+//! of the corner's receiver vertices (vertex AO, `occluded_many` per vertex, all threads). Every
+//! backend answers the same rays in the same pass: our ray caster (obvhs CWBVH + watertight
+//! triangles), Embree where the crate is built with `--features embree`, the field's batched
+//! nearest lookup, and the two cost floors of [`floor`] (what any lookup must do at least).
+//! Each time is the fastest of a few passes after an untimed one.
+//!
+//! Three sweeps, each written to `table.csv` (column `sweep`) and plotted:
+//! - `triangles`: real models from 3.7k to 269k triangles, one field shape (4226 × 32² u8);
+//! - `field_size`: one caster, fields from tens of KiB (in L2) to tens of MiB (beyond L3);
+//! - `entering`: one caster and field, each vertex's rays drawn so that a set share of them
+//!   enters the caster's bounding sphere (the rays whose answer the field must read).
+
+pub mod floor;
+
+use super::fields::FieldSupply;
+use super::plot::{xy_plot, Axes, HLine, Series};
+use super::scenes::{mesh_sha256, LoadedMesh};
+use super::{Error, Result};
+use crate::field::lookup::{LookupOptions, SphereOrigin};
+use crate::field::scene::{FieldInstance, FieldScene};
+use crate::field::{FieldParams, Precision, Selection};
+use crate::geometry::procedural::{over_corner, supershape, Supershape};
+use crate::geometry::{models, Mesh, Scene};
+use crate::render::ao::{ao_at_points, AoOptions};
+use crate::render::receivers::Receivers;
+use crate::render::Visibility;
+use crate::sampling::rays::RaySet;
+use crate::sampling::{Frame, LayoutKind, SphereKind};
+use crate::trace::Tracer;
+use floor::{NoQuery, SphereCull};
+use glam::{Quat, Vec3};
+use rayon::prelude::*;
+use serde::Serialize;
+use std::path::Path;
+use std::sync::Arc;
+use std::time::Instant;
+
+/// One backend's time on one sweep point.
+#[derive(Clone, Debug, Serialize)]
+pub struct PerfRow {
+    /// `triangles`, `field_size` or `entering`.
+    pub sweep: &'static str,
+    pub caster: String,
+    pub triangles: usize,
+    /// The field of the lookup and floor rows ("4226x32² u8"), its storage bytes.
+    pub field: String,
+    pub field_bytes: u64,
+    /// Share of the rays that enter the caster's bounding sphere.
+    pub entering_share: f64,
+    /// `raycast` (ours), `embree`, `field_nearest`, `floor_sphere_cull`, `floor_no_query`.
+    pub backend: &'static str,
+    pub rays: u64,
+    /// Fastest timed pass, seconds (all threads).
+    pub seconds: f64,
+    pub mrays_s: f64,
+    /// This backend's speed over our ray caster's on the same rays (> 1: faster).
+    pub vs_raycast: f64,
+    /// Over Embree's, where it ran.
+    pub vs_embree: Option<f64>,
+    /// Share of the rays answered free (the AO): equal for every exact backend.
+    pub free_share: f64,
+    /// Preparation before the timed passes (BVH build; field bake or cache read), seconds.
+    pub setup_s: f64,
+}
+
+/// Sizes of one run.
+struct Profile {
+    stride: usize,
+    passes: usize,
+    models: Vec<&'static str>,
+    sizes: Vec<(usize, u32, Precision)>,
+    shares: Vec<f64>,
+    /// The field of the `triangles` and `entering` sweeps.
+    standard: (usize, u32, Precision),
+}
+
+impl Profile {
+    fn new(quick: bool) -> Profile {
+        if quick {
+            Profile {
+                stride: 16,
+                passes: 1,
+                models: vec!["bunny_npm", "stanford-bunny_39k"],
+                sizes: vec![(290, 8, Precision::U8), (290, 16, Precision::U8)],
+                shares: vec![0.0, 0.5, 1.0],
+                standard: (290, 16, Precision::U8),
+            }
+        } else {
+            Profile {
+                stride: 1,
+                passes: 3,
+                models: vec![
+                    "bunny_npm",
+                    "elephant",
+                    "armadillo",
+                    "stanford-bunny_39k",
+                    "igea_67k",
+                    "dragon",
+                    "supershape",
+                    "igea",
+                ],
+                sizes: vec![
+                    (290, 16, Precision::U8),
+                    (1090, 16, Precision::U8),
+                    (1090, 32, Precision::U8),
+                    (4226, 32, Precision::U8),
+                    (4226, 32, Precision::F32),
+                    (4226, 64, Precision::U8),
+                    (4226, 64, Precision::F32),
+                ],
+                shares: vec![0.0, 0.1, 0.25, 0.5, 0.75, 1.0],
+                standard: (4226, 32, Precision::U8),
+            }
+        }
+    }
+}
+
+fn field_params((count, res, precision): (usize, u32, Precision)) -> FieldParams {
+    FieldParams {
+        sphere: SphereKind::Slater,
+        count,
+        layout: LayoutKind::Concentric,
+        res,
+        precision,
+    }
+}
+
+/// A caster by name: a model of `../shared/models` or `supershape` (261,120 triangles).
+fn caster(name: &str) -> Result<LoadedMesh> {
+    let mesh: Mesh = if name == "supershape" {
+        supershape(&Supershape::default(), 261_120).map_err(Error::geometry("supershape"))?
+    } else {
+        models::load_model(name)?
+    };
+    Ok(LoadedMesh {
+        label: name.to_string(),
+        sha256: mesh_sha256(&mesh),
+        mesh: Arc::new(mesh),
+        model_origin: glam::DVec3::ZERO,
+    })
+}
+
+/// The receivers (every `stride`-th corner vertex) of a caster's scene.
+struct Rays {
+    points: Vec<Vec3>,
+    normals: Vec<Vec3>,
+    set: RaySet,
+}
+
+impl Rays {
+    fn of(scene: &Scene, stride: usize) -> Rays {
+        let recv = Receivers::of(scene);
+        let pick = |v: &[Vec3]| v.iter().copied().step_by(stride).collect::<Vec<_>>();
+        Rays {
+            points: pick(&recv.points),
+            normals: pick(&recv.normals),
+            set: RaySet::new(16, 1),
+        }
+    }
+
+    fn count(&self) -> u64 {
+        (self.points.len() * self.set.len()) as u64
+    }
+
+    /// The share of the rays whose line meets the world sphere ahead of the origin.
+    fn entering_share(&self, center: Vec3, radius: f32, opts: &AoOptions) -> f64 {
+        let prep = self.set.prepare();
+        let mut dirs = Vec::new();
+        let mut n = 0usize;
+        for (i, (&p, &nrm)) in self.points.iter().zip(&self.normals).enumerate() {
+            // As `ao_at_point` makes the rays of point i.
+            let from = SphereOrigin::new(p + opts.offset * nrm, center, radius);
+            prep.fill_world(i as u32, &Frame::from_normal(nrm), &mut dirs);
+            n += dirs
+                .iter()
+                .filter(|&&d| from.crossing(d).is_some_and(|c| c.t1 >= 0.0))
+                .count();
+        }
+        n as f64 / self.count().max(1) as f64
+    }
+}
+
+/// A backend to time, with its preparation time.
+struct Backend<'a> {
+    name: &'static str,
+    vis: Box<dyn Visibility + 'a>,
+    setup_s: f64,
+}
+
+/// Fastest of `passes` timed passes of `pass` after an untimed one; its answer (share free).
+fn time(passes: usize, pass: impl Fn() -> f64) -> (f64, f64) {
+    let free = pass();
+    let mut best = f64::INFINITY;
+    for _ in 0..passes {
+        let t = Instant::now();
+        let f = pass();
+        best = best.min(t.elapsed().as_secs_f64());
+        assert_eq!(f.to_bits(), free.to_bits(), "a pass changed its answer");
+    }
+    (best, free)
+}
+
+/// Rows of every backend on the same vertex-AO rays.
+#[allow(clippy::too_many_arguments)]
+fn measure_ao(
+    sweep: &'static str,
+    caster: &str,
+    triangles: usize,
+    field: (&str, u64),
+    share: f64,
+    backends: &[Backend],
+    rays: &Rays,
+    opts: &AoOptions,
+    passes: usize,
+) -> Vec<PerfRow> {
+    let timed: Vec<(f64, f64)> = backends
+        .iter()
+        .map(|b| {
+            time(passes, || {
+                let ao = ao_at_points(&*b.vis, &rays.points, &rays.normals, &rays.set, opts);
+                ao.iter().map(|&v| v as f64).sum::<f64>() / ao.len().max(1) as f64
+            })
+        })
+        .collect();
+    rows(
+        sweep,
+        caster,
+        triangles,
+        field,
+        share,
+        backends,
+        &timed,
+        rays.count(),
+    )
+}
+
+#[allow(clippy::too_many_arguments)]
+fn rows(
+    sweep: &'static str,
+    caster: &str,
+    triangles: usize,
+    (field, field_bytes): (&str, u64),
+    share: f64,
+    backends: &[Backend],
+    timed: &[(f64, f64)],
+    rays: u64,
+) -> Vec<PerfRow> {
+    let secs_of = |name: &str| {
+        backends
+            .iter()
+            .zip(timed)
+            .find(|(b, _)| b.name == name)
+            .map(|(_, t)| t.0)
+    };
+    let (raycast, embree) = (secs_of("raycast"), secs_of("embree"));
+    backends
+        .iter()
+        .zip(timed)
+        .map(|(b, &(seconds, free))| {
+            let row = PerfRow {
+                sweep,
+                caster: caster.to_string(),
+                triangles,
+                field: field.to_string(),
+                field_bytes,
+                entering_share: share,
+                backend: b.name,
+                rays,
+                seconds,
+                mrays_s: rays as f64 / seconds / 1e6,
+                vs_raycast: raycast.map_or(f64::NAN, |r| r / seconds),
+                vs_embree: embree.map(|e| e / seconds),
+                free_share: free,
+                setup_s: b.setup_s,
+            };
+            println!(
+                "performance {sweep:<10} {caster:<20} {field:<16} {:<18} {:>8.2} Mrays/s  ({:.2}x ray casting)",
+                b.name, row.mrays_s, row.vs_raycast
+            );
+            row
+        })
+        .collect()
+}
+
+/// The ray casters of a scene: ours and, with the feature, Embree.
+fn ray_casters(scene: &Scene) -> Vec<Backend<'static>> {
+    let tris = scene.caster_triangles();
+    let t = Instant::now();
+    let tracer = Tracer::new(&tris);
+    let v = vec![Backend {
+        name: "raycast",
+        vis: Box::new(tracer),
+        setup_s: t.elapsed().as_secs_f64(),
+    }];
+    v
+}
+
+/// The field lookup and the floors over `fs`.
+fn field_backends(fs: &FieldScene, bake_s: f64) -> Vec<Backend<'_>> {
+    vec![
+        Backend {
+            name: "field_nearest",
+            vis: Box::new(fs.clone()),
+            setup_s: bake_s,
+        },
+        Backend {
+            name: "floor_sphere_cull",
+            vis: Box::new(SphereCull(fs)),
+            setup_s: 0.0,
+        },
+        Backend {
+            name: "floor_no_query",
+            vis: Box::new(NoQuery),
+            setup_s: 0.0,
+        },
+    ]
+}
+
+/// The scene's one caster's field, baked or read from the cache.
+fn field_scene(
+    supply: &FieldSupply,
+    mesh: &LoadedMesh,
+    scene: &Scene,
+    shape: (usize, u32, Precision),
+) -> Result<(FieldScene, String, u64, f64)> {
+    let params = field_params(shape);
+    let t = Instant::now();
+    let got = supply.obtain(mesh, params)?;
+    let label = format!("{}x{}² {}", shape.0, shape.1, shape.2.name());
+    let bytes = got.field.bytes();
+    let fs = FieldScene {
+        instances: vec![FieldInstance::new(got.field, scene.instances[1].transform)],
+        options: LookupOptions {
+            selection: Selection::Nearest,
+            ..LookupOptions::default()
+        },
+    };
+    Ok((fs, label, bytes, t.elapsed().as_secs_f64()))
+}
+
+/// Runs the three sweeps into `out` (see the module docs).
+pub fn run(out: &Path, quick: bool, supply: &FieldSupply) -> Result<Vec<PerfRow>> {
+    super::run::ensure_writable(out)?;
+    let meta = super::meta::RunMeta::collect(None);
+    let prof = Profile::new(quick);
+    let opts = AoOptions::for_scene_radius(0.9);
+    let mut table = Vec::new();
+    // Load every caster before any timing: a missing model fails here.
+    let casters: Vec<LoadedMesh> = prof
+        .models
+        .iter()
+        .map(|m| caster(m))
+        .collect::<Result<_>>()?;
+    for mesh in &casters {
+        let scene = over_corner((*mesh.mesh).clone(), Quat::IDENTITY);
+        let rays = Rays::of(&scene, prof.stride);
+        let world = scene.instances[1]
+            .transform
+            .to_world_sphere(&mesh.mesh.bounding_sphere());
+        let share = rays.entering_share(world.center, world.radius, &opts);
+        let casters_b = ray_casters(&scene);
+        let (fs, label, bytes, bake_s) = field_scene(supply, mesh, &scene, prof.standard)?;
+        let mut all = casters_b;
+        all.extend(field_backends(&fs, bake_s));
+        let tris = mesh.mesh.triangles.len();
+        table.extend(measure_ao(
+            "triangles",
+            &mesh.label,
+            tris,
+            (&label, bytes),
+            share,
+            &all,
+            &rays,
+            &opts,
+            prof.passes,
+        ));
+        if mesh.label == "stanford-bunny_39k" {
+            for &shape in &prof.sizes {
+                let (fs, label, bytes, bake_s) = field_scene(supply, mesh, &scene, shape)?;
+                let mut all = ray_casters(&scene);
+                all.extend(field_backends(&fs, bake_s));
+                table.extend(measure_ao(
+                    "field_size",
+                    &mesh.label,
+                    tris,
+                    (&label, bytes),
+                    share,
+                    &all,
+                    &rays,
+                    &opts,
+                    prof.passes,
+                ));
+            }
+            let mut all = ray_casters(&scene);
+            all.extend(field_backends(&fs, bake_s));
+            for &p in &prof.shares {
+                let dirs = entering_rays(&rays, world.center, world.radius, &opts, p);
+                let timed: Vec<(f64, f64)> = all
+                    .iter()
+                    .map(|b| time(prof.passes, || free_share(&*b.vis, &dirs, &opts)))
+                    .collect();
+                let n = dirs.iter().map(|d| d.1.len() as u64).sum();
+                // The share drawn: round(p · 256) of each receiver's 256 rays.
+                let k = rays.set.len() as f64;
+                let drawn = (p * k).round() / k;
+                table.extend(rows(
+                    "entering",
+                    &mesh.label,
+                    tris,
+                    (&label, bytes),
+                    drawn,
+                    &all,
+                    &timed,
+                    n,
+                ));
+            }
+        }
+    }
+    std::fs::create_dir_all(out).map_err(Error::io(out))?;
+    super::outputs::write_csv(&out.join("table.csv"), &table)?;
+    plots(out, &table)?;
+    let json = out.join("run.json");
+    crate::io::write_atomic(&json, meta.to_json().as_bytes()).map_err(Error::io(&json))?;
+    println!("performance: {} row(s) -> {}", table.len(), out.display());
+    Ok(table)
+}
+
+/// Per receiver: its origin and 256 world directions of which `round(share · 256)` enter the
+/// caster's sphere, drawn in turn from a pool of 4096 cosine directions (receivers whose pool
+/// lacks either kind are left out, for every share alike).
+fn entering_rays(
+    rays: &Rays,
+    center: Vec3,
+    radius: f32,
+    opts: &AoOptions,
+    share: f64,
+) -> Vec<(Vec3, Vec<Vec3>)> {
+    let pool = RaySet::new(64, 7).prepare();
+    let n = rays.set.len();
+    let want = (share * n as f64).round() as usize;
+    let mut dirs = Vec::new();
+    rays.points
+        .iter()
+        .zip(&rays.normals)
+        .enumerate()
+        .filter_map(|(i, (&p, &nrm))| {
+            let origin = p + opts.offset * nrm;
+            let from = SphereOrigin::new(origin, center, radius);
+            pool.fill_world(i as u32, &Frame::from_normal(nrm), &mut dirs);
+            let (enter, miss): (Vec<Vec3>, Vec<Vec3>) = dirs
+                .iter()
+                .partition(|&&d| from.crossing(d).is_some_and(|c| c.t1 >= 0.0));
+            if enter.is_empty() || miss.is_empty() {
+                return None;
+            }
+            let picked = (0..n)
+                .map(|k| {
+                    if k < want {
+                        enter[k % enter.len()]
+                    } else {
+                        miss[k % miss.len()]
+                    }
+                })
+                .collect();
+            Some((origin, picked))
+        })
+        .collect()
+}
+
+/// The share of `dirs` that `vis` answers free, over all receivers in parallel.
+fn free_share(vis: &dyn Visibility, dirs: &[(Vec3, Vec<Vec3>)], opts: &AoOptions) -> f64 {
+    let tmax = opts.max_distance.unwrap_or(f32::INFINITY);
+    let free: usize = dirs
+        .par_iter()
+        .map(|(o, d)| {
+            let mut out = vec![false; d.len()];
+            vis.occluded_many(*o, d, 0.0, tmax, &mut out);
+            out.iter().filter(|&&b| !b).count()
+        })
+        .sum();
+    let total: usize = dirs.iter().map(|d| d.1.len()).sum();
+    free as f64 / total.max(1) as f64
+}
+
+/// The three growth plots.
+fn plots(out: &Path, rows: &[PerfRow]) -> Result<()> {
+    let series = |sweep: &str, x: &dyn Fn(&PerfRow) -> f64| -> Vec<Series> {
+        let mut names: Vec<&str> = Vec::new();
+        for r in rows.iter().filter(|r| r.sweep == sweep) {
+            if !names.contains(&r.backend) {
+                names.push(r.backend);
+            }
+        }
+        names
+            .iter()
+            .map(|&b| Series {
+                label: b.to_string(),
+                points: rows
+                    .iter()
+                    .filter(|r| r.sweep == sweep && r.backend == b)
+                    .map(|r| (x(r), r.mrays_s))
+                    .collect(),
+                line: true,
+            })
+            .collect()
+    };
+    let axes = |title: &str, x: &str, log_x: bool| Axes {
+        title: title.to_string(),
+        x_label: x.to_string(),
+        y_label: "Mrays/s (same rays, all threads)".to_string(),
+        log_x,
+        log_y: true,
+    };
+    let plot = |name: &str, a: Axes, s: Vec<Series>, h: &[HLine]| -> Result<()> {
+        if s.iter().all(|s| s.points.is_empty()) {
+            return Ok(());
+        }
+        xy_plot(&out.join(name), &a, &s, h)
+    };
+    plot(
+        "growth_triangles.png",
+        axes(
+            "Vertex AO rays against caster triangles",
+            "caster triangles",
+            true,
+        ),
+        series("triangles", &|r| r.triangles as f64),
+        &[],
+    )?;
+    let caches = cache_sizes();
+    plot(
+        "growth_field_size.png",
+        axes(
+            &format!("Against field size ({caches})"),
+            "field storage, bytes",
+            true,
+        ),
+        series("field_size", &|r| r.field_bytes as f64),
+        &[],
+    )?;
+    plot(
+        "growth_entering.png",
+        axes(
+            "Against the share of rays entering the caster's sphere",
+            "share of rays entering the bounding sphere",
+            false,
+        ),
+        series("entering", &|r| r.entering_share),
+        &[],
+    )
+}
+
+/// "L2 512 KiB, L3 16384 KiB" from sysfs (empty where unknown).
+fn cache_sizes() -> String {
+    let read = |i: u32| {
+        let d = format!("/sys/devices/system/cpu/cpu0/cache/index{i}");
+        let level = std::fs::read_to_string(format!("{d}/level")).ok()?;
+        let size = std::fs::read_to_string(format!("{d}/size")).ok()?;
+        Some(format!("L{} {}", level.trim(), size.trim()))
+    };
+    (2..5).filter_map(read).collect::<Vec<_>>().join(", ")
+}
