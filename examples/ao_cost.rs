@@ -5,7 +5,9 @@
 //! `cargo run --release --example ao_cost -- CASTER BACKEND [PRECISION] [STRIDE]`
 //!
 //! - CASTER: `bunny` (stanford-bunny_39k), `dragon` or `supershape` (261,120 triangles).
-//! - BACKEND: `anyhit` (obvhs ray casting), `nearest`, `interpolated` (field lookup, per-ray
+//! - BACKEND: `anyhit` (our ray caster: obvhs CWBVH with padded boxes at a working scale and
+//!   watertight triangles), `anyhit-plain` (plain obvhs on the same triangles: unpadded boxes,
+//!   no scaling, obvhs's Möller–Trumbore test; not watertight, a cost baseline only), `nearest`, `interpolated` (field lookup, per-ray
 //!   queries) or `nearest-batch`, `interpolated-batch` (the batched per-point entry point);
 //!   and the two cost floors of `visfield::experiment::performance::floor`, below any field lookup: `none`
 //!   (every ray free: building the rays and the AO loop alone) and `sphere` (occluded where the
@@ -41,7 +43,7 @@ use visfield::experiment::performance::floor::{NoQuery, SphereCull};
 fn usage() -> ! {
     eprintln!(
         "usage: ao_cost CASTER(bunny|dragon|supershape) \
-         BACKEND(anyhit|nearest|interpolated|nearest-batch|interpolated-batch|none|sphere) \
+         BACKEND(anyhit|anyhit-plain|nearest|interpolated|nearest-batch|interpolated-batch|none|sphere) \
          [PRECISION(u8|u16|f32|bit1)] [STRIDE]"
     );
     std::process::exit(2)
@@ -110,6 +112,11 @@ fn main() {
         let t = Instant::now();
         let ao = ao_pass(&NoQuery, &points, &normals, &rays);
         (ao, t.elapsed().as_secs_f64())
+    } else if args[1] == "anyhit-plain" {
+        let plain = PlainObvhs::new(&scene.caster_triangles());
+        let t = Instant::now();
+        let ao = ao_pass(&plain, &points, &normals, &rays);
+        (ao, t.elapsed().as_secs_f64())
     } else if args[1] == "anyhit" {
         let tracer = Tracer::new(&scene.caster_triangles());
         let t = Instant::now();
@@ -165,4 +172,59 @@ fn main() {
         secs,
         n_rays as f64 / secs / 1e6
     );
+}
+
+/// Plain obvhs any hit (the `medium_build` CWBVH over the triangles' own boxes, obvhs's
+/// Möller–Trumbore test): what our ray caster costs over obvhs itself on the same rays.
+struct PlainObvhs {
+    bvh: obvhs::cwbvh::CwBvh,
+    triangles: Vec<obvhs::triangle::Triangle>,
+}
+
+impl PlainObvhs {
+    fn new(tris: &[[Vec3; 3]]) -> PlainObvhs {
+        use obvhs::triangle::Triangle;
+        let tris: Vec<Triangle> = tris
+            .iter()
+            .map(|t| Triangle {
+                v0: t[0].into(),
+                v1: t[1].into(),
+                v2: t[2].into(),
+            })
+            .collect();
+        let boxes: Vec<obvhs::aabb::Aabb> = tris.iter().map(|t| t.aabb()).collect();
+        let bvh = obvhs::cwbvh::builder::build_cwbvh(
+            &boxes,
+            obvhs::BvhBuildParams::medium_build(),
+            &mut std::time::Duration::default(),
+        );
+        let triangles = bvh
+            .primitive_indices
+            .iter()
+            .map(|&i| tris[i as usize])
+            .collect();
+        PlainObvhs { bvh, triangles }
+    }
+}
+
+impl Visibility for PlainObvhs {
+    fn occluded(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> bool {
+        let ray = obvhs::ray::Ray::new(origin.into(), dir.into(), tmin, tmax);
+        !self.bvh.ray_traverse_miss(ray, |r, id| {
+            let t = self.triangles[id].intersect(r);
+            if t >= tmin && t <= tmax {
+                f32::NEG_INFINITY
+            } else {
+                f32::INFINITY
+            }
+        })
+    }
+
+    fn hit_distance(&self, _: Vec3, _: Vec3, _: f32, _: f32) -> Option<f32> {
+        unimplemented!("ao_cost times any-hit queries only")
+    }
+
+    fn surface_hit(&self, _: Vec3, _: Vec3, _: f32, _: f32) -> Option<visfield::render::SurfaceHit> {
+        unimplemented!("ao_cost times any-hit queries only")
+    }
 }
