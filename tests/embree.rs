@@ -1,5 +1,6 @@
 //! Embree (`trace::embree::EmbreeTracer`, the `embree` feature) against our reference tracer on
-//! the same rays: AO rays of real scenes, the disagreements counted and characterised, the
+//! the same rays: the AO rays of two procedural scenes (a supershape over the corner, and the
+//! same with the corner casting too), the disagreements counted and characterised, the
 //! `Visibility` contract (occluded == hit_distance.is_some(), packets == single rays) and the
 //! normals. Without the feature every test here reports itself ignored, with the reason.
 
