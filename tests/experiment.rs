@@ -525,6 +525,9 @@ fn paper_ratios_are_normalised_to_the_reference_cell() {
         normal_bits: None,
         second_reference: None,
         rms_image_vs_second: None,
+        embree_s: None,
+        embree_mrays_s: None,
+        embree_rms_vs_raycast: None,
     };
     let cell = |label: &str, count: usize, pre: f64| PaperCell {
         label: label.into(),
@@ -1000,4 +1003,45 @@ fn a_scene_state_over_the_memory_limit_is_refused_before_any_work() {
     let mut o = options(dir.path().join("out"));
     o.dry_run = true;
     assert!(run(&ls, &o).is_ok());
+}
+
+/// A spec listing the Embree ray caster: with the `embree` feature its CPU rows carry Embree's
+/// time on the reference's rays and its estimate's RMS against ours (the tiny scene's caster
+/// floats clear of the corner: no contact origin, so none); without it the run goes on with
+/// the columns empty, and `require_embree` refuses it naming the spec field.
+#[test]
+fn embree_columns_or_a_skip_with_the_reason() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = tiny(ONE_FIELD, "").replace(
+        r#""reference": {"#,
+        r#""raycasters": ["embree"], "reference": {"#,
+    );
+    let ls = loaded(dir.path(), &text);
+    let report = run(&ls, &options(dir.path().join("out"))).unwrap();
+    assert_eq!(report.rows.len(), 1);
+    let row = &report.rows[0];
+    if cfg!(feature = "embree") {
+        let s = row.embree_s.expect("embree_s");
+        assert!(s > 0.0, "{s}");
+        assert_eq!(
+            row.embree_mrays_s,
+            Some(row.rays_cast as f64 / s / 1e6),
+            "embree_mrays_s is rays_cast / embree_s"
+        );
+        assert_eq!(row.embree_rms_vs_raycast, Some(0.0));
+    } else {
+        assert_eq!(row.embree_s, None);
+        assert_eq!(row.embree_mrays_s, None);
+        assert_eq!(row.embree_rms_vs_raycast, None);
+        let mut o = options(dir.path().join("out2"));
+        o.require_embree = true;
+        let e = run(&ls, &o).unwrap_err().chain();
+        assert!(
+            e.contains("raycasters") && e.contains("--features embree"),
+            "{e}"
+        );
+    }
+    // The column is in the table either way.
+    let csv = std::fs::read_to_string(dir.path().join("out/table.csv")).unwrap();
+    assert!(csv.lines().next().unwrap().contains("embree_s"));
 }

@@ -140,6 +140,10 @@ pub struct RunArgs {
     /// files are kept, never deleted.
     #[arg(long)]
     pub allow_nonempty_out: bool,
+    /// Fail where a spec lists the Embree ray caster ("raycasters": ["embree"]) and this build
+    /// has none (without it, such a run leaves out the embree_* columns and says why).
+    #[arg(long)]
+    pub require_embree: bool,
 }
 
 /// Runs the spec experiments/NAME.json (see `experiment list`).
@@ -158,6 +162,7 @@ impl RunArgs {
         o.dry_run = self.dry_run;
         o.adapter = adapter_preference(self.adapter.as_deref());
         o.allow_nonempty_out = self.allow_nonempty_out;
+        o.require_embree = self.require_embree;
         o.supply = FieldSupply {
             cache: if self.no_cache {
                 None

@@ -8,7 +8,7 @@ use super::normals::{pack_normal, NormalField};
 use super::{frames_for, FieldError, FieldParams, Storage, VisibilityField};
 use crate::geometry::{Mesh, Sphere};
 use crate::sampling::{HemisphereLayout, SpherePoints};
-use crate::trace::Tracer;
+use crate::trace::{ClosestHit, Tracer};
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -89,9 +89,11 @@ fn mesh_tracer(mesh: &Mesh) -> (Tracer, Sphere, f64) {
     (tracer, bounds, bvh_seconds)
 }
 
-/// Bakes a field of the geometry behind `tracer`, bounded by `bounds` (which must contain it).
-pub fn bake_with(
-    tracer: &Tracer,
+/// Bakes a field of the geometry behind `tracer` (our [`Tracer`], or with the `embree` feature
+/// `trace::embree::EmbreeTracer`: the same rays, each caster's own hits), bounded by `bounds`
+/// (which must contain it).
+pub fn bake_with<T: ClosestHit + ?Sized>(
+    tracer: &T,
     bounds: Sphere,
     params: FieldParams,
     opts: &BakeOptions,
@@ -102,8 +104,8 @@ pub fn bake_with(
 /// Bakes a distance field and its normal field (2010 §4.2) in one pass over the same rays: per
 /// texel, the hit's unit geometric normal packed octahedrally in 2 × `normal_bits` bits
 /// (8 or 16); misses store the inward direction's reverse (unused by lookups).
-pub fn bake_with_normals(
-    tracer: &Tracer,
+pub fn bake_with_normals<T: ClosestHit + ?Sized>(
+    tracer: &T,
     bounds: Sphere,
     params: FieldParams,
     normal_bits: u32,
@@ -125,8 +127,8 @@ pub fn bake_with_normals(
     Ok((field, normals, stats))
 }
 
-fn bake_maps(
-    tracer: &Tracer,
+fn bake_maps<T: ClosestHit + ?Sized>(
+    tracer: &T,
     bounds: Sphere,
     params: FieldParams,
     opts: &BakeOptions,

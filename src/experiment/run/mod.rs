@@ -8,6 +8,7 @@
 //! [`crate::render::Visibility`] behind the same estimator. Stages shorter than
 //! `short_stage_s` are timed as the best of `repeats` runs.
 
+mod raycasters;
 mod references;
 mod staging;
 mod state;
@@ -76,6 +77,9 @@ pub struct RunOptions {
     pub adapter: AdapterPreference,
     /// Run into an output folder that holds files no run wrote (they are kept).
     pub allow_nonempty_out: bool,
+    /// Fail, rather than skip the `embree_*` columns, where a spec lists the Embree ray caster
+    /// and this build has none (no `embree` feature).
+    pub require_embree: bool,
 }
 
 impl RunOptions {
@@ -94,6 +98,7 @@ impl RunOptions {
             repeats: 3,
             adapter: AdapterPreference::from_env(),
             allow_nonempty_out: false,
+            require_embree: false,
         }
     }
 }
@@ -204,8 +209,10 @@ fn run_checked(
         out: staging::create(&opts.out)?,
         ..opts.clone()
     };
+    let embree = raycasters::embree_enabled(ls, spec, opts)?;
     let rows = (|| {
         let mut runner = Runner::new(spec, &plan, &scenes, &staged)?;
+        runner.embree = embree;
         for step in &plan.steps {
             runner.step(step)?;
         }

@@ -46,6 +46,8 @@ pub(super) struct Runner<'a> {
     pub(super) results: Vec<CellResult>,
     lookups: usize,
     done: usize,
+    /// Time Embree on the reference's rays (the spec lists it and the build has it).
+    pub(super) embree: bool,
 }
 
 /// A cell's fields as the lookup reads them, and what their bakes cost.
@@ -95,6 +97,7 @@ impl<'a> Runner<'a> {
                 .filter(|s| matches!(s, Step::Lookup { .. }))
                 .count(),
             done: 0,
+            embree: false,
         })
     }
 
@@ -237,6 +240,9 @@ impl<'a> Runner<'a> {
             st.ref_image.as_ref().map(|_| 0.0),
         );
         let name = bs.name.clone();
+        if self.embree {
+            self.embree_reference(scene, k)?;
+        }
         self.seed_references(scene, k)?;
         let st = self.states[scene].as_ref().expect("scene state");
         let (t, t_sd) = mean_sd(&st.reference_vs_truth);
@@ -326,6 +332,8 @@ impl<'a> Runner<'a> {
             shaded.save_png(&p).map_err(Error::io(&p))?;
         }
         let be = self.backends[&c.backend].as_ref();
+        // Embree runs on the CPU: its columns go with the CPU rows.
+        let embree = st.embree.filter(|_| c.backend == Backend::Cpu);
         let row = Row::from_parts(
             self.cell_columns(&c, &id, st, be.adapter()),
             TimeColumns {
@@ -335,10 +343,15 @@ impl<'a> Runner<'a> {
                     .raycast_kernel_s
                     .get(&(c.backend, self.plan.render_k))
                     .copied(),
+                embree_s: embree.map(|e| e.0),
                 ..ev.times
             },
             fields.columns,
-            ErrorColumns { image, ..errors },
+            ErrorColumns {
+                image,
+                embree_rms_vs_raycast: embree.map(|e| e.1),
+                ..errors
+            },
         );
         self.rows.push((cell, row));
         self.field_sweep.extend(field_sweep);
@@ -510,6 +523,7 @@ impl<'a> Runner<'a> {
                 (Some(a), Some(s), Some((_, mask))) => Some(rms_u8(&a.data, &s.data, Some(mask))),
                 _ => None,
             },
+            embree_rms_vs_raycast: None,
             image: String::new(),
         }
     }
