@@ -224,7 +224,13 @@ impl Visibility for PlainObvhs {
         unimplemented!("ao_cost times any-hit queries only")
     }
 
-    fn surface_hit(&self, _: Vec3, _: Vec3, _: f32, _: f32) -> Option<visfield::render::SurfaceHit> {
+    fn surface_hit(
+        &self,
+        _: Vec3,
+        _: Vec3,
+        _: f32,
+        _: f32,
+    ) -> Option<visfield::render::SurfaceHit> {
         unimplemented!("ao_cost times any-hit queries only")
     }
 }

@@ -291,11 +291,24 @@ fn ray_casters(scene: &Scene) -> Vec<Backend<'static>> {
     let tris = scene.caster_triangles();
     let t = Instant::now();
     let tracer = Tracer::new(&tris);
-    let v = vec![Backend {
+    #[allow(unused_mut)]
+    let mut v = vec![Backend {
         name: "raycast",
         vis: Box::new(tracer),
         setup_s: t.elapsed().as_secs_f64(),
     }];
+    #[cfg(feature = "embree")]
+    {
+        let t = Instant::now();
+        match crate::trace::embree::EmbreeTracer::new(&tris) {
+            Ok(e) => v.push(Backend {
+                name: "embree",
+                vis: Box::new(e),
+                setup_s: t.elapsed().as_secs_f64(),
+            }),
+            Err(e) => eprintln!("performance: Embree not timed: {e}"),
+        }
+    }
     v
 }
 
