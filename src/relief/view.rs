@@ -11,12 +11,22 @@ use crate::render::image::GrayImage;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
+/// The prism's height relative to the square's side in the world (the displacement scale):
+/// a view's angle is taken in the world, where the relief is this thin.
+///
+/// Deviation from the paper: it does not state its displacement scale; with a prism as high as
+/// it is wide (1) no ray from the lid reaches the `simple` map (heights 0.25–0.75) at 75°
+/// before leaving through a side wall, while at ¼ a 75° ray crosses 0.93 of the square per unit
+/// of height, so the tangential views look across the surface.
+pub const DEPTH: f32 = 0.25;
+
 /// The azimuth of every view (degrees from the t axis towards s): off the texel grid's axes,
 /// so that no column of pixels runs along a row of texel centres.
 pub const AZIMUTH_DEG: f32 = 20.0;
 
 /// A view of the square `[0, 1]²` (z up) from a distant eye at `angle_deg` off its normal (0°:
-/// perpendicular, towards 90°: tangential), looking along +t turned [`AZIMUTH_DEG`] towards +s.
+/// perpendicular, towards 90°: tangential; in the world, where the prism is `depth` high for a
+/// side of 1), looking along +t turned [`AZIMUTH_DEG`] towards +s.
 /// Pixel `(x, y)` is the ray that enters the prism through the lid at the point
 /// `lo + ((x + ½)/width, 1 − (y + ½)/height)·(hi − lo)` of the window `[lo, hi]` (the whole lid,
 /// or a part of it for a close-up), so every ray enters through the lid going down, as the
@@ -32,17 +42,20 @@ pub struct View {
     /// The lid window the image covers, `(s, t)` corners.
     pub lo: Vec2,
     pub hi: Vec2,
+    /// The prism's world height over its side ([`DEPTH`] in the experiment).
+    pub depth: f32,
     pub width: u32,
     pub height: u32,
 }
 
 impl View {
-    /// The whole lid at `size × size` pixels.
+    /// The whole lid at `size × size` pixels, the prism [`DEPTH`] high.
     pub fn lid(angle_deg: f32, size: u32) -> View {
         View {
             angle_deg,
             lo: Vec2::ZERO,
             hi: Vec2::ONE,
+            depth: DEPTH,
             width: size,
             height: size,
         }
@@ -57,10 +70,11 @@ impl View {
         }
     }
 
-    /// The unit direction of every ray.
+    /// The unit direction of every ray in prism coordinates (the world direction with its
+    /// height divided by `depth`).
     pub fn direction(&self) -> Vec3 {
         let (a, z) = (self.angle_deg.to_radians(), AZIMUTH_DEG.to_radians());
-        Vec3::new(a.sin() * z.sin(), a.sin() * z.cos(), -a.cos()).normalize()
+        Vec3::new(a.sin() * z.sin(), a.sin() * z.cos(), -a.cos() / self.depth).normalize()
     }
 
     /// The lid point (z = 1) and the unit ray of pixel `(x, y)`.
