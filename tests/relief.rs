@@ -105,7 +105,10 @@ fn spikes_floor_pixels_are_all_found() {
                 );
             }
         }
-        assert!(floor >= 128, "{angle}°: {floor} floor pixels (at least a row)");
+        assert!(
+            floor >= 128,
+            "{angle}°: {floor} floor pixels (at least a row)"
+        );
     }
 }
 

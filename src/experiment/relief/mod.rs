@@ -61,7 +61,10 @@ pub struct ReliefRow {
     /// The caster: `paper-skips` (the 2005 search).
     pub method: &'static str,
     pub dataset: &'static str,
+    /// The view's angle from the normal in the world, and its rays' angle in prism
+    /// coordinates (the prism [`crate::relief::view::DEPTH`] as high as wide).
     pub view_deg: f32,
+    pub prism_deg: f32,
     pub samples_per_unit: f32,
     pub bisections: u32,
     pub skips: u32,
@@ -340,6 +343,7 @@ fn run_pass(
                     method: METHOD,
                     dataset: pass.dataset.name(),
                     view_deg: pass.view.angle_deg,
+                    prism_deg: (-pass.view.direction().z).acos().to_degrees(),
                     samples_per_unit: rate,
                     bisections,
                     skips,

@@ -259,7 +259,7 @@ pub fn quality_grids(out: &Path, size: u32) -> Result<()> {
         image_grid(
             &out.join(file),
             &format!(
-                "{} ({what}) at {QUALITY_ANGLE}°: samples per unit × skips, against the exact intersection",
+                "{} ({what}) {QUALITY_ANGLE}°: samples/unit × skips vs exact",
                 dset.name()
             ),
             &refs,
