@@ -881,8 +881,9 @@ fn relief_caster_matches_the_cpu() {
                      {same_fetches}/{n} same fetches ({hits} hits)",
                     dset.name()
                 );
+                // At 75° most rays leave through the far walls; still hundreds hit.
                 assert!(
-                    hits > n / 4,
+                    hits > n / 8,
                     "{}: too few hits to test ({hits})",
                     dset.name()
                 );
