@@ -5,7 +5,6 @@
 //! the lid, floors at height 0 are found, and skipping never loses a hit the search without
 //! skips finds.
 
-use glam::Vec3;
 use visfield::experiment::relief::{
     run, Population, Reference, ANGLES, QUALITY_DATASETS, QUALITY_RATES, RATE_SETTINGS,
 };

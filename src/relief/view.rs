@@ -103,7 +103,7 @@ pub fn clip_to_prism(o: Vec3, d: Vec3) -> Option<(Vec3, Vec3)> {
     let (lo, hi) = (t0.min(t1), t0.max(t1));
     let near = lo.max_element().max(0.0);
     let far = hi.min_element();
-    if !(near < far) {
+    if near.partial_cmp(&far) != Some(std::cmp::Ordering::Less) {
         return None;
     }
     let (mut e, mut x) = (o + near * d, o + far * d);

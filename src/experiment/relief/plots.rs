@@ -211,7 +211,9 @@ pub fn difference(a: &GrayImage, b: &GrayImage) -> GrayImage {
 /// bisections) of its Figure 12 (`needles`, the whole lid) and Figure 10 (`relief`'s close-up),
 /// the exact image, then for 0, 1 and 2 skips the image and its difference from the exact one.
 pub fn quality_grids(out: &Path, size: u32) -> Result<()> {
-    let figures: [(&str, Dataset, bool, &[(f32, u32)]); 2] = [
+    /// File, map, close-up, (samples per unit, bisections) per row.
+    type Figure<'a> = (&'a str, Dataset, bool, &'a [(f32, u32)]);
+    let figures: [Figure; 2] = [
         (
             "quality_needles.png",
             Dataset::Needles,
