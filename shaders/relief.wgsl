@@ -27,7 +27,8 @@ struct ReliefParams {
     deltas: vec4<f32>,
     // Trips of the completion loop (loop_budget.wgsl).
     trips: u32,
-    _pad0: u32,
+    // 1 / samples_per_unit, the lattice step, computed on the host as the CPU does.
+    step: f32,
     _pad1: u32,
     _pad2: u32,
 }
@@ -149,13 +150,25 @@ fn relief_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     results[ray] = vec2<u32>(hit, select(CUT_SHORT, fetches, loops_completed(params.trips)));
 }
 
-// `intersect`: λ's bits, or MISS; the fetches are left in `fetches`.
+// The point λ of the segment, X itself at its end (`intersect`'s `at`).
+fn point_at(e: vec3<f32>, x: vec3<f32>, r: vec3<f32>, len: f32, l: f32) -> vec3<f32> {
+    if l >= len {
+        return x;
+    }
+    return e + l * r;
+}
+
+// `intersect`: λ's bits, or MISS; the fetches are left in `fetches`. A hit is d ≤ 0.
 fn cast_ray(e: vec3<f32>, x: vec3<f32>) -> u32 {
     let len = length(x - e);
     fetches = 1u;
     let de = dist(e);
-    if de < 0.0 || len <= 0.0 {
+    if de < 0.0 || !(len > 0.0) {
         return MISS;
+    }
+    if de <= 0.0 {
+        // The bits of λ = 0.
+        return 0u;
     }
     let r = (x - e) / len;
     // `skip`: rounds of forward and backward skips.
@@ -163,30 +176,37 @@ fn cast_ray(e: vec3<f32>, x: vec3<f32>) -> u32 {
     var l1 = 0.0;
     var l2 = len;
     for (var round = 0u; round < params.skips; round++) {
-        fetches += 2u;
+        // The dilation forward, the dilation and the erosion backward.
+        fetches += 3u;
         l1 += forward_skip(e + l1 * r, r, norm);
         l2 -= backward_skip(e + l2 * r, r, norm);
         if l1 > l2 {
             return MISS;
         }
     }
-    let step = 1.0 / params.samples_per_unit;
+    let step = params.step;
+    // The last lattice point λ_k = k·step at or before λ1.
+    var k = u32(floor(l1 * params.samples_per_unit));
+    if f32(k) * step > l1 {
+        k -= 1u;
+    }
     var la = 0.0;
     var da = de;
-    if l1 > 0.0 {
+    if k > 0u {
         fetches += 1u;
-        la = l1;
-        da = dist(e + l1 * r);
+        la = f32(k) * step;
+        da = dist(point_at(e, x, r, len, la));
     }
-    if da < 0.0 {
+    if da <= 0.0 {
         return bitcast<u32>(la);
     }
     loop {
-        let lb = min(la + step, l2);
-        let db = dist(e + lb * r);
+        k += 1u;
+        let lb = min(f32(k) * step, l2);
+        let db = dist(point_at(e, x, r, len, lb));
         fetches += 1u;
-        if db < 0.0 {
-            return bitcast<u32>(bisect(e, r, la, da, lb, db));
+        if db <= 0.0 {
+            return bitcast<u32>(bisect(e, x, r, len, la, da, lb, db));
         }
         if lb >= l2 {
             return MISS;
@@ -197,8 +217,17 @@ fn cast_ray(e: vec3<f32>, x: vec3<f32>) -> u32 {
     return MISS;
 }
 
-// The paper's interpolating bisection, keeping the sign change (`bisect`).
-fn bisect(e: vec3<f32>, r: vec3<f32>, la0: f32, da0: f32, lb0: f32, db0: f32) -> f32 {
+// The paper's interpolating bisection, keeping the sign change da > 0 ≥ db (`bisect`).
+fn bisect(
+    e: vec3<f32>,
+    x: vec3<f32>,
+    r: vec3<f32>,
+    len: f32,
+    la0: f32,
+    da0: f32,
+    lb0: f32,
+    db0: f32,
+) -> f32 {
     var la = la0;
     var da = da0;
     var lb = lb0;
@@ -206,9 +235,9 @@ fn bisect(e: vec3<f32>, r: vec3<f32>, la0: f32, da0: f32, lb0: f32, db0: f32) ->
     var l = lb;
     for (var s = 0u; s < params.bisections; s++) {
         l = la + da / (da - db) * (lb - la);
-        let dl = dist(e + l * r);
+        let dl = dist(point_at(e, x, r, len, l));
         fetches += 1u;
-        if dl >= 0.0 {
+        if dl > 0.0 {
             la = l;
             da = dl;
         } else {

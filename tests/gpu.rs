@@ -830,7 +830,7 @@ fn gpu_ray_cast_ao_at_4096_rays_per_point_matches_the_cpu() {
 }
 
 /// The 2005 relief caster on the GPU against `relief::intersect` on the same segments, for
-/// every dataset, a steep and a flat view, and 0–2 rounds of skips: the same hit or miss and
+/// every dataset, a perpendicular and a grazing view, and 0–2 rounds of skips: the same hit or miss and
 /// λ within 1e-4 on at least 99.5% of the rays, the same fetch count on at least 99%, and the
 /// same rendered frame (hit masks and shading) up to those rays. The two paths differ only
 /// where the driver fuses a multiply-add and a sample within a rounding of the surface changes
@@ -844,17 +844,11 @@ fn relief_caster_matches_the_cpu() {
         let map = dset.map(64);
         let zones = SafetyZones::new(&map, &PAPER_BOXES);
         let kernel = ReliefKernel::new(ctx, &map, &zones).unwrap();
-        for angle in [0.0f32, 60.0] {
-            let view = View {
-                angle_deg: angle,
-                distance: 1.6,
-                fov_deg: 40.0,
-                width: 48,
-                height: 48,
-            };
+        for angle in [0.0f32, 75.0] {
+            let view = View::lid(angle, 48);
             let segments: Vec<(Vec3, Vec3)> =
                 (0..48 * 48).filter_map(|k| view.segment(k)).collect();
-            assert!(segments.len() > 1000, "{}", segments.len());
+            assert_eq!(segments.len(), 48 * 48);
             for skips in 0..=2 {
                 let p = CastParams {
                     samples_per_unit: 75.0,
@@ -887,8 +881,9 @@ fn relief_caster_matches_the_cpu() {
                      {same_fetches}/{n} same fetches ({hits} hits)",
                     dset.name()
                 );
+                // At 75° most rays leave through the far walls; still hundreds hit.
                 assert!(
-                    hits > n / 4,
+                    hits > n / 8,
                     "{}: too few hits to test ({hits})",
                     dset.name()
                 );

@@ -41,7 +41,8 @@ struct ReliefParamsGpu {
     deltas: [f32; 4],
     /// Trips of the completion loop (`loops_completed`).
     trips: u32,
-    _pad0: u32,
+    /// `1 / samples_per_unit`, the search's lattice step, as the CPU computes it.
+    step: f32,
     _pad1: u32,
     _pad2: u32,
 }
@@ -176,7 +177,7 @@ impl<'a> ReliefKernel<'a> {
                     channels: self.channels,
                     deltas: self.deltas,
                     trips: COMPLETION_TRIPS,
-                    _pad0: 0,
+                    step: 1.0 / params.samples_per_unit,
                     _pad1: 0,
                     _pad2: 0,
                 };

@@ -21,23 +21,43 @@ pub struct CastParams {
 }
 
 /// The answer of one ray: the hit parameter λ and the texture reads it took (one per height
-/// sample, one per four-channel zone read, as the paper counts texture fetches).
+/// sample, one per four-channel zone map read: a skip round reads the dilation going forward
+/// and the dilation and the erosion going backward, three reads).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Cast {
     pub hit: Option<f32>,
     pub fetches: u32,
 }
 
+/// Zone-map reads per round of skips: the dilation forward, dilation and erosion backward.
+pub const FETCHES_PER_SKIP_ROUND: u32 = 3;
+
 #[inline]
 fn d(map: &HeightMap, p: Vec3) -> f32 {
     p.z - map.sample(Vec2::new(p.x, p.y))
 }
 
-/// The paper's search along `E → X` (§3.1): discard when `E` is below the surface (back
-/// faces), `skips` rounds of forward and backward empty-space skips (§3.3), linear search at
-/// `samples_per_unit` within the remaining segment (its end sample included), then
-/// `bisections` interpolating bisection steps (§3.1) on the first interval with a sign change.
-/// With no bisection the hit is the first sample below the surface.
+/// Whether `p` (the entry of a segment) lies strictly below the surface: the paper discards
+/// such a pixel (§3.1 step 1, back faces and side walls entered below the surface).
+pub fn culled(map: &HeightMap, p: Vec3) -> bool {
+    d(map, p) < 0.0
+}
+
+/// The paper's search along `E → X` (§3.1): discard when `E` is strictly below the surface
+/// (back faces), `skips` rounds of forward and backward empty-space skips (§3.3), linear search
+/// within the remaining segment `[λ1, λ2]` (its end sample included), then `bisections`
+/// interpolating bisection steps (§3.1) on the first interval with a sign change. With no
+/// bisection the hit is the first sample on or below the surface.
+///
+/// The hit rule is `d ≤ 0` (on or below the surface), the same as [`exact`]'s, and the segment's
+/// last sample is `X` itself, so a ray that ends on a surface at height 0 (the prism's floor
+/// under a zero texel) is a hit. Deviation from the paper: its test is `d < 0`, under which such
+/// a ray hits or misses by the rounding of its last sample's height.
+///
+/// The linear search samples the lattice `λ_k = k / samples_per_unit` from the last lattice
+/// point at or before `λ1`: with and without skips the samples it takes are the same points, so
+/// skipping can only drop samples in empty space. Deviation from the paper: its regular
+/// sampling starts at `λ1` itself.
 pub fn intersect(
     map: &HeightMap,
     zones: Option<&SafetyZones>,
@@ -49,11 +69,17 @@ pub fn intersect(
     let mut fetches = 1;
     let miss = |fetches| Cast { hit: None, fetches };
     let de = d(map, e);
-    if de < 0.0 || len <= 0.0 {
+    if de < 0.0 || len.is_nan() || len <= 0.0 {
         return miss(fetches);
     }
+    if de <= 0.0 {
+        return Cast {
+            hit: Some(0.0),
+            fetches,
+        };
+    }
     let r = (x - e) / len;
-    let at = |l: f32| e + l * r;
+    let at = |l: f32| if l >= len { x } else { e + l * r };
     let (l1, l2) = match zones {
         Some(z) => match skip(z, e, r, len, params.skips, &mut fetches) {
             Some(seg) => seg,
@@ -61,26 +87,33 @@ pub fn intersect(
         },
         None => (0.0, len),
     };
-    let step = 1.0 / params.samples_per_unit;
-    // The entry's sample is read once; a forward skip moves the start to a new sample.
-    let (mut la, mut da) = if l1 > 0.0 {
+    let (rate, step) = (params.samples_per_unit, 1.0 / params.samples_per_unit);
+    // The last lattice point at or before λ1 (the product's rounding corrected).
+    let mut k = (l1 * rate).floor() as u32;
+    if k as f32 * step > l1 {
+        k -= 1;
+    }
+    // The entry's sample is read once; a skip past the first lattice step starts at a new one.
+    let (mut la, mut da) = if k > 0 {
         fetches += 1;
-        (l1, d(map, at(l1)))
+        let l = k as f32 * step;
+        (l, d(map, at(l)))
     } else {
         (0.0, de)
     };
-    if da < 0.0 {
-        // A skip ends on the zone's boundary, above the surface; only rounding lands below.
+    if da <= 0.0 {
+        // Every point before λ1 lies in a zone above the surface; only rounding lands here.
         return Cast {
             hit: Some(la),
             fetches,
         };
     }
     loop {
-        let lb = (la + step).min(l2);
+        k += 1;
+        let lb = (k as f32 * step).min(l2);
         let db = d(map, at(lb));
         fetches += 1;
-        if db < 0.0 {
+        if db <= 0.0 {
             let hit = bisect(map, at, (la, da), (lb, db), params.bisections, &mut fetches);
             return Cast {
                 hit: Some(hit),
@@ -96,7 +129,8 @@ pub fn intersect(
 
 /// `rounds` of forward and backward skips (§3.3) on the segment `[0, len]` of the ray from `e`
 /// along the unit `r`: the remaining segment `[λ1, λ2]`, or `None` when the skips cross (no
-/// intersection). Each round reads the zones twice (counted in `fetches`).
+/// intersection). Each round reads the zone maps [`FETCHES_PER_SKIP_ROUND`] times (counted in
+/// `fetches`).
 pub fn skip(
     z: &SafetyZones,
     e: Vec3,
@@ -109,7 +143,7 @@ pub fn skip(
     let norm = r.x.abs().max(r.y.abs());
     let (mut l1, mut l2) = (0.0f32, len);
     for _ in 0..rounds {
-        *fetches += 2;
+        *fetches += FETCHES_PER_SKIP_ROUND;
         l1 += forward_skip(z, e + l1 * r, r, norm);
         l2 -= backward_skip(z, e + l2 * r, r, norm);
         if l1 > l2 {
@@ -119,7 +153,8 @@ pub fn skip(
     Some((l1, l2))
 }
 
-/// The paper's bisection: λ = λa + d_a/(d_a − d_b)·(λb − λa), keeping the sign change.
+/// The paper's bisection: λ = λa + d_a/(d_a − d_b)·(λb − λa), keeping the sign change
+/// (`d_a > 0 ≥ d_b`).
 fn bisect(
     map: &HeightMap,
     at: impl Fn(f32) -> Vec3,
@@ -133,7 +168,7 @@ fn bisect(
         l = la + da / (da - db) * (lb - la);
         let dl = d(map, at(l));
         *fetches += 1;
-        if dl >= 0.0 {
+        if dl > 0.0 {
             (la, da) = (l, dl);
         } else {
             (lb, db) = (l, dl);
@@ -198,12 +233,21 @@ fn backward_skip(z: &SafetyZones, p: Vec3, r: Vec3, norm: f32) -> f32 {
 
 /// The exact first intersection of `E → X` with the bilinear surface (the reference): the ray
 /// is walked cell by cell over the grid of texel centres, where `d(λ)` is a quadratic, solved
-/// in f64. `None` for a miss and, as [`intersect`], where `E` lies below the surface.
+/// in f64, for the first point where `d ≤ 0` ([`intersect`]'s rule). `None` for a miss and,
+/// as [`intersect`], where `E` lies strictly below the surface; where the walk finds no root
+/// but `X` is on or below the surface in f32 (a ray ending on a zero floor, the root lost to
+/// rounding), the hit is `X`, as the search's last sample finds it.
 pub fn exact(map: &HeightMap, e: Vec3, x: Vec3) -> Option<f32> {
-    let len = (x - e).length() as f64;
+    let len32 = (x - e).length();
+    let len = len32 as f64;
     if len.is_nan() || len <= 0.0 || d(map, e) < 0.0 {
         return None;
     }
+    walk(map, e, x, len).or_else(|| (d(map, x) <= 0.0).then_some(len32))
+}
+
+/// The cell walk of [`exact`] over `[0, len]`.
+fn walk(map: &HeightMap, e: Vec3, x: Vec3, len: f64) -> Option<f32> {
     let (w, h) = (map.width as f64, map.height as f64);
     // Grid coordinates u = s·N − ½: cell i spans [i, i + 1] and is bilinear there.
     let o = [e.x as f64 * w - 0.5, e.y as f64 * h - 0.5, e.z as f64];
@@ -324,6 +368,54 @@ mod tests {
         let got = exact(&map, e, x).unwrap();
         // The bilinear ramp follows the centres: M = s exactly between 1/16 and 15/16.
         assert!((got - 0.4).abs() < 1e-6, "{got}");
+    }
+
+    /// A round of skips reads the dilation going forward and the dilation and the erosion
+    /// going backward: three fetches, counted.
+    #[test]
+    fn a_round_of_skips_reads_three_zone_maps() {
+        let map = flat(0.25);
+        let zones = SafetyZones::new(&map, &PAPER_BOXES);
+        let (e, x) = (Vec3::new(0.1, 0.2, 1.0), Vec3::new(0.9, 0.6, 0.0));
+        let len = (x - e).length();
+        for rounds in 0..4 {
+            let mut fetches = 0;
+            assert!(skip(&zones, e, (x - e) / len, len, rounds, &mut fetches).is_some());
+            assert_eq!(fetches, FETCHES_PER_SKIP_ROUND * rounds);
+        }
+    }
+
+    /// A ray ending on a zero floor is a hit at its end, for the search (at any sample rate,
+    /// with or without bisection) and the reference alike; a ray touching the surface only at
+    /// its entry is a hit at 0.
+    #[test]
+    fn a_ray_ending_on_a_zero_floor_hits_it() {
+        let map = flat(0.0);
+        let zones = SafetyZones::new(&map, &PAPER_BOXES);
+        let (e, x) = (Vec3::new(0.1, 0.2, 1.0), Vec3::new(0.7, 0.9, 0.0));
+        let len = (x - e).length();
+        assert_eq!(exact(&map, e, x), Some(len));
+        for (rate, bisections, skips) in [(10.0, 0, 0), (75.0, 2, 0), (75.0, 2, 2), (7.3, 3, 1)] {
+            let p = CastParams {
+                samples_per_unit: rate,
+                bisections,
+                skips,
+            };
+            let c = intersect(&map, Some(&zones), e, x, &p);
+            let hit = c.hit.expect("the floor");
+            assert!(
+                (hit - len).abs() <= 2.0 * f32::EPSILON * len,
+                "{p:?}: {hit} vs {len}"
+            );
+        }
+        let top = flat(1.0);
+        let p = CastParams {
+            samples_per_unit: 10.0,
+            bisections: 2,
+            skips: 0,
+        };
+        assert_eq!(intersect(&top, None, e, x, &p).hit, Some(0.0));
+        assert_eq!(exact(&top, e, x), Some(0.0));
     }
 
     #[test]

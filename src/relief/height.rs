@@ -87,13 +87,27 @@ pub enum Dataset {
     Simple,
     /// Bumps and terraces of mixed frequency (our stand-in for the paper's "angel").
     Relief,
-    /// A grid of sharp cones (the paper's "spikes"): the high-frequency case.
+    /// An 8 × 8 grid of cones 15 texels in radius at 256² on a zero floor (28.5% of the texels
+    /// are 0): our "spikes", sharp-tipped but not high-frequency.
     Spikes,
+    /// Thin needles: one isolated texel of height 1 in every 8 × 8 block at a seeded position
+    /// on a zero floor, the bilinear surface a two-texel-wide pyramid there: the paper's
+    /// thin-spike case (its Figure 12), where a linear search can step over a whole needle.
+    Needles,
+    /// Seeded white noise, one independent value in [0, 1) per texel: the highest frequency a
+    /// map of its size holds.
+    Noise,
 }
 
 impl Dataset {
     /// All datasets, in table order.
-    pub const ALL: [Dataset; 3] = [Dataset::Simple, Dataset::Relief, Dataset::Spikes];
+    pub const ALL: [Dataset; 5] = [
+        Dataset::Simple,
+        Dataset::Relief,
+        Dataset::Spikes,
+        Dataset::Needles,
+        Dataset::Noise,
+    ];
 
     /// The name in tables.
     pub fn name(self) -> &'static str {
@@ -101,10 +115,12 @@ impl Dataset {
             Dataset::Simple => "simple",
             Dataset::Relief => "relief",
             Dataset::Spikes => "spikes",
+            Dataset::Needles => "needles",
+            Dataset::Noise => "noise",
         }
     }
 
-    /// The map at `n × n` texels.
+    /// The map at `n × n` texels (`n` ≥ 1).
     pub fn map(self, n: usize) -> HeightMap {
         use std::f32::consts::TAU;
         match self {
@@ -116,6 +132,25 @@ impl Dataset {
                 let c = (s * 8.0).fract() - Vec2::splat(0.5);
                 (0.9 * (1.0 - c.length() / 0.48)).max(0.0)
             }),
+            Dataset::Needles => {
+                // One needle per 8 × 8 block, in the block's inner 6 × 6 so that no two touch.
+                let mut rng = Lcg(0x2005_5e1e);
+                let mut data = vec![0.0f32; n * n];
+                for bj in (0..n).step_by(8) {
+                    for bi in (0..n).step_by(8) {
+                        let i = bi + 1 + (rng.next_f32() * 6.0) as usize;
+                        let j = bj + 1 + (rng.next_f32() * 6.0) as usize;
+                        if i < n && j < n {
+                            data[j * n + i] = 1.0;
+                        }
+                    }
+                }
+                HeightMap::new(n, n, data)
+            }
+            Dataset::Noise => {
+                let mut rng = Lcg(0x2005_0a15e);
+                HeightMap::new(n, n, (0..n * n).map(|_| rng.next_f32()).collect())
+            }
             Dataset::Relief => {
                 let bumps = relief_bumps();
                 HeightMap::from_fn(n, |s| {
@@ -177,6 +212,34 @@ mod tests {
         // Clamped beyond the outer centres.
         assert_eq!(m.sample(Vec2::new(0.0, 0.0)), 0.0);
         assert_eq!(m.sample(Vec2::new(1.0, 0.25)), 1.0);
+    }
+
+    /// Needles are isolated texels of height 1 (no two of the 8 neighbours both set), one per
+    /// 8 × 8 block, on a floor of exact zeros.
+    #[test]
+    fn needles_are_isolated_unit_texels() {
+        let n = 64;
+        let m = Dataset::Needles.map(n);
+        let ones: Vec<(isize, isize)> = (0..n * n)
+            .filter(|&k| m.data[k] == 1.0)
+            .map(|k| ((k % n) as isize, (k / n) as isize))
+            .collect();
+        assert_eq!(ones.len(), (n / 8) * (n / 8));
+        assert!(m.data.iter().all(|&v| v == 0.0 || v == 1.0));
+        for &(i, j) in &ones {
+            for (di, dj) in [
+                (-1, -1),
+                (-1, 0),
+                (-1, 1),
+                (0, -1),
+                (0, 1),
+                (1, -1),
+                (1, 0),
+                (1, 1),
+            ] {
+                assert_eq!(m.texel(i + di, j + dj), 0.0, "needle at {i},{j}");
+            }
+        }
     }
 
     #[test]

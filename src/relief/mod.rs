@@ -2,7 +2,8 @@
 //! "Efficient Empty Space Skipping for Per-Pixel Displacement Mapping", VMV 2005.
 //!
 //! - [`height`]: displacement maps M : [0, 1]² → [0, 1] (bilinear) and the procedural datasets.
-//! - [`zones`]: the dilation / erosion safety-zone maps, up to four box sizes (§3.2, §3.4).
+//! - [`zones`]: the dilation / erosion safety-zone maps, up to four box sizes (§3.2, §3.4),
+//!   δ as the paper's (the box size) or half of it.
 //! - [`cast`]: linear search, bisection and forward / backward skips (§3.1, §3.3), and the
 //!   exact intersection with the bilinear surface, cell by cell, as the reference.
 //! - [`view`]: images of a displaced square seen at an angle, CPU (rayon), with per-pixel
@@ -21,4 +22,4 @@ pub mod zones;
 
 pub use cast::{exact, intersect, Cast, CastParams};
 pub use height::{Dataset, HeightMap};
-pub use zones::{SafetyZones, PAPER_BOXES};
+pub use zones::{DeltaRule, SafetyZones, PAPER_BOXES};

@@ -1,7 +1,7 @@
-//! Images of the displaced unit square: a pinhole camera looking at the square's centre from a
-//! given angle to its normal, each pixel's ray clipped to the prism box and searched with
-//! [`intersect`] (or [`exact`] for the reference; [`render_gpu`] for the GPU caster), the hit
-//! shaded with the map's normal.
+//! Images of the displaced unit square: a distant (orthographic) eye above the prism's lid
+//! looking down at a given angle from the normal, one ray per pixel from the lid `z = 1` clipped
+//! to the prism and searched with [`intersect`] (or [`exact`] for the reference; [`render_gpu`]
+//! for the GPU caster), the hit shaded with the map's normal.
 
 use super::cast::{exact, intersect, CastParams};
 use super::height::HeightMap;
@@ -11,54 +11,122 @@ use crate::render::image::GrayImage;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
-/// A view of the square `[0, 1]²` (z up), from `angle_deg` off its normal at `distance` from
-/// its centre (0°: perpendicular, towards 90°: tangential), with a `fov_deg` vertical field.
+/// The prism's height relative to the square's side in the world (the displacement scale):
+/// a view's angle is taken in the world, where the relief is this thin.
+///
+/// Deviation from the paper: it does not state its displacement scale; with a prism as high as
+/// it is wide (1) no ray from the lid reaches the `simple` map (heights 0.25–0.75) at 75°
+/// before leaving through a side wall, while at ¼ a 75° ray crosses 0.93 of the square per unit
+/// of height, so the tangential views look across the surface.
+pub const DEPTH: f32 = 0.25;
+
+/// The azimuth of every view (degrees from the t axis towards s): off the texel grid's axes,
+/// so that no column of pixels runs along a row of texel centres.
+pub const AZIMUTH_DEG: f32 = 20.0;
+
+/// A view of the square `[0, 1]²` (z up) from a distant eye at `angle_deg` off its normal (0°:
+/// perpendicular, towards 90°: tangential; in the world, where the prism is `depth` high for a
+/// side of 1), looking along +t turned [`AZIMUTH_DEG`] towards +s.
+/// Pixel `(x, y)` is the ray that enters the prism through the lid at the point
+/// `lo + ((x + ½)/width, 1 − (y + ½)/height)·(hi − lo)` of the window `[lo, hi]` (the whole lid,
+/// or a part of it for a close-up), so every ray enters through the lid going down, as the
+/// paper's views from above the surface do (§5: perpendicular to nearly tangential).
+///
+/// Deviation from the paper: its views are perspective images of the rasterised prism; here
+/// the eye is at infinity (parallel rays) and the image is the lid's window resampled on a
+/// regular grid, i.e. the orthographic image stretched by 1/cos θ along the view's tilt, so
+/// every pixel stands for the same area of the lid.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct View {
     pub angle_deg: f32,
-    pub distance: f32,
-    pub fov_deg: f32,
+    /// The lid window the image covers, `(s, t)` corners.
+    pub lo: Vec2,
+    pub hi: Vec2,
+    /// The prism's world height over its side ([`DEPTH`] in the experiment).
+    pub depth: f32,
     pub width: u32,
     pub height: u32,
 }
 
 impl View {
-    /// The eye and the unit ray of pixel `(x, y)`.
+    /// The whole lid at `size × size` pixels, the prism [`DEPTH`] high.
+    pub fn lid(angle_deg: f32, size: u32) -> View {
+        View {
+            angle_deg,
+            lo: Vec2::ZERO,
+            hi: Vec2::ONE,
+            depth: DEPTH,
+            width: size,
+            height: size,
+        }
+    }
+
+    /// A close-up: the lid's central quarter `[¼, ¾]²` at `size × size` pixels.
+    pub fn close_up(angle_deg: f32, size: u32) -> View {
+        View {
+            lo: Vec2::splat(0.25),
+            hi: Vec2::splat(0.75),
+            ..View::lid(angle_deg, size)
+        }
+    }
+
+    /// The unit direction of every ray in prism coordinates (the world direction with its
+    /// height divided by `depth`).
+    pub fn direction(&self) -> Vec3 {
+        let (a, z) = (self.angle_deg.to_radians(), AZIMUTH_DEG.to_radians());
+        Vec3::new(a.sin() * z.sin(), a.sin() * z.cos(), -a.cos() / self.depth).normalize()
+    }
+
+    /// The lid point (z = 1) and the unit ray of pixel `(x, y)`.
     pub fn ray(&self, x: u32, y: u32) -> (Vec3, Vec3) {
-        let a = self.angle_deg.to_radians();
-        let target = Vec3::new(0.5, 0.5, 0.25);
-        let eye = target + self.distance * Vec3::new(0.0, -a.sin(), a.cos());
-        let fwd = (target - eye).normalize();
-        let right = Vec3::X;
-        let up = right.cross(fwd).normalize();
-        let th = (0.5 * self.fov_deg.to_radians()).tan();
-        let aspect = self.width as f32 / self.height as f32;
-        let px = ((x as f32 + 0.5) / self.width as f32 * 2.0 - 1.0) * th * aspect;
-        let py = (1.0 - (y as f32 + 0.5) / self.height as f32 * 2.0) * th;
-        (eye, (fwd + px * right + py * up).normalize())
+        let u = Vec2::new(
+            (x as f32 + 0.5) / self.width as f32,
+            1.0 - (y as f32 + 0.5) / self.height as f32,
+        );
+        let s = self.lo + u * (self.hi - self.lo);
+        (s.extend(1.0), self.direction())
     }
 
     /// The segment `(E, X)` of pixel `k` (row-major) through the prism, `None` where its ray
-    /// misses the prism.
+    /// misses the prism (a view at 90° or more, or a window outside the lid).
     pub fn segment(&self, k: u32) -> Option<(Vec3, Vec3)> {
         let (eye, d) = self.ray(k % self.width, k / self.width);
         clip_to_prism(eye, d)
     }
 }
 
-/// The entry and exit of `o + t·d` through the box `[0, 1]² × [0, 1]` (slabs).
+/// The entry and exit of `o + t·d` (t ≥ 0) through the box `[0, 1]² × [0, 1]` (slabs). The
+/// coordinate of the face each point lies on is set to exactly 0 or 1, not a rounding of it.
 pub fn clip_to_prism(o: Vec3, d: Vec3) -> Option<(Vec3, Vec3)> {
     let inv = d.recip();
     let (t0, t1) = (-o * inv, (Vec3::ONE - o) * inv);
-    let near = t0.min(t1).max_element().max(0.0);
-    let far = t0.max(t1).min_element();
-    (near < far).then(|| (o + near * d, o + far * d))
+    let (lo, hi) = (t0.min(t1), t0.max(t1));
+    let near = lo.max_element().max(0.0);
+    let far = hi.min_element();
+    if near.partial_cmp(&far) != Some(std::cmp::Ordering::Less) {
+        return None;
+    }
+    let (mut e, mut x) = (o + near * d, o + far * d);
+    for k in 0..3 {
+        if hi[k] == far {
+            x[k] = if d[k] > 0.0 { 1.0 } else { 0.0 };
+        }
+        if near > 0.0 && lo[k] == near {
+            e[k] = if d[k] > 0.0 { 0.0 } else { 1.0 };
+        }
+    }
+    Some((
+        e.clamp(Vec3::ZERO, Vec3::ONE),
+        x.clamp(Vec3::ZERO, Vec3::ONE),
+    ))
 }
 
-/// One rendered image: shading (0 background), hit mask, and fetches per pixel.
+/// One rendered image: shading (0 background), hit mask, the hit's λ along the pixel's
+/// segment, and fetches per pixel.
 pub struct ReliefFrame {
     pub image: GrayImage,
     pub hit: Vec<bool>,
+    pub lambda: Vec<Option<f32>>,
     pub fetches: Vec<u32>,
 }
 
@@ -82,11 +150,11 @@ pub fn render(
     params: Option<&CastParams>,
 ) -> ReliefFrame {
     let (w, h) = (view.width, view.height);
-    let px: Vec<(f32, bool, u32)> = (0..w * h)
+    let px: Vec<Pixel> = (0..w * h)
         .into_par_iter()
         .map(|k| {
             let Some((e, x)) = view.segment(k) else {
-                return (0.0, false, 0);
+                return (0.0, None, 0);
             };
             let (hit, fetches) = match params {
                 Some(p) => {
@@ -115,38 +183,36 @@ pub fn render_gpu(
         .collect();
     let segments: Vec<(Vec3, Vec3)> = pixels.iter().map(|p| p.1).collect();
     let (casts, timing) = kernel.cast(&segments, params)?;
-    let mut px = vec![(0.0, false, 0); (w * h) as usize];
+    let mut px = vec![(0.0, None, 0); (w * h) as usize];
     for (&(k, (e, x)), c) in pixels.iter().zip(&casts) {
         px[k as usize] = shade_pixel(map, e, x, c.hit, c.fetches);
     }
     Ok((assemble(view, px), timing))
 }
 
+/// A pixel's shade, hit λ and fetches.
+type Pixel = (f32, Option<f32>, u32);
+
 /// A pixel's (shade, hit, fetches) for the answer `hit` on its segment `E → X`.
-fn shade_pixel(
-    map: &HeightMap,
-    e: Vec3,
-    x: Vec3,
-    hit: Option<f32>,
-    fetches: u32,
-) -> (f32, bool, u32) {
+fn shade_pixel(map: &HeightMap, e: Vec3, x: Vec3, hit: Option<f32>, fetches: u32) -> Pixel {
     match hit {
         Some(l) => {
             let p = e + l * (x - e).normalize();
-            (shade(map, Vec2::new(p.x, p.y)), true, fetches)
+            (shade(map, Vec2::new(p.x, p.y)), hit, fetches)
         }
-        None => (0.0, false, fetches),
+        None => (0.0, None, fetches),
     }
 }
 
-fn assemble(view: &View, px: Vec<(f32, bool, u32)>) -> ReliefFrame {
+fn assemble(view: &View, px: Vec<Pixel>) -> ReliefFrame {
     ReliefFrame {
         image: GrayImage {
             width: view.width,
             height: view.height,
             data: px.iter().map(|p| p.0).collect(),
         },
-        hit: px.iter().map(|p| p.1).collect(),
+        hit: px.iter().map(|p| p.1.is_some()).collect(),
+        lambda: px.iter().map(|p| p.1).collect(),
         fetches: px.iter().map(|p| p.2).collect(),
     }
 }
@@ -166,13 +232,7 @@ mod tests {
     #[test]
     fn perpendicular_view_of_a_flat_map_is_all_hits_of_one_shade() {
         let map = HeightMap::new(4, 4, vec![0.3; 16]);
-        let view = View {
-            angle_deg: 0.0,
-            distance: 1.5,
-            fov_deg: 20.0,
-            width: 16,
-            height: 16,
-        };
+        let view = View::lid(0.0, 16);
         let f = render(&map, None, &view, None);
         assert!(f.hit.iter().all(|h| *h));
         let s = shade(&map, Vec2::splat(0.5));

@@ -1,18 +1,24 @@
 //! Safety zones (Kolb and Rezk-Salama, VMV 2005, §3.2): the dilation and erosion of the
-//! displacement map with boxes of half-width δ in the ∞-norm, up to four of them at once
+//! displacement map over the ∞-norm neighbourhoods of radius δ, up to four of them at once
 //! (§3.4, one per texture channel).
 //!
 //! M_dil(S) = max{M(S′) : |s − s′| < δ ∧ |t − t′| < δ}, M_ero the min. Above M_dil(S), within
 //! the box around S, no part of the surface lies (the zone R_dil(S)); below M_ero(S) all of it
 //! is solid (R_ero(S)).
 //!
+//! δ: the paper calls δ "the size of the region in s and t direction", lists its four "filter
+//! box-sizes" as 3.125, 6.25, 12.5 and 25% of the map (§5) and passes those sizes as `delta` to
+//! its Cg code's box-wall test `delta/maxNorm` (§4), so its δ is the box size itself: the
+//! neighbourhood is `2δ` wide. [`DeltaRule::Paper`] (the default) does that;
+//! [`DeltaRule::Half`] reads the sizes as full widths (δ half of them), which this crate did
+//! before: smaller zones, shorter skips, the same safety.
+//!
 //! Deviation from the paper: it filters the texels; the surface between texels is bilinear, so
 //! a box around a point can reach texels one beyond those its own extent covers. Each zone
 //! value here is the max (min) over texels within `⌈δ·N⌉ + 1` of the point's cell, which bounds
 //! the bilinear surface over the whole box (`zones_bound_the_bilinear_surface`), and the zone
 //! maps are read with nearest sampling at the point's cell, widened by 4 f32 ulps of 1 for the
-//! rounding of the bilinear filter. The paper's box sizes (Table 3:
-//! 3.125, 6.25, 12.5 and 25% of the map) are read as full widths, δ half of them.
+//! rounding of the bilinear filter.
 
 use super::height::HeightMap;
 use glam::Vec2;
@@ -21,14 +27,48 @@ use glam::Vec2;
 /// largest of its four texels by an ulp or two.
 const ROUNDING: f32 = 4.0 * f32::EPSILON;
 
-/// The paper's four box sizes as fractions of the map (full widths).
+/// The paper's four box sizes as fractions of the map (§5).
 pub const PAPER_BOXES: [f32; 4] = [0.03125, 0.0625, 0.125, 0.25];
+
+/// How a box size becomes the zone's half-width δ.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DeltaRule {
+    /// δ = the box size: the paper's |s − s′| < δ with the size passed as δ (§3.2, §4).
+    Paper,
+    /// δ = half the box size (the sizes read as full widths). Deviation from the paper, kept
+    /// to show what the zone size is worth.
+    Half,
+}
+
+impl DeltaRule {
+    /// Both rules, the paper's first.
+    pub const ALL: [DeltaRule; 2] = [DeltaRule::Paper, DeltaRule::Half];
+
+    /// The name in tables.
+    pub fn name(self) -> &'static str {
+        match self {
+            DeltaRule::Paper => "paper",
+            DeltaRule::Half => "half",
+        }
+    }
+
+    /// δ for a box of `size` (fraction of the map).
+    pub fn delta(self, size: f32) -> f32 {
+        match self {
+            DeltaRule::Paper => size,
+            DeltaRule::Half => 0.5 * size,
+        }
+    }
+}
 
 /// Dilation and erosion maps for up to four half-widths δ.
 #[derive(Clone, Debug)]
 pub struct SafetyZones {
     /// Half-widths δ in texture units, one per channel.
     pub deltas: Vec<f32>,
+    /// How `deltas` came from the box sizes.
+    pub rule: DeltaRule,
     /// Per texel, one value per channel: max over the channel's window.
     pub dilation: Vec<[f32; 4]>,
     /// Per texel, one value per channel: min over the channel's window.
@@ -38,22 +78,32 @@ pub struct SafetyZones {
 }
 
 impl SafetyZones {
-    /// The zones of `map` for the boxes `boxes` (full widths as fractions of the map; at most
-    /// four, each in (0, 1]).
+    /// The zones of `map` for the box sizes `boxes` (fractions of the map; at most four, each
+    /// in (0, 1]) with the paper's δ ([`DeltaRule::Paper`]).
     ///
     /// # Panics
-    /// With no box, more than four, or a width outside (0, 1].
+    /// With no box, more than four, or a size outside (0, 1].
     pub fn new(map: &HeightMap, boxes: &[f32]) -> SafetyZones {
+        SafetyZones::with_rule(map, boxes, DeltaRule::Paper)
+    }
+
+    /// The zones of `map` for the box sizes `boxes`, δ by `rule`.
+    ///
+    /// # Panics
+    /// With no box, more than four, or a size outside (0, 1].
+    pub fn with_rule(map: &HeightMap, boxes: &[f32], rule: DeltaRule) -> SafetyZones {
         assert!(
             (1..=4).contains(&boxes.len()),
             "one to four box sizes (texture channels), got {}",
             boxes.len()
         );
-        assert!(boxes.iter().all(|b| *b > 0.0 && *b <= 1.0));
+        if let Some(b) = boxes.iter().find(|b| !(**b > 0.0 && **b <= 1.0)) {
+            panic!("box sizes must lie in (0, 1], got {b}");
+        }
         let (w, h) = (map.width, map.height);
         let mut dilation = vec![[0.0f32; 4]; w * h];
         let mut erosion = vec![[1.0f32; 4]; w * h];
-        let deltas: Vec<f32> = boxes.iter().map(|b| 0.5 * b).collect();
+        let deltas: Vec<f32> = boxes.iter().map(|&b| rule.delta(b)).collect();
         for (c, &delta) in deltas.iter().enumerate() {
             let rx = (delta * w as f32).ceil() as usize + 1;
             let ry = (delta * h as f32).ceil() as usize + 1;
@@ -73,6 +123,7 @@ impl SafetyZones {
         }
         SafetyZones {
             deltas,
+            rule,
             dilation,
             erosion,
             width: w,
@@ -133,12 +184,16 @@ mod tests {
     use crate::relief::height::Dataset;
 
     /// For seeded points p and points q with |q − p|∞ < δ, the bilinear M(q) lies within the
-    /// zone values read at p.
+    /// zone values read at p, under both δ rules.
     #[test]
     fn zones_bound_the_bilinear_surface() {
-        for d in Dataset::ALL {
+        for (d, rule) in Dataset::ALL
+            .into_iter()
+            .flat_map(|d| DeltaRule::ALL.map(|r| (d, r)))
+        {
             let map = d.map(64);
-            let zones = SafetyZones::new(&map, &PAPER_BOXES);
+            let zones = SafetyZones::with_rule(&map, &PAPER_BOXES, rule);
+            assert_eq!(zones.deltas[3], rule.delta(0.25));
             let mut rng = crate::relief::height::Lcg(7);
             let mut rnd = || rng.next_f32();
             for _ in 0..20_000 {
@@ -150,12 +205,34 @@ mod tests {
                     let m = map.sample(q);
                     assert!(
                         m <= dil[c] && m >= ero[c],
-                        "{d:?} channel {c}: {m} at {q} from {p}: dil {} ero {}",
+                        "{d:?} {rule:?} channel {c}: {m} at {q} from {p}: dil {} ero {}",
                         dil[c],
                         ero[c]
                     );
                 }
             }
+        }
+    }
+
+    /// The paper's δ is twice the half rule's: its zones hold the half rule's (higher
+    /// dilation, lower erosion everywhere) and are strictly larger somewhere on every map.
+    #[test]
+    fn paper_delta_zones_contain_the_half_rule_zones() {
+        for d in Dataset::ALL {
+            let map = d.map(64);
+            let paper = SafetyZones::new(&map, &PAPER_BOXES);
+            let half = SafetyZones::with_rule(&map, &PAPER_BOXES, DeltaRule::Half);
+            assert_eq!(paper.deltas, PAPER_BOXES.to_vec());
+            assert_eq!(half.deltas, PAPER_BOXES.map(|b| b / 2.0).to_vec());
+            let mut wider = false;
+            for k in 0..map.data.len() {
+                for c in 0..4 {
+                    assert!(paper.dilation[k][c] >= half.dilation[k][c], "{d:?}");
+                    assert!(paper.erosion[k][c] <= half.erosion[k][c], "{d:?}");
+                    wider |= paper.dilation[k][c] > half.dilation[k][c];
+                }
+            }
+            assert!(wider, "{d:?}");
         }
     }
 
