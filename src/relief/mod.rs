@@ -16,6 +16,7 @@
 
 pub mod cast;
 pub mod height;
+pub mod peers;
 pub mod view;
 pub mod zones;
 

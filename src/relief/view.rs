@@ -123,7 +123,7 @@ pub fn render_gpu(
 }
 
 /// A pixel's (shade, hit, fetches) for the answer `hit` on its segment `E → X`.
-fn shade_pixel(
+pub(crate) fn shade_pixel(
     map: &HeightMap,
     e: Vec3,
     x: Vec3,
@@ -139,7 +139,7 @@ fn shade_pixel(
     }
 }
 
-fn assemble(view: &View, px: Vec<(f32, bool, u32)>) -> ReliefFrame {
+pub(crate) fn assemble(view: &View, px: Vec<(f32, bool, u32)>) -> ReliefFrame {
     ReliefFrame {
         image: GrayImage {
             width: view.width,
