@@ -8,7 +8,7 @@
 // Deviation from the papers: compute shaders over host-clipped segments reading storage
 // buffers with the CPU's own formulas (not texture units), so GPU and CPU agree ray by ray.
 
-// Mirrors `PeersParamsGpu` (src/gpu/relief_peers.rs), 48 bytes.
+// Mirrors `PeersParamsGpu` (src/gpu/relief_peers.rs), 112 bytes.
 struct PeersParams {
     // Map width and height (texels).
     size: vec2<u32>,
@@ -30,6 +30,8 @@ struct PeersParams {
     trips: u32,
     _pad0: u32,
     _pad1: u32,
+    // Offset of max-mip level l in `mips`: offsets[l / 4][l % 4].
+    offsets: array<vec4<u32>, 4>,
 }
 
 @group(0) @binding(0) var<uniform> params: PeersParams;
@@ -240,11 +242,7 @@ fn cell_walk() -> u32 {
 }
 
 fn mip_at(level: u32, ni: i32, nj: i32) -> f32 {
-    var offset = 0u;
-    for (var l = 0u; l < level; l++) {
-        let n = params.mip_size >> l;
-        offset += n * n;
-    }
+    let offset = params.offsets[level / 4u][level % 4u];
     return mips[offset + u32(nj) * (params.mip_size >> level) + u32(ni)];
 }
 

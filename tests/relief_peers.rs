@@ -403,8 +403,8 @@ fn gpu_peers_match_the_cpu() {
     }
 }
 
-/// Settings past the driver's loop budget are refused before the dispatch, naming the peer.
-fn gpu_peers_refuse_settings_past_the_loop_budget() {
+/// Bad settings and a mismatched map are refused before any dispatch, naming the field.
+fn gpu_peers_refuse_bad_settings() {
     use visfield::gpu::{GpuError, ReliefPeersKernel};
     let Some(ctx) = common::gpu_context() else {
         return;
@@ -413,14 +413,19 @@ fn gpu_peers_refuse_settings_past_the_loop_budget() {
     let data = PeerData::new(&map);
     let kernel = ReliefPeersKernel::new(ctx, &map, &data).unwrap();
     let segs = [(Vec3::new(0.5, 0.5, 1.0), Vec3::new(0.6, 0.5, 0.0))];
-    let peer = Peer::RelaxedCone {
-        steps: 16_000,
-        bisections: 16_000,
-    };
-    let err = kernel.cast(&segs, &peer).err().unwrap();
-    assert!(matches!(err, GpuError::Unsupported(_)), "{err}");
     let err = kernel.cast(&segs, &Peer::Cone { steps: 0 }).err().unwrap();
-    assert!(err.to_string().contains("steps"), "{err}");
+    assert!(
+        matches!(err, GpuError::Invalid(_)) && err.to_string().contains("steps"),
+        "{err}"
+    );
+    let bad = [(Vec3::new(f32::NAN, 0.5, 1.0), Vec3::ONE)];
+    let err = kernel.cast(&bad, &Peer::MaxMip).err().unwrap();
+    assert!(err.to_string().contains("segment 0"), "{err}");
+    let other = Dataset::Simple.map(8);
+    assert!(ReliefPeersKernel::new(ctx, &other, &data).is_err());
+    // Hits come back as the CPU's (one segment, straight down onto the smooth map).
+    let (got, _) = kernel.cast(&segs, &Peer::MaxMip).unwrap();
+    assert_eq!(got[0], data.cast(&map, &Peer::MaxMip, segs[0].0, segs[0].1));
 }
 
 fn main() {
@@ -429,8 +434,8 @@ fn main() {
         &[
             ("gpu_peers_match_the_cpu", gpu_peers_match_the_cpu),
             (
-                "gpu_peers_refuse_settings_past_the_loop_budget",
-                gpu_peers_refuse_settings_past_the_loop_budget,
+                "gpu_peers_refuse_bad_settings",
+                gpu_peers_refuse_bad_settings,
             ),
         ],
         &[

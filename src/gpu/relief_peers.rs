@@ -11,7 +11,7 @@
 //! Deviation from the papers: compute shaders over host-clipped segments, storage buffers read
 //! with the CPU's formulas instead of texture units (parity with the CPU, not speed).
 
-use super::context::{entry, GpuContext};
+use super::context::{entry, storage_layout_entry, uniform_layout_entry, GpuContext};
 use super::loop_budget::{COMPLETION_TRIPS, CUT_SHORT};
 use super::{GpuError, GpuTiming};
 use crate::relief::peers::{Peer, PeerData};
@@ -44,10 +44,16 @@ struct PeersParamsGpu {
     trips: u32,
     _pad0: u32,
     _pad1: u32,
+    /// Offset of each max-mip level in the `mips` buffer (levels 0 ..= mip_top).
+    offsets: [u32; MAX_LEVELS],
 }
-const _: () = assert!(std::mem::size_of::<PeersParamsGpu>() == 48);
+const _: () = assert!(std::mem::size_of::<PeersParamsGpu>() == 112);
 const _: () = assert!(std::mem::offset_of!(PeersParamsGpu, mip_size) == 16);
 const _: () = assert!(std::mem::offset_of!(PeersParamsGpu, trips) == 36);
+const _: () = assert!(std::mem::offset_of!(PeersParamsGpu, offsets) == 48);
+
+/// Max-mip levels the uniform holds: maps up to 32,766 texels a side.
+const MAX_LEVELS: usize = 16;
 
 const MISS: u32 = u32::MAX;
 
@@ -61,6 +67,8 @@ pub struct ReliefPeersKernel<'a> {
     size: [u32; 2],
     mip_size: u32,
     mip_top: u32,
+    offsets: [u32; MAX_LEVELS],
+    group: wgpu::BindGroupLayout,
     heights: wgpu::Buffer,
     mips: wgpu::Buffer,
     conservative: wgpu::Buffer,
@@ -85,16 +93,55 @@ impl<'a> ReliefPeersKernel<'a> {
                 data.cones.width, data.cones.height, map.width, map.height
             )));
         }
+        if data.mip.offsets.len() > MAX_LEVELS {
+            return Err(GpuError::Unsupported(format!(
+                "a max mip of {} levels ({}×{} map); the GPU path holds {MAX_LEVELS}",
+                data.mip.offsets.len(),
+                map.width,
+                map.height
+            )));
+        }
+        let mut offsets = [0u32; MAX_LEVELS];
+        for (o, &v) in offsets.iter_mut().zip(&data.mip.offsets) {
+            *o = v as u32;
+        }
+        // One layout for the three entry points (each uses a subset of the bindings).
+        let entries = [
+            uniform_layout_entry(0),
+            storage_layout_entry(1, true),
+            storage_layout_entry(2, true),
+            storage_layout_entry(3, true),
+            storage_layout_entry(4, true),
+            storage_layout_entry(5, false),
+        ];
+        let group = ctx
+            .device
+            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("relief peers"),
+                entries: &entries,
+            });
+        let layout = ctx
+            .device
+            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("relief peers"),
+                bind_group_layouts: &[Some(&group)],
+                immediate_size: 0,
+            });
         let source = [
             include_str!("../../shaders/loop_budget.wgsl"),
             include_str!("../../shaders/relief_peers.wgsl"),
         ]
         .concat();
+        let pipeline = |label: &str, entry: &str| {
+            ctx.compute_pipeline_with_layout(label, &source, entry, Some(&layout))
+        };
         Ok(ReliefPeersKernel {
             ctx,
             size: [map.width as u32, map.height as u32],
             mip_size: data.mip.size as u32,
             mip_top: data.mip.top() as u32,
+            offsets,
+            group,
             heights: ctx.storage_buffer("heights", bytemuck::cast_slice(&map.data)),
             mips: ctx.storage_buffer("max mip", bytemuck::cast_slice(&data.mip.data)),
             conservative: ctx.storage_buffer(
@@ -105,9 +152,9 @@ impl<'a> ReliefPeersKernel<'a> {
                 "relaxed cone ratios",
                 bytemuck::cast_slice(&data.cones.relaxed),
             ),
-            cellwalk: ctx.compute_pipeline("relief cell walk", &source, "cellwalk_main")?,
-            maxmip: ctx.compute_pipeline("relief max mip", &source, "maxmip_main")?,
-            cone: ctx.compute_pipeline("relief cones", &source, "cone_main")?,
+            cellwalk: pipeline("relief cell walk", "cellwalk_main")?,
+            maxmip: pipeline("relief max mip", "maxmip_main")?,
+            cone: pipeline("relief cones", "cone_main")?,
             setup: start.elapsed(),
         })
     }
@@ -134,14 +181,14 @@ impl<'a> ReliefPeersKernel<'a> {
                 "relief segment {k} is not finite"
             )));
         }
-        // Loop iterations per ray: cells crossed (a segment in the prism crosses at most
-        // W + H + 2 cells), per cell at most a descent and an ascent of the tree; the cone
-        // steps and bisections; the completion loop; the max mip's level offsets.
+        // Loop iterations per ray: the cells crossed (a segment in the prism crosses at most
+        // W + H + 2); for the max mip one advance per node left (each enters a new cell) and
+        // at most one descent per ascent (one per advance) plus the first descent from the
+        // root; the cone steps and bisections; the completion loop.
         let cells = (self.size[0] + self.size[1] + 2) as f64;
-        let levels = (self.mip_top + 1) as f64;
         let (pipeline, steps, bisections, relaxed) = match *peer {
             Peer::CellWalk => (&self.cellwalk, cells, 0, 0),
-            Peer::MaxMip => (&self.maxmip, 2.0 * cells * levels * (1.0 + levels), 0, 0),
+            Peer::MaxMip => (&self.maxmip, 2.0 * cells + self.mip_top as f64, 0, 0),
             Peer::Cone { steps } => (&self.cone, steps as f64, 0, 0),
             Peer::RelaxedCone { steps, bisections } => {
                 (&self.cone, (steps + bisections) as f64, bisections, 1)
@@ -191,12 +238,13 @@ impl<'a> ReliefPeersKernel<'a> {
                     trips: COMPLETION_TRIPS,
                     _pad0: 0,
                     _pad1: 0,
+                    offsets: self.offsets,
                 };
                 let uniform = ctx.uniform_buffer("peers params", bytemuck::bytes_of(&uniform));
                 let rays = ctx.storage_buffer("segments", bytemuck::cast_slice(part));
                 ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
                     label: Some("relief peers"),
-                    layout: &pipeline.get_bind_group_layout(0),
+                    layout: &self.group,
                     entries: &[
                         entry(0, uniform.as_entire_binding()),
                         entry(1, self.heights.as_entire_binding()),
