@@ -403,7 +403,8 @@ fn gpu_peers_match_the_cpu() {
     }
 }
 
-/// Bad settings and a mismatched map are refused before any dispatch, naming the field.
+/// Bad settings, segments and a mismatched map are refused before any dispatch, naming the
+/// field; a frame rendered on the GPU is the CPU's frame.
 fn gpu_peers_refuse_bad_settings() {
     use visfield::gpu::{GpuError, ReliefPeersKernel};
     let Some(ctx) = common::gpu_context() else {
@@ -418,14 +419,26 @@ fn gpu_peers_refuse_bad_settings() {
         matches!(err, GpuError::Invalid(_)) && err.to_string().contains("steps"),
         "{err}"
     );
-    let bad = [(Vec3::new(f32::NAN, 0.5, 1.0), Vec3::ONE)];
-    let err = kernel.cast(&bad, &Peer::MaxMip).err().unwrap();
-    assert!(err.to_string().contains("segment 0"), "{err}");
+    for bad in [
+        [(Vec3::new(f32::NAN, 0.5, 1.0), Vec3::ONE)],
+        [(Vec3::new(0.5, 0.5, 1.0), Vec3::new(2.0, 0.5, 0.0))],
+    ] {
+        let err = kernel.cast(&bad, &Peer::MaxMip).err().unwrap();
+        assert!(err.to_string().contains("segment 0"), "{err}");
+    }
     let other = Dataset::Simple.map(8);
     assert!(ReliefPeersKernel::new(ctx, &other, &data).is_err());
     // Hits come back as the CPU's (one segment, straight down onto the smooth map).
     let (got, _) = kernel.cast(&segs, &Peer::MaxMip).unwrap();
     assert_eq!(got[0], data.cast(&map, &Peer::MaxMip, segs[0].0, segs[0].1));
+    // A GPU frame is the CPU frame (every pixel's answer and fetches agreed above).
+    let v = view(45.0);
+    let (gpu, _) =
+        visfield::relief::peers::render_peer_gpu(&kernel, &map, &v, &Peer::MaxMip).unwrap();
+    let cpu = render_peer(&map, &data, &v, &Peer::MaxMip).unwrap();
+    assert_eq!(gpu.hit, cpu.hit);
+    assert_eq!(gpu.fetches, cpu.fetches);
+    assert_eq!(gpu.image.data, cpu.image.data);
 }
 
 fn main() {

@@ -14,7 +14,7 @@
 use super::context::{entry, storage_layout_entry, uniform_layout_entry, GpuContext};
 use super::loop_budget::{COMPLETION_TRIPS, CUT_SHORT};
 use super::{GpuError, GpuTiming};
-use crate::relief::peers::{Peer, PeerData};
+use crate::relief::peers::{in_prism, Peer, PeerData};
 use crate::relief::{Cast, HeightMap};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
@@ -175,10 +175,11 @@ impl<'a> ReliefPeersKernel<'a> {
         peer.validate().map_err(GpuError::Invalid)?;
         if let Some(k) = segments
             .iter()
-            .position(|(e, x)| !e.is_finite() || !x.is_finite())
+            .position(|(e, x)| !in_prism(*e) || !in_prism(*x))
         {
             return Err(GpuError::Invalid(format!(
-                "relief segment {k} is not finite"
+                "relief segment {k} ({}, {}) is not finite or leaves the prism [0, 1]³",
+                segments[k].0, segments[k].1
             )));
         }
         // Loop iterations per ray: the cells crossed (a segment in the prism crosses at most

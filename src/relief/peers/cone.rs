@@ -26,9 +26,11 @@
 //! (super::Peer::RelaxedCone) bisects the last step `bisections` times, keeping the sign
 //! change, and answers its lower end's successor below the surface: within
 //! `step / 2^bisections` after a crossing. As in the paper the property is sampled, not
-//! guaranteed: rays from the texel centres of rings of up to [`RELAXED_RINGS`] texels, every
-//! half texel; a ratio is never below the conservative one (a conservative cone holds no
-//! solid, so it is relaxed too).
+//! guaranteed: the height profile under [`RELAXED_AZIMUTHS`] azimuths from the texel centre,
+//! every half texel up to [`RELAXED_RINGS`] texels, gives in one pass per azimuth the nearest
+//! reach `D` whose ray from the top enters twice (the ratio is `D / (1 − h)`); a ratio is
+//! never below the conservative one (a conservative cone holds no solid, so it is relaxed
+//! too).
 //!
 //! Fetches: a cone step reads two texels, the bilinear height `M(p)` and the cone ratio of the
 //! nearest texel; a bisection step reads the height.
@@ -52,9 +54,12 @@ use rayon::prelude::*;
 /// any clearance `h ≥ 10⁻⁴`.
 pub const CONE_CAP: f32 = 1.0e4;
 
-/// Rings of texels searched for the relaxed ratio; beyond them the ratio is capped at the
-/// ring's distance over the height left above the apex, as if a violation lay there.
-pub const RELAXED_RINGS: usize = 16;
+/// Radius, in texels, searched for the relaxed ratio; beyond it the ratio is capped at the
+/// radius over the height left above the apex, as if a violation lay there.
+pub const RELAXED_RINGS: usize = 24;
+
+/// Azimuths of the rays searched for the relaxed ratio.
+pub const RELAXED_AZIMUTHS: usize = 128;
 
 /// Per-texel cone ratios of one map (row-major, as the map).
 #[derive(Clone, Debug, PartialEq)]
@@ -176,52 +181,43 @@ pub fn relaxed_ratios(map: &HeightMap, conservative: &[f32]) -> Vec<f32> {
 
 fn relaxed_ratio(map: &HeightMap, ti: isize, tj: isize, global_max: f32) -> f32 {
     let (w, h) = (map.width as f32, map.height as f32);
-    let centre = |i: isize, j: isize| Vec2::new((i as f32 + 0.5) / w, (j as f32 + 0.5) / h);
-    let a = centre(ti, tj);
+    let a = Vec2::new((ti as f32 + 0.5) / w, (tj as f32 + 0.5) / h);
     let ha = map.texel(ti, tj);
     if ha >= global_max {
         return CONE_CAP; // nothing is higher: no ray can enter before the apex
     }
     let above = 1.0 - ha;
-    let unit = (1.0 / w).min(1.0 / h);
+    let step = 0.5 * (1.0 / w).min(1.0 / h);
+    let samples = 2 * RELAXED_RINGS;
     let mut best = CONE_CAP;
-    for r in 1..=RELAXED_RINGS as isize {
-        if r as f32 * unit / above >= best {
-            return best;
-        }
-        for j in tj - r..=tj + r {
-            for i in ti - r..=ti + r {
-                let ring = (i - ti).abs().max((j - tj).abs()) == r;
-                if !ring || i < 0 || j < 0 || i >= map.width as isize || j >= map.height as isize {
-                    continue;
-                }
-                let q = centre(i, j);
-                let ratio = (q - a).length() / above;
-                if ratio < best && enters_twice(map, q, a, ha, 2 * r as usize) {
-                    best = ratio;
+    for az in 0..RELAXED_AZIMUTHS {
+        let phi = std::f32::consts::TAU * az as f32 / RELAXED_AZIMUTHS as f32;
+        let dir = Vec2::new(phi.cos(), phi.sin());
+        // The ray of horizontal reach D from (a + D·dir, 1) down to the apex has slope
+        // s = (1 − h_a)/D; at sample x it is inside the solid iff g(x) = (M − h_a)/x ≥ s. It
+        // enters twice iff some sample x_b < D is inside and an earlier one x_a < x_b outside:
+        // g(x_a) < s ≤ g(x_b), i.e. D ∈ [above/g(x_b), above/min g(x_a)) and D > x_b.
+        let mut gmin = f32::INFINITY;
+        for k in 1..=samples {
+            let x = k as f32 * step;
+            if x / above >= best {
+                break;
+            }
+            let p = a + x * dir;
+            if p.x < 0.0 || p.y < 0.0 || p.x > 1.0 || p.y > 1.0 {
+                break;
+            }
+            let g = (map.sample(p) - ha) / x;
+            if g > 0.0 && g > gmin {
+                let d = (above / g).max(x);
+                if gmin <= 0.0 || d < above / gmin {
+                    best = best.min(d / above);
                 }
             }
+            gmin = gmin.min(g);
         }
     }
-    best.min(RELAXED_RINGS as f32 * unit / above)
-}
-
-/// Whether the ray from `(q, 1)` down to the apex `(a, ha)`, sampled at `n` interior points,
-/// leaves the solid after entering it (and so enters twice, the apex being the second time).
-fn enters_twice(map: &HeightMap, q: Vec2, a: Vec2, ha: f32, n: usize) -> bool {
-    let mut entered = false;
-    for k in 1..n {
-        let t = k as f32 / n as f32;
-        let p = q + t * (a - q);
-        let z = 1.0 + t * (ha - 1.0);
-        let inside = z <= map.sample(p);
-        if inside {
-            entered = true;
-        } else if entered {
-            return true;
-        }
-    }
-    false
+    best.min(samples as f32 * step / above)
 }
 
 /// How a cone walk ended, for tests of the relaxed bisection bound.

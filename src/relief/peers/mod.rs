@@ -30,7 +30,7 @@ pub mod maxmip;
 use super::cast::Cast;
 use super::height::HeightMap;
 use super::view::{assemble, shade_pixel, ReliefFrame, View};
-pub use cone::{ConeMaps, CONE_CAP, RELAXED_RINGS};
+pub use cone::{ConeMaps, CONE_CAP, RELAXED_AZIMUTHS, RELAXED_RINGS};
 use glam::Vec3;
 pub use maxmip::MaxMip;
 use rayon::prelude::*;
@@ -149,12 +149,21 @@ impl PeerData {
 
     /// `peer` on the segment `E → X` of `map` (the map these structures were built from).
     ///
+    /// `peer` is taken as given ([`render_peer`] and the GPU kernel check it with
+    /// [`Peer::validate`]).
+    ///
     /// # Panics
-    /// If `peer` fails [`Peer::validate`] or `map` is not the size these were built for.
+    /// If `map` is not the size these were built for, or `E` or `X` is not finite or lies
+    /// outside the prism `[0, 1]³` by more than [`PRISM_SLACK`] (segments come from
+    /// [`View::segment`] or [`crate::relief::view::clip_to_prism`]).
     pub fn cast(&self, map: &HeightMap, peer: &Peer, e: Vec3, x: Vec3) -> Cast {
         assert_eq!(
             (map.width, map.height),
             (self.cones.width, self.cones.height)
+        );
+        assert!(
+            in_prism(e) && in_prism(x),
+            "segment ({e}, {x}) leaves the prism [0, 1]³"
         );
         match *peer {
             Peer::CellWalk => cellwalk::cast(map, e, x),
@@ -167,6 +176,16 @@ impl PeerData {
             }
         }
     }
+}
+
+/// How far outside the prism `[0, 1]³` a segment's ends may lie (rounding of the clipping).
+pub const PRISM_SLACK: f32 = 1e-4;
+
+/// Whether `p` is finite and in the prism, up to [`PRISM_SLACK`].
+pub fn in_prism(p: Vec3) -> bool {
+    p.is_finite()
+        && p.cmpge(Vec3::splat(-PRISM_SLACK)).all()
+        && p.cmple(Vec3::splat(1.0 + PRISM_SLACK)).all()
 }
 
 /// Renders `view` with `peer`, as [`crate::relief::view::render`] renders the 2005 search.
@@ -194,4 +213,24 @@ pub fn render_peer(
         })
         .collect();
     Ok(assemble(view, px))
+}
+
+/// Renders `view` with the GPU twin of `peer` (`kernel`, made for `map` and its
+/// [`PeerData`]); the hits are shaded on the host as in [`render_peer`].
+pub fn render_peer_gpu(
+    kernel: &crate::gpu::ReliefPeersKernel,
+    map: &HeightMap,
+    view: &View,
+    peer: &Peer,
+) -> Result<(ReliefFrame, crate::gpu::GpuTiming), crate::gpu::GpuError> {
+    let pixels: Vec<(u32, (Vec3, Vec3))> = (0..view.width * view.height)
+        .filter_map(|k| view.segment(k).map(|s| (k, s)))
+        .collect();
+    let segments: Vec<(Vec3, Vec3)> = pixels.iter().map(|p| p.1).collect();
+    let (casts, timing) = kernel.cast(&segments, peer)?;
+    let mut px = vec![(0.0, false, 0); (view.width * view.height) as usize];
+    for (&(k, (e, x)), c) in pixels.iter().zip(&casts) {
+        px[k as usize] = shade_pixel(map, e, x, c.hit, c.fetches);
+    }
+    Ok((assemble(view, px), timing))
 }
