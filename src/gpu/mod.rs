@@ -21,6 +21,8 @@
 //!   device (any / closest hit, AO, soft shadows, glossy reflections).
 //! - [`ReliefKernel`]: the 2005 relief caster (linear search, bisection, safety-zone skips)
 //!   over segments through the prism, for the relief experiment's GPU columns.
+//! - [`ReliefPeersKernel`]: the relief search's modern peers (cell walk, maximum mipmaps,
+//!   cone and relaxed cone stepping), the CPU's f32 operations in WGSL.
 //! - [`GpuTiming`]: GPU timestamps (where the adapter has them) and wall time, separately.
 //!
 //! WGSL lives in `shaders/` and is included at compile time; every uniform and storage struct
@@ -37,6 +39,7 @@ mod loop_budget;
 mod rays;
 mod reflect_rays;
 mod relief;
+mod relief_peers;
 mod shadow_rays;
 mod texture;
 mod tracer;
@@ -48,6 +51,7 @@ pub use field_data::FieldInstanceGpu;
 pub use field_reflect::FieldReflectKernel;
 pub use field_shadow::FieldShadowKernel;
 pub use relief::ReliefKernel;
+pub use relief_peers::ReliefPeersKernel;
 pub use tracer::{GpuHit, GpuTracer};
 
 use std::time::Duration;

@@ -17,6 +17,7 @@
 
 pub mod cast;
 pub mod height;
+pub mod peers;
 pub mod view;
 pub mod zones;
 

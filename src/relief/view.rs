@@ -191,10 +191,16 @@ pub fn render_gpu(
 }
 
 /// A pixel's shade, hit λ and fetches.
-type Pixel = (f32, Option<f32>, u32);
+pub(crate) type Pixel = (f32, Option<f32>, u32);
 
 /// A pixel's (shade, hit, fetches) for the answer `hit` on its segment `E → X`.
-fn shade_pixel(map: &HeightMap, e: Vec3, x: Vec3, hit: Option<f32>, fetches: u32) -> Pixel {
+pub(crate) fn shade_pixel(
+    map: &HeightMap,
+    e: Vec3,
+    x: Vec3,
+    hit: Option<f32>,
+    fetches: u32,
+) -> Pixel {
     match hit {
         Some(l) => {
             let p = e + l * (x - e).normalize();
@@ -204,7 +210,7 @@ fn shade_pixel(map: &HeightMap, e: Vec3, x: Vec3, hit: Option<f32>, fetches: u32
     }
 }
 
-fn assemble(view: &View, px: Vec<Pixel>) -> ReliefFrame {
+pub(crate) fn assemble(view: &View, px: Vec<Pixel>) -> ReliefFrame {
     ReliefFrame {
         image: GrayImage {
             width: view.width,
