@@ -6,7 +6,7 @@
 //! skips finds.
 
 use visfield::experiment::relief::{
-    run, Population, Reference, ANGLES, QUALITY_DATASETS, QUALITY_RATES, RATE_SETTINGS,
+    run, Population, Reference, ANGLES, PEERS, QUALITY_DATASETS, QUALITY_RATES, RATE_SETTINGS,
 };
 use visfield::gpu::AdapterPreference;
 use visfield::relief::cast::skip;
@@ -191,16 +191,37 @@ fn relief_quick_writes_tables_where_skipping_removes_fetches() {
     }
     // Five maps × six angles × (0–2 skips with the paper's δ, 1–2 with half of it), the
     // sample-rate table and the quality table.
+    // The quick profile runs the peers on `simple` only.
     let n = Dataset::ALL.len();
     let count = |t: &str| rows.iter().filter(|r| r.table == t).count();
-    assert_eq!(count("angles"), n * ANGLES.len() * 5);
+    assert_eq!(
+        count("angles"),
+        n * ANGLES.len() * 5 + PEERS.len() * ANGLES.len()
+    );
+    assert!(out.join("methods_error_vs_fetches.png").is_file());
+    assert!(out.join("methods_error_vs_time.png").is_file());
     assert_eq!(count("rates"), RATE_SETTINGS.len() * 3);
     assert_eq!(
         count("quality"),
         QUALITY_DATASETS.len() * QUALITY_RATES.len() * 3
     );
     for r in &rows {
-        assert_eq!(r.method, "paper-skips");
+        if r.method != "paper-skips" {
+            assert!(PEERS.iter().any(|p| p.1 == r.method), "{r:?}");
+            assert_eq!(
+                (r.table, r.dataset, r.skips),
+                ("angles", "simple", 0),
+                "{r:?}"
+            );
+            assert!(r.setup_s.is_some(), "{r:?}");
+            // The exact peers find every surface pixel's first hit.
+            if matches!(r.method, "cell-walk" | "max-mip") {
+                assert_eq!(r.missed_share, 0.0, "{r:?}");
+            }
+            if let Some(d) = r.gpu_hit_mismatches_vs_cpu {
+                assert_eq!(d, 0, "{r:?}");
+            }
+        }
         assert_eq!(
             r.surface_pixels + r.no_hit_pixels + r.culled_pixels,
             r.pixels
@@ -217,7 +238,7 @@ fn relief_quick_writes_tables_where_skipping_removes_fetches() {
         assert!((parts - r.fetches_per_pixel * r.pixels as f64).abs() < 1e-6 * parts);
         assert!(r.rms_vs_exact.is_finite() && r.rms_vs_exact >= 0.0, "{r:?}");
         assert!((0.0..=1.0).contains(&r.missed_share), "{r:?}");
-        if r.skips == 0 {
+        if r.skips == 0 && r.method == "paper-skips" {
             assert_eq!(r.surface_fetch_reduction, 1.0);
             assert_eq!(r.delta_rule, "paper");
         }
@@ -226,6 +247,7 @@ fn relief_quick_writes_tables_where_skipping_removes_fetches() {
         rows.iter()
             .find(|r| {
                 r.table == "angles"
+                    && r.method == "paper-skips"
                     && r.dataset == d
                     && r.view_deg == angle
                     && r.skips == skips

@@ -14,8 +14,11 @@
 //! Tables (`table` column): `angles` (Tables 1–2: every map, six angles, 75 samples per unit,
 //! 2 bisections, the paper's δ and, for 1–2 skips, half of it), `rates` (Table 3: `relief`'s
 //! close-up at 45°) and `quality` (the thin-spike and noise maps at 75° over samples per unit).
-//! The `method` column names the caster (`paper-skips`: [`crate::relief::intersect`]); other
-//! methods' rows fit the same columns (`skips` 0 and `delta_rule` empty where they have none).
+//! The `method` column names the caster (`paper-skips`: [`crate::relief::intersect`]); the
+//! `angles` table also holds the modern peers' rows ([`peers`]: `cell-walk`, `max-mip`,
+//! `cone-N`, `relaxed-N+B`; `skips` 0, `delta_rule` empty, a cone's steps in
+//! `samples_per_unit` and its bisections in `bisections`, their structures' build time in
+//! `setup_s`), plotted with the paper's search as error against fetches and against time.
 //!
 //! With an adapter (lavapipe or a GPU; `--no-gpu` to skip) every setting also runs on the
 //! GPU caster (`gpu::ReliefKernel`) and its frame is compared with the CPU's (`gpu_*` columns).
@@ -26,14 +29,17 @@
 //! procedural `relief` map.
 
 mod paper;
+pub mod peers;
 mod plots;
 mod score;
 
 pub use paper::Comparison;
+pub use peers::PEERS;
 pub use score::{populations, score, Population, Scores, Tally, OFF_TEXELS};
 
 use super::{Error, Result, ResultExt};
-use crate::gpu::{AdapterPreference, GpuContext, GpuError, ReliefKernel};
+use crate::gpu::{AdapterPreference, GpuContext, GpuError, ReliefKernel, ReliefPeersKernel};
+use crate::relief::peers::PeerData;
 use crate::relief::view::{render, render_gpu, ReliefFrame, View};
 use crate::relief::{CastParams, Dataset, DeltaRule, HeightMap, SafetyZones, PAPER_BOXES};
 use serde::Serialize;
@@ -58,13 +64,15 @@ pub const QUALITY_RATES: [f32; 5] = [10.0, 20.0, 40.0, 75.0, 150.0];
 pub struct ReliefRow {
     /// `angles` (Tables 1–2), `rates` (Table 3) or `quality` (samples per unit at 75°).
     pub table: &'static str,
-    /// The caster: `paper-skips` (the 2005 search).
+    /// The caster: `paper-skips` (the 2005 search) or a peer (`cell-walk`, `max-mip`,
+    /// `cone-N`, `relaxed-N+B`).
     pub method: &'static str,
     pub dataset: &'static str,
     /// The view's angle from the normal in the world, and its rays' angle in prism
     /// coordinates (the prism [`crate::relief::view::DEPTH`] as high as wide).
     pub view_deg: f32,
     pub prism_deg: f32,
+    /// Linear-search samples per unit length (a cone method's steps).
     pub samples_per_unit: f32,
     pub bisections: u32,
     pub skips: u32,
@@ -87,6 +95,9 @@ pub struct ReliefRow {
     pub culled_fetches: f64,
     /// Fastest of the timed renders, seconds (CPU, all threads).
     pub time_s: f64,
+    /// Build time of what the method reads besides the map (the peers' max mip or cone
+    /// maps), seconds; empty for the paper's search.
+    pub setup_s: Option<f64>,
     /// RMS (0–255) of the shaded image against the exact intersection's, over pixels hit by
     /// either.
     pub rms_vs_exact: f64,
@@ -132,6 +143,8 @@ struct GpuCells {
 /// What [`measure`] found for one setting.
 struct Measured {
     time_s: f64,
+    /// Build time of what the method reads besides the map (the peers' mips and cone maps).
+    setup_s: Option<f64>,
     scores: Scores,
     gpu: GpuCells,
 }
@@ -219,6 +232,7 @@ fn measure(
     }
     Ok(Measured {
         time_s: best,
+        setup_s: None,
         scores,
         gpu: cells,
     })
@@ -288,6 +302,55 @@ fn push(rows: &mut Vec<ReliefRow>, mut r: ReliefRow) {
     rows.push(r);
 }
 
+/// What a row is of, besides its pass.
+struct Setting {
+    method: &'static str,
+    samples_per_unit: f32,
+    bisections: u32,
+    skips: u32,
+    delta_rule: &'static str,
+}
+
+/// The row of `pass` at `at`, measured `m` (gains 1 until [`push`] sets them).
+fn row(pass: &Pass, at: &Setting, m: &Measured) -> ReliefRow {
+    let s = &m.scores;
+    ReliefRow {
+        table: pass.table,
+        method: at.method,
+        dataset: pass.dataset.name(),
+        view_deg: pass.view.angle_deg,
+        prism_deg: (-pass.view.direction().z).acos().to_degrees(),
+        samples_per_unit: at.samples_per_unit,
+        bisections: at.bisections,
+        skips: at.skips,
+        delta_rule: at.delta_rule,
+        pixels: s.all.pixels,
+        fetches_per_pixel: s.all.mean_fetches,
+        surface_pixels: s.surface.pixels,
+        surface_fetches: s.surface.mean_fetches,
+        no_hit_pixels: s.no_hit.pixels,
+        no_hit_fetches: s.no_hit.mean_fetches,
+        culled_pixels: s.culled.pixels,
+        culled_fetches: s.culled.mean_fetches,
+        time_s: m.time_s,
+        setup_s: m.setup_s,
+        rms_vs_exact: s.rms_vs_exact,
+        hit_mismatches: s.hit_mismatches,
+        missed_share: s.missed_share,
+        hit_rms_texels: s.hit_rms_texels,
+        time_speedup: 1.0,
+        surface_fetch_reduction: 1.0,
+        fetch_reduction: 1.0,
+        gpu_adapter: m.gpu.adapter.clone(),
+        gpu_kernel_s: m.gpu.kernel_s,
+        gpu_wall_s: m.gpu.wall_s,
+        gpu_fetches_per_pixel: m.gpu.fetches_per_pixel,
+        gpu_hit_mismatches_vs_cpu: m.gpu.hit_mismatches_vs_cpu,
+        gpu_rms_vs_cpu: m.gpu.rms_vs_cpu,
+        gpu_time_speedup: m.gpu.kernel_s.map(|_| 1.0),
+    }
+}
+
 /// Measures `pass` at `params` (every zone rule for 1+ skips, the first for none) and appends
 /// the rows.
 fn run_pass(
@@ -336,43 +399,14 @@ fn run_pass(
                 m.time_s,
                 100.0 * s.missed_share,
             );
-            push(
-                rows,
-                ReliefRow {
-                    table: pass.table,
-                    method: METHOD,
-                    dataset: pass.dataset.name(),
-                    view_deg: pass.view.angle_deg,
-                    prism_deg: (-pass.view.direction().z).acos().to_degrees(),
-                    samples_per_unit: rate,
-                    bisections,
-                    skips,
-                    delta_rule: z.rule.name(),
-                    pixels: s.all.pixels,
-                    fetches_per_pixel: s.all.mean_fetches,
-                    surface_pixels: s.surface.pixels,
-                    surface_fetches: s.surface.mean_fetches,
-                    no_hit_pixels: s.no_hit.pixels,
-                    no_hit_fetches: s.no_hit.mean_fetches,
-                    culled_pixels: s.culled.pixels,
-                    culled_fetches: s.culled.mean_fetches,
-                    time_s: m.time_s,
-                    rms_vs_exact: s.rms_vs_exact,
-                    hit_mismatches: s.hit_mismatches,
-                    missed_share: s.missed_share,
-                    hit_rms_texels: s.hit_rms_texels,
-                    time_speedup: 1.0,
-                    surface_fetch_reduction: 1.0,
-                    fetch_reduction: 1.0,
-                    gpu_adapter: m.gpu.adapter,
-                    gpu_kernel_s: m.gpu.kernel_s,
-                    gpu_wall_s: m.gpu.wall_s,
-                    gpu_fetches_per_pixel: m.gpu.fetches_per_pixel,
-                    gpu_hit_mismatches_vs_cpu: m.gpu.hit_mismatches_vs_cpu,
-                    gpu_rms_vs_cpu: m.gpu.rms_vs_cpu,
-                    gpu_time_speedup: m.gpu.kernel_s.map(|_| 1.0),
-                },
-            );
+            let at = Setting {
+                method: METHOD,
+                samples_per_unit: rate,
+                bisections,
+                skips,
+                delta_rule: z.rule.name(),
+            };
+            push(rows, row(pass, &at, &m));
         }
     }
     Ok(())
@@ -409,6 +443,24 @@ pub fn run(out: &Path, quick: bool, gpu: Option<AdapterPreference>) -> Result<Ve
             })
             .collect::<Result<Vec<_>>>()?;
         let adapter = adapter.as_deref();
+        // The peers on every map (the quick profile: `simple` only).
+        let peer_data = (!quick || dset == Dataset::Simple).then(|| {
+            let d = PeerData::new(&map);
+            eprintln!(
+                "relief: {} peer data: max mip {:.3} s, cones {:.2} s, relaxed cones {:.2} s",
+                dset.name(),
+                d.mip_time.as_secs_f64(),
+                d.cone_time.as_secs_f64(),
+                d.relaxed_time.as_secs_f64()
+            );
+            d
+        });
+        let peer_kernel = match (&ctx, &peer_data) {
+            (Some(c), Some(d)) => {
+                Some(ReliefPeersKernel::new(c, &map, d).context(|| "relief peers".into())?)
+            }
+            _ => None,
+        };
         for angle in ANGLES {
             let view = View::lid(angle, size);
             let reference = Reference::new(&map, &view);
@@ -420,6 +472,10 @@ pub fn run(out: &Path, quick: bool, gpu: Option<AdapterPreference>) -> Result<Ve
                 reference: &reference,
             };
             run_pass(&pass, &zoned, &[(75.0, 2)], repeats, adapter, &mut rows)?;
+            if let Some(data) = &peer_data {
+                let gpu = peer_kernel.as_ref().zip(adapter);
+                peers::run_peers(&pass, data, gpu, repeats, &mut rows)?;
+            }
             if angle == 60.0 {
                 exact_60.push((reference.frame.image, dset));
             }

@@ -155,6 +155,68 @@ pub fn plots(out: &Path, rows: &[ReliefRow], size: u32) -> Result<()> {
         },
         &pareto,
         &[],
+    )?;
+    methods_plots(out, rows)
+}
+
+/// Every method's error against its fetches and its time, over the `angles` table's maps at
+/// the grazing views (45°–75°): the paper's search (paper's δ, 0–2 skips) and the peers.
+fn methods_plots(out: &Path, rows: &[ReliefRow]) -> Result<()> {
+    let of = |r: &ReliefRow| {
+        if r.method == super::METHOD {
+            (r.delta_rule == "paper").then(|| format!("paper · {} skip(s)", r.skips))
+        } else {
+            Some(r.method.to_string())
+        }
+    };
+    let picked: Vec<(String, &ReliefRow)> = rows
+        .iter()
+        .filter(|r| r.table == "angles" && r.view_deg >= 45.0)
+        .filter_map(|r| of(r).map(|m| (m, r)))
+        .collect();
+    let mut names: Vec<&String> = Vec::new();
+    for (m, _) in &picked {
+        if !names.contains(&m) {
+            names.push(m);
+        }
+    }
+    let series = |x: &dyn Fn(&ReliefRow) -> f64| -> Vec<Series> {
+        names
+            .iter()
+            .map(|&n| Series {
+                label: n.clone(),
+                points: picked
+                    .iter()
+                    .filter(|(m, _)| m == n)
+                    .map(|(_, r)| (x(r), r.rms_vs_exact))
+                    .collect(),
+                line: false,
+            })
+            .collect()
+    };
+    let axes = |x: &str| Axes {
+        title:
+            "Every method on every map at 45°, 60° and 75° (75 samples/unit for the paper's search)"
+                .into(),
+        x_label: x.into(),
+        y_label: "RMS vs the exact intersection (0–255)".into(),
+        log_x: true,
+        log_y: false,
+    };
+    if names.is_empty() {
+        return Ok(());
+    }
+    xy_plot(
+        &out.join("methods_error_vs_fetches.png"),
+        &axes("mean fetches per surface pixel"),
+        &series(&|r| r.surface_fetches),
+        &[],
+    )?;
+    xy_plot(
+        &out.join("methods_error_vs_time.png"),
+        &axes("CPU seconds per frame"),
+        &series(&|r| r.time_s),
+        &[],
     )
 }
 

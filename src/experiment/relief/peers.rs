@@ -1,0 +1,116 @@
+//! The modern peers' rows of `experiment relief` (`crate::relief::peers`): the exact cell walk,
+//! maximum mipmaps (Tevs, Ihrke, Seidel, I3D 2008), cone step mapping (Dummer 2006) and relaxed
+//! cone stepping (Policarpo and Oliveira, GPU Gems 3 ch. 18, 2007) on the same maps, views,
+//! exact reference and fetch accounting as the paper's search; with an adapter, each also on
+//! its WGSL twin (`gpu::ReliefPeersKernel`), compared with the CPU frame.
+
+use super::{compare_frames, mean_entering_fetches, push, row, GpuCells, Measured, Pass, Setting};
+use super::{ReliefRow, Result, ResultExt};
+use crate::gpu::ReliefPeersKernel;
+use crate::relief::peers::{render_peer, render_peer_gpu, Peer, PeerData};
+use std::time::Instant;
+
+/// The peers and their settings, with their `method` names.
+pub const PEERS: [(Peer, &str); 6] = [
+    (Peer::CellWalk, "cell-walk"),
+    (Peer::MaxMip, "max-mip"),
+    (Peer::Cone { steps: 32 }, "cone-32"),
+    (Peer::Cone { steps: 128 }, "cone-128"),
+    (
+        Peer::RelaxedCone {
+            steps: 8,
+            bisections: 6,
+        },
+        "relaxed-8+6",
+    ),
+    (
+        Peer::RelaxedCone {
+            steps: 16,
+            bisections: 8,
+        },
+        "relaxed-16+8",
+    ),
+];
+
+/// Renders `pass` with every peer (`repeats` timings, the fastest kept) and appends the rows;
+/// with `gpu`, each also on the GPU twin, compared with the CPU frame.
+pub(super) fn run_peers(
+    pass: &Pass,
+    data: &PeerData,
+    gpu: Option<(&ReliefPeersKernel, &str)>,
+    repeats: usize,
+    rows: &mut Vec<ReliefRow>,
+) -> Result<()> {
+    let reference = pass.reference;
+    for (peer, method) in PEERS {
+        let mut best = f64::INFINITY;
+        let mut frame = None;
+        for _ in 0..repeats.max(1) {
+            let t = Instant::now();
+            let f = render_peer(pass.map, data, &pass.view, &peer)
+                .map_err(|e| super::Error::invalid("relief peer", e))?;
+            best = best.min(t.elapsed().as_secs_f64());
+            frame = Some(f);
+        }
+        let f = frame.expect("rendered once");
+        let scores = super::score(&f, &reference.frame, &reference.populations, pass.map.width);
+        let mut cells = GpuCells::default();
+        if let Some((kernel, adapter)) = gpu {
+            let (mut kernel_s, mut wall_s, mut gpu_frame) = (None::<f64>, f64::INFINITY, None);
+            // At least twice: the first dispatch also pays the driver's compile.
+            for _ in 0..repeats.max(2) {
+                let (g, timing) = render_peer_gpu(kernel, pass.map, &pass.view, &peer)
+                    .context(|| format!("relief peer {method}"))?;
+                if let Some(k) = timing.kernel {
+                    let k = k.as_secs_f64();
+                    kernel_s = Some(kernel_s.map_or(k, |b| b.min(k)));
+                }
+                wall_s = wall_s.min(timing.wall.as_secs_f64());
+                gpu_frame = Some(g);
+            }
+            let g = gpu_frame.expect("rendered once");
+            let (mismatches, rms) = compare_frames(&g, &f);
+            cells = GpuCells {
+                adapter: Some(adapter.to_string()),
+                kernel_s,
+                wall_s: Some(wall_s),
+                fetches_per_pixel: Some(mean_entering_fetches(&g)),
+                hit_mismatches_vs_cpu: Some(mismatches),
+                rms_vs_cpu: Some(rms),
+            };
+        }
+        eprintln!(
+            "relief: {} {} {}° {method}: {:.1} fetches per surface pixel, {:.4} s, missed {:.2}%{}",
+            pass.table,
+            pass.dataset.name(),
+            pass.view.angle_deg,
+            scores.surface.mean_fetches,
+            best,
+            100.0 * scores.missed_share,
+            cells
+                .hit_mismatches_vs_cpu
+                .map_or(String::new(), |d| format!("; GPU {d} pixel(s) differ")),
+        );
+        let (steps, bisections) = match peer {
+            Peer::Cone { steps } => (steps, 0),
+            Peer::RelaxedCone { steps, bisections } => (steps, bisections),
+            Peer::CellWalk | Peer::MaxMip => (0, 0),
+        };
+        let at = Setting {
+            method,
+            // The cone methods' step count stands where the search's samples per unit stand.
+            samples_per_unit: steps as f32,
+            bisections,
+            skips: 0,
+            delta_rule: "",
+        };
+        let m = Measured {
+            time_s: best,
+            setup_s: Some(data.build_time(&peer).as_secs_f64()),
+            scores,
+            gpu: cells,
+        };
+        push(rows, row(pass, &at, &m));
+    }
+    Ok(())
+}
