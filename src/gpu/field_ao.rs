@@ -49,6 +49,11 @@ pub struct FieldGpuOptions {
     /// Largest texture depth (texture layout); `None`: the adapter's
     /// `max_texture_dimension_3d`. Smaller depths only serve to test the tiling.
     pub max_texture_depth: Option<u32>,
+    /// AO kernel: cull each round of rays against the world spheres and answer only the rays
+    /// that meet one, shared over the workgroup (WGSL `ao_main`, the default); `false`: every
+    /// invocation answers its own rays (`ao_main_direct`, kept for comparison; the answers are
+    /// the same). See docs/gpu.md, "Field kernel speed on lavapipe".
+    pub queue_rays: bool,
 }
 
 impl FieldGpuOptions {
@@ -78,6 +83,7 @@ impl Default for FieldGpuOptions {
             window_bytes: None,
             rays_per_invocation: super::loop_budget::DEFAULT_RAYS_PER_INVOCATION,
             max_texture_depth: None,
+            queue_rays: true,
         }
     }
 }
@@ -188,7 +194,11 @@ impl<'a> FieldAoKernel<'a> {
             |label, entry| ctx.compute_pipeline_with_layout(label, &source, entry, Some(&layout));
         Ok(FieldAoKernel {
             ctx,
-            ao: compile("field_ao", "ao_main")?,
+            ao: if opts.queue_rays {
+                compile("field_ao", "ao_main")?
+            } else {
+                compile("field_ao_direct", "ao_main_direct")?
+            },
             probe: compile("field_probe", "probe_main")?,
             group_layout,
             rays_per_invocation: opts.start_rays_per_invocation(instances.len()),
