@@ -18,7 +18,8 @@ struct Params {
     instance_count: u32,
     // Invocations per row of the dispatch grid (i = gid.x + gid.y * row_stride).
     row_stride: u32,
-    // Selection (SELECT_NEAREST, SELECT_INTERPOLATED).
+    // Selection (SELECT_NEAREST, SELECT_INTERPOLATED); the kernels read the pipeline's
+    // constant AO_SELECTION, which the host sets to the same.
     selection: u32,
     // Rays one invocation traces.
     rays_per_invocation: u32,
@@ -133,7 +134,7 @@ fn ao_main(@builtin(global_invocation_id) gid: vec3<u32>,
             let origin = origins[owner];
             let dir = world_dir(owner, r);
             for (var k = 0u; k < params.instance_count; k++) {
-                if instance_occludes(instances[k], origin, dir, 0.0, tmax, params.selection, params.intra_bias, params.intra_auto != 0u) {
+                if instance_occludes(instances[k], origin, dir, 0.0, tmax, AO_SELECTION, params.intra_bias, params.intra_auto != 0u) {
                     atomicAdd(&blocked_rays[owner], 1u);
                     break;
                 }
@@ -177,7 +178,7 @@ fn ao_main_direct(@builtin(global_invocation_id) gid: vec3<u32>) {
         let dir = frame_to_world(frame, local);
         var blocked = false;
         for (var k = 0u; k < params.instance_count; k++) {
-            if instance_occludes(instances[k], origin, dir, 0.0, tmax, params.selection, params.intra_bias, params.intra_auto != 0u) {
+            if instance_occludes(instances[k], origin, dir, 0.0, tmax, AO_SELECTION, params.intra_bias, params.intra_auto != 0u) {
                 blocked = true;
                 break;
             }
@@ -201,9 +202,9 @@ fn probe_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let u = receivers[i].position;
     let dir = receivers[i].normal;
     let pbase = inst.point_base;
-    let m = nearest_point(u, inst.sphere_kind, inst.ring_param, pbase);
+    let m = nearest_point(u, fixed_or(FIXED_SPHERE, inst.sphere_kind), inst.ring_param, pbase);
     let local = frame_to_local(frame_from_normal(-sphere_point(pbase, m)), dir);
-    let t = layout_to_texel(inst.layout_kind, inst.resolution, local);
+    let t = layout_to_texel(fixed_or(FIXED_LAYOUT, inst.layout_kind), inst.resolution, local);
     out[4u * i] = m;
     out[4u * i + 1u] = t;
     out[4u * i + 2u] = bitcast<u32>(field_sample(inst, u, dir, SELECT_NEAREST));
