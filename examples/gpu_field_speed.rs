@@ -29,7 +29,10 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 fn max_diff(a: &[f32], b: &[f32]) -> f32 {
-    a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f32::max)
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f32::max)
 }
 
 fn main() {
@@ -72,8 +75,12 @@ fn main() {
     let rays = RaySet::new(16, 1);
     let opts = AoOptions::for_scene_radius(1.0);
     let ctx = GpuContext::new(AdapterPreference::from_env()).expect("adapter");
-    let kernel = FieldAoKernel::new(&ctx, std::slice::from_ref(&inst), &FieldGpuOptions::default())
-        .expect("kernel");
+    let kernel = FieldAoKernel::new(
+        &ctx,
+        std::slice::from_ref(&inst),
+        &FieldGpuOptions::default(),
+    )
+    .expect("kernel");
     let direct = FieldAoKernel::new(
         &ctx,
         &[inst],
@@ -84,7 +91,13 @@ fn main() {
     )
     .expect("kernel");
     let gtracer = GpuTracer::new(&ctx, &tris).expect("gpu tracer");
-    println!("{} on {}: {} points x {} rays", params_label(maps, res), ctx.adapter_label(), p.len(), rays.len());
+    println!(
+        "{} on {}: {} points x {} rays",
+        params_label(maps, res),
+        ctx.adapter_label(),
+        p.len(),
+        rays.len()
+    );
     let cpu_field = ao_at_points(&fs, p, n, &rays, &opts);
     let (gf, _) = kernel.vertex_ao(p, n, &rays, &opts).expect("field kernel");
     let (gd, _) = direct.vertex_ao(p, n, &rays, &opts).expect("direct kernel");
@@ -113,9 +126,24 @@ fn main() {
     let m: Vec<f64> = s.iter().map(|v| median(v.clone())).collect();
     let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
     println!("rounds {rounds}, load {}", load.trim());
-    println!("gpu field kernel {:.4} s  gpu cwbvh kernel {:.4} s  ratio {:.2}", m[0], m[1], m[1] / m[0]);
-    println!("gpu direct (before) {:.4} s  ratio to cwbvh {:.2}  queued speed-up {:.2}", m[4], m[1] / m[4], m[4] / m[0]);
-    println!("cpu field        {:.4} s  cpu raycast      {:.4} s  ratio {:.2}", m[2], m[3], m[3] / m[2]);
+    println!(
+        "gpu field kernel {:.4} s  gpu cwbvh kernel {:.4} s  ratio {:.2}",
+        m[0],
+        m[1],
+        m[1] / m[0]
+    );
+    println!(
+        "gpu direct (before) {:.4} s  ratio to cwbvh {:.2}  queued speed-up {:.2}",
+        m[4],
+        m[1] / m[4],
+        m[4] / m[0]
+    );
+    println!(
+        "cpu field        {:.4} s  cpu raycast      {:.4} s  ratio {:.2}",
+        m[2],
+        m[3],
+        m[3] / m[2]
+    );
     println!("samples: {s:?}");
 }
 

@@ -97,16 +97,25 @@ fn ao_main(@builtin(global_invocation_id) gid: vec3<u32>,
     let in_range = i < params.point_count * per_point;
     var first = 0u;
     var last = 0u;
+    // This invocation's receiver in registers for the cull (the queue's readers take it from
+    // workgroup memory).
+    var frame = Frame(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0));
+    var origin = vec3<f32>(0.0);
+    var cs = 0.0;
+    var sn = 0.0;
     if in_range {
         first = (i % per_point) * params.rays_per_invocation;
         last = min(first + params.rays_per_invocation, params.rays_per_point);
         let rc = receivers[i / per_point];
         let nrm = rc.normal;
-        let frame = frame_from_normal(nrm);
-        frame_x[lid] = vec4<f32>(frame.x, rc.rotation_cos);
-        frame_y[lid] = vec4<f32>(frame.y, rc.rotation_sin);
+        frame = frame_from_normal(nrm);
+        cs = rc.rotation_cos;
+        sn = rc.rotation_sin;
+        origin = rc.position + params.origin_offset * nrm;
+        frame_x[lid] = vec4<f32>(frame.x, cs);
+        frame_y[lid] = vec4<f32>(frame.y, sn);
         frame_z[lid] = frame.z;
-        origins[lid] = rc.position + params.origin_offset * nrm;
+        origins[lid] = origin;
     }
     firsts[lid] = first;
     atomicStore(&blocked_rays[lid], 0u);
@@ -121,7 +130,9 @@ fn ao_main(@builtin(global_invocation_id) gid: vec3<u32>,
         workgroupBarrier();
         let end = min(first + base + AO_CHUNK, last);
         for (var r = first + base; r < end; r++) {
-            if meets_any_sphere(origins[lid], world_dir(lid, r), tmax) {
+            let b = dirs[r].xyz;
+            let local = vec3<f32>(cs * b.x - sn * b.y, sn * b.x + cs * b.y, b.z);
+            if meets_any_sphere(origin, frame_to_world(frame, local), tmax) {
                 queue[atomicAdd(&queue_len, 1u)] = lid * AO_CHUNK + (r - first - base);
             }
         }
