@@ -144,6 +144,14 @@ fn main() {
         m[3],
         m[3] / m[2]
     );
+    // Per-round ratios: both sides of a round ran under about the same load.
+    let paired = |a: usize, b: usize| median(s[a].iter().zip(&s[b]).map(|(x, y)| x / y).collect());
+    println!(
+        "median per-round ratios: gpu cwbvh / field {:.2}, cwbvh / direct {:.2}, cpu raycast / field {:.2}",
+        paired(1, 0),
+        paired(1, 4),
+        paired(3, 2)
+    );
     println!("samples: {s:?}");
 }
 
