@@ -47,9 +47,9 @@ struct Params {
 // Rays are answered in two steps per round of AO_CHUNK rays an invocation: every invocation
 // culls its rays against the instances' world spheres and queues the ones that meet a sphere
 // in workgroup memory; then the workgroup's invocations share the queue, AO_GROUP entries at a
-// time. llvmpipe runs 8 invocations as the lanes of one SIMD program and does not skip a
-// branch that no lane takes, so a ray that misses every sphere would otherwise cost a whole
-// lookup whenever a neighbouring lane's ray entered one (docs/gpu.md, "Field kernel speed").
+// time. llvmpipe runs 8 invocations as the lanes of one SIMD program, masked, so a ray that
+// misses every sphere would otherwise wait through a whole lookup whenever a neighbouring
+// lane's ray entered one (docs/gpu.md, "Field kernel speed on lavapipe").
 // The same arithmetic decides every ray (the cull is the lookup's own world-sphere test).
 const AO_GROUP: u32 = 64u;
 const AO_CHUNK: u32 = 32u;
