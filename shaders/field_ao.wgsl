@@ -18,7 +18,8 @@ struct Params {
     instance_count: u32,
     // Invocations per row of the dispatch grid (i = gid.x + gid.y * row_stride).
     row_stride: u32,
-    // Selection (SELECT_NEAREST, SELECT_INTERPOLATED).
+    // Selection (SELECT_NEAREST, SELECT_INTERPOLATED); the kernels read the pipeline's
+    // constant AO_SELECTION, which the host sets to the same.
     selection: u32,
     // Rays one invocation traces.
     rays_per_invocation: u32,
@@ -43,8 +44,134 @@ struct Params {
 @group(0) @binding(2) var<storage, read_write> out: array<u32>;
 @group(0) @binding(3) var<storage, read> dirs: array<vec4<f32>>;
 
+// Rays are answered in two steps per round of AO_CHUNK rays an invocation: every invocation
+// culls its rays against the instances' world spheres and queues the ones that meet a sphere
+// in workgroup memory; then the workgroup's invocations share the queue, AO_GROUP entries at a
+// time. llvmpipe runs 8 invocations as the lanes of one SIMD program, masked, so a ray that
+// misses every sphere would otherwise wait through a whole lookup whenever a neighbouring
+// lane's ray entered one (docs/gpu.md, "Field kernel speed on lavapipe").
+// The same arithmetic decides every ray (the cull is the lookup's own world-sphere test).
+const AO_GROUP: u32 = 64u;
+const AO_CHUNK: u32 = 32u;
+
+var<workgroup> queue: array<u32, 2048>;
+var<workgroup> queue_len: atomic<u32>;
+// Set when any invocation of the group (one past the points too) had its loops cut short.
+var<workgroup> group_cut_short: atomic<u32>;
+var<workgroup> blocked_rays: array<atomic<u32>, AO_GROUP>;
+// Per invocation: frame x and cos, frame y and sin, normal, origin.
+var<workgroup> frame_x: array<vec4<f32>, AO_GROUP>;
+var<workgroup> frame_y: array<vec4<f32>, AO_GROUP>;
+var<workgroup> frame_z: array<vec3<f32>, AO_GROUP>;
+var<workgroup> origins: array<vec3<f32>, AO_GROUP>;
+var<workgroup> firsts: array<u32, AO_GROUP>;
+
+// Whether the world segment origin + t dir, t in [0, tmax], meets any instance's world sphere
+// (the first test of `instance_occludes`).
+fn meets_any_sphere(origin: vec3<f32>, dir: vec3<f32>, tmax: f32) -> bool {
+    for (var k = 0u; k < params.instance_count; k++) {
+        let ws = ray_sphere(origin, dir, instances[k].world_center, instances[k].world_radius);
+        if ws.z != 0.0 && ws.y >= 0.0 && ws.x <= tmax {
+            return true;
+        }
+    }
+    return false;
+}
+
+fn world_dir(lid: u32, r: u32) -> vec3<f32> {
+    let fx = frame_x[lid];
+    let fy = frame_y[lid];
+    let frame = Frame(fx.xyz, fy.xyz, frame_z[lid]);
+    let cs = fx.w;
+    let sn = fy.w;
+    let b = dirs[r].xyz;
+    let local = vec3<f32>(cs * b.x - sn * b.y, sn * b.x + cs * b.y, b.z);
+    return frame_to_world(frame, local);
+}
+
 @compute @workgroup_size(64)
-fn ao_main(@builtin(global_invocation_id) gid: vec3<u32>) {
+fn ao_main(@builtin(global_invocation_id) gid: vec3<u32>,
+           @builtin(local_invocation_index) lid: u32) {
+    let i = gid.x + gid.y * params.row_stride;
+    let per_point = params.invocations_per_point;
+    let in_range = i < params.point_count * per_point;
+    var first = 0u;
+    var last = 0u;
+    // This invocation's receiver in registers for the cull (the queue's readers take it from
+    // workgroup memory).
+    var frame = Frame(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0));
+    var origin = vec3<f32>(0.0);
+    var cs = 0.0;
+    var sn = 0.0;
+    if in_range {
+        first = (i % per_point) * params.rays_per_invocation;
+        last = min(first + params.rays_per_invocation, params.rays_per_point);
+        let rc = receivers[i / per_point];
+        let nrm = rc.normal;
+        frame = frame_from_normal(nrm);
+        cs = rc.rotation_cos;
+        sn = rc.rotation_sin;
+        origin = rc.position + params.origin_offset * nrm;
+        frame_x[lid] = vec4<f32>(frame.x, cs);
+        frame_y[lid] = vec4<f32>(frame.y, sn);
+        frame_z[lid] = frame.z;
+        origins[lid] = origin;
+    }
+    firsts[lid] = first;
+    atomicStore(&blocked_rays[lid], 0u);
+    if lid == 0u {
+        atomicStore(&group_cut_short, 0u);
+    }
+    let tmax = params.tmax;
+    let first_instance = instances[0];
+    for (var base = 0u; base < params.rays_per_invocation; base += AO_CHUNK) {
+        if lid == 0u {
+            atomicStore(&queue_len, 0u);
+        }
+        workgroupBarrier();
+        let end = min(first + base + AO_CHUNK, last);
+        for (var r = first + base; r < end; r++) {
+            let b = dirs[r].xyz;
+            let local = vec3<f32>(cs * b.x - sn * b.y, sn * b.x + cs * b.y, b.z);
+            if meets_any_sphere(origin, frame_to_world(frame, local), tmax) {
+                queue[atomicAdd(&queue_len, 1u)] = lid * AO_CHUNK + (r - first - base);
+            }
+        }
+        workgroupBarrier();
+        let queued = atomicLoad(&queue_len);
+        for (var q = lid; q < queued; q += AO_GROUP) {
+            let e = queue[q];
+            let owner = e / AO_CHUNK;
+            let r = firsts[owner] + base + e % AO_CHUNK;
+            let origin = origins[owner];
+            let dir = world_dir(owner, r);
+            // The first instance comes from registers (read once per invocation): lavapipe
+            // reads a 144-byte record lane by lane.
+            var blocked = instance_occludes(first_instance, origin, dir, 0.0, tmax, AO_SELECTION, params.intra_bias, params.intra_auto != 0u);
+            for (var k = 1u; k < params.instance_count && !blocked; k++) {
+                blocked = instance_occludes(instances[k], origin, dir, 0.0, tmax, AO_SELECTION, params.intra_bias, params.intra_auto != 0u);
+            }
+            if blocked {
+                atomicAdd(&blocked_rays[owner], 1u);
+            }
+        }
+        workgroupBarrier();
+    }
+    // Queue entries are answered by any invocation of the group: one whose loops were cut
+    // short spoils its neighbours' counts, so the whole group reports it.
+    if !loops_completed(params.completion_trips) {
+        atomicStore(&group_cut_short, 1u);
+    }
+    workgroupBarrier();
+    if in_range {
+        let free = (last - first) - atomicLoad(&blocked_rays[lid]);
+        out[i] = select(free, CUT_SHORT, atomicLoad(&group_cut_short) != 0u);
+    }
+}
+
+// The kernel before the queue: each invocation answers its own rays (`queue_rays: false`).
+@compute @workgroup_size(64)
+fn ao_main_direct(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x + gid.y * params.row_stride;
     let per_point = params.invocations_per_point;
     if i >= params.point_count * per_point {
@@ -66,7 +193,7 @@ fn ao_main(@builtin(global_invocation_id) gid: vec3<u32>) {
         let dir = frame_to_world(frame, local);
         var blocked = false;
         for (var k = 0u; k < params.instance_count; k++) {
-            if instance_occludes(instances[k], origin, dir, 0.0, tmax, params.selection, params.intra_bias, params.intra_auto != 0u) {
+            if instance_occludes(instances[k], origin, dir, 0.0, tmax, AO_SELECTION, params.intra_bias, params.intra_auto != 0u) {
                 blocked = true;
                 break;
             }
@@ -90,9 +217,9 @@ fn probe_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let u = receivers[i].position;
     let dir = receivers[i].normal;
     let pbase = inst.point_base;
-    let m = nearest_point(u, inst.sphere_kind, inst.ring_param, pbase);
+    let m = nearest_point(u, fixed_or(FIXED_SPHERE, inst.sphere_kind), inst.ring_param, pbase);
     let local = frame_to_local(frame_from_normal(-sphere_point(pbase, m)), dir);
-    let t = layout_to_texel(inst.layout_kind, inst.resolution, local);
+    let t = layout_to_texel(fixed_or(FIXED_LAYOUT, inst.layout_kind), inst.resolution, local);
     out[4u * i] = m;
     out[4u * i + 1u] = t;
     out[4u * i + 2u] = bitcast<u32>(field_sample(inst, u, dir, SELECT_NEAREST));

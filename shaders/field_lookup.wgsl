@@ -102,9 +102,9 @@ fn ray_sphere(o: vec3<f32>, d: vec3<f32>, c: vec3<f32>, r: f32) -> vec3<f32> {
 // Normalised distance D stored for a ray crossing the sphere at unit `u` with model direction
 // `dir` pointing into the sphere.
 fn field_sample(inst: Instance, u: vec3<f32>, dir: vec3<f32>, selection: u32) -> f32 {
-    let kind = inst.sphere_kind;
+    let kind = fixed_or(FIXED_SPHERE, inst.sphere_kind);
     let n = inst.ring_param;
-    let lay = inst.layout_kind;
+    let lay = fixed_or(FIXED_LAYOUT, inst.layout_kind);
     let res = inst.resolution;
     let pbase = inst.point_base;
     let m = nearest_point(u, kind, n, pbase);

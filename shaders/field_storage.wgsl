@@ -18,7 +18,7 @@ fn load_distance(inst: Instance, m: u32, t: u32) -> f32 {
     let res = inst.resolution;
     let texels = res * res;
     let base = inst.data_base;
-    let prec = inst.storage_precision;
+    let prec = fixed_or(FIXED_PRECISION, inst.storage_precision);
     if prec == PRECISION_F32 {
         return bitcast<f32>(load_word(base + m * texels + t));
     }

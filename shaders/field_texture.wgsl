@@ -26,7 +26,7 @@ fn load_tile(inst: Instance, m: u32, e: u32) -> u32 {
 }
 
 fn load_distance(inst: Instance, m: u32, t: u32) -> f32 {
-    let prec = inst.storage_precision;
+    let prec = fixed_or(FIXED_PRECISION, inst.storage_precision);
     if prec == PRECISION_F32 {
         return bitcast<f32>(load_tile(inst, m, t));
     }

@@ -98,9 +98,12 @@ fn nearest_point(d: vec3<f32>, kind: u32, n: u32, base: u32) -> u32 {
         let ring = ring_of(g, kind, n);
         let m = ring.count;
         let u = turns * f32(m) - ring.phase;
+        // floor(u) mod m without an integer division (scalar on a CPU driver): |turns| <= 1/2
+        // and 0 <= phase <= 1/2 put floor(u) in [-m/2 - 1, m/2], so one wrap suffices for
+        // m >= 2, and the pole ring (m = 1, phase 0) has floor(u) in {-1, 0}.
         let fl = i32(floor(u));
         let mi = i32(m);
-        let j0 = u32(((fl % mi) + mi) % mi);
+        let j0 = u32(select(fl, fl + mi, fl < 0i));
         let j1 = select(j0 + 1u, 0u, j0 + 1u == m);
         for (var c = 0u; c < 2u; c++) {
             let i = ring.first + select(j0, j1, c == 1u);

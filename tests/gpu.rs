@@ -794,6 +794,47 @@ fn field_ao_at_4096_rays_per_point_matches_the_cpu() {
     }
 }
 
+/// The AO kernel's workgroup ray queue (the default) and the per-invocation kernel
+/// (`queue_rays: false`) give the same free-ray counts, bit for bit, for both selections,
+/// with a point's rays spread over several invocations (100 rays, 32 per invocation: the last
+/// invocation of a point takes 4) and a receiver count that is no multiple of the workgroup.
+fn ray_queue_and_per_invocation_kernels_agree() {
+    let Some(ctx) = context() else { return };
+    let rays = RaySet::new(10, 3);
+    let field = baked(params(290, 16, Precision::U8, LayoutKind::Concentric));
+    let inst = placed(&field);
+    let (p, n) = receivers(&inst);
+    let (p, n): (Vec<Vec3>, Vec<Vec3>) = p.into_iter().zip(n).step_by(5).unzip();
+    assert_ne!(p.len() % 64, 0);
+    let opts = AoOptions::for_scene_radius(1.0);
+    for selection in [Selection::Nearest, Selection::Interpolated] {
+        let run = |queue_rays| {
+            let gpu_opts = FieldGpuOptions {
+                queue_rays,
+                rays_per_invocation: 32,
+                lookup: LookupOptions {
+                    selection,
+                    ..Default::default()
+                },
+                ..Default::default()
+            };
+            let kernel = FieldAoKernel::new(ctx, std::slice::from_ref(&inst), &gpu_opts).unwrap();
+            kernel.vertex_ao(&p, &n, &rays, &opts).unwrap().0
+        };
+        let (queued, direct) = (run(true), run(false));
+        assert_occlusion_is_nontrivial(&direct);
+        let differ = queued
+            .iter()
+            .zip(&direct)
+            .filter(|(a, b)| a.to_bits() != b.to_bits());
+        assert_eq!(
+            differ.count(),
+            0,
+            "{selection:?}: queue and per-invocation kernels differ"
+        );
+    }
+}
+
 /// Ray-cast AO at 4096 rays per point on the GPU (more than one lavapipe invocation can loop
 /// over: the tracer spreads a point's rays over invocations) gives the CPU's answer per vertex
 /// within one 8-bit step. Every 7th receiver keeps it to seconds on lavapipe.
@@ -1102,6 +1143,10 @@ fn main() {
             (
                 "field_ao_at_4096_rays_per_point_matches_the_cpu",
                 field_ao_at_4096_rays_per_point_matches_the_cpu,
+            ),
+            (
+                "ray_queue_and_per_invocation_kernels_agree",
+                ray_queue_and_per_invocation_kernels_agree,
             ),
             (
                 "gpu_ray_cast_ao_at_4096_rays_per_point_matches_the_cpu",

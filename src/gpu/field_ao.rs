@@ -32,6 +32,7 @@ use crate::render::ao::AoOptions;
 use crate::sampling::rays::RaySet;
 use glam::Vec3;
 use std::sync::atomic::AtomicU32;
+use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 /// Options of a [`FieldAoKernel`].
@@ -49,6 +50,11 @@ pub struct FieldGpuOptions {
     /// Largest texture depth (texture layout); `None`: the adapter's
     /// `max_texture_dimension_3d`. Smaller depths only serve to test the tiling.
     pub max_texture_depth: Option<u32>,
+    /// AO kernel: cull each round of rays against the world spheres and answer only the rays
+    /// that meet one, shared over the workgroup (WGSL `ao_main`, the default); `false`: every
+    /// invocation answers its own rays (`ao_main_direct`, kept for comparison; the answers are
+    /// the same). See docs/gpu.md, "Field kernel speed on lavapipe".
+    pub queue_rays: bool,
 }
 
 impl FieldGpuOptions {
@@ -78,6 +84,7 @@ impl Default for FieldGpuOptions {
             window_bytes: None,
             rays_per_invocation: super::loop_budget::DEFAULT_RAYS_PER_INVOCATION,
             max_texture_depth: None,
+            queue_rays: true,
         }
     }
 }
@@ -142,7 +149,12 @@ const KERNEL_STORAGE_BUFFERS: u32 = 3;
 /// fields in a `FieldBinding` (src/gpu/field_binding.rs).
 pub struct FieldAoKernel<'a> {
     ctx: &'a GpuContext,
-    ao: wgpu::ComputePipeline,
+    /// The AO pipeline per selection code ([`selection_code`]), compiled on first use: the
+    /// selection is a shader constant (`AO_SELECTION`) so that the compiler drops the other's
+    /// code, which llvmpipe would run masked for every ray.
+    ao: Mutex<[Option<wgpu::ComputePipeline>; 2]>,
+    /// Kernel source without `AO_SELECTION`, its entry point and pipeline layout.
+    ao_source: (String, &'static str, wgpu::PipelineLayout),
     probe: wgpu::ComputePipeline,
     /// Layout of the kernel's own group (0).
     group_layout: wgpu::BindGroupLayout,
@@ -178,24 +190,57 @@ impl<'a> FieldAoKernel<'a> {
                     storage_layout_entry(DIRECTIONS_BINDING, true),
                 ],
             });
-        let source = field.shader_source(&[
+        let mut source = field.shader_source(&[
             include_str!("../../shaders/receiver.wgsl"),
             include_str!("../../shaders/loop_budget.wgsl"),
             include_str!("../../shaders/field_ao.wgsl"),
         ]);
         let layout = field.pipeline_layout(ctx, &group_layout);
-        let compile =
-            |label, entry| ctx.compute_pipeline_with_layout(label, &source, entry, Some(&layout));
-        Ok(FieldAoKernel {
+        let entry = if opts.queue_rays {
+            "ao_main"
+        } else {
+            "ao_main_direct"
+        };
+        let probe = ctx.compute_pipeline_with_layout(
+            "field_probe",
+            &(ao_selection_const(0) + &source),
+            "probe_main",
+            Some(&layout),
+        )?;
+        source.shrink_to_fit();
+        let kernel = FieldAoKernel {
             ctx,
-            ao: compile("field_ao", "ao_main")?,
-            probe: compile("field_probe", "probe_main")?,
+            ao: Mutex::new([None, None]),
+            ao_source: (source, entry, layout),
+            probe,
             group_layout,
             rays_per_invocation: opts.start_rays_per_invocation(instances.len()),
             field,
-            upload: start.elapsed(),
+            upload: Duration::ZERO,
             lookup: opts.lookup,
+        };
+        kernel.ao_pipeline(selection_code(opts.lookup.selection))?;
+        Ok(FieldAoKernel {
+            upload: start.elapsed(),
+            ..kernel
         })
+    }
+
+    /// The AO pipeline of selection code `code`, compiled on first use.
+    fn ao_pipeline(&self, code: u32) -> Result<wgpu::ComputePipeline, GpuError> {
+        let mut cache = self.ao.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(p) = &cache[code as usize] {
+            return Ok(p.clone());
+        }
+        let (source, entry, layout) = &self.ao_source;
+        let p = self.ctx.compute_pipeline_with_layout(
+            "field_ao",
+            &(ao_selection_const(code) + source),
+            entry,
+            Some(layout),
+        )?;
+        cache[code as usize] = Some(p.clone());
+        Ok(p)
     }
 
     /// Bytes of stored distances on the device.
@@ -264,6 +309,7 @@ impl<'a> FieldAoKernel<'a> {
             intra_auto,
             ..Default::default()
         };
+        let pipeline = self.ao_pipeline(params.selection)?;
         let (ao, kernel, upload) = free_fractions(
             &self.rays_per_invocation,
             base.len() as u32,
@@ -271,7 +317,7 @@ impl<'a> FieldAoKernel<'a> {
             |per_invocation, per_point| {
                 params.rays_per_invocation = per_invocation;
                 params.invocations_per_point = per_point;
-                self.run(&self.ao, params, &recv, &dirs, per_point, 1)
+                self.run(&pipeline, params, &recv, &dirs, per_point, 1)
             },
         )?;
         Ok((
@@ -363,6 +409,11 @@ impl<'a> FieldAoKernel<'a> {
             },
         )
     }
+}
+
+/// WGSL `AO_SELECTION`, the AO kernel's selection code.
+fn ao_selection_const(code: u32) -> String {
+    format!("const AO_SELECTION: u32 = {code}u;\n")
 }
 
 /// WGSL `intra_bias` and `intra_auto` of a lookup's intra-object bias.

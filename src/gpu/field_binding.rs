@@ -23,7 +23,7 @@
 //! `win0`, `win1`, … (storage layout) or `field_tex` (texture layout).
 
 use super::context::{entry, storage_layout_entry, GpuContext};
-use super::field_data::{field_words, PackedFields};
+use super::field_data::{field_words, FieldInstanceGpu, PackedFields};
 use super::texture::FieldTexture;
 use super::GpuError;
 use crate::field::scene::FieldInstance;
@@ -184,6 +184,7 @@ impl FieldBinding {
             store,
         };
         let (prelude, layout_source) = resources.prelude();
+        let prelude = kinds_prelude(&packed.instances) + &prelude;
         let group_layout = ctx
             .device
             .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -336,6 +337,29 @@ fn group_prelude() -> String {
          @group({FIELD_GROUP}) @binding(0) var<storage, read> tables: array<vec4<f32>>;\n\
          @group({FIELD_GROUP}) @binding(1) var<storage, read> mesh: array<vec4<u32>>;\n\
          @group({FIELD_GROUP}) @binding(2) var<storage, read> instances: array<Instance>;\n"
+    )
+}
+
+/// `FIXED_SPHERE`, `FIXED_LAYOUT` and `FIXED_PRECISION`: the code every instance shares, or
+/// `VARIES` (WGSL `fixed_or`). With them the shader compiler drops the branches of the other
+/// kinds; llvmpipe would otherwise run every branch of a lookup, masked, for every ray.
+fn kinds_prelude(instances: &[FieldInstanceGpu]) -> String {
+    let shared = |f: fn(&FieldInstanceGpu) -> u32| -> u32 {
+        match instances.first().map(f) {
+            Some(v) if instances.iter().all(|i| f(i) == v) => v,
+            _ => u32::MAX,
+        }
+    };
+    format!(
+        "const VARIES: u32 = 0xffffffffu;\n\
+         const FIXED_SPHERE: u32 = {}u;\n\
+         const FIXED_LAYOUT: u32 = {}u;\n\
+         const FIXED_PRECISION: u32 = {}u;\n\
+         // `fixed` where every instance shares it, else the instance's own `value`.\n\
+         fn fixed_or(fixed: u32, value: u32) -> u32 {{ return select(fixed, value, fixed == VARIES); }}\n",
+        shared(|i| i.sphere_kind),
+        shared(|i| i.layout_kind),
+        shared(|i| i.storage_precision),
     )
 }
 
