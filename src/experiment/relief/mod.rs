@@ -38,7 +38,9 @@ pub use peers::PEERS;
 pub use score::{populations, score, Population, Scores, Tally, OFF_TEXELS};
 
 use super::{Error, Result, ResultExt};
-use crate::gpu::{AdapterPreference, GpuContext, GpuError, ReliefKernel, ReliefPeersKernel};
+use crate::gpu::{
+    AdapterPreference, GpuContext, GpuError, GpuTiming, ReliefKernel, ReliefPeersKernel,
+};
 use crate::relief::peers::PeerData;
 use crate::relief::view::{render, render_gpu, ReliefFrame, View};
 use crate::relief::{CastParams, Dataset, DeltaRule, HeightMap, SafetyZones, PAPER_BOXES};
@@ -184,6 +186,37 @@ fn mean_entering_fetches(f: &ReliefFrame) -> f64 {
     sum as f64 / n.max(1) as f64
 }
 
+/// The GPU columns of a setting: `render` run `repeats` times (at least twice: the first
+/// dispatch of a kernel also pays its driver-side compile), the fastest kernel and wall times
+/// kept, and the last frame compared with the CPU's `cpu`.
+fn gpu_cells(
+    adapter: &str,
+    cpu: &ReliefFrame,
+    repeats: usize,
+    mut render: impl FnMut() -> Result<(ReliefFrame, GpuTiming)>,
+) -> Result<GpuCells> {
+    let (mut kernel_s, mut wall_s, mut frame) = (None::<f64>, f64::INFINITY, None);
+    for _ in 0..repeats.max(2) {
+        let (g, timing) = render()?;
+        if let Some(k) = timing.kernel {
+            let k = k.as_secs_f64();
+            kernel_s = Some(kernel_s.map_or(k, |b| b.min(k)));
+        }
+        wall_s = wall_s.min(timing.wall.as_secs_f64());
+        frame = Some(g);
+    }
+    let g = frame.expect("rendered at least twice");
+    let (mismatches, rms) = compare_frames(&g, cpu);
+    Ok(GpuCells {
+        adapter: Some(adapter.to_string()),
+        kernel_s,
+        wall_s: Some(wall_s),
+        fetches_per_pixel: Some(mean_entering_fetches(&g)),
+        hit_mismatches_vs_cpu: Some(mismatches),
+        rms_vs_cpu: Some(rms),
+    })
+}
+
 /// Renders one setting `repeats` times (the fastest time kept) and scores it against the
 /// reference; with `gpu`, renders it there as often and compares the GPU frame with the CPU's.
 fn measure(
@@ -205,31 +238,12 @@ fn measure(
     }
     let f = frame.expect("rendered once");
     let scores = score(&f, &reference.frame, &reference.populations, map.width);
-    let mut cells = GpuCells::default();
-    if let Some((kernel, adapter)) = gpu {
-        let (mut kernel_s, mut wall_s) = (None::<f64>, f64::INFINITY);
-        let mut gpu_frame = None;
-        // At least twice: the first dispatch of a kernel also pays its driver-side compile.
-        for _ in 0..repeats.max(2) {
-            let (g, timing) = render_gpu(kernel, map, v, p).context(|| "relief".into())?;
-            if let Some(k) = timing.kernel {
-                let k = k.as_secs_f64();
-                kernel_s = Some(kernel_s.map_or(k, |b| b.min(k)));
-            }
-            wall_s = wall_s.min(timing.wall.as_secs_f64());
-            gpu_frame = Some(g);
-        }
-        let g = gpu_frame.expect("rendered once");
-        let (mismatches_vs_cpu, rms_vs_cpu) = compare_frames(&g, &f);
-        cells = GpuCells {
-            adapter: Some(adapter.to_string()),
-            kernel_s,
-            wall_s: Some(wall_s),
-            fetches_per_pixel: Some(mean_entering_fetches(&g)),
-            hit_mismatches_vs_cpu: Some(mismatches_vs_cpu),
-            rms_vs_cpu: Some(rms_vs_cpu),
-        };
-    }
+    let cells = match gpu {
+        Some((kernel, adapter)) => gpu_cells(adapter, &f, repeats, || {
+            render_gpu(kernel, map, v, p).context(|| "relief".into())
+        })?,
+        None => GpuCells::default(),
+    };
     Ok(Measured {
         time_s: best,
         setup_s: None,

@@ -4,7 +4,7 @@
 //! exact reference and fetch accounting as the paper's search; with an adapter, each also on
 //! its WGSL twin (`gpu::ReliefPeersKernel`), compared with the CPU frame.
 
-use super::{compare_frames, mean_entering_fetches, push, row, GpuCells, Measured, Pass, Setting};
+use super::{gpu_cells, push, row, GpuCells, Measured, Pass, Setting};
 use super::{ReliefRow, Result, ResultExt};
 use crate::gpu::ReliefPeersKernel;
 use crate::relief::peers::{render_peer, render_peer_gpu, Peer, PeerData};
@@ -54,31 +54,13 @@ pub(super) fn run_peers(
         }
         let f = frame.expect("rendered once");
         let scores = super::score(&f, &reference.frame, &reference.populations, pass.map.width);
-        let mut cells = GpuCells::default();
-        if let Some((kernel, adapter)) = gpu {
-            let (mut kernel_s, mut wall_s, mut gpu_frame) = (None::<f64>, f64::INFINITY, None);
-            // At least twice: the first dispatch also pays the driver's compile.
-            for _ in 0..repeats.max(2) {
-                let (g, timing) = render_peer_gpu(kernel, pass.map, &pass.view, &peer)
-                    .context(|| format!("relief peer {method}"))?;
-                if let Some(k) = timing.kernel {
-                    let k = k.as_secs_f64();
-                    kernel_s = Some(kernel_s.map_or(k, |b| b.min(k)));
-                }
-                wall_s = wall_s.min(timing.wall.as_secs_f64());
-                gpu_frame = Some(g);
-            }
-            let g = gpu_frame.expect("rendered once");
-            let (mismatches, rms) = compare_frames(&g, &f);
-            cells = GpuCells {
-                adapter: Some(adapter.to_string()),
-                kernel_s,
-                wall_s: Some(wall_s),
-                fetches_per_pixel: Some(mean_entering_fetches(&g)),
-                hit_mismatches_vs_cpu: Some(mismatches),
-                rms_vs_cpu: Some(rms),
-            };
-        }
+        let cells = match gpu {
+            Some((kernel, adapter)) => gpu_cells(adapter, &f, repeats, || {
+                render_peer_gpu(kernel, pass.map, &pass.view, &peer)
+                    .context(|| format!("relief peer {method}"))
+            })?,
+            None => GpuCells::default(),
+        };
         eprintln!(
             "relief: {} {} {}° {method}: {:.1} fetches per surface pixel, {:.4} s, missed {:.2}%{}",
             pass.table,
