@@ -9,7 +9,8 @@
 pub enum Isa {
     /// One ray at a time (any CPU).
     Portable,
-    /// AVX2 intrinsics, eight f32 or four f64 lanes per instruction.
+    /// AVX2 intrinsics, eight f32 or four f64 lanes per instruction (a request: on a CPU
+    /// without AVX2 the loops run one lane at a time).
     #[cfg(target_arch = "x86_64")]
     Avx2,
 }

@@ -65,10 +65,13 @@ pub fn cull(
     );
     match isa {
         Isa::Portable => cull_scalar(meet, dirs, tmin, skip, idx),
-        // SAFETY: `Isa::Avx2` is only made by `detect` on a CPU with AVX2 (or by a caller that
-        // checked it, as the tests do).
+        // SAFETY: the CPU has AVX2 (checked here, a cached flag: `Isa::Avx2` is a request).
         #[cfg(target_arch = "x86_64")]
-        Isa::Avx2 => unsafe { avx2::cull(meet, dirs, tmin, skip, idx) },
+        Isa::Avx2 if Isa::detect() == Isa::Avx2 => unsafe {
+            avx2::cull(meet, dirs, tmin, skip, idx)
+        },
+        #[cfg(target_arch = "x86_64")]
+        Isa::Avx2 => cull_scalar(meet, dirs, tmin, skip, idx),
     }
 }
 
@@ -103,7 +106,9 @@ pub fn crossings(isa: Isa, from: &SphereOrigin, dirs: &[Vec3], out: &mut [Option
         Isa::Portable => crossings_scalar(from, dirs, out),
         // SAFETY: as in `cull`.
         #[cfg(target_arch = "x86_64")]
-        Isa::Avx2 => unsafe { avx2::crossings(from, dirs, out) },
+        Isa::Avx2 if Isa::detect() == Isa::Avx2 => unsafe { avx2::crossings(from, dirs, out) },
+        #[cfg(target_arch = "x86_64")]
+        Isa::Avx2 => crossings_scalar(from, dirs, out),
     }
 }
 

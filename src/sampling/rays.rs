@@ -194,9 +194,14 @@ impl PreparedRaySet {
         out.resize(base.len(), Vec3::ZERO);
         let done = match isa {
             Isa::Portable => 0,
-            // SAFETY: `Isa::Avx2` means the CPU has AVX2 (`Isa::detect`); the lengths agree.
+            // SAFETY: the CPU has AVX2 (checked here: `Isa::Avx2` is a request); the lengths
+            // agree.
             #[cfg(target_arch = "x86_64")]
-            Isa::Avx2 => unsafe { avx2_rotate_to_world(base, (s, c), frame, out) },
+            Isa::Avx2 if Isa::detect() == Isa::Avx2 => unsafe {
+                avx2_rotate_to_world(base, (s, c), frame, out)
+            },
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx2 => 0,
         };
         for (o, d) in out[done..].iter_mut().zip(&base[done..]) {
             *o = frame.to_world(Vec3::new(c * d.x - s * d.y, s * d.x + c * d.y, d.z));
