@@ -2,7 +2,7 @@
 //! exactly whatever the timing (the floors against the measured share of entering rays).
 
 use visfield::experiment::fields::FieldSupply;
-use visfield::experiment::performance::{run, PerfRow};
+use visfield::experiment::performance::{plan, run, PerfRow};
 
 #[test]
 fn the_quick_run_writes_every_sweep_with_exact_shares() {
@@ -67,4 +67,24 @@ fn the_quick_run_writes_every_sweep_with_exact_shares() {
         .iter()
         .filter(|r| r.backend == "raycast")
         .all(|r| r.vs_raycast == 1.0));
+}
+
+#[test]
+fn the_dry_run_names_every_caster_and_field_without_running() {
+    let full = plan(false);
+    for m in [
+        "bunny_npm",
+        "dragon",
+        "supershape",
+        "igea",
+        "4226x64² f32",
+        "0.25",
+    ] {
+        assert!(full.contains(m), "{m} missing from {full}");
+    }
+    assert!(
+        plan(true).contains("every 16th corner vertex"),
+        "{}",
+        plan(true)
+    );
 }

@@ -433,6 +433,10 @@ pub fn run(cli: Cli) -> Result<i32> {
         }
         Command::Performance { opts } => {
             let o = opts.options("performance", None)?;
+            if o.dry_run {
+                println!("{}", super::performance::plan(o.quick));
+                return Ok(0);
+            }
             super::performance::run(&o.out, o.quick, &o.supply)?;
         }
         Command::Check {

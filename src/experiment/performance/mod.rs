@@ -355,6 +355,43 @@ fn field_scene(
     Ok((fs, label, bytes, t.elapsed().as_secs_f64()))
 }
 
+/// What [`run`] would do, for `--dry-run`: the casters, fields, shares and passes.
+pub fn plan(quick: bool) -> String {
+    let p = Profile::new(quick);
+    let field = |(c, r, pr): &(usize, u32, Precision)| format!("{c}x{r}² {}", pr.name());
+    format!(
+        "performance ({}): 256 AO rays at every{} corner vertex, best of {} passes after an \
+         untimed one, on ray casting (ours{}), the field lookup and the two floors\n  \
+         triangles: {} with {}\n  field_size (stanford-bunny_39k): {}\n  \
+         entering shares: {}",
+        if quick { "quick" } else { "full" },
+        ordinal(p.stride),
+        p.passes,
+        if cfg!(feature = "embree") {
+            ", Embree"
+        } else {
+            ""
+        },
+        p.models.join(", "),
+        field(&p.standard),
+        p.sizes.iter().map(field).collect::<Vec<_>>().join(", "),
+        p.shares
+            .iter()
+            .map(|s| format!("{s}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    )
+}
+
+/// "" for every vertex, " 16th" for every 16th.
+fn ordinal(n: usize) -> String {
+    if n == 1 {
+        String::new()
+    } else {
+        format!(" {n}th")
+    }
+}
+
 /// Runs the three sweeps into `out` (see the module docs).
 pub fn run(out: &Path, quick: bool, supply: &FieldSupply) -> Result<Vec<PerfRow>> {
     super::run::ensure_writable(out)?;
