@@ -81,6 +81,16 @@ fn a_killed_run_leaves_previous_results_and_the_cache_whole() {
     );
     let good = fields_of(visible_files(&good_cache));
     assert_eq!(good.len(), 1, "one cached field: {:?}", good.keys());
+    // The finished run's converged reference passes the wholeness check the killed runs face,
+    // and a truncated copy does not.
+    let truths: Vec<Vec<u8>> = visible_files(&good_cache)
+        .into_iter()
+        .filter(|(p, _)| p.extension().is_some_and(|e| e == "vtruth"))
+        .map(|(_, b)| b)
+        .collect();
+    assert_eq!(truths.len(), 1, "one cached converged reference");
+    assert!(truth_file_is_whole(&truths[0]));
+    assert!(!truth_file_is_whole(&truths[0][..truths[0].len() - 1]));
 
     let mut killed_mid_way = 0;
     for fraction in [0.1, 0.25, 0.4, 0.55, 0.7] {
@@ -99,6 +109,15 @@ fn a_killed_run_leaves_previous_results_and_the_cache_whole() {
             "killed at {fraction} of a run: the previous results changed"
         );
         for (name, bytes) in visible_files(&cache) {
+            if name.extension().is_some_and(|e| e == "vtruth") {
+                // A cached converged reference: whole (its payload's checksum holds) or absent.
+                assert!(
+                    truth_file_is_whole(&bytes),
+                    "killed at {fraction}: {} is not a whole converged reference",
+                    name.display()
+                );
+                continue;
+            }
             if !is_field(&name) {
                 // The bake's sidecar (timings): whole JSON or absent.
                 assert!(
@@ -133,6 +152,28 @@ fn a_killed_run_leaves_previous_results_and_the_cache_whole() {
         .collect();
     assert!(left.is_empty(), "hidden leftovers in the results: {left:?}");
     assert_eq!(fields_of(visible_files(&cache)), good);
+}
+
+/// Whether `bytes` is a whole converged-reference file (`experiment::truth_cache`'s layout:
+/// magic, version, header length, JSON header, payload): the header parses and the payload has
+/// the header's length and sha256.
+fn truth_file_is_whole(bytes: &[u8]) -> bool {
+    let Some(rest) = bytes.strip_prefix(b"VTRUTHCA") else {
+        return false;
+    };
+    if rest.len() < 8 {
+        return false;
+    }
+    let hlen = u32::from_le_bytes(rest[4..8].try_into().unwrap()) as usize;
+    let Some(header) = rest.get(8..8 + hlen) else {
+        return false;
+    };
+    let Ok(h) = serde_json::from_slice::<serde_json::Value>(header) else {
+        return false;
+    };
+    let payload = &rest[8 + hlen..];
+    h["payload_len"].as_u64() == Some(payload.len() as u64)
+        && h["payload_sha256"].as_str() == Some(visfield::io::sha256_hex(payload).as_str())
 }
 
 fn is_field(p: &Path) -> bool {
