@@ -75,6 +75,65 @@ pub fn cull(
     }
 }
 
+/// Rays culled and crossed per window of [`for_each_crossing`].
+const WINDOW: usize = 64;
+
+/// The batched lookup's first steps over every ray from one origin, window by window: the rays
+/// not yet marked in `out` that pass `meet` ([`cull`]) and `pick(i, dirs[i])` (which gives the
+/// direction to cross, e.g. in a field's model space, or `None` to leave the ray), crossed
+/// with `from`'s sphere ([`crossings`]); `visit(out, i, dir, crossing)` is called, in increasing
+/// `i`, for each that meets it. A window's cull reads `out` before its rays are visited, so
+/// `visit` may mark rays (its own or earlier ones) as it goes.
+///
+/// # Panics
+/// If `dirs` and `out` differ in length.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+pub fn for_each_crossing(
+    isa: Isa,
+    meet: &MayMeetFrom,
+    from: &SphereOrigin,
+    dirs: &[Vec3],
+    tmin: f32,
+    out: &mut [bool],
+    mut pick: impl FnMut(usize, Vec3) -> Option<Vec3>,
+    mut visit: impl FnMut(&mut [bool], usize, Vec3, SphereCrossing),
+) {
+    assert_eq!(
+        dirs.len(),
+        out.len(),
+        "for_each_crossing: dirs and out differ in length"
+    );
+    let mut idx = [0u32; WINDOW];
+    let mut picked = [Vec3::ZERO; WINDOW];
+    let mut hits: [Option<SphereCrossing>; WINDOW] = [None; WINDOW];
+    for start in (0..dirs.len()).step_by(WINDOW) {
+        let end = (start + WINDOW).min(dirs.len());
+        let culled = cull(
+            isa,
+            meet,
+            &dirs[start..end],
+            tmin,
+            &out[start..end],
+            &mut idx,
+        );
+        let mut kept = 0;
+        for k in 0..culled {
+            let i = start + idx[k] as usize;
+            if let Some(d) = pick(i, dirs[i]) {
+                (idx[kept], picked[kept]) = (idx[k], d);
+                kept += 1;
+            }
+        }
+        crossings(isa, from, &picked[..kept], &mut hits[..kept]);
+        for k in 0..kept {
+            if let Some(c) = hits[k] {
+                visit(out, start + idx[k] as usize, picked[k], c);
+            }
+        }
+    }
+}
+
 /// [`cull`] one ray at a time.
 fn cull_scalar(
     meet: &MayMeetFrom,

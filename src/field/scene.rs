@@ -3,8 +3,7 @@
 
 use super::lanes::{self, Isa, MayMeetFrom};
 use super::lookup::{
-    ray_sphere, BlendReads, Crossed, LookupOptions, NearestRead, Reads, SphereCrossing,
-    SphereOrigin,
+    ray_sphere, BlendReads, Crossed, LookupOptions, NearestRead, Reads, SphereOrigin,
 };
 use super::normals::NormalField;
 use super::Selection;
@@ -212,8 +211,6 @@ impl FieldInstance {
         also: impl Fn(usize, Vec3) -> bool,
         out: &mut [bool],
     ) {
-        /// Rays culled and crossed per window.
-        const WINDOW: usize = 64;
         /// Crossings whose reads are staged together.
         const BLOCK: usize = 16;
         let isa = Isa::detect();
@@ -223,9 +220,6 @@ impl FieldInstance {
         let o = self.local_origin(origin);
         let from = SphereOrigin::new(o, field.bounds.center, field.bounds.radius);
         let lmin = tr.to_local_distance(tmin);
-        let mut idx = [0u32; WINDOW];
-        let mut local = [Vec3::ZERO; WINDOW];
-        let mut hits: [Option<SphereCrossing>; WINDOW] = [None; WINDOW];
         let mut index = [0usize; BLOCK];
         let mut lmaxs = [0.0f32; BLOCK];
         let mut crossed = [Crossed::default(); BLOCK];
@@ -239,34 +233,18 @@ impl FieldInstance {
                     out[index[k]] |= field.finish(&probe, lmin, lmaxs[k], opts).is_some();
                 }
             };
-        for start in (0..dirs.len()).step_by(WINDOW) {
-            let end = (start + WINDOW).min(dirs.len());
-            let culled = lanes::cull(
-                isa,
-                &meet,
-                &dirs[start..end],
-                tmin,
-                &out[start..end],
-                &mut idx,
-            );
-            let mut kept = 0;
-            for k in 0..culled {
-                let i = start + idx[k] as usize;
-                if also(i, dirs[i]) {
-                    idx[kept] = idx[k];
-                    local[kept] = self.local_dir(dirs[i]);
-                    kept += 1;
-                }
-            }
-            lanes::crossings(isa, &from, &local[..kept], &mut hits[..kept]);
-            for k in 0..kept {
-                let i = start + idx[k] as usize;
-                let Some(hit) = hits[k] else {
-                    continue;
-                };
+        lanes::for_each_crossing(
+            isa,
+            &meet,
+            &from,
+            dirs,
+            tmin,
+            out,
+            |i, dir| also(i, dir).then(|| self.local_dir(dir)),
+            |out, i, local, hit| {
                 let lmax = tr.to_local_distance(tmax(i));
-                let Some(c) = field.cross_at(hit, o, local[k], lmin, lmax) else {
-                    continue;
+                let Some(c) = field.cross_at(hit, o, local, lmin, lmax) else {
+                    return;
                 };
                 (index[n], lmaxs[n], crossed[n]) = (i, lmax, c);
                 n += 1;
@@ -274,8 +252,8 @@ impl FieldInstance {
                     resolve(n, &index, &lmaxs, &crossed, out);
                     n = 0;
                 }
-            }
-        }
+            },
+        );
         resolve(n, &index, &lmaxs, &crossed, out);
     }
 }

@@ -111,42 +111,28 @@ impl Visibility for SphereCull<'_> {
         })
     }
 
-    /// The lookup's own batched cull and crossing ([`lanes`]), window by window.
+    /// The lookup's own batched cull and crossing ([`lanes::for_each_crossing`]).
     fn occluded_many(&self, origin: Vec3, dirs: &[Vec3], tmin: f32, tmax: f32, out: &mut [bool]) {
         assert_eq!(
             dirs.len(),
             out.len(),
             "occluded_many: dirs and out differ in length"
         );
-        const WINDOW: usize = 64;
         out.fill(false);
         let isa = Isa::detect();
-        let mut idx = [0u32; WINDOW];
-        let mut picked = [Vec3::ZERO; WINDOW];
-        let mut hits = [None; WINDOW];
         for inst in &self.0.instances {
             let meet = inst.may_meet_from(origin);
             let from = SphereOrigin::new(origin, inst.world_center, inst.world_radius);
-            for start in (0..dirs.len()).step_by(WINDOW) {
-                let end = (start + WINDOW).min(dirs.len());
-                let n = lanes::cull(
-                    isa,
-                    &meet,
-                    &dirs[start..end],
-                    tmin,
-                    &out[start..end],
-                    &mut idx,
-                );
-                for k in 0..n {
-                    picked[k] = dirs[start + idx[k] as usize];
-                }
-                lanes::crossings(isa, &from, &picked[..n], &mut hits[..n]);
-                for k in 0..n {
-                    if let Some(c) = hits[k] {
-                        out[start + idx[k] as usize] = c.t1 >= tmin && c.t0 <= tmax;
-                    }
-                }
-            }
+            lanes::for_each_crossing(
+                isa,
+                &meet,
+                &from,
+                dirs,
+                tmin,
+                out,
+                |_, d| Some(d),
+                |out, i, _, c| out[i] = c.t1 >= tmin && c.t0 <= tmax,
+            );
         }
     }
 }
