@@ -1,5 +1,6 @@
-//! The batched lookup's first steps, eight rays at a time: the bounding-sphere cull of many rays
-//! from one origin ([`cull`]) and their exact sphere crossings ([`crossings`]).
+//! The batched lookup's steps, eight rays at a time: the bounding-sphere cull of many rays from
+//! one origin ([`cull`]), their exact sphere crossings ([`crossings`]), and for the rays that
+//! enter the sphere the map and texel they read ([`nearest_reads`]).
 //!
 //! Every field lookup starts by deciding whether its ray meets the caster's bounding sphere and
 //! where (2008 Algorithm 2); for AO rays three quarters of the rays stop there. Where the CPU
@@ -10,8 +11,9 @@
 //! answer is bit-identical to the per-ray [`MayMeetFrom::test`] and
 //! [`SphereOrigin::crossing`] (tests below and in `tests/field_batch.rs`).
 
-use super::lookup::{SphereCrossing, SphereOrigin};
-use glam::Vec3;
+use super::lookup::{Crossed, NearestRead, SphereCrossing, SphereOrigin};
+use super::VisibilityField;
+use glam::{Quat, Vec3};
 
 /// Rays per step.
 pub const LANES: usize = 8;
@@ -79,11 +81,12 @@ pub fn cull(
 const WINDOW: usize = 64;
 
 /// The batched lookup's first steps over every ray from one origin, window by window: the rays
-/// not yet marked in `out` that pass `meet` ([`cull`]) and `pick(i, dirs[i])` (which gives the
-/// direction to cross, e.g. in a field's model space, or `None` to leave the ray), crossed
-/// with `from`'s sphere ([`crossings`]); `visit(out, i, dir, crossing)` is called, in increasing
-/// `i`, for each that meets it. A window's cull reads `out` before its rays are visited, so
-/// `visit` may mark rays (its own or earlier ones) as it goes.
+/// not yet marked in `out` that pass `meet` ([`cull`]) and `keep(i, dirs[i])`, turned by
+/// `rotate` (into a field's model space: `(q * d).normalize()`, [`rotate_normalize`]) when
+/// given, crossed with `from`'s sphere ([`crossings`]); `visit(out, i, dir, crossing)` is
+/// called, in increasing `i`, for each that meets it, with the direction crossed. A window's
+/// cull reads `out` before its rays are visited, so `visit` may mark rays (its own or earlier
+/// ones) as it goes.
 ///
 /// # Panics
 /// If `dirs` and `out` differ in length.
@@ -96,7 +99,8 @@ pub fn for_each_crossing(
     dirs: &[Vec3],
     tmin: f32,
     out: &mut [bool],
-    mut pick: impl FnMut(usize, Vec3) -> Option<Vec3>,
+    rotate: Option<Quat>,
+    mut keep: impl FnMut(usize, Vec3) -> bool,
     mut visit: impl FnMut(&mut [bool], usize, Vec3, SphereCrossing),
 ) {
     assert_eq!(
@@ -120,10 +124,13 @@ pub fn for_each_crossing(
         let mut kept = 0;
         for k in 0..culled {
             let i = start + idx[k] as usize;
-            if let Some(d) = pick(i, dirs[i]) {
-                (idx[kept], picked[kept]) = (idx[k], d);
+            if keep(i, dirs[i]) {
+                (idx[kept], picked[kept]) = (idx[k], dirs[i]);
                 kept += 1;
             }
+        }
+        if let Some(q) = rotate {
+            rotate_normalize(isa, q, &mut picked[..kept]);
         }
         crossings(isa, from, &picked[..kept], &mut hits[..kept]);
         for k in 0..kept {
@@ -131,6 +138,28 @@ pub fn for_each_crossing(
                 visit(out, start + idx[k] as usize, picked[k], c);
             }
         }
+    }
+}
+
+/// `d ← (q * d).normalize()` for every `d` (a rotation into a field's model space, renormalised),
+/// bit for bit: with AVX2 eight directions per instruction in the order of glam's SSE2
+/// `Quat::mul_vec3a` and `Vec3::normalize`.
+#[inline]
+pub fn rotate_normalize(isa: Isa, q: Quat, dirs: &mut [Vec3]) {
+    match isa {
+        Isa::Portable => rotate_normalize_scalar(q, dirs),
+        // SAFETY: as in `cull`.
+        #[cfg(target_arch = "x86_64")]
+        Isa::Avx2 if Isa::detect() == Isa::Avx2 => unsafe { avx2::rotate_normalize(q, dirs) },
+        #[cfg(target_arch = "x86_64")]
+        Isa::Avx2 => rotate_normalize_scalar(q, dirs),
+    }
+}
+
+/// [`rotate_normalize`] one direction at a time.
+fn rotate_normalize_scalar(q: Quat, dirs: &mut [Vec3]) {
+    for d in dirs {
+        *d = (q * *d).normalize();
     }
 }
 
@@ -178,110 +207,39 @@ fn crossings_scalar(from: &SphereOrigin, dirs: &[Vec3], out: &mut [Option<Sphere
     }
 }
 
+/// `out[k] = NearestRead::of(field, at[k].u, at[k].dir)` for every `k`, with each read's
+/// storage prefetched ([`crate::field::lookup::Reads::of_block`]): the owner-table cell of
+/// every crossing, then its map, then the map's frame turning the direction into the map's
+/// frame and the texel-table cell, then the texel, in stages of sixteen crossings. With AVX2
+/// the cells and the rotation run eight crossings per instruction (the same IEEE operations in
+/// the same order as [`crate::sampling::SpherePoints::nearest`],
+/// [`crate::sampling::Frame::to_local`] and [`crate::sampling::TexelTable::texel`]); the table
+/// reads and their fallbacks (the candidate search, the exact texel) run one crossing at a
+/// time in both.
+///
+/// # Panics
+/// If `at` and `out` differ in length.
+#[inline]
+pub fn nearest_reads(isa: Isa, field: &VisibilityField, at: &[Crossed], out: &mut [NearestRead]) {
+    assert_eq!(
+        at.len(),
+        out.len(),
+        "nearest_reads: at and out differ in length"
+    );
+    match isa {
+        Isa::Portable => NearestRead::staged(field, at, out),
+        // SAFETY: as in `cull`.
+        #[cfg(target_arch = "x86_64")]
+        Isa::Avx2 if Isa::detect() == Isa::Avx2 => unsafe { avx2::nearest_reads(field, at, out) },
+        #[cfg(target_arch = "x86_64")]
+        Isa::Avx2 => NearestRead::staged(field, at, out),
+    }
+}
+
 #[cfg(target_arch = "x86_64")]
 #[path = "lanes_avx2.rs"]
 mod avx2;
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::sampling::rays::seeded_sphere_direction;
-
-    fn isas() -> Vec<Isa> {
-        Isa::all_available()
-    }
-
-    /// Directions from the origin that graze, enter and miss a sphere, with lengths off unit
-    /// by f32 rounding and far from it (both normalisation branches), and a non-direction.
-    fn directions(origin: Vec3, center: Vec3, radius: f32) -> Vec<Vec3> {
-        let to = (center - origin).normalize();
-        let mut v: Vec<Vec3> = (0..997).map(|i| seeded_sphere_direction(i, 5)).collect();
-        for i in 0..400 {
-            // Around the sphere's outline as seen from the origin.
-            let side = seeded_sphere_direction(i, 9).cross(to).normalize();
-            let tangent = radius / (center - origin).length();
-            let k = tangent * (1.0 + (i as f32 - 200.0) * 1e-6);
-            v.push((to + k * side).normalize());
-        }
-        v.extend([to, -to, to * 1.5, to * 1e-3, Vec3::ZERO, Vec3::NAN]);
-        v
-    }
-
-    #[test]
-    fn the_culls_are_the_per_ray_test() {
-        for (origin, center, radius) in [
-            (Vec3::new(0.3, -0.2, 0.1), Vec3::new(0.0, 0.0, 2.0), 0.7),
-            (
-                Vec3::new(1e3, 2e3, -5e2),
-                Vec3::new(1e3 + 3.0, 2e3, -5e2),
-                1.0,
-            ),
-            (Vec3::new(0.1, 0.1, 0.1), Vec3::ZERO, 1.0), // inside
-        ] {
-            let dirs = directions(origin, center, radius);
-            let meet = MayMeetFrom {
-                f: center - origin,
-                reach: radius * (1.0 + 1e-5),
-            };
-            let skip: Vec<bool> = (0..dirs.len()).map(|i| i % 7 == 3).collect();
-            for tmin in [0.0, 1.0, 1e9] {
-                let want: Vec<u32> = (0..dirs.len() as u32)
-                    .filter(|&i| !skip[i as usize] && meet.test(dirs[i as usize], tmin))
-                    .collect();
-                assert!(!want.is_empty() || tmin > 1.0);
-                assert!(want.len() < dirs.len() - dirs.len() / 7);
-                for isa in isas() {
-                    for n in [0, 1, 7, 8, 9, 64, dirs.len()] {
-                        let mut got = vec![u32::MAX; n];
-                        let kept = cull(isa, &meet, &dirs[..n], tmin, &skip[..n], &mut got);
-                        got.truncate(kept);
-                        let w: Vec<u32> =
-                            want.iter().copied().filter(|&i| (i as usize) < n).collect();
-                        assert_eq!(got, w, "{isa:?}, {n} rays, tmin {tmin}");
-                    }
-                }
-            }
-        }
-    }
-
-    #[test]
-    fn the_crossings_are_the_per_ray_crossing_bit_for_bit() {
-        for (origin, center, radius) in [
-            (Vec3::new(0.3, -0.2, 0.1), Vec3::new(0.0, 0.0, 2.0), 0.7),
-            (Vec3::new(1e6, -3e5, 2e6), Vec3::new(1.0, 2.0, 3.0), 0.5),
-            (Vec3::new(0.1, 0.1, 0.1), Vec3::ZERO, 1.0),
-        ] {
-            let from = SphereOrigin::new(origin, center, radius);
-            let dirs = directions(origin, center, radius);
-            let want: Vec<_> = dirs.iter().map(|&d| from.crossing(d)).collect();
-            let hits = want.iter().filter(|c| c.is_some()).count();
-            assert!(hits > 150 && hits < dirs.len(), "{hits} of {}", dirs.len());
-            for isa in isas() {
-                for n in [0, 3, 8, 13, dirs.len()] {
-                    let mut got = vec![None; n];
-                    crossings(isa, &from, &dirs[..n], &mut got);
-                    // Bit for bit, NaN-free fields compared by their bits.
-                    let bits = |c: &Option<SphereCrossing>| {
-                        c.map(|c| {
-                            [
-                                c.t0.to_bits() as u64,
-                                c.t1.to_bits() as u64,
-                                c.entry.x.to_bits(),
-                                c.entry.y.to_bits(),
-                                c.entry.z.to_bits(),
-                            ]
-                        })
-                    };
-                    for k in 0..n {
-                        assert_eq!(
-                            bits(&got[k]),
-                            bits(&want[k]),
-                            "{isa:?}, ray {k}: {:?}",
-                            dirs[k]
-                        );
-                    }
-                }
-            }
-        }
-    }
-}
+#[path = "lanes_tests.rs"]
+mod tests;

@@ -1,14 +1,18 @@
-//! [`super::cull`] and [`super::crossings`] with AVX2 intrinsics, eight rays per step: the
-//! directions are loaded and transposed to structure-of-arrays form in registers, the cull runs
-//! as 8 × f32 and the crossing as 2 × 4 × f64. Every lane performs the scalar code's IEEE
+//! [`super::cull`], [`super::crossings`] and [`super::nearest_reads`] with AVX2 intrinsics,
+//! eight rays per step: the directions are loaded and transposed to structure-of-arrays form in
+//! registers, the cull runs as 8 × f32, the crossing as 2 × 4 × f64, the table cells and the
+//! rotation into a map's frame as 8 × f32. Every lane performs the scalar code's IEEE
 //! operations in its order (multiplications and additions kept apart, no fused multiply-add),
 //! so the answers are the scalar ones bit for bit. Callers guarantee the CPU has AVX2.
 
-use super::super::lookup::{SphereCrossing, SphereOrigin};
+use super::super::lookup::{Crossed, NearestRead, SphereCrossing, SphereOrigin, STAGE};
+use super::super::VisibilityField;
 use super::{MayMeetFrom, LANES};
-use crate::simd::x86::load3x8 as load_transposed;
-use glam::{DVec3, Vec3};
+use crate::sampling::{Frame, OwnerCell, TexelCell};
+use crate::simd::x86::{load3x8 as load_transposed, store3x8};
+use glam::{DVec3, Quat, Vec3};
 use std::arch::x86_64::*;
+use std::mem::{offset_of, size_of};
 
 /// [`super::cull`].
 ///
@@ -175,4 +179,278 @@ fn crossing4(
             entry: DVec3::new(ex[k], ey[k], ez[k]),
         })
     })
+}
+
+/// [`super::rotate_normalize`]: glam's SSE2 `Quat::mul_vec3a` (r (w² − b·b) + b (2 r·b) +
+/// (b × r)(2w), b the vector part) and `Vec3::normalize` (v · (1 / |v|)) per lane, in their
+/// order of operations.
+///
+/// # Safety
+/// The CPU must have AVX2.
+#[target_feature(enable = "avx2")]
+pub(super) unsafe fn rotate_normalize(q: Quat, dirs: &mut [Vec3]) {
+    let (mul, add, sub) = (_mm256_mul_ps, _mm256_add_ps, _mm256_sub_ps);
+    let (bx, by, bz, w) = (q.x, q.y, q.z, q.w);
+    // The terms glam computes once per rotation, in its order.
+    let b2 = bx * bx + by * by + bz * bz;
+    let k1 = _mm256_set1_ps(w * w - b2);
+    let w2 = _mm256_set1_ps(w * 2.0);
+    let (bx, by, bz) = (_mm256_set1_ps(bx), _mm256_set1_ps(by), _mm256_set1_ps(bz));
+    let two = _mm256_set1_ps(2.0);
+    let whole = dirs.len() / LANES * LANES;
+    for base in (0..whole).step_by(LANES) {
+        let p: *mut f32 = dirs.as_mut_ptr().add(base).cast();
+        let (rx, ry, rz) = load_transposed(p);
+        let k2 = mul(add(add(mul(rx, bx), mul(ry, by)), mul(rz, bz)), two);
+        // b × r as glam groups it: (b.zxy · r − r.zxy · b).zxy.
+        let cx = sub(mul(by, rz), mul(ry, bz));
+        let cy = sub(mul(bz, rx), mul(rz, bx));
+        let cz = sub(mul(bx, ry), mul(rx, by));
+        let turn = |r: __m256, b: __m256, c: __m256| add(add(mul(r, k1), mul(b, k2)), mul(c, w2));
+        let (x, y, z) = (turn(rx, bx, cx), turn(ry, by, cy), turn(rz, bz, cz));
+        let len = _mm256_sqrt_ps(add(add(mul(x, x), mul(y, y)), mul(z, z)));
+        let recip = _mm256_div_ps(_mm256_set1_ps(1.0), len);
+        store3x8(p, mul(x, recip), mul(y, recip), mul(z, recip));
+    }
+    for d in &mut dirs[whole..] {
+        *d = (q * *d).normalize();
+    }
+}
+
+/// [`super::nearest_reads`]: each stage of [`NearestRead::staged`] over a block of [`STAGE`]
+/// crossings, its arithmetic eight crossings per instruction.
+///
+/// # Safety
+/// The CPU must have AVX2; `out` as long as `at`.
+#[target_feature(enable = "avx2")]
+pub(super) unsafe fn nearest_reads(
+    field: &VisibilityField,
+    at: &[Crossed],
+    out: &mut [NearestRead],
+) {
+    const { assert!(STAGE.is_multiple_of(LANES)) };
+    let points = &field.points;
+    let (og, ohalf) = points.owner_cell_scale();
+    let (tg, thalf) = field.texels.cell_scale();
+    for (at, out) in at.chunks(STAGE).zip(out.chunks_mut(STAGE)) {
+        let n = at.len();
+        // Table cells, u32::MAX where a lane has none.
+        let mut cell = [0u32; STAGE];
+        let some = |c: u32| (c != u32::MAX).then_some(c as usize);
+        // Owner-table cells, requested before any is read.
+        for g in 0..n.div_ceil(LANES) {
+            let live = live_lanes(n - g * LANES);
+            let (x, y, z) = gather_vec3(at, g * LANES, offset_of!(Crossed, u), live);
+            let c = owner_cells(x, y, z, og, ohalf);
+            _mm256_storeu_si256(cell.as_mut_ptr().add(g * LANES).cast(), c);
+        }
+        let mut owner = [OwnerCell::default(); STAGE];
+        for (o, &c) in owner[..n].iter_mut().zip(&cell) {
+            *o = OwnerCell::new(some(c));
+            points.prefetch_owner_cell(*o);
+        }
+        // The maps, their frames requested.
+        for ((r, c), &o) in out.iter_mut().zip(at).zip(&owner) {
+            let m = points.nearest_at(o, c.u);
+            r.map = m as u32;
+            crate::hint::prefetch_value(field.frames.as_ptr().wrapping_add(m));
+        }
+        // Directions in the maps' frames and their texel-table cells.
+        let mut local = [Vec3::ZERO; STAGE];
+        for g in 0..n.div_ceil(LANES) {
+            let live = live_lanes(n - g * LANES);
+            let (x, y, z) = gather_vec3(at, g * LANES, offset_of!(Crossed, dir), live);
+            let (lx, ly, lz) = to_local(&field.frames, &out[g * LANES..n], x, y, z);
+            store3x8(local.as_mut_ptr().add(g * LANES).cast(), lx, ly, lz);
+            let c = texel_cells(lx, ly, lz, tg, thalf);
+            _mm256_storeu_si256(cell.as_mut_ptr().add(g * LANES).cast(), c);
+        }
+        let mut texel = [TexelCell::default(); STAGE];
+        for (t, &c) in texel[..n].iter_mut().zip(&cell) {
+            *t = TexelCell::new(some(c));
+            field.texels.prefetch_cell(*t);
+        }
+        // The texels, their storage requested.
+        for ((r, &t), &d) in out.iter_mut().zip(&texel).zip(&local) {
+            r.texel = field.texels.texel_at(t, d);
+            field.storage.prefetch(r.map as usize, r.texel as usize);
+        }
+    }
+}
+
+/// The lane mask of the first `min(live, 8)` lanes.
+#[inline]
+#[target_feature(enable = "avx2")]
+fn live_lanes(live: usize) -> __m256i {
+    let k = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+    _mm256_cmpgt_epi32(_mm256_set1_epi32(live.min(LANES) as i32), k)
+}
+
+/// The `Vec3` at byte offset `field` of crossings `at[first..first + 8]` transposed into x, y
+/// and z registers; lanes outside `live` (past the end of `at`) read nothing and hold 0.
+///
+/// # Safety
+/// `live` must mark only lanes with `first + lane < at.len()`.
+#[inline]
+#[target_feature(enable = "avx2")]
+unsafe fn gather_vec3(
+    at: &[Crossed],
+    first: usize,
+    field: usize,
+    live: __m256i,
+) -> (__m256, __m256, __m256) {
+    const STRIDE: i32 = (size_of::<Crossed>() / 4) as i32;
+    const { assert!(size_of::<Crossed>().is_multiple_of(4)) };
+    let base: *const f32 = at
+        .as_ptr()
+        .wrapping_add(first)
+        .cast::<f32>()
+        .wrapping_add(field / 4);
+    let idx = _mm256_mullo_epi32(
+        _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7),
+        _mm256_set1_epi32(STRIDE),
+    );
+    let mask = _mm256_castsi256_ps(live);
+    let zero = _mm256_setzero_ps();
+    // SAFETY: every live lane reads a component of a `Vec3` field of a crossing in `at`.
+    unsafe {
+        (
+            _mm256_mask_i32gather_ps::<4>(zero, base, idx, mask),
+            _mm256_mask_i32gather_ps::<4>(zero, base.wrapping_add(1), idx, mask),
+            _mm256_mask_i32gather_ps::<4>(zero, base.wrapping_add(2), idx, mask),
+        )
+    }
+}
+
+/// [`Frame::to_local`] of eight directions, lane k in the frame of map `reads[k].map` (lanes
+/// past `reads.len()` in map 0's frame).
+///
+/// # Safety
+/// Every `reads[k].map` (k < 8) must index `frames`, and `frames` must not be empty.
+#[inline]
+#[target_feature(enable = "avx2")]
+unsafe fn to_local(
+    frames: &[Frame],
+    reads: &[NearestRead],
+    x: __m256,
+    y: __m256,
+    z: __m256,
+) -> (__m256, __m256, __m256) {
+    const STRIDE: i32 = (size_of::<Frame>() / 4) as i32;
+    const { assert!(size_of::<Frame>() == 36) };
+    let mut maps = [0i32; LANES];
+    for (m, r) in maps.iter_mut().zip(reads) {
+        *m = r.map as i32;
+    }
+    let idx = _mm256_mullo_epi32(
+        _mm256_loadu_si256(maps.as_ptr().cast()),
+        _mm256_set1_epi32(STRIDE),
+    );
+    let base: *const f32 = frames.as_ptr().cast();
+    // SAFETY: each index is map · 9 (+ 0..8) inside `frames` (`Frame` is `repr(C)`, nine f32).
+    let axis = |k: usize| unsafe {
+        let at = |c: usize| _mm256_i32gather_ps::<4>(base.wrapping_add(3 * k + c), idx);
+        (at(0), at(1), at(2))
+    };
+    // Vec3::dot: (x · a.x + y · a.y) + z · a.z, per axis a of the frame.
+    let dot = |(ax, ay, az): (__m256, __m256, __m256)| {
+        _mm256_add_ps(
+            _mm256_add_ps(_mm256_mul_ps(x, ax), _mm256_mul_ps(y, ay)),
+            _mm256_mul_ps(z, az),
+        )
+    };
+    (dot(axis(0)), dot(axis(1)), dot(axis(2)))
+}
+
+/// The owner-table cell of eight directions (`OwnerGrid::cell`, g cells per face edge),
+/// u32::MAX in the lanes that have none.
+#[inline]
+#[target_feature(enable = "avx2")]
+fn owner_cells(x: __m256, y: __m256, z: __m256, g: u32, half_g: f32) -> __m256i {
+    let sign = _mm256_set1_ps(-0.0);
+    let abs = |v: __m256| _mm256_andnot_ps(sign, v);
+    let (ax, ay, az) = (abs(x), abs(y), abs(z));
+    let x_wins = _mm256_and_ps(
+        _mm256_cmp_ps::<_CMP_GE_OQ>(ax, ay),
+        _mm256_cmp_ps::<_CMP_GE_OQ>(ax, az),
+    );
+    let y_wins = _mm256_andnot_ps(x_wins, _mm256_cmp_ps::<_CMP_GE_OQ>(ay, az));
+    let pick = |on_x: __m256, on_y: __m256, on_z: __m256| {
+        _mm256_blendv_ps(_mm256_blendv_ps(on_z, on_y, y_wins), on_x, x_wins)
+    };
+    let (da, pb, pc) = (pick(x, y, z), pick(y, z, x), pick(z, x, y));
+    let m = abs(da);
+    let half = _mm256_set1_ps(half_g);
+    let k = _mm256_div_ps(half, m);
+    let fi = _mm256_add_ps(_mm256_mul_ps(pb, k), half);
+    let fj = _mm256_add_ps(_mm256_mul_ps(pc, k), half);
+    let (zero, gf) = (_mm256_setzero_ps(), _mm256_set1_ps(g as f32));
+    let inside = |v: __m256| {
+        _mm256_and_ps(
+            _mm256_cmp_ps::<_CMP_GE_OQ>(v, zero),
+            _mm256_cmp_ps::<_CMP_LE_OQ>(v, gf),
+        )
+    };
+    let ok = _mm256_and_ps(
+        _mm256_and_ps(
+            _mm256_cmp_ps::<_CMP_GT_OQ>(m, _mm256_set1_ps(1e-30)),
+            _mm256_cmp_ps::<_CMP_LT_OQ>(m, _mm256_set1_ps(f32::INFINITY)),
+        ),
+        _mm256_and_ps(inside(fi), inside(fj)),
+    );
+    let last = _mm256_set1_epi32(g as i32 - 1);
+    let i = _mm256_min_epu32(_mm256_cvttps_epi32(fi), last);
+    let j = _mm256_min_epu32(_mm256_cvttps_epi32(fj), last);
+    // Face 2a + (da < 0): a = 0, 1, 2 for x, y, z winning; a compare mask is −1.
+    let a = _mm256_castps_si256(pick(
+        _mm256_castsi256_ps(_mm256_set1_epi32(0)),
+        _mm256_castsi256_ps(_mm256_set1_epi32(1)),
+        _mm256_castsi256_ps(_mm256_set1_epi32(2)),
+    ));
+    let negative = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LT_OQ>(da, zero));
+    let face = _mm256_sub_epi32(_mm256_add_epi32(a, a), negative);
+    let gv = _mm256_set1_epi32(g as i32);
+    let cell = _mm256_add_epi32(
+        _mm256_mullo_epi32(_mm256_add_epi32(_mm256_mullo_epi32(face, gv), j), gv),
+        i,
+    );
+    _mm256_or_si256(
+        cell,
+        _mm256_castps_si256(_mm256_andnot_ps(
+            ok,
+            _mm256_castsi256_ps(_mm256_set1_epi32(-1)),
+        )),
+    )
+}
+
+/// The texel-table cell of eight local directions (`TexelTable::cell`, g cells per side),
+/// u32::MAX in the lanes that have none.
+#[inline]
+#[target_feature(enable = "avx2")]
+fn texel_cells(x: __m256, y: __m256, z: __m256, g: u32, half_g: f32) -> __m256i {
+    let (one, half) = (_mm256_set1_ps(1.0), _mm256_set1_ps(half_g));
+    let fx = _mm256_mul_ps(_mm256_add_ps(x, one), half);
+    let fy = _mm256_mul_ps(_mm256_add_ps(y, one), half);
+    let (zero, gf) = (_mm256_setzero_ps(), _mm256_set1_ps(g as f32));
+    let inside = |v: __m256| {
+        _mm256_and_ps(
+            _mm256_cmp_ps::<_CMP_GE_OQ>(v, zero),
+            _mm256_cmp_ps::<_CMP_LT_OQ>(v, gf),
+        )
+    };
+    let ok = _mm256_and_ps(
+        _mm256_cmp_ps::<_CMP_GE_OQ>(z, zero),
+        _mm256_and_ps(inside(fx), inside(fy)),
+    );
+    let cell = _mm256_add_epi32(
+        _mm256_mullo_epi32(_mm256_cvttps_epi32(fy), _mm256_set1_epi32(g as i32)),
+        _mm256_cvttps_epi32(fx),
+    );
+    _mm256_or_si256(
+        cell,
+        _mm256_castps_si256(_mm256_andnot_ps(
+            ok,
+            _mm256_castsi256_ps(_mm256_set1_epi32(-1)),
+        )),
+    )
 }

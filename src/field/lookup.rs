@@ -237,11 +237,21 @@ impl Reads for NearestRead {
 
     /// The lookups' memory reads in stages: the owner-table cells of every crossing are
     /// found and requested before any is read, then the frames of the maps found, then the
-    /// texel-table cells, then the stored texels, [`STAGE`] crossings at a time. Each stage's cache misses
-    /// overlap instead of queueing behind each other (a lookup's owner cell, frame and
-    /// texel-table cell are dependent reads); the answers are those of [`Reads::of`].
+    /// texel-table cells, then the stored texels, [`STAGE`] crossings at a time. Each stage's
+    /// cache misses overlap instead of queueing behind each other (a lookup's owner cell,
+    /// frame and texel-table cell are dependent reads); the answers are those of
+    /// [`Reads::of`]. Where the CPU has AVX2 the cells and the model-to-map rotation are
+    /// computed eight crossings per instruction ([`super::lanes::nearest_reads`]).
     #[inline]
     fn of_block(field: &VisibilityField, at: &[Crossed], out: &mut [Self]) {
+        super::lanes::nearest_reads(super::lanes::Isa::detect(), field, at, out);
+    }
+}
+
+impl NearestRead {
+    /// [`Reads::of_block`] one crossing at a time, in the same stages.
+    #[inline]
+    pub(super) fn staged(field: &VisibilityField, at: &[Crossed], out: &mut [Self]) {
         assert_eq!(at.len(), out.len(), "of_block: at and out differ in length");
         for (at, out) in at.chunks(STAGE).zip(out.chunks_mut(STAGE)) {
             let mut owner = [OwnerCell::default(); STAGE];
@@ -266,7 +276,7 @@ impl Reads for NearestRead {
 }
 
 /// Crossings per stage of [`NearestRead`]'s [`Reads::of_block`].
-const STAGE: usize = 16;
+pub(super) const STAGE: usize = 16;
 
 /// [`Selection::Interpolated`]: up to three maps × four texels, weight = map weight × bilinear
 /// weight, blended as an occupancy ([`VisibilityField::sample_interpolated`]).

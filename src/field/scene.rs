@@ -157,7 +157,8 @@ impl FieldInstance {
         self.inv_rotation * ((origin - tr.translation) / tr.scale)
     }
 
-    /// `transform.to_local_dir(dir)` (bit-identical), renormalised.
+    /// `transform.to_local_dir(dir)` (bit-identical), renormalised (as
+    /// [`lanes::rotate_normalize`] turns the batched lookups' directions).
     #[inline]
     fn local_dir(&self, dir: Vec3) -> Vec3 {
         (self.inv_rotation * dir).normalize()
@@ -240,7 +241,8 @@ impl FieldInstance {
             dirs,
             tmin,
             out,
-            |i, dir| also(i, dir).then(|| self.local_dir(dir)),
+            Some(self.inv_rotation),
+            also,
             |out, i, local, hit| {
                 let lmax = tr.to_local_distance(tmax(i));
                 let Some(c) = field.cross_at(hit, o, local, lmin, lmax) else {

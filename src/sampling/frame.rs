@@ -3,7 +3,9 @@
 use glam::Vec3;
 
 /// An orthonormal frame; `z` is the normal. Local directions have `z >= 0` in the hemisphere.
+/// Laid out as nine f32 (x, y, z in turn), which the eight-lane lookup gathers from.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
 pub struct Frame {
     pub x: Vec3,
     pub y: Vec3,

@@ -153,6 +153,19 @@ impl OwnerGrid {
         cell
     }
 
+    /// The terms of [`Self::cell`]: cells per face edge g and g/2 (for the eight-lane cell
+    /// computation of `field::lanes`, which must reproduce [`Self::cell`] bit for bit).
+    #[inline(always)]
+    pub fn cell_scale(&self) -> (u32, f32) {
+        (self.g, self.half_g)
+    }
+
+    /// Hints the CPU to fetch table cell `cell` (any value; no effect on results).
+    #[inline(always)]
+    pub fn prefetch_cell(&self, cell: usize) {
+        crate::hint::prefetch_value(self.owner.as_ptr().wrapping_add(cell));
+    }
+
     /// Bytes held by the table.
     pub fn bytes(&self) -> usize {
         self.owner.len() * std::mem::size_of::<u16>()

@@ -60,6 +60,16 @@ enum Index {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct OwnerCell(Option<usize>);
 
+impl OwnerCell {
+    /// The cell `cell` of the owner table (`None`: no cell, the query goes to the search), as
+    /// computed outside [`SpherePoints::prefetch_nearest`] (eight at a time by
+    /// `field::lanes`); [`SpherePoints::nearest_at`] requires it to be that function's cell.
+    #[inline(always)]
+    pub(crate) fn new(cell: Option<usize>) -> OwnerCell {
+        OwnerCell(cell)
+    }
+}
+
 /// A point set on the unit sphere with exact nearest-point and interpolation queries.
 ///
 /// The 2008 paper (Gaitatzes, Chrysanthou, Papaioannou, WSCG 2008, "Selecting Samples around the
@@ -238,7 +248,22 @@ impl SpherePoints {
     pub fn nearest_at(&self, cell: OwnerCell, d: Vec3) -> usize {
         match self.owners.owner_at(cell.0, &self.points, d) {
             Some(p) => p,
-            None => self.grid.nearest(&self.points, d),
+            None => self.nearest_searched(d),
+        }
+    }
+
+    /// The owner table's cells per cube-face edge g and g/2, the terms of its cell computation
+    /// (for `field::lanes`, which computes the cells of eight directions at a time).
+    #[inline(always)]
+    pub(crate) fn owner_cell_scale(&self) -> (u32, f32) {
+        self.owners.cell_scale()
+    }
+
+    /// Hints the CPU to fetch owner-table cell `cell` (no effect on results).
+    #[inline(always)]
+    pub(crate) fn prefetch_owner_cell(&self, cell: OwnerCell) {
+        if let Some(c) = cell.0 {
+            self.owners.prefetch_cell(c);
         }
     }
 
@@ -251,6 +276,7 @@ impl SpherePoints {
 
     /// [`Self::nearest`] without the owner table: always the cube grid's candidate search (the
     /// reference the table is tested against).
+    #[inline(never)]
     pub fn nearest_searched(&self, d: Vec3) -> usize {
         self.grid.nearest(&self.points, d)
     }

@@ -130,7 +130,8 @@ impl Visibility for SphereCull<'_> {
                 dirs,
                 tmin,
                 out,
-                |_, d| Some(d),
+                None,
+                |_, _| true,
                 |out, i, _, c| out[i] = c.t1 >= tmin && c.t0 <= tmax,
             );
         }
