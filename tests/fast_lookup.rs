@@ -207,8 +207,7 @@ fn texel_table_gives_the_searched_texel() {
             100.0 * share,
             table.bytes()
         );
-        // Measured 82–85% (res 7 to 32) and 70% (res 64, G capped at 512); only concentric maps
-        // up to res 255 have a table.
+        // Measured 64–71% (res 7 to 64); only concentric maps up to res 255 have a table.
         let has_table = kind == LayoutKind::Concentric && res <= 255;
         assert_eq!(table.bytes() > 0, has_table, "{kind:?} {res}");
         if has_table && (7..=64).contains(&res) {

@@ -8,7 +8,8 @@
 use super::super::lookup::{Crossed, NearestRead, SphereCrossing, SphereOrigin, STAGE};
 use super::super::VisibilityField;
 use super::{MayMeetFrom, LANES};
-use crate::sampling::{Frame, OwnerCell, TexelCell};
+use crate::sampling::{certificate_margin, ATAN_F32_COEFFS, FOUR_OVER_PI};
+use crate::sampling::{Frame, LayoutKind, OwnerCell};
 use crate::simd::x86::{load3x8 as load_transposed, store3x8};
 use glam::{DVec3, Quat, Vec3};
 use std::arch::x86_64::*;
@@ -231,7 +232,10 @@ pub(super) unsafe fn nearest_reads(
     const { assert!(STAGE.is_multiple_of(LANES)) };
     let points = &field.points;
     let (og, ohalf) = points.owner_cell_scale();
-    let (tg, thalf) = field.texels.cell_scale();
+    let (concentric, res) = (
+        field.layout.kind == LayoutKind::Concentric,
+        field.layout.res,
+    );
     for (at, out) in at.chunks(STAGE).zip(out.chunks_mut(STAGE)) {
         let n = at.len();
         // Table cells, u32::MAX where a lane has none.
@@ -255,24 +259,28 @@ pub(super) unsafe fn nearest_reads(
             r.map = m as u32;
             crate::hint::prefetch_value(field.frames.as_ptr().wrapping_add(m));
         }
-        // Directions in the maps' frames and their texel-table cells.
+        // Directions in the maps' frames and, for the concentric layout, their texels through
+        // its fast path (`HemisphereLayout::to_cell`'s first, libm-free path).
         let mut local = [Vec3::ZERO; STAGE];
+        let mut fast = [u32::MAX; STAGE];
         for g in 0..n.div_ceil(LANES) {
             let live = live_lanes(n - g * LANES);
             let (x, y, z) = gather_vec3(at, g * LANES, offset_of!(Crossed, dir), live);
             let (lx, ly, lz) = to_local(&field.frames, &out[g * LANES..n], x, y, z);
             store3x8(local.as_mut_ptr().add(g * LANES).cast(), lx, ly, lz);
-            let c = texel_cells(lx, ly, lz, tg, thalf);
-            _mm256_storeu_si256(cell.as_mut_ptr().add(g * LANES).cast(), c);
+            if concentric {
+                let t = concentric_texels(lx, ly, lz, res);
+                _mm256_storeu_si256(fast.as_mut_ptr().add(g * LANES).cast(), t);
+            }
         }
-        let mut texel = [TexelCell::default(); STAGE];
-        for (t, &c) in texel[..n].iter_mut().zip(&cell) {
-            *t = TexelCell::new(some(c));
-            field.texels.prefetch_cell(*t);
-        }
-        // The texels, their storage requested.
-        for ((r, &t), &d) in out.iter_mut().zip(&texel).zip(&local) {
-            r.texel = field.texels.texel_at(t, d);
+        // The texels (the texel table or the exact path where the fast one defers), their
+        // storage requested.
+        for ((r, &d), &f) in out.iter_mut().zip(&local).zip(&fast) {
+            r.texel = if f != u32::MAX {
+                f
+            } else {
+                field.texels.texel(d)
+            };
             field.storage.prefetch(r.map as usize, r.texel as usize);
         }
     }
@@ -423,31 +431,72 @@ fn owner_cells(x: __m256, y: __m256, z: __m256, g: u32, half_g: f32) -> __m256i 
     )
 }
 
-/// The texel-table cell of eight local directions (`TexelTable::cell`, g cells per side),
-/// u32::MAX in the lanes that have none.
+/// The texel of eight local directions through the concentric layout's fast path
+/// (`layout_fast::concentric_square`, then `certified_cell` at `res`, row · res + column), in
+/// its order of operations; u32::MAX in the lanes where that path gives none (below the
+/// horizon, on the axis, or too near a texel edge), which take the exact path.
 #[inline]
 #[target_feature(enable = "avx2")]
-fn texel_cells(x: __m256, y: __m256, z: __m256, g: u32, half_g: f32) -> __m256i {
-    let (one, half) = (_mm256_set1_ps(1.0), _mm256_set1_ps(half_g));
-    let fx = _mm256_mul_ps(_mm256_add_ps(x, one), half);
-    let fy = _mm256_mul_ps(_mm256_add_ps(y, one), half);
-    let (zero, gf) = (_mm256_setzero_ps(), _mm256_set1_ps(g as f32));
-    let inside = |v: __m256| {
-        _mm256_and_ps(
-            _mm256_cmp_ps::<_CMP_GE_OQ>(v, zero),
-            _mm256_cmp_ps::<_CMP_LT_OQ>(v, gf),
-        )
-    };
-    let ok = _mm256_and_ps(
+fn concentric_texels(x: __m256, y: __m256, z: __m256, res: u32) -> __m256i {
+    let (mul, add) = (_mm256_mul_ps, _mm256_add_ps);
+    let sign = _mm256_set1_ps(-0.0);
+    let abs = |v: __m256| _mm256_andnot_ps(sign, v);
+    let zero = _mm256_setzero_ps();
+    let r = _mm256_sqrt_ps(add(mul(x, x), mul(y, y)));
+    let valid = _mm256_and_ps(
         _mm256_cmp_ps::<_CMP_GE_OQ>(z, zero),
-        _mm256_and_ps(inside(fx), inside(fy)),
+        _mm256_cmp_ps::<_CMP_GT_OQ>(r, zero),
     );
-    let cell = _mm256_add_epi32(
-        _mm256_mullo_epi32(_mm256_cvttps_epi32(fy), _mm256_set1_epi32(g as i32)),
-        _mm256_cvttps_epi32(fx),
+    let x_wedge = _mm256_cmp_ps::<_CMP_GT_OQ>(abs(x), abs(y));
+    let num = _mm256_blendv_ps(x, y, x_wedge);
+    let den = _mm256_blendv_ps(abs(y), abs(x), x_wedge);
+    let along = _mm256_blendv_ps(y, x, x_wedge);
+    // atan_unit_f32(num / den), Estrin's scheme as there.
+    let t = _mm256_div_ps(num, den);
+    let c = ATAN_F32_COEFFS.map(|k| _mm256_set1_ps(k));
+    let t2 = mul(t, t);
+    let t4 = mul(t2, t2);
+    let t8 = mul(t4, t4);
+    let p01 = add(c[0], mul(t2, c[1]));
+    let p23 = add(c[2], mul(t2, c[3]));
+    let p45 = add(c[4], mul(t2, c[5]));
+    let p67 = add(c[6], mul(t2, c[7]));
+    let p = add(add(p01, mul(t4, p23)), mul(t8, add(p45, mul(t4, p67))));
+    let atan = add(t, mul(mul(t, t2), p));
+    let angular = mul(mul(r, _mm256_set1_ps(FOUR_OVER_PI)), atan);
+    let radial = _mm256_or_ps(r, _mm256_and_ps(along, sign)); // r.copysign(along), r ≥ 0
+    let a = _mm256_blendv_ps(angular, radial, x_wedge);
+    let b = _mm256_blendv_ps(radial, angular, x_wedge);
+    let (half, one) = (_mm256_set1_ps(0.5), _mm256_set1_ps(1.0));
+    let resf = _mm256_set1_ps(res as f32);
+    let (pa, pb) = (
+        mul(mul(half, add(a, one)), resf),
+        mul(mul(half, add(b, one)), resf),
     );
+    // certified_cell, per axis: c = (v as u32).min(res − 1), v more than the margin from
+    // every interior cell boundary.
+    let m = _mm256_set1_ps(certificate_margin(res));
+    let last = _mm256_set1_epi32(res as i32 - 1);
+    let axis = |v: __m256| {
+        let number = _mm256_cmp_ps::<_CMP_ORD_Q>(v, v);
+        // The saturating cast: negative → 0, beyond i32 → i32::MIN → (unsigned) the last cell.
+        let c = _mm256_min_epu32(_mm256_cvttps_epi32(_mm256_max_ps(v, zero)), last);
+        let cf = _mm256_cvtepi32_ps(c);
+        let below = _mm256_or_ps(
+            _mm256_castsi256_ps(_mm256_cmpeq_epi32(c, _mm256_setzero_si256())),
+            _mm256_cmp_ps::<_CMP_GT_OQ>(_mm256_sub_ps(v, cf), m),
+        );
+        let above = _mm256_or_ps(
+            _mm256_castsi256_ps(_mm256_cmpeq_epi32(c, last)),
+            _mm256_cmp_ps::<_CMP_GT_OQ>(_mm256_sub_ps(add(cf, one), v), m),
+        );
+        (c, _mm256_and_ps(number, _mm256_and_ps(below, above)))
+    };
+    let ((col, ok_a), (row, ok_b)) = (axis(pa), axis(pb));
+    let ok = _mm256_and_ps(valid, _mm256_and_ps(ok_a, ok_b));
+    let texel = _mm256_add_epi32(_mm256_mullo_epi32(row, _mm256_set1_epi32(res as i32)), col);
     _mm256_or_si256(
-        cell,
+        texel,
         _mm256_castps_si256(_mm256_andnot_ps(
             ok,
             _mm256_castsi256_ps(_mm256_set1_epi32(-1)),

@@ -47,16 +47,30 @@ pub(crate) const ATAN_F32_MAX_ERROR: f32 = 3e-7;
 #[inline]
 pub(crate) fn atan_unit_f32(t: f32) -> f32 {
     // Estrin's scheme: a dependency chain of five multiply–adds instead of Horner's eight.
+    let c = ATAN_F32_COEFFS;
     let z = t * t;
     let z2 = z * z;
     let z4 = z2 * z2;
-    let p01 = -3.333_332_5e-1 + z * 1.999_881_1e-1;
-    let p23 = -1.425_878_9e-1 + z * 1.087_526_4e-1;
-    let p45 = -8.035_188e-2 + z * 4.927_194e-2;
-    let p67 = -2.027_806_6e-2 + z * 3.936_620_4e-3;
+    let p01 = c[0] + z * c[1];
+    let p23 = c[2] + z * c[3];
+    let p45 = c[4] + z * c[5];
+    let p67 = c[6] + z * c[7];
     let p = (p01 + z2 * p23) + z4 * (p45 + z2 * p67);
     t + t * z * p
 }
+
+/// The coefficients of [`atan_unit_f32`]'s P, lowest degree first (also evaluated eight lanes
+/// at a time by `field::lanes`, in the same order).
+pub(crate) const ATAN_F32_COEFFS: [f32; 8] = [
+    -3.333_332_5e-1,
+    1.999_881_1e-1,
+    -1.425_878_9e-1,
+    1.087_526_4e-1,
+    -8.035_188e-2,
+    4.927_194e-2,
+    -2.027_806_6e-2,
+    3.936_620_4e-3,
+];
 
 /// ⌊x⌋ as an integer, for |x| < 2⁶²; exact (truncation, corrected for negatives).
 #[inline]

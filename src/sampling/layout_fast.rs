@@ -21,7 +21,8 @@ use std::f32::consts::{FRAC_PI_2, PI, TAU};
 /// about five times the error budget of the module doc; a test measures it.
 pub(crate) const SQUARE_MAX_DEVIATION: f32 = 4e-6;
 
-const FOUR_OVER_PI: f32 = 4.0 / PI;
+/// 4/π, the concentric map's angle scale.
+pub(crate) const FOUR_OVER_PI: f32 = 4.0 / PI;
 
 // The bound must leave room for the polynomial's own error (in square units).
 const _: () = assert!(ATAN_F32_MAX_ERROR * FOUR_OVER_PI < 0.25 * SQUARE_MAX_DEVIATION);
@@ -94,6 +95,13 @@ pub(crate) fn polar_square(d: Vec3) -> Option<Vec2> {
     Some(Vec2::new(if u >= 1.0 { 0.0 } else { u }, theta / FRAC_PI_2))
 }
 
+/// The margin of [`certified_cell`] in texel units: [`SQUARE_MAX_DEVIATION`] plus the two f32
+/// roundings of the products square · res.
+#[inline]
+pub(crate) fn certificate_margin(res: u32) -> f32 {
+    (SQUARE_MAX_DEVIATION + 2.0 * f32::EPSILON) * res as f32
+}
+
 /// The cell (column, row) of texel coordinates `p` (square · res, clamped to the map as
 /// [`super::HemisphereLayout::to_cell`] does) when each coordinate lies more than
 /// `SQUARE_MAX_DEVIATION · res` from every interior cell boundary, so that the libm coordinates
@@ -101,8 +109,7 @@ pub(crate) fn polar_square(d: Vec3) -> Option<Vec2> {
 /// both sides of them in the same cell.
 #[inline]
 pub(crate) fn certified_cell(p: Vec2, res: u32) -> Option<(u32, u32)> {
-    // The margin plus the two f32 roundings of the products square · res.
-    let m = (SQUARE_MAX_DEVIATION + 2.0 * f32::EPSILON) * res as f32;
+    let m = certificate_margin(res);
     let axis = |v: f32| {
         if v.is_nan() {
             return None;

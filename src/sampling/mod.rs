@@ -37,8 +37,11 @@ mod texel_measure;
 mod texel_table;
 pub mod warp;
 
+/// The concentric layout's fast texel path, for `field::lanes`'s eight-lane copy of it.
+pub(crate) use approx::ATAN_F32_COEFFS;
 pub use frame::Frame;
 pub use layout::{HemisphereLayout, LayoutKind};
+pub(crate) use layout_fast::{certificate_margin, FOUR_OVER_PI};
 pub use sphere::{OwnerCell, Spacing, SphereKind, SpherePoints, MAX_FIBONACCI, MIN_FIBONACCI};
 pub use texel_table::{TexelCell, TexelTable};
 

@@ -31,11 +31,9 @@ use std::f64::consts::FRAC_PI_4;
 const DELTA: f64 = 1e-5;
 /// Marks an uncertified cell.
 const MIXED: u16 = u16::MAX;
-/// Table cells per texel along each axis (G = this × res, at most [`MAX_CELLS`]): 82–85% of the
-/// directions of a concentric map of res 7–32 land in a certified cell (70% at res 64, where G
-/// is capped), at 512 KiB for res 32. With 8 cells per texel it was 64–71% at 128 KiB; the
-/// texels are read for every entering ray and a fallback costs about 160 instructions.
-pub const CELLS_PER_TEXEL: u32 = 16;
+/// Table cells per texel along each axis (G = this × res, at most [`MAX_CELLS`]): about 70% of
+/// the directions of a concentric map land in a certified cell, at 128 KiB for res = 32.
+pub const CELLS_PER_TEXEL: u32 = 8;
 /// Largest G: the table stays within 512 KiB (fewer cells per texel above res = 64).
 pub const MAX_CELLS: u32 = 512;
 
@@ -74,16 +72,6 @@ fn concentric_exact(x: f64, y: f64) -> (f64, f64) {
 /// [`TexelTable::texel_at`] (for the same direction).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct TexelCell(Option<usize>);
-
-impl TexelCell {
-    /// Cell `cell` of the table (`None`: outside it), as computed outside
-    /// [`TexelTable::prefetch`] (eight at a time by `field::lanes`); [`TexelTable::texel_at`]
-    /// requires it to be that function's cell.
-    #[inline(always)]
-    pub(crate) fn new(cell: Option<usize>) -> TexelCell {
-        TexelCell(cell)
-    }
-}
 
 impl TexelTable {
     /// The table of `layout` (empty unless concentric with res ≤ 255).
@@ -204,21 +192,6 @@ impl TexelTable {
             crate::hint::prefetch_value(self.texel.as_ptr().wrapping_add(cell));
         }
         TexelCell(cell)
-    }
-
-    /// The terms of the cell computation: cells per side G and G/2 (for `field::lanes`, which
-    /// reproduces [`Self::prefetch`]'s cell eight directions at a time).
-    #[inline(always)]
-    pub(crate) fn cell_scale(&self) -> (u32, f32) {
-        (self.g, self.half_g)
-    }
-
-    /// Hints the CPU to fetch `cell` (no effect on results).
-    #[inline(always)]
-    pub(crate) fn prefetch_cell(&self, cell: TexelCell) {
-        if let Some(c) = cell.0 {
-            crate::hint::prefetch_value(self.texel.as_ptr().wrapping_add(c));
-        }
     }
 
     /// Cells per side of the table (G; 0 for an empty table).
