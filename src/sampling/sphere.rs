@@ -261,6 +261,12 @@ impl SpherePoints {
         self.owners.owner(&self.points, d)
     }
 
+    /// The owner table of [`Self::nearest`] as stored (the GPU lookup uploads it): cells per
+    /// face edge, per-cell codes (owner < len, pair len + k, `u16::MAX` for the search), pairs.
+    pub(crate) fn owner_table_raw(&self) -> (u32, &[u16], &[[u16; 2]]) {
+        self.owners.raw()
+    }
+
     /// Bytes of the owner table that answers most [`Self::nearest`] queries.
     pub fn owner_table_bytes(&self) -> usize {
         self.owners.bytes()
