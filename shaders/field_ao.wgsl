@@ -130,11 +130,23 @@ fn ao_main(@builtin(global_invocation_id) gid: vec3<u32>,
         }
         workgroupBarrier();
         let end = min(first + base + AO_CHUNK, last);
+        // The round's rays that meet a sphere as bits, then queued with one atomic add per
+        // invocation (lavapipe runs a workgroup atomic lane by lane).
+        var mask = 0u;
         for (var r = first + base; r < end; r++) {
             let b = dirs[r].xyz;
             let local = vec3<f32>(cs * b.x - sn * b.y, sn * b.x + cs * b.y, b.z);
             if meets_any_sphere(origin, frame_to_world(frame, local), tmax) {
-                queue[atomicAdd(&queue_len, 1u)] = lid * AO_CHUNK + (r - first - base);
+                mask |= 1u << (r - first - base);
+            }
+        }
+        if mask != 0u {
+            var slot = atomicAdd(&queue_len, countOneBits(mask));
+            var left = mask;
+            while left != 0u {
+                queue[slot] = lid * AO_CHUNK + firstTrailingBit(left);
+                slot++;
+                left &= left - 1u;
             }
         }
         workgroupBarrier();
@@ -217,9 +229,9 @@ fn probe_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let u = receivers[i].position;
     let dir = receivers[i].normal;
     let pbase = inst.point_base;
-    let m = nearest_point(u, fixed_or(FIXED_SPHERE, inst.sphere_kind), inst.ring_param, pbase);
+    let m = lookup_nearest(inst, u);
     let local = frame_to_local(frame_from_normal(-sphere_point(pbase, m)), dir);
-    let t = layout_to_texel(fixed_or(FIXED_LAYOUT, inst.layout_kind), inst.resolution, local);
+    let t = lookup_texel(inst, local);
     out[4u * i] = m;
     out[4u * i + 1u] = t;
     out[4u * i + 2u] = bitcast<u32>(field_sample(inst, u, dir, SELECT_NEAREST));

@@ -55,6 +55,12 @@ pub struct FieldGpuOptions {
     /// invocation answers its own rays (`ao_main_direct`, kept for comparison; the answers are
     /// the same). See docs/gpu.md, "Field kernel speed on lavapipe".
     pub queue_rays: bool,
+    /// Read each field's owner table (the CPU's `SpherePoints::nearest` table) and texel table
+    /// on the device before the ring search and the concentric map, which remain for the cells
+    /// the tables leave open (the default); `false`: the ring search and the map alone. The
+    /// same map and texel but for f32 near-ties (docs/gpu.md, "Field kernel speed on
+    /// lavapipe").
+    pub lookup_tables: bool,
 }
 
 impl FieldGpuOptions {
@@ -66,6 +72,7 @@ impl FieldGpuOptions {
             window_bytes: self.window_bytes,
             max_texture_depth: self.max_texture_depth,
             kernel_storage_buffers,
+            lookup_tables: self.lookup_tables,
         }
     }
 
@@ -85,6 +92,7 @@ impl Default for FieldGpuOptions {
             rays_per_invocation: super::loop_budget::DEFAULT_RAYS_PER_INVOCATION,
             max_texture_depth: None,
             queue_rays: true,
+            lookup_tables: true,
         }
     }
 }

@@ -57,6 +57,9 @@ pub(crate) struct FieldBindingOptions {
     /// Storage buffers the kernel binds itself (group 0): the windows get what is left of the
     /// adapter's `max_storage_buffers_per_shader_stage`.
     pub kernel_storage_buffers: u32,
+    /// Upload each field's owner and texel tables and read them before the ring search and
+    /// the concentric map (`OWNER_TABLES`, `TEXEL_TABLES` in the WGSL lookup).
+    pub lookup_tables: bool,
 }
 
 /// The fields' stored distances on the device.
@@ -172,7 +175,7 @@ impl FieldBinding {
         instances: &[FieldInstance],
         opts: &FieldBindingOptions,
     ) -> Result<FieldBinding, GpuError> {
-        let mut packed = PackedFields::new(instances)?;
+        let mut packed = PackedFields::new(instances, opts.lookup_tables)?;
         let (store, field_bytes) = match opts.layout {
             FieldLayout::StorageBuffers => upload_windows(ctx, &mut packed, opts)?,
             FieldLayout::Texture3d => upload_texture(ctx, &mut packed, opts)?,
@@ -217,6 +220,7 @@ impl FieldBinding {
             include_str!("../../shaders/sphere_points.wgsl"),
             include_str!("../../shaders/layouts.wgsl"),
             include_str!("../../shaders/field_lookup.wgsl"),
+            include_str!("../../shaders/lookup_tables.wgsl"),
             self.layout_source,
         ];
         parts.extend_from_slice(kernel);
@@ -343,6 +347,8 @@ fn group_prelude() -> String {
 /// `FIXED_SPHERE`, `FIXED_LAYOUT` and `FIXED_PRECISION`: the code every instance shares, or
 /// `VARIES` (WGSL `fixed_or`). With them the shader compiler drops the branches of the other
 /// kinds; llvmpipe would otherwise run every branch of a lookup, masked, for every ray.
+/// `OWNER_TABLES` and `TEXEL_TABLES`: whether any instance has that table (without, the
+/// compiler drops the table reads and the lookup is the ring search and the layout's map).
 fn kinds_prelude(instances: &[FieldInstanceGpu]) -> String {
     let shared = |f: fn(&FieldInstanceGpu) -> u32| -> u32 {
         match instances.first().map(f) {
@@ -355,11 +361,15 @@ fn kinds_prelude(instances: &[FieldInstanceGpu]) -> String {
          const FIXED_SPHERE: u32 = {}u;\n\
          const FIXED_LAYOUT: u32 = {}u;\n\
          const FIXED_PRECISION: u32 = {}u;\n\
+         const OWNER_TABLES: bool = {};\n\
+         const TEXEL_TABLES: bool = {};\n\
          // `fixed` where every instance shares it, else the instance's own `value`.\n\
          fn fixed_or(fixed: u32, value: u32) -> u32 {{ return select(fixed, value, fixed == VARIES); }}\n",
         shared(|i| i.sphere_kind),
         shared(|i| i.layout_kind),
         shared(|i| i.storage_precision),
+        instances.iter().any(|i| i.owner_grid > 0),
+        instances.iter().any(|i| i.texel_grid > 0),
     )
 }
 
