@@ -67,9 +67,13 @@ var<workgroup> origins: array<vec3<f32>, AO_GROUP>;
 var<workgroup> firsts: array<u32, AO_GROUP>;
 
 // Whether the world segment origin + t dir, t in [0, tmax], meets any instance's world sphere
-// (the first test of `instance_occludes`).
-fn meets_any_sphere(origin: vec3<f32>, dir: vec3<f32>, tmax: f32) -> bool {
-    for (var k = 0u; k < params.instance_count; k++) {
+// (the first test of `instance_occludes`); `first` is instance 0's record, from registers.
+fn meets_any_sphere(origin: vec3<f32>, dir: vec3<f32>, tmax: f32, first: Instance) -> bool {
+    let w0 = ray_sphere(origin, dir, first.world_center, first.world_radius);
+    if w0.z != 0.0 && w0.y >= 0.0 && w0.x <= tmax {
+        return true;
+    }
+    for (var k = 1u; k < params.instance_count; k++) {
         let ws = ray_sphere(origin, dir, instances[k].world_center, instances[k].world_radius);
         if ws.z != 0.0 && ws.y >= 0.0 && ws.x <= tmax {
             return true;
@@ -136,7 +140,7 @@ fn ao_main(@builtin(global_invocation_id) gid: vec3<u32>,
         for (var r = first + base; r < end; r++) {
             let b = dirs[r].xyz;
             let local = vec3<f32>(cs * b.x - sn * b.y, sn * b.x + cs * b.y, b.z);
-            if meets_any_sphere(origin, frame_to_world(frame, local), tmax) {
+            if meets_any_sphere(origin, frame_to_world(frame, local), tmax, first_instance) {
                 mask |= 1u << (r - first - base);
             }
         }

@@ -6,13 +6,14 @@
 //! shaders/field_lookup.wgsl) reads:
 //!
 //! - the per-instance records ([`super::FieldInstanceGpu`]), the shared tables (sphere points,
-//!   1-bit means) and the sphere triangulations ([`PackedFields`]);
+//!   1-bit means) and the sphere triangulations followed by the owner and texel tables
+//!   ([`PackedFields`]; shaders/lookup_tables.wgsl);
 //! - the stored distances: storage-buffer windows of at most the adapter's binding size, or the
 //!   tiles of one 3D texture ([`FieldTexture`]);
 //! - the bind-group layout and the bind group of group [`FIELD_GROUP`] holding them;
 //! - the WGSL text of the lookup: the group's declarations and the layout's `load_word` /
-//!   `load_element`, then frame, sphere points, layouts, lookup and the layout's
-//!   `load_distance` ([`FieldBinding::shader_source`]).
+//!   `load_element`, then frame, sphere points, layouts, lookup, lookup tables and the
+//!   layout's `load_distance` ([`FieldBinding::shader_source`]).
 //!
 //! A field kernel (AO today, [`super::FieldAoKernel`]) builds a `FieldBinding`, declares only
 //! its own bindings in group 0 and its entry points, compiles with
