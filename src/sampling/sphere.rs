@@ -267,6 +267,13 @@ impl SpherePoints {
         self.owners.raw()
     }
 
+    /// The candidate slots of the cube grid that [`Self::nearest`] searches where the owner
+    /// table leaves a cell open (the GPU lookup uploads them): cells per face edge, per cell
+    /// four candidates or `u32::MAX` first when it has more.
+    pub(crate) fn candidate_slots_raw(&self) -> (u32, &[[u32; 4]]) {
+        self.grid.raw_slots()
+    }
+
     /// Bytes of the owner table that answers most [`Self::nearest`] queries.
     pub fn owner_table_bytes(&self) -> usize {
         self.owners.bytes()
