@@ -73,6 +73,9 @@ fn meets_any_sphere(origin: vec3<f32>, dir: vec3<f32>, tmax: f32, first: Instanc
     if w0.z != 0.0 && w0.y >= 0.0 && w0.x <= tmax {
         return true;
     }
+    if SINGLE_INSTANCE {
+        return false;
+    }
     for (var k = 1u; k < params.instance_count; k++) {
         let ws = ray_sphere(origin, dir, instances[k].world_center, instances[k].world_radius);
         if ws.z != 0.0 && ws.y >= 0.0 && ws.x <= tmax {
@@ -164,8 +167,12 @@ fn ao_main(@builtin(global_invocation_id) gid: vec3<u32>,
             // The first instance comes from registers (read once per invocation): lavapipe
             // reads a 144-byte record lane by lane.
             var blocked = instance_occludes(first_instance, origin, dir, 0.0, tmax, AO_SELECTION, params.intra_bias, params.intra_auto != 0u);
-            for (var k = 1u; k < params.instance_count && !blocked; k++) {
-                blocked = instance_occludes(instances[k], origin, dir, 0.0, tmax, AO_SELECTION, params.intra_bias, params.intra_auto != 0u);
+            // A second inlined lookup, even never run, slows lavapipe's queue loop by a third
+            // (register pressure): one-instance fields compile without it.
+            if !SINGLE_INSTANCE {
+                for (var k = 1u; k < params.instance_count && !blocked; k++) {
+                    blocked = instance_occludes(instances[k], origin, dir, 0.0, tmax, AO_SELECTION, params.intra_bias, params.intra_auto != 0u);
+                }
             }
             if blocked {
                 atomicAdd(&blocked_rays[owner], 1u);

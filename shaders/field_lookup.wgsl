@@ -67,8 +67,11 @@ struct Instance {
     texel_grid: u32,
     // First texel-table cell in `mesh`, in 16-bit halves.
     texel_base: u32,
-    _pad0: u32,
-    _pad1: u32,
+    // Candidate grid (the CPU's cube grid, for MIXED owner cells): cells per face edge, 0 for
+    // none.
+    cand_grid: u32,
+    // First candidate-grid cell in `mesh`, in entries.
+    cand_base: u32,
 }
 
 // glam's `Quat::mul_vec3a`: v (w^2 - b.b) + b 2(v.b) + (b x v) 2w.

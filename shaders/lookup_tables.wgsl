@@ -1,5 +1,6 @@
 // The CPU's lookup tables on the GPU, read before the ring search and the concentric map:
-// the owner table of `SpherePoints::nearest` (src/sampling/owner_grid.rs) and the texel table
+// the owner table of `SpherePoints::nearest` (src/sampling/owner_grid.rs), the candidate slots
+// of its cube grid (src/sampling/cube_grid.rs) and the texel table
 // (src/sampling/texel_table.rs), u16 cells two to a word in the `mesh` buffer after the
 // triangulations (src/gpu/field_data.rs, `lookup_tables`). A cell the CPU left open (MIXED)
 // sends the query to the exact path, as on the CPU. `OWNER_TABLES` / `TEXEL_TABLES` are false
@@ -8,6 +9,8 @@
 
 const TABLE_MIXED: u32 = 0xffffu;
 const NO_CELL: u32 = 0xffffffffu;
+// A candidate-grid cell with more than four candidates (first slot).
+const CAND_OVERFLOW: u32 = 0xffffffffu;
 
 // Word `w` of the mesh buffer.
 fn mesh_word(w: u32) -> u32 {
@@ -57,7 +60,8 @@ fn owner_cell(g: u32, d: vec3<f32>) -> u32 {
 }
 
 // The nearest map of unit `u` on `inst`'s field: the owner table's owner, or of its pair the
-// larger f32 dot product (the CPU compares in f64), else the ring search.
+// larger f32 dot product (the CPU compares in f64), else the best of the candidate grid's
+// cell, else the ring search.
 fn lookup_nearest(inst: Instance, u: vec3<f32>) -> u32 {
     let pbase = inst.point_base;
     if OWNER_TABLES && inst.owner_grid != 0u {
@@ -72,6 +76,24 @@ fn lookup_nearest(inst: Instance, u: vec3<f32>) -> u32 {
                 let p = pq & 0xffffu;
                 let q = pq >> 16u;
                 return select(p, q, dot(u, sphere_point(pbase, q)) > dot(u, sphere_point(pbase, p)));
+            }
+        }
+        // A MIXED cell: the candidate grid's four slots (`CubeGrid::nearest`; padding repeats
+        // the first, which never wins a strict comparison), unless its cell has more.
+        let cc = owner_cell(inst.cand_grid, u);
+        if inst.cand_grid != 0u && cc != NO_CELL {
+            let slots = mesh[inst.cand_base + cc];
+            if slots.x != CAND_OVERFLOW {
+                var best = slots.x;
+                var best_dot = dot(u, sphere_point(pbase, slots.x));
+                for (var k = 1u; k < 4u; k++) {
+                    let x = dot(u, sphere_point(pbase, slots[k]));
+                    if x > best_dot {
+                        best = slots[k];
+                        best_dot = x;
+                    }
+                }
+                return best;
             }
         }
     }

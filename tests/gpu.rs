@@ -225,7 +225,8 @@ fn nearest_map_texel_and_samples_agree_with_the_cpu() {
 /// the default) and the ring search and layout maps alone (`false`) choose the same map and
 /// texel for 100,000 seeded lookups per field, but for f32 near-ties: a map may differ only
 /// where the two points are equally near in f64 to 1e-6 (the ring search compares f32 dot
-/// products; the table holds the exact owner, or decides a pair by an f32 dot product), a
+/// products; the table holds the exact owner, or decides a pair or a MIXED cell's four
+/// candidates by f32 dot products), a
 /// texel only where the CPU's continuous texel coordinate lies within 10⁻³ texel of a texel
 /// edge (the certified cell is exact, the WGSL map is f32 trigonometry), each at most once in
 /// 10,000 lookups. Counts against the CPU's `nearest` are printed for both paths
@@ -864,9 +865,16 @@ fn field_ao_at_4096_rays_per_point_matches_the_cpu() {
     let (mut p, mut n): (Vec<Vec3>, Vec<Vec3>) = p.into_iter().zip(n).step_by(7).unzip();
     p.push(Vec3::new(0.5, -5.0, 0.5));
     n.push(Vec3::NEG_Y);
-    for rays_per_invocation in [FieldGpuOptions::default().rays_per_invocation, 4096] {
+    // The queued kernel with the lookup tables fits 4096 rays into one lavapipe invocation's
+    // loop budget (few loop trips a lookup); the per-invocation kernel without the tables
+    // (the ring search's loops for every ray) does not, and must split them.
+    let default_rays = FieldGpuOptions::default().rays_per_invocation;
+    for (rays_per_invocation, lookup_tables) in [(default_rays, true), (4096, true), (4096, false)]
+    {
         let gpu_opts = FieldGpuOptions {
             rays_per_invocation,
+            lookup_tables,
+            queue_rays: lookup_tables,
             ..Default::default()
         };
         let mut kernel = FieldAoKernel::new(ctx, std::slice::from_ref(&inst), &gpu_opts).unwrap();
@@ -879,7 +887,10 @@ fn field_ao_at_4096_rays_per_point_matches_the_cpu() {
             assert_occlusion_is_nontrivial(&cpu);
             assert_eq!(*cpu.last().unwrap(), 1.0);
             let q = parity(&gpu, &cpu);
-            let label = format!("4096 rays, {rays_per_invocation} per invocation, {selection:?}");
+            let label = format!(
+                "4096 rays, {rays_per_invocation} per invocation, tables {lookup_tables}, \
+                 {selection:?}"
+            );
             eprintln!(
                 "{label}: {} vertices, max |Δ| {:.2}/255, {} over 1/255, RMS {:.4}/255, kernel \
                  {:?}, wall {:?}",
@@ -895,9 +906,9 @@ fn field_ao_at_4096_rays_per_point_matches_the_cpu() {
                 panic!("{label}: see {}", path.display());
             }
         }
-        // On lavapipe 4096 rays (about 31 loop iterations each) cannot run in one invocation:
-        // the kernel must have split them.
-        if ctx.is_cpu_adapter() && rays_per_invocation == 4096 {
+        // On lavapipe 4096 rays through the per-invocation kernel without the tables (about 31
+        // loop iterations each) cannot run in one invocation: the kernel must have split them.
+        if ctx.is_cpu_adapter() && rays_per_invocation == 4096 && !lookup_tables {
             assert!(kernel.rays_per_invocation() <= 2048);
         }
     }

@@ -3,8 +3,8 @@
 //!
 //! One thread per receiver point loops over the point's rays and over the instances
 //! (shaders/field_ao.wgsl); the lookup is a line-by-line f32 port of `field::lookup` and
-//! `field::scene`: the Slater / lat-long nearest point (the CPU's owner table, else 4 rings × 2
-//! azimuths), the Duff frame, the three layouts' `to_texel` (the concentric one after the CPU's
+//! `field::scene`: the Slater / lat-long nearest point (the CPU's owner table, else its cube grid's
+//! candidates, else 4 rings × 2 azimuths), the Duff frame, the three layouts' `to_texel` (the concentric one after the CPU's
 //! texel table), the interpolated selection's triangle walk and bilinear
 //! footprint. On lavapipe it reproduces the CPU AO bit for bit in the parity tests.
 //!

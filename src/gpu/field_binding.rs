@@ -350,6 +350,7 @@ fn group_prelude() -> String {
 /// kinds; llvmpipe would otherwise run every branch of a lookup, masked, for every ray.
 /// `OWNER_TABLES` and `TEXEL_TABLES`: whether any instance has that table (without, the
 /// compiler drops the table reads and the lookup is the ring search and the layout's map).
+/// `SINGLE_INSTANCE`: one instance is bound (kernels drop their loops over the others).
 fn kinds_prelude(instances: &[FieldInstanceGpu]) -> String {
     let shared = |f: fn(&FieldInstanceGpu) -> u32| -> u32 {
         match instances.first().map(f) {
@@ -364,6 +365,7 @@ fn kinds_prelude(instances: &[FieldInstanceGpu]) -> String {
          const FIXED_PRECISION: u32 = {}u;\n\
          const OWNER_TABLES: bool = {};\n\
          const TEXEL_TABLES: bool = {};\n\
+         const SINGLE_INSTANCE: bool = {};\n\
          // `fixed` where every instance shares it, else the instance's own `value`.\n\
          fn fixed_or(fixed: u32, value: u32) -> u32 {{ return select(fixed, value, fixed == VARIES); }}\n",
         shared(|i| i.sphere_kind),
@@ -371,6 +373,7 @@ fn kinds_prelude(instances: &[FieldInstanceGpu]) -> String {
         shared(|i| i.storage_precision),
         instances.iter().any(|i| i.owner_grid > 0),
         instances.iter().any(|i| i.texel_grid > 0),
+        instances.len() == 1,
     )
 }
 

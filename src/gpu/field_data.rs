@@ -74,8 +74,11 @@ pub struct FieldInstanceGpu {
     pub texel_grid: u32,
     /// First texel-table cell in the mesh buffer, in 16-bit halves of its words.
     pub texel_base: u32,
-    pub _pad0: u32,
-    pub _pad1: u32,
+    /// Candidate grid (the cube grid of [`crate::sampling::SpherePoints::nearest`]'s search,
+    /// read for the owner table's MIXED cells): cells per face edge, 0 for none.
+    pub cand_grid: u32,
+    /// First candidate-grid cell in the mesh buffer, in entries (four candidates each).
+    pub cand_base: u32,
 }
 const _: () = assert!(std::mem::size_of::<FieldInstanceGpu>() == 160);
 const _: () = assert!(std::mem::offset_of!(FieldInstanceGpu, scale) == 28);
@@ -188,6 +191,8 @@ impl PackedFields {
                         pair_base: lookup.pair_base,
                         texel_grid: lookup.texel_grid,
                         texel_base: lookup.texel_base,
+                        cand_grid: lookup.cand_grid,
+                        cand_base: lookup.cand_base,
                         sphere_kind: sphere,
                         map_count: f.params.count as u32,
                         ring_param: ring,
@@ -253,12 +258,15 @@ struct LookupTables {
     pair_base: u32,
     texel_grid: u32,
     texel_base: u32,
+    cand_grid: u32,
+    cand_base: u32,
 }
 
-/// Appends `f`'s owner table (codes, then pairs) and texel table to `mesh`, each starting on an
-/// entry (16-byte) boundary, u16 codes two to a word, low half first. The owner table is left
-/// out when the set has ≥ 2¹⁶ − 1 points (every cell would send the query to the search); the
-/// texel table is empty but for concentric maps of res ≤ 255.
+/// Appends `f`'s owner table (codes, then pairs), candidate grid and texel table to `mesh`,
+/// each starting on an entry (16-byte) boundary, u16 codes two to a word, low half first, a
+/// candidate cell one entry. The owner table and the candidate grid are left out when the set
+/// has ≥ 2¹⁶ − 1 points (every owner cell would send the query to the search); the texel table
+/// is empty but for concentric maps of res ≤ 255.
 fn lookup_tables(f: &VisibilityField, mesh: &mut Vec<[u32; 4]>) -> LookupTables {
     // u16 values packed into whole entries; returns the first half's index.
     fn push_halves(mesh: &mut Vec<[u32; 4]>, halves: impl ExactSizeIterator<Item = u16>) -> u32 {
@@ -285,6 +293,10 @@ fn lookup_tables(f: &VisibilityField, mesh: &mut Vec<[u32; 4]>) -> LookupTables 
                 .collect::<Vec<_>>()
                 .into_iter(),
         );
+        let (cg, slots) = f.points.candidate_slots_raw();
+        out.cand_grid = cg;
+        out.cand_base = mesh.len() as u32;
+        mesh.extend_from_slice(slots);
     }
     let cells = f.texels.raw_cells();
     if f.texels.cells_per_side() > 0 && f.texels.layout() == f.layout {
@@ -475,6 +487,10 @@ mod tests {
                     [((inst.pair_base + k as u32) % 4) as usize];
                 assert_eq!((w & 0xffff, w >> 16), (p as u32, q as u32), "pair {k}");
             }
+            let (cg, slots) = f.points.candidate_slots_raw();
+            assert_eq!(inst.cand_grid, cg);
+            let base = inst.cand_base as usize;
+            assert_eq!(&packed.mesh[base..base + slots.len()], slots);
             let cells = f.texels.raw_cells();
             assert_eq!(inst.texel_grid, f.texels.cells_per_side());
             assert_eq!(cells.len(), (inst.texel_grid * inst.texel_grid) as usize);
@@ -487,7 +503,7 @@ mod tests {
         assert!(bare
             .instances
             .iter()
-            .all(|i| i.owner_grid == 0 && i.texel_grid == 0));
+            .all(|i| i.owner_grid == 0 && i.texel_grid == 0 && i.cand_grid == 0));
         let tris: usize = insts
             .iter()
             .map(|i| 2 * i.field.points.triangles().len())
