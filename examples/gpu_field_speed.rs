@@ -1,7 +1,8 @@
 //! Field-lookup AO against CWBVH ray casting on the same rays, on the GPU (whatever adapter
 //! `VISFIELD_ADAPTER` picks) and on the CPU: figure6's scene (stanford-bunny_39k over the
 //! corner's 3 × 33 × 33 vertices, 256 stratified cosine rays each), a Slater × concentric u8
-//! field, nearest selection. The four backends run interleaved ROUNDS times; the medians and
+//! field, nearest selection. The backends (and the GPU field kernel without the queue and
+//! without the lookup tables) run interleaved ROUNDS times; the medians and
 //! the two field / ray-casting speed-ups are printed, with the GPU answers' largest difference
 //! from the CPU field's.
 //!
@@ -83,9 +84,18 @@ fn main() {
     .expect("kernel");
     let direct = FieldAoKernel::new(
         &ctx,
-        &[inst],
+        std::slice::from_ref(&inst),
         &FieldGpuOptions {
             queue_rays: false,
+            ..Default::default()
+        },
+    )
+    .expect("kernel");
+    let untabled = FieldAoKernel::new(
+        &ctx,
+        std::slice::from_ref(&inst),
+        &FieldGpuOptions {
+            lookup_tables: false,
             ..Default::default()
         },
     )
@@ -101,7 +111,14 @@ fn main() {
     let cpu_field = ao_at_points(&fs, p, n, &rays, &opts);
     let (gf, _) = kernel.vertex_ao(p, n, &rays, &opts).expect("field kernel");
     let (gd, _) = direct.vertex_ao(p, n, &rays, &opts).expect("direct kernel");
-    println!("max |queued - direct| {:e}", max_diff(&gf, &gd));
+    let (gu, _) = untabled
+        .vertex_ao(p, n, &rays, &opts)
+        .expect("untabled kernel");
+    println!(
+        "max |queued - direct| {:e}; max |tables - no tables| {:e}",
+        max_diff(&gf, &gd),
+        max_diff(&gf, &gu)
+    );
     let (gt, _) = gtracer.ao(p, n, &rays, &opts).expect("gpu tracer");
     println!(
         "max |gpu field - cpu field| {:e}; max |gpu cwbvh - gpu field| {:e}",
@@ -114,13 +131,14 @@ fn main() {
         f();
         t.elapsed().as_secs_f64()
     };
-    let mut s: [Vec<f64>; 5] = Default::default();
+    let mut s: [Vec<f64>; 6] = Default::default();
     for _ in 0..rounds {
         s[0].push(kern(&kernel.vertex_ao(p, n, &rays, &opts).unwrap().1));
         s[1].push(kern(&gtracer.ao(p, n, &rays, &opts).unwrap().1));
         s[2].push(wall(&|| drop(ao_at_points(&fs, p, n, &rays, &opts))));
         s[3].push(wall(&|| drop(ao_at_points(&tracer, p, n, &rays, &opts))));
         s[4].push(kern(&direct.vertex_ao(p, n, &rays, &opts).unwrap().1));
+        s[5].push(kern(&untabled.vertex_ao(p, n, &rays, &opts).unwrap().1));
         std::thread::sleep(Duration::from_millis(50));
     }
     let m: Vec<f64> = s.iter().map(|v| median(v.clone())).collect();
@@ -139,6 +157,12 @@ fn main() {
         m[4] / m[0]
     );
     println!(
+        "gpu no tables    {:.4} s  ratio to cwbvh {:.2}  tables speed-up {:.2}",
+        m[5],
+        m[1] / m[5],
+        m[5] / m[0]
+    );
+    println!(
         "cpu field        {:.4} s  cpu raycast      {:.4} s  ratio {:.2}",
         m[2],
         m[3],
@@ -147,9 +171,10 @@ fn main() {
     // Per-round ratios: both sides of a round ran under about the same load.
     let paired = |a: usize, b: usize| median(s[a].iter().zip(&s[b]).map(|(x, y)| x / y).collect());
     println!(
-        "median per-round ratios: gpu cwbvh / field {:.2}, cwbvh / direct {:.2}, cpu raycast / field {:.2}",
+        "median per-round ratios: gpu cwbvh / field {:.2}, cwbvh / direct {:.2}, cwbvh / no tables {:.2}, cpu raycast / field {:.2}",
         paired(1, 0),
         paired(1, 4),
+        paired(1, 5),
         paired(3, 2)
     );
     println!("samples: {s:?}");

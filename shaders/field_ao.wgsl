@@ -67,9 +67,16 @@ var<workgroup> origins: array<vec3<f32>, AO_GROUP>;
 var<workgroup> firsts: array<u32, AO_GROUP>;
 
 // Whether the world segment origin + t dir, t in [0, tmax], meets any instance's world sphere
-// (the first test of `instance_occludes`).
-fn meets_any_sphere(origin: vec3<f32>, dir: vec3<f32>, tmax: f32) -> bool {
-    for (var k = 0u; k < params.instance_count; k++) {
+// (the first test of `instance_occludes`); `first` is instance 0's record, from registers.
+fn meets_any_sphere(origin: vec3<f32>, dir: vec3<f32>, tmax: f32, first: Instance) -> bool {
+    let w0 = ray_sphere(origin, dir, first.world_center, first.world_radius);
+    if w0.z != 0.0 && w0.y >= 0.0 && w0.x <= tmax {
+        return true;
+    }
+    if SINGLE_INSTANCE {
+        return false;
+    }
+    for (var k = 1u; k < params.instance_count; k++) {
         let ws = ray_sphere(origin, dir, instances[k].world_center, instances[k].world_radius);
         if ws.z != 0.0 && ws.y >= 0.0 && ws.x <= tmax {
             return true;
@@ -130,11 +137,23 @@ fn ao_main(@builtin(global_invocation_id) gid: vec3<u32>,
         }
         workgroupBarrier();
         let end = min(first + base + AO_CHUNK, last);
+        // The round's rays that meet a sphere as bits, then queued with one atomic add per
+        // invocation (lavapipe runs a workgroup atomic lane by lane).
+        var mask = 0u;
         for (var r = first + base; r < end; r++) {
             let b = dirs[r].xyz;
             let local = vec3<f32>(cs * b.x - sn * b.y, sn * b.x + cs * b.y, b.z);
-            if meets_any_sphere(origin, frame_to_world(frame, local), tmax) {
-                queue[atomicAdd(&queue_len, 1u)] = lid * AO_CHUNK + (r - first - base);
+            if meets_any_sphere(origin, frame_to_world(frame, local), tmax, first_instance) {
+                mask |= 1u << (r - first - base);
+            }
+        }
+        if mask != 0u {
+            var slot = atomicAdd(&queue_len, countOneBits(mask));
+            var left = mask;
+            while left != 0u {
+                queue[slot] = lid * AO_CHUNK + firstTrailingBit(left);
+                slot++;
+                left &= left - 1u;
             }
         }
         workgroupBarrier();
@@ -148,8 +167,12 @@ fn ao_main(@builtin(global_invocation_id) gid: vec3<u32>,
             // The first instance comes from registers (read once per invocation): lavapipe
             // reads a 144-byte record lane by lane.
             var blocked = instance_occludes(first_instance, origin, dir, 0.0, tmax, AO_SELECTION, params.intra_bias, params.intra_auto != 0u);
-            for (var k = 1u; k < params.instance_count && !blocked; k++) {
-                blocked = instance_occludes(instances[k], origin, dir, 0.0, tmax, AO_SELECTION, params.intra_bias, params.intra_auto != 0u);
+            // A second inlined lookup, even never run, slows lavapipe's queue loop by a third
+            // (register pressure): one-instance fields compile without it.
+            if !SINGLE_INSTANCE {
+                for (var k = 1u; k < params.instance_count && !blocked; k++) {
+                    blocked = instance_occludes(instances[k], origin, dir, 0.0, tmax, AO_SELECTION, params.intra_bias, params.intra_auto != 0u);
+                }
             }
             if blocked {
                 atomicAdd(&blocked_rays[owner], 1u);
@@ -217,9 +240,9 @@ fn probe_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let u = receivers[i].position;
     let dir = receivers[i].normal;
     let pbase = inst.point_base;
-    let m = nearest_point(u, fixed_or(FIXED_SPHERE, inst.sphere_kind), inst.ring_param, pbase);
+    let m = lookup_nearest(inst, u);
     let local = frame_to_local(frame_from_normal(-sphere_point(pbase, m)), dir);
-    let t = layout_to_texel(fixed_or(FIXED_LAYOUT, inst.layout_kind), inst.resolution, local);
+    let t = lookup_texel(inst, local);
     out[4u * i] = m;
     out[4u * i + 1u] = t;
     out[4u * i + 2u] = bitcast<u32>(field_sample(inst, u, dir, SELECT_NEAREST));

@@ -7,7 +7,7 @@
 const SELECT_NEAREST: u32 = 0u;
 const SELECT_INTERPOLATED: u32 = 1u;
 
-// One placed field. Mirrors `FieldInstanceGpu` (src/gpu/field_data.rs), 144 bytes.
+// One placed field. Mirrors `FieldInstanceGpu` (src/gpu/field_data.rs), 160 bytes.
 struct Instance {
     // World -> model rotation as a unit quaternion (x, y, z, w).
     rotation: vec4<f32>,
@@ -53,13 +53,25 @@ struct Instance {
     tile_width: u32,
     // Tile height in elements (texture layout).
     tile_height: u32,
-    _pad0: u32,
+    // Owner table: cells per cube face edge, 0 for none (shaders/lookup_tables.wgsl).
+    owner_grid: u32,
     // Intra-object tolerance, positional part (model units).
     intra_positional: f32,
     // Intra-object tolerance, directional part (radians).
     intra_directional: f32,
-    _pad1: f32,
-    _pad2: f32,
+    // First owner-table code in `mesh`, in 16-bit halves.
+    owner_base: u32,
+    // First owner-table pair in `mesh`, in words.
+    pair_base: u32,
+    // Texel table: cells per side, 0 for none.
+    texel_grid: u32,
+    // First texel-table cell in `mesh`, in 16-bit halves.
+    texel_base: u32,
+    // Candidate grid (the CPU's cube grid, for MIXED owner cells): cells per face edge, 0 for
+    // none.
+    cand_grid: u32,
+    // First candidate-grid cell in `mesh`, in entries.
+    cand_base: u32,
 }
 
 // glam's `Quat::mul_vec3a`: v (w^2 - b.b) + b 2(v.b) + (b x v) 2w.
@@ -107,10 +119,10 @@ fn field_sample(inst: Instance, u: vec3<f32>, dir: vec3<f32>, selection: u32) ->
     let lay = fixed_or(FIXED_LAYOUT, inst.layout_kind);
     let res = inst.resolution;
     let pbase = inst.point_base;
-    let m = nearest_point(u, kind, n, pbase);
+    let m = lookup_nearest(inst, u);
     if selection == SELECT_NEAREST {
         let local = frame_to_local(frame_from_normal(-sphere_point(pbase, m)), dir);
-        return load_distance(inst, m, layout_to_texel(lay, res, local));
+        return load_distance(inst, m, lookup_texel(inst, local));
     }
     // Interpolated: hits and misses blended as an occupancy (src/field/lookup.rs).
     let s = surrounding(u, m, pbase, inst.mesh_base, inst.walk_steps);

@@ -111,9 +111,8 @@ fn instance_surface_hit(inst: Instance, origin: vec3<f32>, dir: vec3<f32>, tmin:
         dread = -d;
     }
     let pbase = inst.point_base;
-    let m = nearest_point(u, fixed_or(FIXED_SPHERE, inst.sphere_kind), inst.ring_param, pbase);
-    let texel = layout_to_texel(fixed_or(FIXED_LAYOUT, inst.layout_kind), inst.resolution,
-                                frame_to_local(frame_from_normal(-sphere_point(pbase, m)), dread));
+    let m = lookup_nearest(inst, u);
+    let texel = lookup_texel(inst, frame_to_local(frame_from_normal(-sphere_point(pbase, m)), dread));
     var dd = 1.0;
     if selection == SELECT_NEAREST {
         dd = load_distance(inst, m, texel);

@@ -221,6 +221,116 @@ fn nearest_map_texel_and_samples_agree_with_the_cpu() {
     }
 }
 
+/// The lookup tables on the device (the CPU's owner and texel tables, `lookup_tables: true`,
+/// the default) and the ring search and layout maps alone (`false`) choose the same map and
+/// texel for 100,000 seeded lookups per field, but for f32 near-ties: a map may differ only
+/// where the two points are equally near in f64 to 1e-6 (the ring search compares f32 dot
+/// products; the table holds the exact owner, or decides a pair or a MIXED cell's four
+/// candidates by f32 dot products), a
+/// texel only where the CPU's continuous texel coordinate lies within 10⁻³ texel of a texel
+/// edge (the certified cell is exact, the WGSL map is f32 trigonometry), each at most once in
+/// 10,000 lookups. Counts against the CPU's `nearest` are printed for both paths
+/// (docs/gpu.md, "Field kernel speed on lavapipe").
+fn lookup_tables_choose_the_maps_and_texels_of_the_search() {
+    let Some(ctx) = context() else { return };
+    for (sphere, count, layout, res) in [
+        (SphereKind::Slater, 290, LayoutKind::Concentric, 32),
+        (SphereKind::Slater, 4226, LayoutKind::Concentric, 128),
+        (SphereKind::Slater, 1090, LayoutKind::Polar, 16),
+        (SphereKind::LatLong, 1122, LayoutKind::Concentric, 16),
+    ] {
+        // Maps and texels do not depend on the stored distances: an unbaked (all-zero) field.
+        let p = FieldParams {
+            sphere,
+            ..params(count, res, Precision::U8, layout)
+        };
+        let storage = visfield::field::Storage::new(p.precision, count, p.texels());
+        let unit = visfield::geometry::Sphere {
+            center: Vec3::ZERO,
+            radius: 1.0,
+        };
+        let field = Arc::new(VisibilityField::from_storage(p, unit, storage).unwrap());
+        let inst = FieldInstance::new(field.clone(), Similarity::default());
+        let probe = |lookup_tables: bool, u: &[Vec3], dirs: &[Vec3]| {
+            let opts = FieldGpuOptions {
+                lookup_tables,
+                ..Default::default()
+            };
+            let kernel = FieldAoKernel::new(ctx, std::slice::from_ref(&inst), &opts).unwrap();
+            kernel.probe(u, dirs).unwrap()
+        };
+        let n = 100_000u64;
+        let u: Vec<Vec3> = (0..n).map(|i| seeded_sphere_direction(i, 11)).collect();
+        let dirs: Vec<Vec3> = (0..n)
+            .map(|i| {
+                let d = seeded_sphere_direction(i, 12);
+                if d.dot(u[i as usize]) > 0.0 {
+                    -d
+                } else {
+                    d
+                }
+            })
+            .collect();
+        let (tabled, searched) = (probe(true, &u, &dirs), probe(false, &u, &dirs));
+        let (mut map_diff, mut texel_diff, mut not_ties) = (0usize, 0usize, Vec::new());
+        let (mut cpu_tabled, mut cpu_searched) = (0usize, 0usize);
+        for i in 0..n as usize {
+            let (a, b) = (tabled[i], searched[i]);
+            let m = field.points.nearest(u[i]);
+            cpu_tabled += (a.map as usize != m) as usize;
+            cpu_searched += (b.map as usize != m) as usize;
+            if a.map != b.map {
+                map_diff += 1;
+                let d = u[i].as_dvec3();
+                let gap = d.dot(field.points.point(a.map as usize).as_dvec3())
+                    - d.dot(field.points.point(b.map as usize).as_dvec3());
+                if gap.abs() > 1e-6 {
+                    not_ties.push(format!("map,{i},{},{},{},{gap:e}", u[i], a.map, b.map));
+                }
+                continue;
+            }
+            if a.texel != b.texel {
+                texel_diff += 1;
+                let local = field.frames[a.map as usize].to_local(dirs[i]);
+                let c = field.layout.to_texel_continuous(local);
+                let edge = |x: f32| (x - x.round()).abs();
+                let near = edge(c.x).min(edge(c.y));
+                if near > 1e-3 {
+                    not_ties.push(format!(
+                        "texel,{i},{},{},{},{near:e}",
+                        dirs[i], a.texel, b.texel
+                    ));
+                }
+            }
+        }
+        let label = format!("{sphere:?} {count} maps {layout:?} {res}");
+        eprintln!(
+            "{label}: tables vs search: {map_diff} maps, {texel_diff} texels differ in {n}; \
+             maps unlike the CPU's nearest: tables {cpu_tabled}, search {cpu_searched}"
+        );
+        if !not_ties.is_empty() {
+            let path = dump(
+                "tables",
+                "what,index,vector,tables,search,gap",
+                not_ties.clone(),
+            );
+            panic!(
+                "{label}: {} differences are not near-ties; see {}",
+                not_ties.len(),
+                path.display()
+            );
+        }
+        assert!(
+            map_diff * 10_000 <= n as usize,
+            "{label}: {map_diff} maps differ"
+        );
+        assert!(
+            texel_diff * 10_000 <= n as usize,
+            "{label}: {texel_diff} texels differ"
+        );
+    }
+}
+
 /// AO at the points `p` (normals `n`) of `inst` by the CPU field path and by `kernel`, both
 /// with `lookup`.
 fn ao_pair(
@@ -755,9 +865,16 @@ fn field_ao_at_4096_rays_per_point_matches_the_cpu() {
     let (mut p, mut n): (Vec<Vec3>, Vec<Vec3>) = p.into_iter().zip(n).step_by(7).unzip();
     p.push(Vec3::new(0.5, -5.0, 0.5));
     n.push(Vec3::NEG_Y);
-    for rays_per_invocation in [FieldGpuOptions::default().rays_per_invocation, 4096] {
+    // The queued kernel with the lookup tables fits 4096 rays into one lavapipe invocation's
+    // loop budget (few loop trips a lookup); the per-invocation kernel without the tables
+    // (the ring search's loops for every ray) does not, and must split them.
+    let default_rays = FieldGpuOptions::default().rays_per_invocation;
+    for (rays_per_invocation, lookup_tables) in [(default_rays, true), (4096, true), (4096, false)]
+    {
         let gpu_opts = FieldGpuOptions {
             rays_per_invocation,
+            lookup_tables,
+            queue_rays: lookup_tables,
             ..Default::default()
         };
         let mut kernel = FieldAoKernel::new(ctx, std::slice::from_ref(&inst), &gpu_opts).unwrap();
@@ -770,7 +887,10 @@ fn field_ao_at_4096_rays_per_point_matches_the_cpu() {
             assert_occlusion_is_nontrivial(&cpu);
             assert_eq!(*cpu.last().unwrap(), 1.0);
             let q = parity(&gpu, &cpu);
-            let label = format!("4096 rays, {rays_per_invocation} per invocation, {selection:?}");
+            let label = format!(
+                "4096 rays, {rays_per_invocation} per invocation, tables {lookup_tables}, \
+                 {selection:?}"
+            );
             eprintln!(
                 "{label}: {} vertices, max |Δ| {:.2}/255, {} over 1/255, RMS {:.4}/255, kernel \
                  {:?}, wall {:?}",
@@ -786,9 +906,9 @@ fn field_ao_at_4096_rays_per_point_matches_the_cpu() {
                 panic!("{label}: see {}", path.display());
             }
         }
-        // On lavapipe 4096 rays (about 31 loop iterations each) cannot run in one invocation:
-        // the kernel must have split them.
-        if ctx.is_cpu_adapter() && rays_per_invocation == 4096 {
+        // On lavapipe 4096 rays through the per-invocation kernel without the tables (about 31
+        // loop iterations each) cannot run in one invocation: the kernel must have split them.
+        if ctx.is_cpu_adapter() && rays_per_invocation == 4096 && !lookup_tables {
             assert!(kernel.rays_per_invocation() <= 2048);
         }
     }
@@ -1115,6 +1235,10 @@ fn main() {
             (
                 "nearest_map_texel_and_samples_agree_with_the_cpu",
                 nearest_map_texel_and_samples_agree_with_the_cpu,
+            ),
+            (
+                "lookup_tables_choose_the_maps_and_texels_of_the_search",
+                lookup_tables_choose_the_maps_and_texels_of_the_search,
             ),
             (
                 "field_ao_matches_the_cpu_for_every_precision_layout_and_selection",

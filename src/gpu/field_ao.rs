@@ -3,8 +3,9 @@
 //!
 //! One thread per receiver point loops over the point's rays and over the instances
 //! (shaders/field_ao.wgsl); the lookup is a line-by-line f32 port of `field::lookup` and
-//! `field::scene`: the Slater / lat-long nearest point (4 rings × 2 azimuths), the Duff frame,
-//! the three layouts' `to_texel`, the interpolated selection's triangle walk and bilinear
+//! `field::scene`: the Slater / lat-long nearest point (the CPU's owner table, else its cube grid's
+//! candidates, else 4 rings × 2 azimuths), the Duff frame, the three layouts' `to_texel` (the concentric one after the CPU's
+//! texel table), the interpolated selection's triangle walk and bilinear
 //! footprint. On lavapipe it reproduces the CPU AO bit for bit in the parity tests.
 //!
 //! Deviations from the CPU path: the world-space ray–sphere test and the entry point are
@@ -55,6 +56,12 @@ pub struct FieldGpuOptions {
     /// invocation answers its own rays (`ao_main_direct`, kept for comparison; the answers are
     /// the same). See docs/gpu.md, "Field kernel speed on lavapipe".
     pub queue_rays: bool,
+    /// Read each field's owner table (the CPU's `SpherePoints::nearest` table) and texel table
+    /// on the device before the ring search and the concentric map, which remain for the cells
+    /// the tables leave open (the default); `false`: the ring search and the map alone. The
+    /// same map and texel but for f32 near-ties (docs/gpu.md, "Field kernel speed on
+    /// lavapipe").
+    pub lookup_tables: bool,
 }
 
 impl FieldGpuOptions {
@@ -66,6 +73,7 @@ impl FieldGpuOptions {
             window_bytes: self.window_bytes,
             max_texture_depth: self.max_texture_depth,
             kernel_storage_buffers,
+            lookup_tables: self.lookup_tables,
         }
     }
 
@@ -85,6 +93,7 @@ impl Default for FieldGpuOptions {
             rays_per_invocation: super::loop_budget::DEFAULT_RAYS_PER_INVOCATION,
             max_texture_depth: None,
             queue_rays: true,
+            lookup_tables: true,
         }
     }
 }

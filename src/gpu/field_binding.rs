@@ -6,13 +6,14 @@
 //! shaders/field_lookup.wgsl) reads:
 //!
 //! - the per-instance records ([`super::FieldInstanceGpu`]), the shared tables (sphere points,
-//!   1-bit means) and the sphere triangulations ([`PackedFields`]);
+//!   1-bit means) and the sphere triangulations followed by the owner and texel tables
+//!   ([`PackedFields`]; shaders/lookup_tables.wgsl);
 //! - the stored distances: storage-buffer windows of at most the adapter's binding size, or the
 //!   tiles of one 3D texture ([`FieldTexture`]);
 //! - the bind-group layout and the bind group of group [`FIELD_GROUP`] holding them;
 //! - the WGSL text of the lookup: the group's declarations and the layout's `load_word` /
-//!   `load_element`, then frame, sphere points, layouts, lookup and the layout's
-//!   `load_distance` ([`FieldBinding::shader_source`]).
+//!   `load_element`, then frame, sphere points, layouts, lookup, lookup tables and the
+//!   layout's `load_distance` ([`FieldBinding::shader_source`]).
 //!
 //! A field kernel (AO today, [`super::FieldAoKernel`]) builds a `FieldBinding`, declares only
 //! its own bindings in group 0 and its entry points, compiles with
@@ -57,6 +58,9 @@ pub(crate) struct FieldBindingOptions {
     /// Storage buffers the kernel binds itself (group 0): the windows get what is left of the
     /// adapter's `max_storage_buffers_per_shader_stage`.
     pub kernel_storage_buffers: u32,
+    /// Upload each field's owner and texel tables and read them before the ring search and
+    /// the concentric map (`OWNER_TABLES`, `TEXEL_TABLES` in the WGSL lookup).
+    pub lookup_tables: bool,
 }
 
 /// The fields' stored distances on the device.
@@ -172,7 +176,7 @@ impl FieldBinding {
         instances: &[FieldInstance],
         opts: &FieldBindingOptions,
     ) -> Result<FieldBinding, GpuError> {
-        let mut packed = PackedFields::new(instances)?;
+        let mut packed = PackedFields::new(instances, opts.lookup_tables)?;
         let (store, field_bytes) = match opts.layout {
             FieldLayout::StorageBuffers => upload_windows(ctx, &mut packed, opts)?,
             FieldLayout::Texture3d => upload_texture(ctx, &mut packed, opts)?,
@@ -217,6 +221,7 @@ impl FieldBinding {
             include_str!("../../shaders/sphere_points.wgsl"),
             include_str!("../../shaders/layouts.wgsl"),
             include_str!("../../shaders/field_lookup.wgsl"),
+            include_str!("../../shaders/lookup_tables.wgsl"),
             self.layout_source,
         ];
         parts.extend_from_slice(kernel);
@@ -343,6 +348,9 @@ fn group_prelude() -> String {
 /// `FIXED_SPHERE`, `FIXED_LAYOUT` and `FIXED_PRECISION`: the code every instance shares, or
 /// `VARIES` (WGSL `fixed_or`). With them the shader compiler drops the branches of the other
 /// kinds; llvmpipe would otherwise run every branch of a lookup, masked, for every ray.
+/// `OWNER_TABLES` and `TEXEL_TABLES`: whether any instance has that table (without, the
+/// compiler drops the table reads and the lookup is the ring search and the layout's map).
+/// `SINGLE_INSTANCE`: one instance is bound (kernels drop their loops over the others).
 fn kinds_prelude(instances: &[FieldInstanceGpu]) -> String {
     let shared = |f: fn(&FieldInstanceGpu) -> u32| -> u32 {
         match instances.first().map(f) {
@@ -355,11 +363,17 @@ fn kinds_prelude(instances: &[FieldInstanceGpu]) -> String {
          const FIXED_SPHERE: u32 = {}u;\n\
          const FIXED_LAYOUT: u32 = {}u;\n\
          const FIXED_PRECISION: u32 = {}u;\n\
+         const OWNER_TABLES: bool = {};\n\
+         const TEXEL_TABLES: bool = {};\n\
+         const SINGLE_INSTANCE: bool = {};\n\
          // `fixed` where every instance shares it, else the instance's own `value`.\n\
          fn fixed_or(fixed: u32, value: u32) -> u32 {{ return select(fixed, value, fixed == VARIES); }}\n",
         shared(|i| i.sphere_kind),
         shared(|i| i.layout_kind),
         shared(|i| i.storage_precision),
+        instances.iter().any(|i| i.owner_grid > 0),
+        instances.iter().any(|i| i.texel_grid > 0),
+        instances.len() == 1,
     )
 }
 

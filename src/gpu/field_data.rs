@@ -58,16 +58,29 @@ pub struct FieldInstanceGpu {
     pub tile_width: u32,
     /// Tile height in elements (texture layout).
     pub tile_height: u32,
-    pub _pad0: u32,
+    /// Owner table ([`crate::sampling::SpherePoints::nearest`]'s): cells per cube face edge, 0
+    /// for none.
+    pub owner_grid: u32,
     /// The intra-object tolerance ([`crate::field::IntraTolerance`]): positional part (model
     /// units).
     pub intra_positional: f32,
     /// The intra-object tolerance's directional part (radians).
     pub intra_directional: f32,
-    pub _pad1: f32,
-    pub _pad2: f32,
+    /// First owner-table code in the mesh buffer, in 16-bit halves of its words.
+    pub owner_base: u32,
+    /// First owner-table pair in the mesh buffer, in words (low half p, high half q).
+    pub pair_base: u32,
+    /// Texel table ([`crate::sampling::TexelTable`]): cells per side, 0 for none.
+    pub texel_grid: u32,
+    /// First texel-table cell in the mesh buffer, in 16-bit halves of its words.
+    pub texel_base: u32,
+    /// Candidate grid (the cube grid of [`crate::sampling::SpherePoints::nearest`]'s search,
+    /// read for the owner table's MIXED cells): cells per face edge, 0 for none.
+    pub cand_grid: u32,
+    /// First candidate-grid cell in the mesh buffer, in entries (four candidates each).
+    pub cand_base: u32,
 }
-const _: () = assert!(std::mem::size_of::<FieldInstanceGpu>() == 144);
+const _: () = assert!(std::mem::size_of::<FieldInstanceGpu>() == 160);
 const _: () = assert!(std::mem::offset_of!(FieldInstanceGpu, scale) == 28);
 const _: () = assert!(std::mem::offset_of!(FieldInstanceGpu, model_center) == 48);
 const _: () = assert!(std::mem::offset_of!(FieldInstanceGpu, sphere_kind) == 64);
@@ -75,6 +88,7 @@ const _: () = assert!(std::mem::offset_of!(FieldInstanceGpu, resolution) == 80);
 const _: () = assert!(std::mem::offset_of!(FieldInstanceGpu, point_base) == 96);
 const _: () = assert!(std::mem::offset_of!(FieldInstanceGpu, tiles_per_slice) == 112);
 const _: () = assert!(std::mem::offset_of!(FieldInstanceGpu, intra_positional) == 128);
+const _: () = assert!(std::mem::offset_of!(FieldInstanceGpu, texel_grid) == 144);
 
 /// Precision code shared with the shaders.
 pub(crate) fn precision_code(s: &Storage) -> u32 {
@@ -119,7 +133,8 @@ pub(crate) struct PackedFields {
     /// Per field its points (w: bits of an incident triangle) and its 1-bit means (four per
     /// entry).
     pub tables: Vec<[f32; 4]>,
-    /// Per triangle: vertices, then the triangles across the edges opposite them.
+    /// Per triangle: vertices, then the triangles across the edges opposite them; then each
+    /// field's lookup tables ([`lookup_tables`]).
     pub mesh: Vec<[u32; 4]>,
     /// The distinct fields, and which one each instance uses.
     pub fields: Vec<Arc<VisibilityField>>,
@@ -129,7 +144,9 @@ pub(crate) struct PackedFields {
 impl PackedFields {
     /// Packs `instances`. The data references (`data_base`) and the texture tiles are left for
     /// the layout to fill.
-    pub fn new(instances: &[FieldInstance]) -> Result<Self, GpuError> {
+    /// `lookup_tables`: also pack each field's owner and texel tables (the lookup reads them
+    /// first).
+    pub fn new(instances: &[FieldInstance], with_tables: bool) -> Result<Self, GpuError> {
         let mut tables: Vec<[f32; 4]> = Vec::new();
         let mut mesh: Vec<[u32; 4]> = Vec::new();
         let mut fields: Vec<Arc<VisibilityField>> = Vec::new();
@@ -163,7 +180,19 @@ impl PackedFields {
                         mesh.push([a[0], a[1], a[2], 0]);
                     }
                     let steps = 64 + 4 * (f.points.len() as f64).sqrt() as u32;
+                    let lookup = if with_tables {
+                        lookup_tables(f, &mut mesh)
+                    } else {
+                        LookupTables::default()
+                    };
                     records.push(FieldInstanceGpu {
+                        owner_grid: lookup.owner_grid,
+                        owner_base: lookup.owner_base,
+                        pair_base: lookup.pair_base,
+                        texel_grid: lookup.texel_grid,
+                        texel_base: lookup.texel_base,
+                        cand_grid: lookup.cand_grid,
+                        cand_base: lookup.cand_base,
                         sphere_kind: sphere,
                         map_count: f.params.count as u32,
                         ring_param: ring,
@@ -219,6 +248,62 @@ impl PackedFields {
             inst.data_base = base_of_field[fi];
         }
     }
+}
+
+/// Where a field's lookup tables lie in the mesh buffer (0 cells: no table).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct LookupTables {
+    owner_grid: u32,
+    owner_base: u32,
+    pair_base: u32,
+    texel_grid: u32,
+    texel_base: u32,
+    cand_grid: u32,
+    cand_base: u32,
+}
+
+/// Appends `f`'s owner table (codes, then pairs), candidate grid and texel table to `mesh`,
+/// each starting on an entry (16-byte) boundary, u16 codes two to a word, low half first, a
+/// candidate cell one entry. The owner table and the candidate grid are left out when the set
+/// has ≥ 2¹⁶ − 1 points (every owner cell would send the query to the search); the texel table
+/// is empty but for concentric maps of res ≤ 255.
+fn lookup_tables(f: &VisibilityField, mesh: &mut Vec<[u32; 4]>) -> LookupTables {
+    // u16 values packed into whole entries; returns the first half's index.
+    fn push_halves(mesh: &mut Vec<[u32; 4]>, halves: impl ExactSizeIterator<Item = u16>) -> u32 {
+        let first = mesh.len() as u32 * 8;
+        let n = halves.len();
+        let start = mesh.len();
+        mesh.resize(start + n.div_ceil(8), [0; 4]);
+        for (k, h) in halves.enumerate() {
+            mesh[start + k / 8][(k / 2) % 4] |= (h as u32) << (16 * (k % 2));
+        }
+        first
+    }
+    let mut out = LookupTables::default();
+    let (g, codes, pairs) = f.points.owner_table_raw();
+    if f.points.len() < u16::MAX as usize && !codes.is_empty() {
+        out.owner_grid = g;
+        out.owner_base = push_halves(mesh, codes.iter().copied());
+        out.pair_base = mesh.len() as u32 * 4;
+        push_halves(
+            mesh,
+            pairs
+                .iter()
+                .flat_map(|&[p, q]| [p, q])
+                .collect::<Vec<_>>()
+                .into_iter(),
+        );
+        let (cg, slots) = f.points.candidate_slots_raw();
+        out.cand_grid = cg;
+        out.cand_base = mesh.len() as u32;
+        mesh.extend_from_slice(slots);
+    }
+    let cells = f.texels.raw_cells();
+    if f.texels.cells_per_side() > 0 && f.texels.layout() == f.layout {
+        out.texel_grid = f.texels.cells_per_side();
+        out.texel_base = push_halves(mesh, cells.iter().copied());
+    }
+    out
 }
 
 /// The triangle incident to each vertex (the last one listing it, as on the host) and, per
@@ -380,6 +465,53 @@ mod tests {
     }
 
     #[test]
+    fn lookup_tables_decode_to_the_hosts_tables() {
+        use crate::field::scene::FieldInstance;
+        use crate::geometry::Similarity;
+        // Two fields: the second's tables follow the first's mesh and tables.
+        let (a, b) = (field(Precision::U8, 16, 3), field(Precision::U8, 7, 4));
+        let insts = [a.clone(), b.clone()].map(|f| FieldInstance::new(f, Similarity::default()));
+        let packed = PackedFields::new(&insts, true).unwrap();
+        let half = |h: u32| {
+            (packed.mesh[(h / 8) as usize][((h / 2) % 4) as usize] >> (16 * (h % 2))) & 0xffff
+        };
+        for (f, inst) in [a, b].iter().zip(&packed.instances) {
+            let (g, codes, pairs) = f.points.owner_table_raw();
+            assert_eq!(inst.owner_grid, g);
+            assert!(g > 0 && codes.len() == 6 * (g * g) as usize);
+            for (k, &c) in codes.iter().enumerate() {
+                assert_eq!(half(inst.owner_base + k as u32), c as u32, "owner cell {k}");
+            }
+            for (k, &[p, q]) in pairs.iter().enumerate() {
+                let w = packed.mesh[((inst.pair_base + k as u32) / 4) as usize]
+                    [((inst.pair_base + k as u32) % 4) as usize];
+                assert_eq!((w & 0xffff, w >> 16), (p as u32, q as u32), "pair {k}");
+            }
+            let (cg, slots) = f.points.candidate_slots_raw();
+            assert_eq!(inst.cand_grid, cg);
+            let base = inst.cand_base as usize;
+            assert_eq!(&packed.mesh[base..base + slots.len()], slots);
+            let cells = f.texels.raw_cells();
+            assert_eq!(inst.texel_grid, f.texels.cells_per_side());
+            assert_eq!(cells.len(), (inst.texel_grid * inst.texel_grid) as usize);
+            for (k, &t) in cells.iter().enumerate() {
+                assert_eq!(half(inst.texel_base + k as u32), t as u32, "texel cell {k}");
+            }
+        }
+        // Without tables: no cells, nothing appended after the triangulations.
+        let bare = PackedFields::new(&insts, false).unwrap();
+        assert!(bare
+            .instances
+            .iter()
+            .all(|i| i.owner_grid == 0 && i.texel_grid == 0 && i.cand_grid == 0));
+        let tris: usize = insts
+            .iter()
+            .map(|i| 2 * i.field.points.triangles().len())
+            .sum();
+        assert_eq!(bare.mesh.len(), tris);
+    }
+
+    #[test]
     fn adjacency_matches_a_brute_force_edge_search() {
         let f = field(Precision::U8, 4, 0);
         let tris = f.points.triangles();
@@ -410,7 +542,7 @@ mod tests {
             FieldInstance::new(b.clone(), Similarity::default()),
             FieldInstance::new(a.clone(), Similarity::default()),
         ];
-        let packed = PackedFields::new(&insts).unwrap();
+        let packed = PackedFields::new(&insts, false).unwrap();
         // Two distinct fields; the third instance reuses the first.
         assert_eq!(packed.fields.len(), 2);
         assert_eq!(packed.field_of_instance, vec![0, 1, 0]);

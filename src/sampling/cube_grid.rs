@@ -463,6 +463,13 @@ impl CubeGrid {
         self.point_start.len() - 1
     }
 
+    /// The raw candidate slots for the GPU lookup (src/gpu/field_data.rs): cells per face edge
+    /// g and per cell its first four candidates (padded with repeats of the first) or, in the
+    /// first slot, `u32::MAX` when it has more.
+    pub(crate) fn raw_slots(&self) -> (u32, &[[u32; SLOTS]]) {
+        (self.g, &self.slots)
+    }
+
     /// The cell of direction `d` (any length; zero and NaN give some valid cell).
     #[inline]
     pub fn cell(&self, d: Vec3) -> usize {

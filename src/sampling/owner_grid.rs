@@ -166,6 +166,13 @@ impl OwnerGrid {
         crate::hint::prefetch_value(self.owner.as_ptr().wrapping_add(cell));
     }
 
+    /// The raw table for the GPU lookup (src/gpu/field_data.rs): cells per face edge g, the
+    /// per-cell codes ([`Self::new`]'s: owner < n, pair n + k, `u16::MAX` for the search) and
+    /// the pairs.
+    pub(crate) fn raw(&self) -> (u32, &[u16], &[[u16; 2]]) {
+        (self.g, &self.owner, &self.pairs)
+    }
+
     /// Bytes held by the table.
     pub fn bytes(&self) -> usize {
         self.owner.len() * std::mem::size_of::<u16>()

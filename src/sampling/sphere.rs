@@ -287,6 +287,19 @@ impl SpherePoints {
         self.owners.owner(&self.points, d)
     }
 
+    /// The owner table of [`Self::nearest`] as stored (the GPU lookup uploads it): cells per
+    /// face edge, per-cell codes (owner < len, pair len + k, `u16::MAX` for the search), pairs.
+    pub(crate) fn owner_table_raw(&self) -> (u32, &[u16], &[[u16; 2]]) {
+        self.owners.raw()
+    }
+
+    /// The candidate slots of the cube grid that [`Self::nearest`] searches where the owner
+    /// table leaves a cell open (the GPU lookup uploads them): cells per face edge, per cell
+    /// four candidates or `u32::MAX` first when it has more.
+    pub(crate) fn candidate_slots_raw(&self) -> (u32, &[[u32; 4]]) {
+        self.grid.raw_slots()
+    }
+
     /// Bytes of the owner table that answers most [`Self::nearest`] queries.
     pub fn owner_table_bytes(&self) -> usize {
         self.owners.bytes()

@@ -199,6 +199,12 @@ impl TexelTable {
         self.g
     }
 
+    /// The raw cells for the GPU lookup (src/gpu/field_data.rs), row-major, G × G: a texel,
+    /// or `u16::MAX` for `to_texel`.
+    pub(crate) fn raw_cells(&self) -> &[u16] {
+        &self.texel
+    }
+
     /// Bytes held by the table.
     pub fn bytes(&self) -> usize {
         self.texel.len() * std::mem::size_of::<u16>()
