@@ -6,7 +6,8 @@
 //! backend answers the same rays in the same pass: our ray caster (obvhs CWBVH + watertight
 //! triangles), Embree where the crate is built with `--features embree`, the field's batched
 //! nearest lookup, and the two cost floors of [`floor`] (what any lookup must do at least).
-//! Each time is the fastest of a few passes after an untimed one.
+//! Each time is the fastest of a few passes after an untimed one, the backends taking turns
+//! pass by pass so that each meets the same load on a shared machine.
 //!
 //! Three sweeps, each written to `table.csv` (column `sweep`) and plotted:
 //! - `triangles`: real models from 3.7k to 269k triangles, one field shape (4226 × 32² u8);
@@ -92,7 +93,7 @@ impl Profile {
         } else {
             Profile {
                 stride: 1,
-                passes: 3,
+                passes: 9,
                 models: vec![
                     "bunny_npm",
                     "elephant",
@@ -191,17 +192,20 @@ struct Backend<'a> {
     setup_s: f64,
 }
 
-/// Fastest of `passes` timed passes of `pass` after an untimed one; its answer (share free).
-fn time(passes: usize, pass: impl Fn() -> f64) -> (f64, f64) {
-    let free = pass();
-    let mut best = f64::INFINITY;
+/// For each of `passes_of`: the fastest of `passes` timed passes after an untimed one, and its
+/// answer (share free). The backends take turns pass by pass (round k times pass k of each),
+/// so that a change of load on a shared machine meets all of them, not the one timed then.
+fn time_interleaved(passes: usize, passes_of: &[&dyn Fn() -> f64]) -> Vec<(f64, f64)> {
+    let mut timed: Vec<(f64, f64)> = passes_of.iter().map(|p| (f64::INFINITY, p())).collect();
     for _ in 0..passes {
-        let t = Instant::now();
-        let f = pass();
-        best = best.min(t.elapsed().as_secs_f64());
-        assert_eq!(f.to_bits(), free.to_bits(), "a pass changed its answer");
+        for (pass, (best, free)) in passes_of.iter().zip(timed.iter_mut()) {
+            let t = Instant::now();
+            let f = pass();
+            *best = best.min(t.elapsed().as_secs_f64());
+            assert_eq!(f.to_bits(), free.to_bits(), "a pass changed its answer");
+        }
     }
-    (best, free)
+    timed
 }
 
 /// Rows of every backend on the same vertex-AO rays.
@@ -217,15 +221,16 @@ fn measure_ao(
     opts: &AoOptions,
     passes: usize,
 ) -> Vec<PerfRow> {
-    let timed: Vec<(f64, f64)> = backends
+    let mean_ao = |b: &Backend| {
+        let ao = ao_at_points(&*b.vis, &rays.points, &rays.normals, &rays.set, opts);
+        ao.iter().map(|&v| v as f64).sum::<f64>() / ao.len().max(1) as f64
+    };
+    let passes_of: Vec<Box<dyn Fn() -> f64 + '_>> = backends
         .iter()
-        .map(|b| {
-            time(passes, || {
-                let ao = ao_at_points(&*b.vis, &rays.points, &rays.normals, &rays.set, opts);
-                ao.iter().map(|&v| v as f64).sum::<f64>() / ao.len().max(1) as f64
-            })
-        })
+        .map(|b| Box::new(move || mean_ao(b)) as Box<dyn Fn() -> f64>)
         .collect();
+    let refs: Vec<&dyn Fn() -> f64> = passes_of.iter().map(|p| &**p).collect();
+    let timed = time_interleaved(passes, &refs);
     rows(
         sweep,
         caster,
@@ -361,7 +366,7 @@ pub fn plan(quick: bool) -> String {
     let field = |(c, r, pr): &(usize, u32, Precision)| format!("{c}x{r}² {}", pr.name());
     format!(
         "performance ({}): 256 AO rays at every{} corner vertex, best of {} passes after an \
-         untimed one, on ray casting (ours{}), the field lookup and the two floors\n  \
+         untimed one, the backends taking turns, on ray casting (ours{}), the field lookup and the two floors\n  \
          triangles: {} with {}\n  field_size (stanford-bunny_39k): {}\n  \
          entering shares: {}",
         if quick { "quick" } else { "full" },
@@ -449,10 +454,15 @@ pub fn run(out: &Path, quick: bool, supply: &FieldSupply) -> Result<Vec<PerfRow>
             all.extend(field_backends(&fs, bake_s));
             for &p in &prof.shares {
                 let dirs = entering_rays(&rays, world.center, world.radius, &opts, p);
-                let timed: Vec<(f64, f64)> = all
+                let passes_of: Vec<Box<dyn Fn() -> f64 + '_>> = all
                     .iter()
-                    .map(|b| time(prof.passes, || free_share(&*b.vis, &dirs, &opts)))
+                    .map(|b| {
+                        let (dirs, opts) = (&dirs, &opts);
+                        Box::new(move || free_share(&*b.vis, dirs, opts)) as Box<dyn Fn() -> f64>
+                    })
                     .collect();
+                let refs: Vec<&dyn Fn() -> f64> = passes_of.iter().map(|p| &**p).collect();
+                let timed = time_interleaved(prof.passes, &refs);
                 let n = dirs.iter().map(|d| d.1.len() as u64).sum();
                 // The share drawn: round(p · 256) of each receiver's 256 rays.
                 let k = rays.set.len() as f64;
