@@ -6,8 +6,9 @@
 //! backend answers the same rays in the same pass: our ray caster (obvhs CWBVH + watertight
 //! triangles), Embree where the crate is built with `--features embree`, the field's batched
 //! nearest lookup, and the two cost floors of [`floor`] (what any lookup must do at least).
-//! Each time is the fastest of a few passes after an untimed one, the backends taking turns
-//! pass by pass so that each meets the same load on a shared machine.
+//! Each time is the fastest of a few passes, the backends taking turns pass by pass so that
+//! each meets the same load on a shared machine, each timed pass right after an untimed one of
+//! the same backend (warm caches).
 //!
 //! Three sweeps, each written to `table.csv` (column `sweep`) and plotted:
 //! - `triangles`: real models from 3.7k to 269k triangles, one field shape (4226 × 32² u8);
@@ -93,7 +94,7 @@ impl Profile {
         } else {
             Profile {
                 stride: 1,
-                passes: 9,
+                passes: 6,
                 models: vec![
                     "bunny_npm",
                     "elephant",
@@ -192,13 +193,17 @@ struct Backend<'a> {
     setup_s: f64,
 }
 
-/// For each of `passes_of`: the fastest of `passes` timed passes after an untimed one, and its
-/// answer (share free). The backends take turns pass by pass (round k times pass k of each),
-/// so that a change of load on a shared machine meets all of them, not the one timed then.
+/// For each of `passes_of`: the fastest of `passes` timed passes, and its answer (share free).
+/// The backends take turns (round k runs each backend's pass k), so that a change of load on a
+/// shared machine meets all of them, not the one timed then; each timed pass follows an untimed
+/// one of the same backend, so that it finds its own data in the caches, as it would when run
+/// alone, not the previous backend's.
 fn time_interleaved(passes: usize, passes_of: &[&dyn Fn() -> f64]) -> Vec<(f64, f64)> {
     let mut timed: Vec<(f64, f64)> = passes_of.iter().map(|p| (f64::INFINITY, p())).collect();
     for _ in 0..passes {
         for (pass, (best, free)) in passes_of.iter().zip(timed.iter_mut()) {
+            let warm = pass();
+            assert_eq!(warm.to_bits(), free.to_bits(), "a pass changed its answer");
             let t = Instant::now();
             let f = pass();
             *best = best.min(t.elapsed().as_secs_f64());
@@ -365,8 +370,8 @@ pub fn plan(quick: bool) -> String {
     let p = Profile::new(quick);
     let field = |(c, r, pr): &(usize, u32, Precision)| format!("{c}x{r}² {}", pr.name());
     format!(
-        "performance ({}): 256 AO rays at every{} corner vertex, best of {} passes after an \
-         untimed one, the backends taking turns, on ray casting (ours{}), the field lookup and the two floors\n  \
+        "performance ({}): 256 AO rays at every{} corner vertex, best of {} passes, the \
+         backends taking turns, each timed pass after an untimed one, on ray casting (ours{}), the field lookup and the two floors\n  \
          triangles: {} with {}\n  field_size (stanford-bunny_39k): {}\n  \
          entering shares: {}",
         if quick { "quick" } else { "full" },
