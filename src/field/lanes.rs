@@ -210,12 +210,13 @@ fn crossings_scalar(from: &SphereOrigin, dirs: &[Vec3], out: &mut [Option<Sphere
 /// `out[k] = NearestRead::of(field, at[k].u, at[k].dir)` for every `k`, with each read's
 /// storage prefetched ([`crate::field::lookup::Reads::of_block`]): the owner-table cell of
 /// every crossing, then its map, then the map's frame turning the direction into the map's
-/// frame and the texel-table cell, then the texel, in stages of sixteen crossings. With AVX2
-/// the cells and the rotation run eight crossings per instruction (the same IEEE operations in
-/// the same order as [`crate::sampling::SpherePoints::nearest`],
-/// [`crate::sampling::Frame::to_local`] and [`crate::sampling::TexelTable::texel`]); the table
-/// reads and their fallbacks (the candidate search, the exact texel) run one crossing at a
-/// time in both.
+/// frame, then the texel, in stages of sixteen crossings. With AVX2 the owner cells, the
+/// rotation and, for concentric maps, the texel itself (the layout's libm-free path, in place of
+/// the texel table) run eight crossings per instruction, with the same IEEE operations in the
+/// same order as [`crate::sampling::SpherePoints::nearest`],
+/// [`crate::sampling::Frame::to_local`] and [`crate::sampling::HemisphereLayout::to_texel`];
+/// the owner-table reads and the fallbacks (the candidate search, the texel table and the exact
+/// texel where the fast path defers) run one crossing at a time.
 ///
 /// # Panics
 /// If `at` and `out` differ in length.

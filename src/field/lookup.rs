@@ -240,8 +240,9 @@ impl Reads for NearestRead {
     /// texel-table cells, then the stored texels, [`STAGE`] crossings at a time. Each stage's
     /// cache misses overlap instead of queueing behind each other (a lookup's owner cell,
     /// frame and texel-table cell are dependent reads); the answers are those of
-    /// [`Reads::of`]. Where the CPU has AVX2 the cells and the model-to-map rotation are
-    /// computed eight crossings per instruction ([`super::lanes::nearest_reads`]).
+    /// [`Reads::of`]. Where the CPU has AVX2 the owner cells, the rotation into each map's
+    /// frame and the concentric texel are computed eight crossings per instruction
+    /// ([`super::lanes::nearest_reads`]).
     #[inline]
     fn of_block(field: &VisibilityField, at: &[Crossed], out: &mut [Self]) {
         super::lanes::nearest_reads(super::lanes::Isa::detect(), field, at, out);
