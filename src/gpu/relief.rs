@@ -51,6 +51,7 @@ const _: () = assert!(std::mem::offset_of!(ReliefParamsGpu, samples_per_unit) ==
 const _: () = assert!(std::mem::offset_of!(ReliefParamsGpu, deltas) == 32);
 const _: () = assert!(std::mem::offset_of!(ReliefParamsGpu, trips) == 48);
 
+/// The hit word of a ray that misses, in both relief kernels.
 const MISS: u32 = u32::MAX;
 
 /// Loop iterations one invocation may take: lavapipe ends every invocation's loops after
@@ -155,71 +156,83 @@ impl<'a> ReliefKernel<'a> {
             )));
         }
         let ctx = self.ctx;
-        let data: Vec<[[f32; 4]; 2]> = segments
-            .iter()
-            .map(|(e, x)| [e.extend(1.0).to_array(), x.extend(0.0).to_array()])
-            .collect();
-        let packed = start.elapsed();
-        let (words, kernel, upload) = ctx.run_batched(
-            &self.pipeline,
-            &[],
-            &data,
-            "relief segment",
-            (1, 2),
-            |part, stride, out| {
-                let uniform = ReliefParamsGpu {
-                    size: self.size,
-                    count: part.len() as u32,
-                    stride,
-                    samples_per_unit: params.samples_per_unit,
-                    bisections: params.bisections,
-                    skips: params.skips,
-                    channels: self.channels,
-                    deltas: self.deltas,
-                    trips: COMPLETION_TRIPS,
-                    step: 1.0 / params.samples_per_unit,
-                    _pad1: 0,
-                    _pad2: 0,
-                };
-                let uniform = ctx.uniform_buffer("relief params", bytemuck::bytes_of(&uniform));
-                let rays = ctx.storage_buffer("segments", bytemuck::cast_slice(part));
-                ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("relief"),
-                    layout: &self.pipeline.get_bind_group_layout(0),
-                    entries: &[
-                        entry(0, uniform.as_entire_binding()),
-                        entry(1, self.heights.as_entire_binding()),
-                        entry(2, self.dilation.as_entire_binding()),
-                        entry(3, self.erosion.as_entire_binding()),
-                        entry(4, rays.as_entire_binding()),
-                        entry(5, out.as_entire_binding()),
-                    ],
-                })
-            },
-        )?;
-        let upload = packed + upload;
-        let cut = words.chunks_exact(2).filter(|w| w[1] == CUT_SHORT).count();
-        if cut > 0 {
-            return Err(GpuError::Unsupported(format!(
-                "{cut} of {} relief rays were cut short by the driver's loop budget per \
-                 invocation (lavapipe: 65,535 iterations)",
-                segments.len()
-            )));
-        }
-        let casts = words
-            .chunks_exact(2)
-            .map(|w| Cast {
-                hit: (w[0] != MISS).then(|| f32::from_bits(w[0])),
-                fetches: w[1],
+        cast_segments(ctx, &self.pipeline, segments, start, |part, stride, out| {
+            let uniform = ReliefParamsGpu {
+                size: self.size,
+                count: part.len() as u32,
+                stride,
+                samples_per_unit: params.samples_per_unit,
+                bisections: params.bisections,
+                skips: params.skips,
+                channels: self.channels,
+                deltas: self.deltas,
+                trips: COMPLETION_TRIPS,
+                step: 1.0 / params.samples_per_unit,
+                _pad1: 0,
+                _pad2: 0,
+            };
+            let uniform = ctx.uniform_buffer("relief params", bytemuck::bytes_of(&uniform));
+            let rays = ctx.storage_buffer("segments", bytemuck::cast_slice(part));
+            ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("relief"),
+                layout: &self.pipeline.get_bind_group_layout(0),
+                entries: &[
+                    entry(0, uniform.as_entire_binding()),
+                    entry(1, self.heights.as_entire_binding()),
+                    entry(2, self.dilation.as_entire_binding()),
+                    entry(3, self.erosion.as_entire_binding()),
+                    entry(4, rays.as_entire_binding()),
+                    entry(5, out.as_entire_binding()),
+                ],
             })
-            .collect();
-        Ok((
-            casts,
-            GpuTiming {
-                kernel,
-                upload,
-                wall: start.elapsed(),
-            },
-        ))
+        })
     }
+}
+
+/// A segment as the relief kernels read it: entry point (w = 1) and exit point (w = 0).
+pub(super) type SegmentGpu = [[f32; 4]; 2];
+
+/// Runs a relief kernel (`shaders/relief.wgsl` or `shaders/relief_peers.wgsl`, which share the
+/// segment input and the (hit, fetches) output) over `segments` in batches: `bind(part, stride,
+/// out)` binds one batch's segments and parameters. The casts, or an error when the driver's
+/// loop budget cut any ray short; `start` is when the caller began (the wall time includes its
+/// checks).
+pub(super) fn cast_segments(
+    ctx: &GpuContext,
+    pipeline: &wgpu::ComputePipeline,
+    segments: &[(Vec3, Vec3)],
+    start: Instant,
+    bind: impl FnMut(&[SegmentGpu], u32, &wgpu::Buffer) -> wgpu::BindGroup,
+) -> Result<(Vec<Cast>, GpuTiming), GpuError> {
+    let data: Vec<SegmentGpu> = segments
+        .iter()
+        .map(|(e, x)| [e.extend(1.0).to_array(), x.extend(0.0).to_array()])
+        .collect();
+    let packed = start.elapsed();
+    let (words, kernel, upload) =
+        ctx.run_batched(pipeline, &[], &data, "relief segment", (1, 2), bind)?;
+    let upload = packed + upload;
+    let cut = words.chunks_exact(2).filter(|w| w[1] == CUT_SHORT).count();
+    if cut > 0 {
+        return Err(GpuError::Unsupported(format!(
+            "{cut} of {} relief rays were cut short by the driver's loop budget per \
+             invocation (lavapipe: 65,535 iterations)",
+            segments.len()
+        )));
+    }
+    let casts = words
+        .chunks_exact(2)
+        .map(|w| Cast {
+            hit: (w[0] != MISS).then(|| f32::from_bits(w[0])),
+            fetches: w[1],
+        })
+        .collect();
+    Ok((
+        casts,
+        GpuTiming {
+            kernel,
+            upload,
+            wall: start.elapsed(),
+        },
+    ))
 }

@@ -12,7 +12,8 @@
 //! with the CPU's formulas instead of texture units (parity with the CPU, not speed).
 
 use super::context::{entry, storage_layout_entry, uniform_layout_entry, GpuContext};
-use super::loop_budget::{COMPLETION_TRIPS, CUT_SHORT};
+use super::loop_budget::COMPLETION_TRIPS;
+use super::relief::cast_segments;
 use super::{GpuError, GpuTiming};
 use crate::relief::peers::{in_prism, Peer, PeerData};
 use crate::relief::{Cast, HeightMap};
@@ -54,8 +55,6 @@ const _: () = assert!(std::mem::offset_of!(PeersParamsGpu, offsets) == 48);
 
 /// Max-mip levels the uniform holds: maps up to 32,766 texels a side.
 const MAX_LEVELS: usize = 16;
-
-const MISS: u32 = u32::MAX;
 
 /// Loop iterations one invocation may take (lavapipe stops every invocation's loops after
 /// 65,535 in all: `loop_budget`); settings that could need more are refused.
@@ -215,71 +214,35 @@ impl<'a> ReliefPeersKernel<'a> {
             _ => 0,
         };
         let ctx = self.ctx;
-        let data: Vec<[[f32; 4]; 2]> = segments
-            .iter()
-            .map(|(e, x)| [e.extend(1.0).to_array(), x.extend(0.0).to_array()])
-            .collect();
-        let packed = start.elapsed();
-        let (words, kernel, upload) = ctx.run_batched(
-            pipeline,
-            &[],
-            &data,
-            "relief segment",
-            (1, 2),
-            |part, stride, out| {
-                let uniform = PeersParamsGpu {
-                    size: self.size,
-                    count: part.len() as u32,
-                    stride,
-                    mip_size: self.mip_size,
-                    mip_top: self.mip_top,
-                    steps: cone_steps,
-                    bisections,
-                    relaxed,
-                    trips: COMPLETION_TRIPS,
-                    _pad0: 0,
-                    _pad1: 0,
-                    offsets: self.offsets,
-                };
-                let uniform = ctx.uniform_buffer("peers params", bytemuck::bytes_of(&uniform));
-                let rays = ctx.storage_buffer("segments", bytemuck::cast_slice(part));
-                ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("relief peers"),
-                    layout: &self.group,
-                    entries: &[
-                        entry(0, uniform.as_entire_binding()),
-                        entry(1, self.heights.as_entire_binding()),
-                        entry(2, self.mips.as_entire_binding()),
-                        entry(3, cones.as_entire_binding()),
-                        entry(4, rays.as_entire_binding()),
-                        entry(5, out.as_entire_binding()),
-                    ],
-                })
-            },
-        )?;
-        let upload = packed + upload;
-        let cut = words.chunks_exact(2).filter(|w| w[1] == CUT_SHORT).count();
-        if cut > 0 {
-            return Err(GpuError::Unsupported(format!(
-                "{cut} of {} relief rays were cut short by the driver's loop budget per \
-                 invocation (lavapipe: 65,535 iterations)",
-                segments.len()
-            )));
-        }
-        let casts = words
-            .chunks_exact(2)
-            .map(|w| Cast {
-                hit: (w[0] != MISS).then(|| f32::from_bits(w[0])),
-                fetches: w[1],
+        cast_segments(ctx, pipeline, segments, start, |part, stride, out| {
+            let uniform = PeersParamsGpu {
+                size: self.size,
+                count: part.len() as u32,
+                stride,
+                mip_size: self.mip_size,
+                mip_top: self.mip_top,
+                steps: cone_steps,
+                bisections,
+                relaxed,
+                trips: COMPLETION_TRIPS,
+                _pad0: 0,
+                _pad1: 0,
+                offsets: self.offsets,
+            };
+            let uniform = ctx.uniform_buffer("peers params", bytemuck::bytes_of(&uniform));
+            let rays = ctx.storage_buffer("segments", bytemuck::cast_slice(part));
+            ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("relief peers"),
+                layout: &self.group,
+                entries: &[
+                    entry(0, uniform.as_entire_binding()),
+                    entry(1, self.heights.as_entire_binding()),
+                    entry(2, self.mips.as_entire_binding()),
+                    entry(3, cones.as_entire_binding()),
+                    entry(4, rays.as_entire_binding()),
+                    entry(5, out.as_entire_binding()),
+                ],
             })
-            .collect();
-        Ok((
-            casts,
-            GpuTiming {
-                kernel,
-                upload,
-                wall: start.elapsed(),
-            },
-        ))
+        })
     }
 }
