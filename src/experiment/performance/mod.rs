@@ -193,19 +193,23 @@ struct Backend<'a> {
     setup_s: f64,
 }
 
-/// For each of `passes_of`: the fastest of `passes` timed passes, and its answer (share free).
-/// The backends take turns (round k runs each backend's pass k), so that a change of load on a
-/// shared machine meets all of them, not the one timed then; each timed pass follows an untimed
-/// one of the same backend, so that it finds its own data in the caches, as it would when run
-/// alone, not the previous backend's.
-fn time_interleaved(passes: usize, passes_of: &[&dyn Fn() -> f64]) -> Vec<(f64, f64)> {
-    let mut timed: Vec<(f64, f64)> = passes_of.iter().map(|p| (f64::INFINITY, p())).collect();
+/// For each backend: the fastest of `passes` timed passes of `pass(backend)`, and its answer
+/// (share free). The backends take turns (round k runs each backend's pass k), so that a change
+/// of load on a shared machine meets all of them, not the one timed then; each timed pass
+/// follows an untimed one of the same backend, so that it finds its own data in the caches, as
+/// it would when run alone, not the previous backend's.
+fn time_interleaved(
+    passes: usize,
+    backends: &[Backend],
+    pass: impl Fn(&Backend) -> f64,
+) -> Vec<(f64, f64)> {
+    let mut timed: Vec<(f64, f64)> = backends.iter().map(|b| (f64::INFINITY, pass(b))).collect();
     for _ in 0..passes {
-        for (pass, (best, free)) in passes_of.iter().zip(timed.iter_mut()) {
-            let warm = pass();
+        for (b, (best, free)) in backends.iter().zip(timed.iter_mut()) {
+            let warm = pass(b);
             assert_eq!(warm.to_bits(), free.to_bits(), "a pass changed its answer");
             let t = Instant::now();
-            let f = pass();
+            let f = pass(b);
             *best = best.min(t.elapsed().as_secs_f64());
             assert_eq!(f.to_bits(), free.to_bits(), "a pass changed its answer");
         }
@@ -230,12 +234,7 @@ fn measure_ao(
         let ao = ao_at_points(&*b.vis, &rays.points, &rays.normals, &rays.set, opts);
         ao.iter().map(|&v| v as f64).sum::<f64>() / ao.len().max(1) as f64
     };
-    let passes_of: Vec<Box<dyn Fn() -> f64 + '_>> = backends
-        .iter()
-        .map(|b| Box::new(move || mean_ao(b)) as Box<dyn Fn() -> f64>)
-        .collect();
-    let refs: Vec<&dyn Fn() -> f64> = passes_of.iter().map(|p| &**p).collect();
-    let timed = time_interleaved(passes, &refs);
+    let timed = time_interleaved(passes, backends, mean_ao);
     rows(
         sweep,
         caster,
@@ -422,9 +421,8 @@ pub fn run(out: &Path, quick: bool, supply: &FieldSupply) -> Result<Vec<PerfRow>
             .transform
             .to_world_sphere(&mesh.mesh.bounding_sphere());
         let share = rays.entering_share(world.center, world.radius, &opts);
-        let casters_b = ray_casters(&scene);
         let (fs, label, bytes, bake_s) = field_scene(supply, mesh, &scene, prof.standard)?;
-        let mut all = casters_b;
+        let mut all = ray_casters(&scene);
         all.extend(field_backends(&fs, bake_s));
         let tris = mesh.mesh.triangles.len();
         table.extend(measure_ao(
@@ -455,19 +453,11 @@ pub fn run(out: &Path, quick: bool, supply: &FieldSupply) -> Result<Vec<PerfRow>
                     prof.passes,
                 ));
             }
-            let mut all = ray_casters(&scene);
-            all.extend(field_backends(&fs, bake_s));
+            // The `triangles` sweep's backends: the same caster and field.
             for &p in &prof.shares {
                 let dirs = entering_rays(&rays, world.center, world.radius, &opts, p);
-                let passes_of: Vec<Box<dyn Fn() -> f64 + '_>> = all
-                    .iter()
-                    .map(|b| {
-                        let (dirs, opts) = (&dirs, &opts);
-                        Box::new(move || free_share(&*b.vis, dirs, opts)) as Box<dyn Fn() -> f64>
-                    })
-                    .collect();
-                let refs: Vec<&dyn Fn() -> f64> = passes_of.iter().map(|p| &**p).collect();
-                let timed = time_interleaved(prof.passes, &refs);
+                let timed =
+                    time_interleaved(prof.passes, &all, |b| free_share(&*b.vis, &dirs, &opts));
                 let n = dirs.iter().map(|d| d.1.len() as u64).sum();
                 // The share drawn: round(p · 256) of each receiver's 256 rays.
                 let k = rays.set.len() as f64;
