@@ -26,6 +26,17 @@ impl Isa {
         Isa::Portable
     }
 
+    /// Whether a loop asked to run on `self` takes its AVX2 code on this CPU: an `Avx2` request
+    /// on a CPU without AVX2 runs one lane at a time (the detection is a cached flag).
+    #[inline]
+    pub fn runs_avx2(self) -> bool {
+        match self {
+            Isa::Portable => false,
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx2 => Isa::detect() == Isa::Avx2,
+        }
+    }
+
     /// Every instruction set this CPU runs (for tests that compare them).
     pub fn all_available() -> Vec<Isa> {
         let mut v = vec![Isa::Portable];

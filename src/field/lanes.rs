@@ -65,16 +65,12 @@ pub fn cull(
         skip.len(),
         idx.len()
     );
-    match isa {
-        Isa::Portable => cull_scalar(meet, dirs, tmin, skip, idx),
-        // SAFETY: the CPU has AVX2 (checked here, a cached flag: `Isa::Avx2` is a request).
+    if isa.runs_avx2() {
         #[cfg(target_arch = "x86_64")]
-        Isa::Avx2 if Isa::detect() == Isa::Avx2 => unsafe {
-            avx2::cull(meet, dirs, tmin, skip, idx)
-        },
-        #[cfg(target_arch = "x86_64")]
-        Isa::Avx2 => cull_scalar(meet, dirs, tmin, skip, idx),
+        // SAFETY: the CPU has AVX2 (`Isa::runs_avx2`).
+        return unsafe { avx2::cull(meet, dirs, tmin, skip, idx) };
     }
+    cull_scalar(meet, dirs, tmin, skip, idx)
 }
 
 /// Rays culled and crossed per window of [`for_each_crossing`].
@@ -146,14 +142,12 @@ pub fn for_each_crossing(
 /// `Quat::mul_vec3a` and `Vec3::normalize`.
 #[inline]
 pub fn rotate_normalize(isa: Isa, q: Quat, dirs: &mut [Vec3]) {
-    match isa {
-        Isa::Portable => rotate_normalize_scalar(q, dirs),
-        // SAFETY: as in `cull`.
+    if isa.runs_avx2() {
         #[cfg(target_arch = "x86_64")]
-        Isa::Avx2 if Isa::detect() == Isa::Avx2 => unsafe { avx2::rotate_normalize(q, dirs) },
-        #[cfg(target_arch = "x86_64")]
-        Isa::Avx2 => rotate_normalize_scalar(q, dirs),
+        // SAFETY: the CPU has AVX2 (`Isa::runs_avx2`).
+        return unsafe { avx2::rotate_normalize(q, dirs) };
     }
+    rotate_normalize_scalar(q, dirs)
 }
 
 /// [`rotate_normalize`] one direction at a time.
@@ -190,14 +184,12 @@ pub fn crossings(isa: Isa, from: &SphereOrigin, dirs: &[Vec3], out: &mut [Option
         out.len(),
         "crossings: dirs and out differ in length"
     );
-    match isa {
-        Isa::Portable => crossings_scalar(from, dirs, out),
-        // SAFETY: as in `cull`.
+    if isa.runs_avx2() {
         #[cfg(target_arch = "x86_64")]
-        Isa::Avx2 if Isa::detect() == Isa::Avx2 => unsafe { avx2::crossings(from, dirs, out) },
-        #[cfg(target_arch = "x86_64")]
-        Isa::Avx2 => crossings_scalar(from, dirs, out),
+        // SAFETY: the CPU has AVX2 (`Isa::runs_avx2`); `out` as long as `dirs` (asserted).
+        return unsafe { avx2::crossings(from, dirs, out) };
     }
+    crossings_scalar(from, dirs, out)
 }
 
 /// [`crossings`] one ray at a time.
@@ -227,14 +219,12 @@ pub fn nearest_reads(isa: Isa, field: &VisibilityField, at: &[Crossed], out: &mu
         out.len(),
         "nearest_reads: at and out differ in length"
     );
-    match isa {
-        Isa::Portable => NearestRead::staged(field, at, out),
-        // SAFETY: as in `cull`.
+    if isa.runs_avx2() {
         #[cfg(target_arch = "x86_64")]
-        Isa::Avx2 if Isa::detect() == Isa::Avx2 => unsafe { avx2::nearest_reads(field, at, out) },
-        #[cfg(target_arch = "x86_64")]
-        Isa::Avx2 => NearestRead::staged(field, at, out),
+        // SAFETY: the CPU has AVX2 (`Isa::runs_avx2`); `out` as long as `at` (asserted).
+        return unsafe { avx2::nearest_reads(field, at, out) };
     }
+    NearestRead::staged(field, at, out)
 }
 
 #[cfg(target_arch = "x86_64")]
