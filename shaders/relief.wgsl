@@ -50,28 +50,7 @@ const HUGE: f32 = 3.0e38;
 
 var<private> fetches: u32;
 
-fn texel(i: i32, j: i32) -> f32 {
-    let w = i32(params.size.x);
-    let h = i32(params.size.y);
-    let ic = clamp(i, 0, w - 1);
-    let jc = clamp(j, 0, h - 1);
-    return heights[jc * w + ic];
-}
-
-// M(s): bilinear between texel centres, clamped beyond them (`HeightMap::sample`).
-fn sample_map(s: vec2<f32>) -> f32 {
-    let x = s.x * f32(params.size.x) - 0.5;
-    let y = s.y * f32(params.size.y) - 0.5;
-    let x0 = floor(x);
-    let y0 = floor(y);
-    let fx = x - x0;
-    let fy = y - y0;
-    let i = i32(x0);
-    let j = i32(y0);
-    let a = texel(i, j) * (1.0 - fx) + texel(i + 1, j) * fx;
-    let b = texel(i, j + 1) * (1.0 - fx) + texel(i + 1, j + 1) * fx;
-    return a * (1.0 - fy) + b * fy;
-}
+// `texel` and `sample_map`: shaders/height_map.wgsl.
 
 fn dist(p: vec3<f32>) -> f32 {
     return p.z - sample_map(p.xy);

@@ -93,6 +93,7 @@ impl<'a> ReliefKernel<'a> {
         deltas[..zones.deltas.len()].copy_from_slice(&zones.deltas);
         let source = [
             include_str!("../../shaders/loop_budget.wgsl"),
+            include_str!("../../shaders/height_map.wgsl"),
             include_str!("../../shaders/relief.wgsl"),
         ]
         .concat();

@@ -128,6 +128,7 @@ impl<'a> ReliefPeersKernel<'a> {
             });
         let source = [
             include_str!("../../shaders/loop_budget.wgsl"),
+            include_str!("../../shaders/height_map.wgsl"),
             include_str!("../../shaders/relief_peers.wgsl"),
         ]
         .concat();
