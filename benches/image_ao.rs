@@ -101,7 +101,7 @@ fn image_ao(c: &mut Criterion) {
         pts.len(),
         rays.len()
     );
-    let run = |vis: &dyn visfield::render::Visibility| {
+    let run = |vis: &dyn visfield::visibility::Visibility| {
         ao_at_points(vis, &pts.origins, &pts.normals, &rays, &opts)
     };
     let tracer = OnceCell::new();
@@ -182,7 +182,7 @@ fn image_ao(c: &mut Criterion) {
         lights: lights.to_vec(),
     };
     let srays = RaySet::new(4, 1);
-    let shadows = |vis: &dyn visfield::render::Visibility| {
+    let shadows = |vis: &dyn visfield::visibility::Visibility| {
         shadow_at_points(vis, &pts.origins, &pts.normals, &srays, &sopts)
     };
     let mut group = c.benchmark_group(format!("shadow_{w}x{h}_3x16_rays/{MODEL}"));
@@ -230,7 +230,7 @@ fn image_ao(c: &mut Criterion) {
         sky: 0.3,
     };
     let rrays = RaySet::new(2, 1);
-    let reflect = |vis: &dyn visfield::render::Visibility| {
+    let reflect = |vis: &dyn visfield::visibility::Visibility| {
         reflect_at_points(vis, &pts.origins, &pts.normals, &rrays, &ropts)
     };
     let mut group = c.benchmark_group(format!("reflection_{w}x{h}_4_rays/{MODEL}"));

@@ -33,7 +33,7 @@ use visfield::geometry::procedural::{over_corner, supershape, Supershape};
 use visfield::geometry::{models, Mesh};
 use visfield::render::ao::{ao_at_point, AoOptions};
 use visfield::render::receivers::Receivers;
-use visfield::render::{PerRay, Visibility};
+use visfield::visibility::{PerRay, Visibility};
 use visfield::sampling::rays::RaySet;
 use visfield::sampling::{LayoutKind, SphereKind};
 use visfield::trace::Tracer;
@@ -230,7 +230,7 @@ impl Visibility for PlainObvhs {
         _: Vec3,
         _: f32,
         _: f32,
-    ) -> Option<visfield::render::SurfaceHit> {
+    ) -> Option<visfield::visibility::SurfaceHit> {
         unimplemented!("ao_cost times any-hit queries only")
     }
 }

@@ -29,7 +29,7 @@ use visfield::geometry::procedural::over_corner;
 use visfield::geometry::{models, Mesh};
 use visfield::render::ao::{ao_at_points, instance_epsilon, AoOptions};
 use visfield::render::receivers::Receivers;
-use visfield::render::Visibility;
+use visfield::visibility::Visibility;
 use visfield::sampling::rays::RaySet;
 use visfield::sampling::{Frame, HemisphereLayout, LayoutKind, SphereKind, SpherePoints};
 use visfield::trace::embree::{EmbreeRays, EmbreeTracer};

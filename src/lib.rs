@@ -13,7 +13,8 @@
 //! - [`sampling`]: sphere point sets, hemisphere layouts, frames, seeded ray sets.
 //! - [`trace`]: the ray-cast reference (obvhs CWBVH + watertight triangles).
 //! - [`field`]: visibility fields: bake, storage, lookup, cache.
-//! - [`render`]: the `Visibility` interface and the AO / shadow / reflection renderers.
+//! - [`visibility`]: the `Visibility` seam that ray casting and field lookup implement.
+//! - [`render`]: the AO / shadow / reflection renderers, written against `Visibility`.
 //! - [`gpu`]: headless wgpu paths.
 //! - [`relief`]: the 2005 height-field ray caster and its safety-zone skipping.
 //! - [`experiment`]: specs, planner, runner, metrics, outputs.
@@ -33,3 +34,4 @@ pub mod render;
 pub mod sampling;
 pub mod simd;
 pub mod trace;
+pub mod visibility;

@@ -61,7 +61,7 @@ mod imp {
     use visfield::geometry::Scene;
     use visfield::render::ao::instance_epsilon;
     use visfield::render::receivers::Receivers;
-    use visfield::render::Visibility;
+    use visfield::visibility::Visibility;
     use visfield::sampling::rays::RaySet;
     use visfield::sampling::Frame;
     use visfield::trace::embree::{EmbreeRays, EmbreeTracer};

@@ -12,7 +12,7 @@ use visfield::field::{FieldParams, Precision, Selection, VisibilityField};
 use visfield::geometry::procedural::{supershape, Supershape};
 use visfield::geometry::Similarity;
 use visfield::render::ao::{ao_at_points, AoOptions};
-use visfield::render::{PerRay, Visibility};
+use visfield::visibility::{PerRay, Visibility};
 use visfield::sampling::rays::{seeded_sphere_direction, RaySet};
 use visfield::sampling::{LayoutKind, SphereKind};
 

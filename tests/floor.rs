@@ -8,7 +8,7 @@ use visfield::experiment::performance::floor::{NoQuery, SphereCull};
 use visfield::field::scene::{FieldInstance, FieldScene};
 use visfield::field::{FieldParams, Precision, Storage, VisibilityField};
 use visfield::geometry::{Similarity, Sphere};
-use visfield::render::Visibility;
+use visfield::visibility::Visibility;
 use visfield::sampling::{LayoutKind, SphereKind};
 
 /// A field of one sphere of radius 1 at (0, 0, 5) (its texels do not matter here).

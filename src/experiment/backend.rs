@@ -5,7 +5,7 @@
 //! shader compilation) for one render kind's [`Estimator`], then evaluates it on given points
 //! and rays as many times as the timing asks ([`Eval::estimate`]), so that the preparation is
 //! reported apart from the estimate's time. The CPU backend runs the estimator through the
-//! [`crate::render::Visibility`] interface on the same rays; the GPU backend
+//! [`crate::visibility::Visibility`] interface on the same rays; the GPU backend
 //! ([`super::backend_gpu::GpuBackend`]) runs the wgpu kernel of the estimator's quantity
 //! ([`crate::gpu`]) on the same rays. No GPU device is ever opened unless a spec asks for
 //! "gpu".
@@ -98,9 +98,9 @@ impl Default for CpuBackend {
     }
 }
 
-/// An estimator over any [`crate::render::Visibility`].
+/// An estimator over any [`crate::visibility::Visibility`].
 struct CpuEval<'a> {
-    vis: &'a dyn crate::render::Visibility,
+    vis: &'a dyn crate::visibility::Visibility,
     est: &'a dyn Estimator,
 }
 

@@ -20,7 +20,7 @@ use super::{Error, Result};
 use crate::field::cache::CacheError;
 use crate::render::estimator::{Estimator, Points};
 use crate::render::truth::{Truth, TruthOptions};
-use crate::render::Visibility;
+use crate::visibility::Visibility;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};

@@ -12,7 +12,7 @@
 //!   interpolated map selection.
 //! - [`normals`]: normal fields for reflections (2010 §4.2).
 //! - [`cache`]: the versioned on-disk cache.
-//! - [`scene`]: several instanced fields answering one [`crate::render::Visibility`].
+//! - [`scene`]: several instanced fields answering one [`crate::visibility::Visibility`].
 
 pub mod bake;
 pub mod cache;

@@ -9,7 +9,7 @@ use super::normals::NormalField;
 use super::Selection;
 use super::VisibilityField;
 use crate::geometry::Similarity;
-use crate::render::{SurfaceHit, Visibility};
+use crate::visibility::{SurfaceHit, Visibility};
 use glam::{Quat, Vec3};
 use std::sync::Arc;
 

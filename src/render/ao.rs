@@ -14,7 +14,7 @@
 //! the hit distance; ours is named and applied identically to every visibility (ray cast: the
 //! closest hit; field: `t_entry + 2R·D`).
 
-use super::Visibility;
+use crate::visibility::Visibility;
 use crate::sampling::rays::{PreparedRaySet, RaySet};
 use crate::sampling::Frame;
 use glam::Vec3;

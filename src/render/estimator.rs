@@ -17,7 +17,7 @@
 
 use super::ao::{ao_at_points, AoOptions};
 use super::truth::{converged_ao, Truth, TruthOptions};
-use super::Visibility;
+use crate::visibility::Visibility;
 use crate::sampling::rays::RaySet;
 use glam::Vec3;
 

@@ -30,7 +30,8 @@
 use super::estimator::{Estimator, Points};
 use super::shadow::SphereLight;
 use super::truth::{converged, Truth, TruthOptions};
-use super::{per_point, SurfaceHit, Visibility};
+use super::per_point;
+use crate::visibility::{SurfaceHit, Visibility};
 use crate::sampling::rays::RaySet;
 use crate::sampling::Frame;
 use glam::{Vec2, Vec3};

@@ -24,7 +24,8 @@
 
 use super::estimator::{Estimator, Points};
 use super::truth::{converged, Truth, TruthOptions};
-use super::{per_point, Visibility};
+use super::per_point;
+use crate::visibility::Visibility;
 use crate::sampling::rays::RaySet;
 use crate::sampling::warp::square_to_concentric_disk;
 use crate::sampling::Frame;

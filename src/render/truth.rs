@@ -20,7 +20,7 @@
 //! radius), so the truth differs from a render only in its rays.
 
 use super::ao::{ao_at_points, AoOptions};
-use super::Visibility;
+use crate::visibility::Visibility;
 use crate::sampling::rays::{mix64, RaySet};
 use glam::Vec3;
 use serde::{Deserialize, Serialize};

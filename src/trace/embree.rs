@@ -1,6 +1,6 @@
 //! A second CPU ray caster: Intel Embree 3 (Wald, Woop, Benthin, Johnson, Ernst, "Embree: A
 //! Kernel Framework for Efficient CPU Ray Tracing", ACM TOG 33(4), 2014) over the same world
-//! triangles as [`super::Tracer`], behind the same [`crate::render::Visibility`] interface, so
+//! triangles as [`super::Tracer`], behind the same [`crate::visibility::Visibility`] interface, so
 //! that ray casting by a production kernel can be timed and compared on exactly the rays of our
 //! reference and of the field lookups. Built only with the `embree` cargo feature (and the
 //! system's `libembree3`, Debian `libembree-dev`).
@@ -26,7 +26,7 @@
 
 use super::embree_sys as sys;
 use super::Hit;
-use crate::render::{SurfaceHit, Visibility};
+use crate::visibility::{SurfaceHit, Visibility};
 use glam::{Vec3, Vec3A};
 use std::ffi::c_uint;
 

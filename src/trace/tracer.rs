@@ -3,6 +3,7 @@
 //! traversed by obvhs) with watertight triangle tests.
 
 use super::watertight::{PackedTriangle, WatertightRay};
+use crate::visibility::{SurfaceHit, Visibility};
 use glam::{Vec3, Vec3A};
 use obvhs::{
     aabb::Aabb,
@@ -244,6 +245,28 @@ impl Tracer {
             .with_min_len(64)
             .map(|r| self.any_hit(r.origin, r.dir, r.tmin, r.tmax))
             .collect()
+    }
+}
+
+/// The ray-cast backend: exact watertight ray casting against the scene's triangles.
+impl Visibility for Tracer {
+    #[inline]
+    fn occluded(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> bool {
+        self.any_hit(origin, dir, tmin, tmax)
+    }
+
+    #[inline]
+    fn hit_distance(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<f32> {
+        self.closest_hit(origin, dir, tmin, tmax).map(|h| h.t)
+    }
+
+    #[inline]
+    fn surface_hit(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<SurfaceHit> {
+        self.closest_hit(origin, dir, tmin, tmax)
+            .map(|h| SurfaceHit {
+                t: h.t,
+                normal: h.normal,
+            })
     }
 }
 

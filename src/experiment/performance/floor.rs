@@ -19,7 +19,7 @@
 use crate::field::lanes::{self, Isa};
 use crate::field::lookup::SphereOrigin;
 use crate::field::scene::{FieldInstance, FieldScene};
-use crate::render::{SurfaceHit, Visibility};
+use crate::visibility::{SurfaceHit, Visibility};
 use glam::Vec3;
 
 /// Every ray free, at no cost ([module docs](self)).

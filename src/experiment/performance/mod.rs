@@ -29,7 +29,7 @@ use crate::geometry::procedural::{over_corner, supershape, Supershape};
 use crate::geometry::{models, Mesh, Scene};
 use crate::render::ao::{ao_at_points, AoOptions};
 use crate::render::receivers::Receivers;
-use crate::render::Visibility;
+use crate::visibility::Visibility;
 use crate::sampling::rays::RaySet;
 use crate::sampling::{Frame, LayoutKind, SphereKind};
 use crate::trace::Tracer;

@@ -5,7 +5,7 @@
 //! Everything runs through the spec's render kind ([`super::kind::Kind`]): its points, its
 //! estimator, its metric columns. Every lookup uses the reference's rays: the same seeded k²
 //! set, the same points, the same offset; the lookup and the ray cast differ only in the
-//! [`crate::render::Visibility`] behind the same estimator. Stages shorter than
+//! [`crate::visibility::Visibility`] behind the same estimator. Stages shorter than
 //! `short_stage_s` are timed as the best of `repeats` runs.
 
 mod raycasters;
