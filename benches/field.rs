@@ -31,10 +31,10 @@ use visfield::geometry::procedural::{over_corner, supershape, Supershape};
 use visfield::geometry::{models, Mesh};
 use visfield::render::ao::{ao_at_points, AoOptions};
 use visfield::render::receivers::Receivers;
-use visfield::visibility::{PerRay, Visibility};
 use visfield::sampling::rays::RaySet;
 use visfield::sampling::{Frame, HemisphereLayout, LayoutKind, SphereKind, SpherePoints};
 use visfield::trace::Tracer;
+use visfield::visibility::{PerRay, Visibility};
 
 use visfield::experiment::performance::floor::{NoQuery, SphereCull};
 

@@ -33,10 +33,10 @@ use visfield::geometry::procedural::{over_corner, supershape, Supershape};
 use visfield::geometry::{models, Mesh};
 use visfield::render::ao::{ao_at_point, AoOptions};
 use visfield::render::receivers::Receivers;
-use visfield::visibility::{PerRay, Visibility};
 use visfield::sampling::rays::RaySet;
 use visfield::sampling::{LayoutKind, SphereKind};
 use visfield::trace::Tracer;
+use visfield::visibility::{PerRay, Visibility};
 
 use visfield::experiment::performance::floor::{NoQuery, SphereCull};
 

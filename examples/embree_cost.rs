@@ -29,11 +29,11 @@ use visfield::geometry::procedural::over_corner;
 use visfield::geometry::{models, Mesh};
 use visfield::render::ao::{ao_at_points, instance_epsilon, AoOptions};
 use visfield::render::receivers::Receivers;
-use visfield::visibility::Visibility;
 use visfield::sampling::rays::RaySet;
 use visfield::sampling::{Frame, HemisphereLayout, LayoutKind, SphereKind, SpherePoints};
 use visfield::trace::embree::{EmbreeRays, EmbreeTracer};
 use visfield::trace::{ClosestHit, Tracer};
+use visfield::visibility::Visibility;
 
 const MODEL: &str = "stanford-bunny_39k";
 

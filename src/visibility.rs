@@ -95,4 +95,3 @@ impl<V: Visibility + ?Sized> Visibility for PerRay<'_, V> {
         self.0.surface_hit(origin, dir, tmin, tmax)
     }
 }
-

@@ -61,11 +61,11 @@ mod imp {
     use visfield::geometry::Scene;
     use visfield::render::ao::instance_epsilon;
     use visfield::render::receivers::Receivers;
-    use visfield::visibility::Visibility;
     use visfield::sampling::rays::RaySet;
     use visfield::sampling::Frame;
     use visfield::trace::embree::{EmbreeRays, EmbreeTracer};
     use visfield::trace::Tracer;
+    use visfield::visibility::Visibility;
 
     /// The AO rays of a scene's receivers, as the renderers cast them: origin offset along
     /// the normal by the receiver's instance epsilon, k² directions per point.

@@ -662,12 +662,12 @@ fn image_ao_evaluates_at_the_receiver_pixels_of_the_gbuffer() {
 /// lacks, and writes back what it read.
 #[test]
 fn render_specs_are_tagged_by_kind() {
-    use visfield::experiment::kind;
-    use visfield::experiment::spec::{RenderKind, RenderSpec};
+    use visfield::experiment::kinds;
+    use visfield::experiment::spec::RenderSpec;
     let s = parse(&tiny(ONE_FIELD, "")).unwrap();
     // No `what`: vertex AO (the 2008 default).
-    assert_eq!(s.render.kind(), RenderKind::VertexAo);
-    let k = kind::of(&s.render);
+    assert_eq!(s.render.what, "vertex_ao");
+    let k = kinds::of(&s.render);
     assert_eq!(
         (k.name(), k.needs().view, k.columns().vertex),
         ("vertex_ao", false, true)
@@ -677,12 +677,12 @@ fn render_specs_are_tagged_by_kind() {
         r#""render": { "what": "image_ao", "rays_per_point""#,
     );
     let s = parse(&image).unwrap();
-    let k = kind::of(&s.render);
+    let k = kinds::of(&s.render);
     assert_eq!(
         (k.name(), k.needs().view, k.columns().vertex),
         ("image_ao", true, false)
     );
-    assert!(!k.needs().normal_field && !k.needs().lights);
+    assert!(!k.needs().normal_field);
     // Round trip through the wire form.
     let json = serde_json::to_string(&s.render).unwrap();
     assert!(json.contains(r#""what":"image_ao""#), "{json}");

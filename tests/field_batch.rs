@@ -12,9 +12,9 @@ use visfield::field::{FieldParams, Precision, Selection, VisibilityField};
 use visfield::geometry::procedural::{supershape, Supershape};
 use visfield::geometry::Similarity;
 use visfield::render::ao::{ao_at_points, AoOptions};
-use visfield::visibility::{PerRay, Visibility};
 use visfield::sampling::rays::{seeded_sphere_direction, RaySet};
 use visfield::sampling::{LayoutKind, SphereKind};
+use visfield::visibility::{PerRay, Visibility};
 
 const PRECISIONS: [Precision; 4] = [
     Precision::F32,

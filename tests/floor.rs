@@ -8,8 +8,8 @@ use visfield::experiment::performance::floor::{NoQuery, SphereCull};
 use visfield::field::scene::{FieldInstance, FieldScene};
 use visfield::field::{FieldParams, Precision, Storage, VisibilityField};
 use visfield::geometry::{Similarity, Sphere};
-use visfield::visibility::Visibility;
 use visfield::sampling::{LayoutKind, SphereKind};
+use visfield::visibility::Visibility;
 
 /// A field of one sphere of radius 1 at (0, 0, 5) (its texels do not matter here).
 fn scene() -> FieldScene {

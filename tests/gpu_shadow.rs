@@ -30,10 +30,10 @@ use visfield::geometry::Similarity;
 use visfield::gpu::{FieldGpuOptions, FieldLayout, FieldShadowKernel, GpuError, GpuTracer};
 use visfield::render::ao::AoOptions;
 use visfield::render::shadow::{shadow_at_points, square_to_cone, ShadowOptions, SphereLight};
-use visfield::visibility::Visibility;
 use visfield::sampling::rays::RaySet;
 use visfield::sampling::Frame;
 use visfield::trace::Tracer;
+use visfield::visibility::Visibility;
 
 mod common;
 use common::{

@@ -27,10 +27,10 @@ use visfield::render::ao::{ao_at_points, AoOptions};
 use visfield::render::camera::Camera;
 use visfield::render::points::{EvalPoints, GBuffer, Support};
 use visfield::render::primary::{gbuffer, PrimaryScene};
-use visfield::visibility::Visibility;
 use visfield::sampling::rays::RaySet;
 use visfield::sampling::Frame;
 use visfield::trace::Tracer;
+use visfield::visibility::Visibility;
 
 mod common;
 use common::slater_params as params;

@@ -40,12 +40,13 @@ fn error_of(text: &str) -> String {
 
 #[test]
 fn reflection_keys_are_read_and_bad_ones_refused_naming_the_field() {
-    use visfield::experiment::spec::{RenderSpec, DEFAULT_ALBEDO, DEFAULT_SKY};
+    use visfield::experiment::kinds::reflections::{ReflectionRender, DEFAULT_ALBEDO, DEFAULT_SKY};
+    use visfield::experiment::spec::RenderSpec;
     use visfield::render::reflect::Gloss;
     let s = Spec::parse(&reflections(&format!(", {GLOSS}")), Path::new("ok.json")).unwrap();
-    let RenderSpec::Reflections(r) = &s.render else {
-        panic!("not reflections: {:?}", s.render)
-    };
+    assert_eq!(s.render.what, "reflections");
+    let r: ReflectionRender = s.render.options_as().expect("reflection options");
+    let r = &r;
     assert_eq!(r.gloss, Gloss::Phong { exponent: 20.0 });
     assert_eq!((r.albedo, r.sky), (DEFAULT_ALBEDO, DEFAULT_SKY));
     assert_eq!(r.normal_bits, vec![16]);

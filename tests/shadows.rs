@@ -33,7 +33,7 @@ fn error_of(text: &str) -> String {
 #[test]
 fn lights_are_read_and_bad_ones_refused_naming_the_field() {
     let s = Spec::parse(&shadows(LIGHTS, ""), Path::new("ok.json")).unwrap();
-    assert_eq!(s.render.rays_per_point(), 16);
+    assert_eq!(s.render.rays_per_point, 16);
     let e = error_of(&shadows("[]", ""));
     assert!(
         e.contains("lights") && e.contains("at least one light"),

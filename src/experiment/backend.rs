@@ -10,7 +10,7 @@
 //! ([`crate::gpu`]) on the same rays. No GPU device is ever opened unless a spec asks for
 //! "gpu".
 
-use super::backend_gpu::GpuBackend;
+use super::backend_gpu::{GpuBackend, GpuQuantity};
 use super::spec::Backend;
 use super::Result;
 use crate::field::scene::FieldScene;
@@ -26,6 +26,26 @@ pub struct Casters<'a> {
     pub triangles: &'a [[Vec3; 3]],
     /// The CPU reference tracer over them.
     pub tracer: &'a Tracer,
+}
+
+/// What a backend computes: a render kind's estimator, and its GPU kernels where it has them
+/// ([`super::kinds::Setup`]).
+#[derive(Clone, Copy)]
+pub struct Quantity<'a> {
+    /// The estimator, run through [`crate::visibility::Visibility`] on the CPU.
+    pub estimator: &'a dyn Estimator,
+    /// Its GPU kernels; none: the `gpu` backend refuses it, naming the estimator.
+    pub gpu: Option<&'a dyn GpuQuantity>,
+}
+
+impl<'a> Quantity<'a> {
+    /// An estimator without GPU kernels (the CPU backend's only need).
+    pub fn cpu(estimator: &'a dyn Estimator) -> Quantity<'a> {
+        Quantity {
+            estimator,
+            gpu: None,
+        }
+    }
 }
 
 /// One evaluation.
@@ -53,28 +73,24 @@ pub trait ComputeBackend {
     fn kind(&self) -> Backend;
     /// The device, for tables and run.json (CPU model and threads, or GPU adapter and driver).
     fn adapter(&self) -> String;
-    /// Prepares `fields` for `est`.
-    fn fields<'s>(
-        &'s self,
-        fields: &'s FieldScene,
-        est: &'s dyn Estimator,
-    ) -> Result<Box<dyn Eval + 's>>;
-    /// Prepares the casters for ray casting `est`.
+    /// Prepares `fields` for `q`.
+    fn fields<'s>(&'s self, fields: &'s FieldScene, q: Quantity<'s>) -> Result<Box<dyn Eval + 's>>;
+    /// Prepares the casters for ray casting `q`.
     fn casters<'s>(
         &'s self,
         casters: &'s Casters<'s>,
-        est: &'s dyn Estimator,
+        q: Quantity<'s>,
     ) -> Result<Box<dyn Eval + 's>>;
 
-    /// `est` by ray casting the casters, on the same rays.
+    /// `q` by ray casting the casters, on the same rays.
     fn raycast_estimate(
         &self,
         casters: &Casters,
-        est: &dyn Estimator,
+        q: Quantity,
         at: Points,
         rays: &RaySet,
     ) -> Result<Vec<f32>> {
-        Ok(self.casters(casters, est)?.estimate(at, rays)?.values)
+        Ok(self.casters(casters, q)?.estimate(at, rays)?.values)
     }
 }
 
@@ -126,22 +142,21 @@ impl ComputeBackend for CpuBackend {
         self.adapter.clone()
     }
 
-    fn fields<'s>(
-        &'s self,
-        fields: &'s FieldScene,
-        est: &'s dyn Estimator,
-    ) -> Result<Box<dyn Eval + 's>> {
-        Ok(Box::new(CpuEval { vis: fields, est }))
+    fn fields<'s>(&'s self, fields: &'s FieldScene, q: Quantity<'s>) -> Result<Box<dyn Eval + 's>> {
+        Ok(Box::new(CpuEval {
+            vis: fields,
+            est: q.estimator,
+        }))
     }
 
     fn casters<'s>(
         &'s self,
         casters: &'s Casters<'s>,
-        est: &'s dyn Estimator,
+        q: Quantity<'s>,
     ) -> Result<Box<dyn Eval + 's>> {
         Ok(Box::new(CpuEval {
             vis: casters.tracer,
-            est,
+            est: q.estimator,
         }))
     }
 }

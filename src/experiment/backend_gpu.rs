@@ -8,30 +8,25 @@
 //! light's cone, for reflections into the Phong lobe about the mirror direction, as on the
 //! CPU).
 //!
-//! Each estimator runs on the kernels of its quantity: the AO estimators
-//! ([`Estimator::ao_options`]) on the two AO kernels, the shadow estimators
-//! ([`Estimator::shadow_options`]) on the two shadow kernels, the reflection estimators
-//! ([`Estimator::reflect_options`]) on the two reflection kernels (the field kernel needs every
-//! instance's normal field, which the run attaches for reflections); an estimator without a
-//! kernel is refused with [`GpuError::Unsupported`], naming it.
+//! Each estimator runs on the kernels of its quantity, which its render kind supplies
+//! ([`GpuQuantity`], in `Setup::gpu`; the AO kinds' in `kinds/ao.rs`, the shadows' in
+//! `kinds/shadows.rs`, the reflections' in `kinds/reflections.rs`, whose field kernel needs
+//! every instance's normal field, which the run attaches for reflections); an estimator without
+//! kernels is refused with [`GpuError::Unsupported`], naming it.
 //!
 //! Times: the runner times [`Eval::estimate`] on the host, which is the call's wall time
 //! (receiver upload, dispatch, wait and read-back); the kernel alone, from GPU timestamps, comes
 //! back in [`Estimate::kernel_s`]; packing and uploading the fields (or building and uploading
 //! the CWBVH) and compiling the shaders is [`Eval::setup_s`], reported apart.
 
-use super::backend::{Casters, ComputeBackend, Estimate, Eval};
+use super::backend::{Casters, ComputeBackend, Estimate, Eval, Quantity};
 use super::spec::Backend;
 use super::Result;
 use crate::field::scene::FieldScene;
 use crate::gpu::{
-    AdapterPreference, FieldAoKernel, FieldGpuOptions, FieldLayout, FieldReflectKernel,
-    FieldShadowKernel, GpuContext, GpuError, GpuTiming, GpuTracer,
+    AdapterPreference, FieldGpuOptions, FieldLayout, GpuContext, GpuError, GpuTiming, GpuTracer,
 };
-use crate::render::ao::AoOptions;
-use crate::render::estimator::{Estimator, Points};
-use crate::render::reflect::ReflectOptions;
-use crate::render::shadow::ShadowOptions;
+use crate::render::estimator::Points;
 use crate::sampling::rays::RaySet;
 
 /// The wgpu device a run's "gpu" cells use, opened once per run.
@@ -65,69 +60,69 @@ fn out(values: Vec<f32>, t: GpuTiming) -> Estimate {
     }
 }
 
-/// The quantity of an estimator that has GPU kernels.
-#[derive(Clone, Debug)]
-enum Quantity {
-    Ao(AoOptions),
-    Shadow(ShadowOptions),
-    Reflect(ReflectOptions),
+/// The GPU kernels of one estimator's quantity, supplied by its render kind
+/// ([`super::kinds::Setup::gpu`]): field lookup on the kernel of the quantity, and ray casting
+/// through the [`GpuTracer`] entry of the quantity, both on the CPU path's rays.
+pub trait GpuQuantity: Send + Sync {
+    /// Packs and uploads `fields` for this quantity's field kernel (`opts`: how they are bound).
+    fn fields<'s>(
+        &'s self,
+        ctx: &'s GpuContext,
+        fields: &'s FieldScene,
+        opts: &FieldGpuOptions,
+    ) -> Result<Box<dyn Eval + 's>>;
+    /// This quantity at `at` by ray casting on `tracer`.
+    fn trace(&self, tracer: &GpuTracer, at: Points, rays: &RaySet) -> Result<Estimate>;
 }
 
-/// The quantity `est` computes, or the refusal naming it.
-fn quantity(est: &dyn Estimator) -> Result<Quantity> {
-    if let Some(ao) = est.ao_options() {
-        return Ok(Quantity::Ao(*ao));
-    }
-    if let Some(sh) = est.shadow_options() {
-        return Ok(Quantity::Shadow(sh.clone()));
-    }
-    if let Some(r) = est.reflect_options() {
-        return Ok(Quantity::Reflect(r.clone()));
-    }
-    Err(GpuError::Unsupported(format!("no GPU kernel computes \"{}\"", est.name())).into())
+/// A field kernel prepared for one quantity: the kernel, the quantity's options and the
+/// kernel's entry (each kind's [`GpuQuantity::fields`] builds one).
+pub struct KernelEval<K, O> {
+    pub kernel: K,
+    pub opts: O,
+    /// The kernel's entry: the values at the points and the timing.
+    pub run: KernelEntry<K, O>,
+    /// The kernel's preparation time (pack, upload, compile).
+    pub setup: fn(&K) -> std::time::Duration,
 }
 
-/// Field lookup on the kernel of the estimator's quantity.
-enum FieldEval<'a> {
-    Ao(FieldAoKernel<'a>, AoOptions),
-    Shadow(FieldShadowKernel<'a>, ShadowOptions),
-    Reflect(FieldReflectKernel<'a>, ReflectOptions),
-}
+/// A field kernel's entry point, as [`KernelEval`] calls it.
+pub type KernelEntry<K, O> =
+    fn(&K, Points, &RaySet, &O) -> std::result::Result<(Vec<f32>, GpuTiming), GpuError>;
 
-impl Eval for FieldEval<'_> {
+impl<K, O> Eval for KernelEval<K, O> {
     fn estimate(&self, at: Points, rays: &RaySet) -> Result<Estimate> {
-        let (values, t) = match self {
-            FieldEval::Ao(k, o) => k.vertex_ao(at.points, at.normals, rays, o)?,
-            FieldEval::Shadow(k, o) => k.light_fractions(at.points, at.normals, rays, o)?,
-            FieldEval::Reflect(k, o) => k.reflections(at.points, at.normals, rays, o)?,
-        };
+        let (values, t) = (self.run)(&self.kernel, at, rays, &self.opts)?;
         Ok(out(values, t))
     }
 
     fn setup_s(&self) -> Option<f64> {
-        let setup = match self {
-            FieldEval::Ao(k, _) => k.setup_time(),
-            FieldEval::Shadow(k, _) => k.setup_time(),
-            FieldEval::Reflect(k, _) => k.setup_time(),
-        };
-        Some(setup.as_secs_f64())
+        Some((self.setup)(&self.kernel).as_secs_f64())
     }
+}
+
+/// [`GpuQuantity::trace`] from a [`GpuTracer`] entry's result.
+pub fn traced(r: std::result::Result<(Vec<f32>, GpuTiming), GpuError>) -> Result<Estimate> {
+    let (values, t) = r?;
+    Ok(out(values, t))
+}
+
+/// The GPU quantity of an estimator, or the refusal naming it.
+fn quantity(q: Quantity<'_>) -> Result<&dyn GpuQuantity> {
+    q.gpu.ok_or_else(|| {
+        GpuError::Unsupported(format!("no GPU kernel computes \"{}\"", q.estimator.name())).into()
+    })
 }
 
 /// Ray casting on the GPU tracer, the entry of the estimator's quantity.
 struct TraceEval<'a> {
     tracer: GpuTracer<'a>,
-    quantity: Quantity,
+    quantity: &'a dyn GpuQuantity,
 }
 
 impl Eval for TraceEval<'_> {
     fn estimate(&self, at: Points, rays: &RaySet) -> Result<Estimate> {
-        let (values, t) = match &self.quantity {
-            Quantity::Ao(o) => self.tracer.ao(at.points, at.normals, rays, o)?,
-            Quantity::Shadow(o) => self.tracer.shadows(at.points, at.normals, rays, o)?,
-            Quantity::Reflect(o) => self.tracer.reflections(at.points, at.normals, rays, o)?,
-        };
-        Ok(out(values, t))
+        self.quantity.trace(&self.tracer, at, rays)
     }
 
     fn setup_s(&self) -> Option<f64> {
@@ -145,39 +140,21 @@ impl ComputeBackend for GpuBackend {
         self.ctx.adapter_label()
     }
 
-    fn fields<'s>(
-        &'s self,
-        fields: &'s FieldScene,
-        est: &'s dyn Estimator,
-    ) -> Result<Box<dyn Eval + 's>> {
-        let quantity = quantity(est)?;
+    fn fields<'s>(&'s self, fields: &'s FieldScene, q: Quantity<'s>) -> Result<Box<dyn Eval + 's>> {
         let opts = FieldGpuOptions {
             lookup: fields.options,
             layout: self.layout,
             ..Default::default()
         };
-        let eval = match quantity {
-            Quantity::Ao(ao) => {
-                FieldEval::Ao(FieldAoKernel::new(&self.ctx, &fields.instances, &opts)?, ao)
-            }
-            Quantity::Shadow(sh) => FieldEval::Shadow(
-                FieldShadowKernel::new(&self.ctx, &fields.instances, &opts)?,
-                sh,
-            ),
-            Quantity::Reflect(r) => FieldEval::Reflect(
-                FieldReflectKernel::new(&self.ctx, &fields.instances, &opts)?,
-                r,
-            ),
-        };
-        Ok(Box::new(eval))
+        quantity(q)?.fields(&self.ctx, fields, &opts)
     }
 
     fn casters<'s>(
         &'s self,
         casters: &'s Casters<'s>,
-        est: &'s dyn Estimator,
+        q: Quantity<'s>,
     ) -> Result<Box<dyn Eval + 's>> {
-        let quantity = quantity(est)?;
+        let quantity = quantity(q)?;
         let tracer = GpuTracer::new(&self.ctx, casters.triangles)?;
         Ok(Box::new(TraceEval { tracer, quantity }))
     }

@@ -1,6 +1,6 @@
 //! The experiment harness: specs, planner, runner, metrics, outputs and the CLI.
 //!
-//! `experiments/NAME.json` ([`spec`]) and its render kind ([`kind`]: the points and the
+//! `experiments/NAME.json` ([`spec`]) and its render kind ([`kinds`]: the points and the
 //! estimator) → built scenes ([`scenes`]) → a [`plan`] of steps (each field baked once, the
 //! reference once per scene and ray set, fields released as soon as their cells are done) → the
 //! runner ([`run`]) with fields from the cache or the bake ([`fields`]) on a backend
@@ -16,7 +16,7 @@ pub mod discover;
 pub mod error;
 pub mod fields;
 pub mod figures;
-pub mod kind;
+pub mod kinds;
 pub mod meta;
 pub mod metrics;
 pub mod outputs;

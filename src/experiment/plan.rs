@@ -12,11 +12,11 @@
 //! - each precision's fields are released after its cells are evaluated, the group's f32
 //!   source after the group, so at most one group's fields are alive at a time.
 //!
-//! Only what the render kind declares ([`super::kind::Needs`]) is planned: a G-buffer where it
+//! Only what the render kind declares ([`super::kinds::Needs`]) is planned: a G-buffer where it
 //! has an image, normal fields where it reads them (reflections), a GPU device
 //! only where a cell's backend is "gpu".
 
-use super::kind::Kind;
+use super::kinds::Kind;
 use super::scenes::Scenes;
 use super::spec::{exact_sqrt, Backend, Spec};
 use super::{Error, Result};
@@ -103,7 +103,7 @@ impl Geometry {
 /// The cells of a spec profile: scenes × field settings × backends (× the normal field
 /// precisions of a kind that reads them), duplicates dropped, in spec order.
 pub fn cells_of(spec: &Spec) -> Vec<Cell> {
-    let bits = super::kind::of(&spec.render).normal_bits();
+    let bits = super::kinds::of(&spec.render).normal_bits();
     let normal_bits: Vec<Option<u32>> = if bits.is_empty() {
         vec![None]
     } else {
@@ -216,9 +216,9 @@ impl Plan {
     /// (`scene_steps`), then per field geometry its bakes, lookups and releases
     /// (`GroupPlanner`).
     pub fn new(spec: &Spec, scenes: &Scenes, limits: PlanLimits) -> Result<Plan> {
-        let kind = super::kind::of(&spec.render);
+        let kind = super::kinds::of(&spec.render);
         let cells = cells_of(spec);
-        let render_k = square_root(spec.render.rays_per_point(), "render.rays_per_point")?;
+        let render_k = square_root(spec.render.rays_per_point, "render.rays_per_point")?;
         let ref_k = square_root(spec.reference.rays_per_point, "reference.rays_per_point")?;
         let mut steps = Vec::new();
         for s in 0..scenes.scenes.len() {
@@ -428,7 +428,7 @@ fn square_root(n: u32, field: &str) -> Result<u32> {
 /// the error names the scene, its size and the flag. The runner calls it beside
 /// [`Plan::new`], dry run included, before any work.
 pub fn check_scene_memory(spec: &Spec, scenes: &Scenes, limits: PlanLimits) -> Result<()> {
-    let kind = super::kind::of(&spec.render);
+    let kind = super::kinds::of(&spec.render);
     for s in 0..scenes.scenes.len() {
         let bytes = scene_state_bytes(spec, scenes, kind.as_ref(), s);
         if bytes > limits.memory_limit {

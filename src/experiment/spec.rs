@@ -278,345 +278,143 @@ impl FieldAxes {
     }
 }
 
-/// The render kinds a spec can ask for (`render.what`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum RenderKind {
-    /// AO at the receivers' vertices, shown Gouraud-interpolated in the image (2008).
-    #[default]
-    VertexAo,
-    /// AO at the surface point of every receiver pixel (2010's image-space AO); needs `image`.
-    ImageAo,
-    /// Soft shadows from spherical lights at every receiver pixel (2010 §4.2); needs `image`
-    /// and `lights`.
-    Shadows,
-    /// Glossy reflections through distance and normal fields at every receiver pixel (2010
-    /// §4.2); needs `image`, `lights` and `gloss`.
-    Reflections,
-}
-
-impl RenderKind {
-    /// The snake-case name, as in specs.
-    pub fn name(self) -> &'static str {
-        match self {
-            RenderKind::VertexAo => "vertex_ao",
-            RenderKind::ImageAo => "image_ao",
-            RenderKind::Shadows => "shadows",
-            RenderKind::Reflections => "reflections",
-        }
-    }
-}
-
-/// What is rendered, one variant per render kind (the tagged form): in JSON an object whose
-/// `what` names the kind and whose other keys are that kind's options ([`RenderWire`] lists
-/// every key any kind reads; a key the kind does not read is an error). See [`super::kind`]
-/// for what each kind computes.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(try_from = "RenderWire", into = "RenderWire")]
-pub enum RenderSpec {
-    /// `"vertex_ao"` (2008, the default): AO at the receivers' vertices.
-    VertexAo(AoRender),
-    /// `"image_ao"` (2010): AO at every receiver pixel of `image` (required).
-    ImageAo(AoRender),
-    /// `"shadows"` (2010): the light fraction of spherical lights at every receiver pixel of
-    /// `image` (required).
-    Shadows(ShadowRender),
-    /// `"reflections"` (2010): the reflected radiance of a glossy receiver at every receiver
-    /// pixel of `image` (required), its reflection rays answered with hit point and normal.
-    Reflections(ReflectionRender),
-}
-
-/// The options of the AO kinds.
-#[derive(Clone, Debug, PartialEq)]
-pub struct AoRender {
-    /// Receiver rays per point, k² stratified cosine directions (a perfect square; the papers
-    /// use 256).
+/// What is rendered: the kind (`what`, a name in the kind registry of [`super::kinds`]; default
+/// `"vertex_ao"`), the keys every kind reads (`rays_per_point`, `image`, `intra_bias`), and the
+/// kind's own options, read in a second step by the kind's plug-in into its own struct, where a
+/// key it does not read is refused by name ([`super::kinds::KindEntry::read`]).
+#[derive(Debug)]
+pub struct RenderSpec {
+    /// The kind's name (`render.what`).
+    pub what: &'static str,
+    /// Rays per evaluation point, k² stratified directions (a perfect square; the papers use
+    /// 256 for AO, 20 per light for shadows, 4 for reflections).
     pub rays_per_point: u32,
-    /// The image (PNG and EXR, and the per-pixel RMS); none: per-vertex numbers only.
+    /// The image (PNG and EXR, and the per-pixel RMS); none: per-point numbers only (a per-pixel
+    /// kind needs one).
     pub image: Option<ImageSpec>,
-    /// AO radius in world units: farther hits do not occlude (none: unlimited, the papers).
-    pub max_distance: Option<f32>,
-    /// How a hit within `max_distance` occludes: "step" (binary, the papers' V; default) or
-    /// "linear" (a hit at t occludes by 1 − t/max_distance; needs `max_distance`). Applied
-    /// identically to the ray cast, the field lookup and the converged reference.
-    pub falloff: crate::render::ao::Falloff,
     /// A fixed tolerance of the intra-object test (receivers that are casters), as a fraction
     /// of 2R (none: the field's own resolution-derived tolerance, `IntraBias::Auto`; see
     /// `field::lookup`).
     pub intra_bias: Option<f32>,
+    /// The kind's own options.
+    pub options: Box<dyn super::kinds::KindOptions>,
 }
 
-/// The options of soft shadows (`render::shadow`).
-#[derive(Clone, Debug, PartialEq)]
-pub struct ShadowRender {
-    /// Shadow rays per light and point, k² stratified over the cone the light subtends (a
-    /// perfect square; the paper uses 20).
-    pub rays_per_point: u32,
-    /// The image (required).
-    pub image: Option<ImageSpec>,
-    /// The spherical lights (at least one), in the spec's world coordinates.
-    pub lights: Vec<crate::render::shadow::SphereLight>,
-    /// As [`AoRender::intra_bias`], for receivers that shadow themselves.
-    pub intra_bias: Option<f32>,
-}
+/// The keys of `render` that every kind reads; the others are the kind's own.
+pub const RENDER_COMMON_KEYS: [&str; 4] = ["what", "rays_per_point", "image", "intra_bias"];
 
-/// The options of glossy reflections (`render::reflect`).
-#[derive(Clone, Debug, PartialEq)]
-pub struct ReflectionRender {
-    /// Reflection rays per point, k² stratified over the lobe (a perfect square; the paper
-    /// uses 4).
-    pub rays_per_point: u32,
-    /// The image (required).
-    pub image: Option<ImageSpec>,
-    /// The lights shading the reflected surfaces (at least one; their centres light the hits).
-    pub lights: Vec<crate::render::shadow::SphereLight>,
-    /// The receiver's lobe: `"mirror"` or `{"phong": {"exponent": e}}`.
-    pub gloss: crate::render::reflect::Gloss,
-    /// Diffuse albedo of the reflected surfaces, in \[0, 1\] (default 0.8).
-    pub albedo: f32,
-    /// Radiance of a reflection ray that meets nothing, in \[0, 1\] (default 0.3).
-    pub sky: f32,
-    /// Normal field precisions, bits per octahedral component (8 and/or 16; default \[16\]):
-    /// a swept axis, one cell per precision.
-    pub normal_bits: Vec<u32>,
-    /// As [`AoRender::intra_bias`], for receivers inside a caster's sphere.
-    pub intra_bias: Option<f32>,
-}
-
-/// The default albedo of reflected surfaces.
-pub const DEFAULT_ALBEDO: f32 = 0.8;
-/// The default sky radiance of reflections.
-pub const DEFAULT_SKY: f32 = 0.3;
-
-/// `render` as written in a spec: every key of every kind, unknown keys rejected. Converted to
-/// [`RenderSpec`] on reading, where a key the kind does not read is refused by name.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct RenderWire {
-    /// The render kind: "vertex_ao" (2008, default), "image_ao", "shadows" or "reflections"
-    /// (2010).
-    #[serde(default)]
-    pub what: RenderKind,
-    /// See [`AoRender::rays_per_point`] and [`ShadowRender::rays_per_point`].
-    pub rays_per_point: u32,
-    /// See [`AoRender::image`].
-    #[serde(default)]
-    pub image: Option<ImageSpec>,
-    /// See [`AoRender::max_distance`] (AO kinds).
-    #[serde(default)]
-    pub max_distance: Option<f32>,
-    /// See [`AoRender::falloff`] (AO kinds).
-    #[serde(default)]
-    pub falloff: crate::render::ao::Falloff,
-    /// See [`AoRender::intra_bias`].
-    #[serde(default)]
-    pub intra_bias: Option<f32>,
-    /// See [`ShadowRender::lights`] (shadows, reflections).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub lights: Option<Vec<crate::render::shadow::SphereLight>>,
-    /// See [`ReflectionRender::gloss`] (reflections).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub gloss: Option<crate::render::reflect::Gloss>,
-    /// See [`ReflectionRender::albedo`] (reflections).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub albedo: Option<f32>,
-    /// See [`ReflectionRender::sky`] (reflections).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub sky: Option<f32>,
-    /// See [`ReflectionRender::normal_bits`] (reflections).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub normal_bits: Option<Vec<u32>>,
-}
-
-/// A `render` that cannot be read: a kind not in this build, or a key its kind does not read.
-#[derive(Debug, thiserror::Error)]
-pub enum RenderError {
-    #[error("`{key}`: \"{}\" does not read it", .kind.name())]
-    Foreign { kind: RenderKind, key: &'static str },
-    #[error("`lights`: \"{}\" needs at least one light", .0.name())]
-    NoLights(RenderKind),
-    #[error("`gloss`: \"reflections\" needs the receiver's lobe: \"mirror\" or {{\"phong\": {{\"exponent\": e}}}}")]
-    NoGloss,
-}
-
-impl TryFrom<RenderWire> for RenderSpec {
-    type Error = RenderError;
-
-    fn try_from(w: RenderWire) -> Result<RenderSpec, RenderError> {
-        let foreign = |key| RenderError::Foreign { kind: w.what, key };
-        if w.what != RenderKind::Reflections {
-            for (key, set) in [
-                ("gloss", w.gloss.is_some()),
-                ("albedo", w.albedo.is_some()),
-                ("sky", w.sky.is_some()),
-                ("normal_bits", w.normal_bits.is_some()),
-            ] {
-                if set {
-                    return Err(foreign(key));
-                }
-            }
-        }
-        if matches!(w.what, RenderKind::Shadows | RenderKind::Reflections) {
-            if w.max_distance.is_some() {
-                return Err(foreign("max_distance"));
-            }
-            if w.falloff != crate::render::ao::Falloff::Step {
-                return Err(foreign("falloff"));
-            }
-        }
-        let lights = |w: &RenderWire| {
-            w.lights
-                .clone()
-                .filter(|l| !l.is_empty())
-                .ok_or(RenderError::NoLights(w.what))
-        };
-        match w.what {
-            RenderKind::VertexAo | RenderKind::ImageAo => {
-                if w.lights.is_some() {
-                    return Err(foreign("lights"));
-                }
-                let ao = AoRender {
-                    rays_per_point: w.rays_per_point,
-                    image: w.image,
-                    max_distance: w.max_distance,
-                    falloff: w.falloff,
-                    intra_bias: w.intra_bias,
-                };
-                Ok(if w.what == RenderKind::VertexAo {
-                    RenderSpec::VertexAo(ao)
-                } else {
-                    RenderSpec::ImageAo(ao)
-                })
-            }
-            RenderKind::Shadows => Ok(RenderSpec::Shadows(ShadowRender {
-                lights: lights(&w)?,
-                rays_per_point: w.rays_per_point,
-                image: w.image,
-                intra_bias: w.intra_bias,
-            })),
-            RenderKind::Reflections => Ok(RenderSpec::Reflections(ReflectionRender {
-                lights: lights(&w)?,
-                gloss: w.gloss.ok_or(RenderError::NoGloss)?,
-                rays_per_point: w.rays_per_point,
-                image: w.image,
-                albedo: w.albedo.unwrap_or(DEFAULT_ALBEDO),
-                sky: w.sky.unwrap_or(DEFAULT_SKY),
-                normal_bits: w.normal_bits.unwrap_or_else(|| vec![16]),
-                intra_bias: w.intra_bias,
-            })),
+impl Clone for RenderSpec {
+    fn clone(&self) -> RenderSpec {
+        RenderSpec {
+            what: self.what,
+            rays_per_point: self.rays_per_point,
+            image: self.image.clone(),
+            intra_bias: self.intra_bias,
+            options: self.options.clone_box(),
         }
     }
 }
 
-impl From<RenderSpec> for RenderWire {
-    fn from(r: RenderSpec) -> RenderWire {
-        let what = r.kind();
-        match r {
-            RenderSpec::VertexAo(a) | RenderSpec::ImageAo(a) => RenderWire {
-                what,
-                rays_per_point: a.rays_per_point,
-                image: a.image,
-                max_distance: a.max_distance,
-                falloff: a.falloff,
-                intra_bias: a.intra_bias,
-                lights: None,
-                gloss: None,
-                albedo: None,
-                sky: None,
-                normal_bits: None,
-            },
-            RenderSpec::Shadows(s) => RenderWire {
-                what,
-                rays_per_point: s.rays_per_point,
-                image: s.image,
-                max_distance: None,
-                falloff: crate::render::ao::Falloff::Step,
-                intra_bias: s.intra_bias,
-                lights: Some(s.lights),
-                gloss: None,
-                albedo: None,
-                sky: None,
-                normal_bits: None,
-            },
-            RenderSpec::Reflections(r) => RenderWire {
-                what,
-                rays_per_point: r.rays_per_point,
-                image: r.image,
-                max_distance: None,
-                falloff: crate::render::ao::Falloff::Step,
-                intra_bias: r.intra_bias,
-                lights: Some(r.lights),
-                gloss: Some(r.gloss),
-                albedo: Some(r.albedo),
-                sky: Some(r.sky),
-                normal_bits: Some(r.normal_bits),
-            },
+impl PartialEq for RenderSpec {
+    fn eq(&self, other: &RenderSpec) -> bool {
+        self.what == other.what
+            && self.rays_per_point == other.rays_per_point
+            && self.image == other.image
+            && self.intra_bias == other.intra_bias
+            && self.options.to_json() == other.options.to_json()
+    }
+}
+
+impl Serialize for RenderSpec {
+    fn serialize<S: serde::Serializer>(&self, ser: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let own = self.options.to_json();
+        let mut m = ser.serialize_map(Some(3 + self.intra_bias.is_some() as usize + own.len()))?;
+        m.serialize_entry("what", self.what)?;
+        m.serialize_entry("rays_per_point", &self.rays_per_point)?;
+        m.serialize_entry("image", &self.image)?;
+        if let Some(b) = self.intra_bias {
+            m.serialize_entry("intra_bias", &b)?;
         }
+        for (k, v) in &own {
+            m.serialize_entry(k, v)?;
+        }
+        m.end()
+    }
+}
+
+impl<'de> Deserialize<'de> for RenderSpec {
+    /// Two steps: the keys every kind reads, each typed where it stands (so that an error names
+    /// its path, `render.rays_per_point`), then the rest by the kind's plug-in.
+    fn deserialize<D: serde::Deserializer<'de>>(de: D) -> Result<RenderSpec, D::Error> {
+        de.deserialize_map(RenderVisitor)
+    }
+}
+
+struct RenderVisitor;
+
+impl<'de> serde::de::Visitor<'de> for RenderVisitor {
+    type Value = RenderSpec;
+
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str("a render object: `what`, `rays_per_point` and the kind's keys")
+    }
+
+    fn visit_map<A: serde::de::MapAccess<'de>>(self, mut m: A) -> Result<RenderSpec, A::Error> {
+        use serde::de::Error;
+        let (mut what, mut rays, mut image, mut intra_bias) = (None, None, None, None);
+        let mut own = serde_json::Map::new();
+        while let Some(key) = m.next_key::<String>()? {
+            let twice = || A::Error::custom(format!("`{key}` given twice"));
+            match key.as_str() {
+                "what" if what.is_some() => return Err(twice()),
+                "what" => what = Some(m.next_value::<String>()?),
+                "rays_per_point" if rays.is_some() => return Err(twice()),
+                "rays_per_point" => rays = Some(m.next_value::<u32>()?),
+                "image" if image.is_some() => return Err(twice()),
+                "image" => image = Some(m.next_value::<Option<ImageSpec>>()?),
+                "intra_bias" if intra_bias.is_some() => return Err(twice()),
+                "intra_bias" => intra_bias = Some(m.next_value::<Option<f32>>()?),
+                _ if own.contains_key(&key) => return Err(twice()),
+                _ => {
+                    let v = m.next_value::<serde_json::Value>()?;
+                    own.insert(key, v);
+                }
+            }
+        }
+        let what = what.unwrap_or_else(|| super::kinds::BUILT_IN[0].name.to_string());
+        let entry = super::kinds::lookup(&what).ok_or_else(|| {
+            A::Error::custom(format!(
+                "`what`: unknown render kind \"{what}\"; this build has {}",
+                super::kinds::names()
+                    .iter()
+                    .map(|n| format!("\"{n}\""))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ))
+        })?;
+        let rays_per_point = rays.ok_or_else(|| A::Error::missing_field("rays_per_point"))?;
+        let options = (entry.read)(serde_json::Value::Object(own))
+            .map_err(|e| A::Error::custom(format!("\"{}\": {e}", entry.name)))?;
+        Ok(RenderSpec {
+            what: entry.name,
+            rays_per_point,
+            image: image.flatten(),
+            intra_bias: intra_bias.flatten(),
+            options,
+        })
     }
 }
 
 impl RenderSpec {
-    /// The kind.
-    pub fn kind(&self) -> RenderKind {
-        match self {
-            RenderSpec::VertexAo(_) => RenderKind::VertexAo,
-            RenderSpec::ImageAo(_) => RenderKind::ImageAo,
-            RenderSpec::Shadows(_) => RenderKind::Shadows,
-            RenderSpec::Reflections(_) => RenderKind::Reflections,
-        }
-    }
-
-    /// The AO options of an AO kind (none for other kinds).
-    pub fn ao(&self) -> Option<&AoRender> {
-        match self {
-            RenderSpec::VertexAo(a) | RenderSpec::ImageAo(a) => Some(a),
-            RenderSpec::Shadows(_) | RenderSpec::Reflections(_) => None,
-        }
-    }
-
-    /// Rays per evaluation point (k²).
-    pub fn rays_per_point(&self) -> u32 {
-        match self {
-            RenderSpec::VertexAo(a) | RenderSpec::ImageAo(a) => a.rays_per_point,
-            RenderSpec::Shadows(s) => s.rays_per_point,
-            RenderSpec::Reflections(r) => r.rays_per_point,
-        }
-    }
-
     /// The image, if the spec renders one.
     pub fn image(&self) -> Option<&ImageSpec> {
-        match self {
-            RenderSpec::VertexAo(a) | RenderSpec::ImageAo(a) => a.image.as_ref(),
-            RenderSpec::Shadows(s) => s.image.as_ref(),
-            RenderSpec::Reflections(r) => r.image.as_ref(),
-        }
+        self.image.as_ref()
     }
 
-    /// The intra-object tolerance, if fixed.
-    pub fn intra_bias(&self) -> Option<f32> {
-        match self {
-            RenderSpec::VertexAo(a) | RenderSpec::ImageAo(a) => a.intra_bias,
-            RenderSpec::Shadows(s) => s.intra_bias,
-            RenderSpec::Reflections(r) => r.intra_bias,
-        }
-    }
-
-    /// Replaces the rays per point (the quick profile).
-    pub fn set_rays_per_point(&mut self, n: u32) {
-        match self {
-            RenderSpec::VertexAo(a) | RenderSpec::ImageAo(a) => a.rays_per_point = n,
-            RenderSpec::Shadows(s) => s.rays_per_point = n,
-            RenderSpec::Reflections(r) => r.rays_per_point = n,
-        }
-    }
-
-    /// Replaces the image (the quick profile).
-    pub fn set_image(&mut self, image: ImageSpec) {
-        match self {
-            RenderSpec::VertexAo(a) | RenderSpec::ImageAo(a) => a.image = Some(image),
-            RenderSpec::Shadows(s) => s.image = Some(image),
-            RenderSpec::Reflections(r) => r.image = Some(image),
-        }
+    /// The kind's own options as `T`, when they are (tests and tools reading one kind's keys).
+    pub fn options_as<T: serde::de::DeserializeOwned>(&self) -> Option<T> {
+        serde_json::from_value(serde_json::Value::Object(self.options.to_json())).ok()
     }
 }
 
@@ -889,11 +687,11 @@ impl Spec {
             s.fields = f.clone();
         }
         if let Some(r) = q.rays_per_point {
-            s.render.set_rays_per_point(r);
+            s.render.rays_per_point = r;
             s.reference.rays_per_point = r;
         }
         if let Some(i) = &q.image {
-            s.render.set_image(i.clone());
+            s.render.image = Some(i.clone());
         }
         if let Some(sw) = &q.raycast_sweep {
             s.reference.raycast_sweep = sw.clone();

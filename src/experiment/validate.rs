@@ -79,7 +79,7 @@ pub fn validate(spec: &Spec, file: &Path) -> Result<(), SpecError> {
         thresholds: "quick.thresholds",
         backends: pick(q.backends.is_some(), "quick.backends", full.backends),
     };
-    let ctx = Ctx { file };
+    let ctx = Validator { file };
     ctx.profile(spec, &full)?;
     ctx.profile(&spec.quick(), &quick)?;
     if spec.reproduces.trim().is_empty() {
@@ -91,12 +91,15 @@ pub fn validate(spec: &Spec, file: &Path) -> Result<(), SpecError> {
     Ok(())
 }
 
-struct Ctx<'a> {
+/// Validation of one spec file: its errors name the file ([`Validator::err`]); the render
+/// kinds' own checks ([`super::kinds::KindOptions::validate`]) are given one.
+pub struct Validator<'a> {
     file: &'a Path,
 }
 
-impl Ctx<'_> {
-    fn err(&self, field: &str, message: String) -> SpecError {
+impl Validator<'_> {
+    /// The error at `field` (a path such as `render.lights[1].radius`) of this file.
+    pub fn err(&self, field: &str, message: String) -> SpecError {
         SpecError::Invalid {
             file: self.file.to_path_buf(),
             field: field.to_string(),
@@ -112,7 +115,7 @@ impl Ctx<'_> {
         for (i, f) in s.fields.iter().enumerate() {
             self.axes(f, &format!("{}[{i}]", p.fields))?;
         }
-        self.square(s.render.rays_per_point(), p.render_rays)?;
+        self.square(s.render.rays_per_point, p.render_rays)?;
         self.square(s.reference.rays_per_point, p.reference_rays)?;
         for (i, &n) in s.reference.raycast_sweep.iter().enumerate() {
             self.square(n, &format!("{}[{i}]", p.sweep))?;
@@ -180,22 +183,15 @@ impl Ctx<'_> {
                 })?;
             }
         }
-        let kind = super::kind::of(&s.render);
+        let kind = super::kinds::of(&s.render);
         if kind.needs().view && s.render.image().is_none() {
             return Err(self.err(
                 "render.image",
                 format!("\"{}\" computes per pixel and needs an image", kind.name()),
             ));
         }
-        if let Some(ao) = s.render.ao() {
-            self.ao_render(ao, s)?;
-        }
-        match &s.render {
-            super::spec::RenderSpec::Shadows(sh) => self.lights(&sh.lights)?,
-            super::spec::RenderSpec::Reflections(r) => self.reflections(r)?,
-            _ => {}
-        }
-        if let Some(b) = s.render.intra_bias() {
+        s.render.options.validate(&s.render, s, self)?;
+        if let Some(b) = s.render.intra_bias {
             if !(0.0..1.0).contains(&b) {
                 return Err(self.err("render.intra_bias", format!("{b} is outside [0, 1)")));
             }
@@ -315,67 +311,8 @@ impl Ctx<'_> {
     }
 
     /// The AO kinds' options.
-    fn ao_render(&self, ao: &super::spec::AoRender, s: &Spec) -> Result<(), SpecError> {
-        if let Some(d) = ao.max_distance {
-            if !(d > 0.0 && d.is_finite()) {
-                return Err(self.err(
-                    "render.max_distance",
-                    format!("{d} must be positive and finite"),
-                ));
-            }
-        }
-        if ao.falloff != crate::render::ao::Falloff::Step {
-            if ao.max_distance.is_none() {
-                return Err(self.err(
-                    "render.falloff",
-                    "a distance falloff needs `render.max_distance`".into(),
-                ));
-            }
-            if s.backends.contains(&super::spec::Backend::Gpu) {
-                return Err(self.err(
-                    "render.falloff",
-                    "the GPU path has binary visibility only; use \"step\" or \"cpu\"".into(),
-                ));
-            }
-        }
-        Ok(())
-    }
-
-    /// Reflections: the lights as for shadows, a Phong exponent positive and finite, albedo
-    /// and sky in [0, 1], normal precisions 8 or 16 bits, each once. The GPU backend runs them
-    /// (src/gpu/field_reflect.rs, `GpuTracer::reflections`).
-    fn reflections(&self, r: &super::spec::ReflectionRender) -> Result<(), SpecError> {
-        use crate::render::reflect::Gloss;
-        self.lights(&r.lights)?;
-        if let Gloss::Phong { exponent } = r.gloss {
-            if !(exponent > 0.0 && exponent.is_finite()) {
-                return Err(self.err(
-                    "render.gloss.phong.exponent",
-                    format!("{exponent} must be positive and finite"),
-                ));
-            }
-        }
-        for (f, v) in [("render.albedo", r.albedo), ("render.sky", r.sky)] {
-            if !(0.0..=1.0).contains(&v) {
-                return Err(self.err(f, format!("{v} is outside [0, 1]")));
-            }
-        }
-        if r.normal_bits.is_empty() {
-            return Err(self.err("render.normal_bits", "is empty: list 8 and/or 16".into()));
-        }
-        for (i, &b) in r.normal_bits.iter().enumerate() {
-            if !(b == 8 || b == 16) || r.normal_bits[..i].contains(&b) {
-                return Err(self.err(
-                    &format!("render.normal_bits[{i}]"),
-                    format!("{b}: each of 8 and 16 bits per component at most once"),
-                ));
-            }
-        }
-        Ok(())
-    }
-
     /// Lights: finite centres within the world's range, positive finite radius and intensity.
-    fn lights(&self, lights: &[crate::render::shadow::SphereLight]) -> Result<(), SpecError> {
+    pub fn lights(&self, lights: &[crate::render::shadow::SphereLight]) -> Result<(), SpecError> {
         for (i, l) in lights.iter().enumerate() {
             let at = |f: &str| format!("render.lights[{i}].{f}");
             if !l.center.is_finite()
@@ -544,7 +481,7 @@ impl Ctx<'_> {
                 "the spec renders no image".into(),
             ));
         }
-        let kind = super::kind::of(&s.render);
+        let kind = super::kinds::of(&s.render);
         if t.rms_vertex_max.is_some() && !kind.columns().vertex {
             return Err(self.err(
                 &format!("{path}.rms_vertex_max"),

@@ -14,9 +14,9 @@
 //! the hit distance; ours is named and applied identically to every visibility (ray cast: the
 //! closest hit; field: `t_entry + 2R·D`).
 
-use crate::visibility::Visibility;
 use crate::sampling::rays::{PreparedRaySet, RaySet};
 use crate::sampling::Frame;
+use crate::visibility::Visibility;
 use glam::Vec3;
 use rayon::prelude::*;
 

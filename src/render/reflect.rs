@@ -28,12 +28,12 @@
 //! by the lights' centres and a constant sky; "brushed metal" here is this lobe, converged.
 
 use super::estimator::{Estimator, Points};
+use super::per_point;
 use super::shadow::SphereLight;
 use super::truth::{converged, Truth, TruthOptions};
-use super::per_point;
-use crate::visibility::{SurfaceHit, Visibility};
 use crate::sampling::rays::RaySet;
 use crate::sampling::Frame;
+use crate::visibility::{SurfaceHit, Visibility};
 use glam::{Vec2, Vec3};
 use serde::{Deserialize, Serialize};
 
@@ -209,10 +209,6 @@ impl Estimator for ReflectionEstimator {
         m.insert("albedo".into(), serde_json::json!(o.albedo));
         m.insert("sky".into(), serde_json::json!(o.sky));
         m
-    }
-
-    fn reflect_options(&self) -> Option<&ReflectOptions> {
-        Some(&self.opts)
     }
 }
 

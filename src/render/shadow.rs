@@ -23,12 +23,12 @@
 //! (k² per light, so 16 or 25 where the paper has 20).
 
 use super::estimator::{Estimator, Points};
-use super::truth::{converged, Truth, TruthOptions};
 use super::per_point;
-use crate::visibility::Visibility;
+use super::truth::{converged, Truth, TruthOptions};
 use crate::sampling::rays::RaySet;
 use crate::sampling::warp::square_to_concentric_disk;
 use crate::sampling::Frame;
+use crate::visibility::Visibility;
 use glam::{Vec2, Vec3};
 use serde::{Deserialize, Serialize};
 
@@ -233,10 +233,6 @@ impl Estimator for ShadowEstimator {
         m.insert("offset".into(), serde_json::json!(self.opts.offset));
         m.insert("lights".into(), serde_json::json!(self.opts.lights));
         m
-    }
-
-    fn shadow_options(&self) -> Option<&ShadowOptions> {
-        Some(&self.opts)
     }
 }
 

@@ -20,8 +20,8 @@
 //! radius), so the truth differs from a render only in its rays.
 
 use super::ao::{ao_at_points, AoOptions};
-use crate::visibility::Visibility;
 use crate::sampling::rays::{mix64, RaySet};
+use crate::visibility::Visibility;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 

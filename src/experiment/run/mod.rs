@@ -2,7 +2,7 @@
 //! read them, release), and writes the outputs of [`super::outputs`], the images, `run.json` and
 //! the plots of [`super::figures`].
 //!
-//! Everything runs through the spec's render kind ([`super::kind::Kind`]): its points, its
+//! Everything runs through the spec's render kind ([`super::kinds::Kind`]): its points, its
 //! estimator, its metric columns. Every lookup uses the reference's rays: the same seeded k²
 //! set, the same points, the same offset; the lookup and the ray cast differ only in the
 //! [`crate::visibility::Visibility`] behind the same estimator. Stages shorter than
@@ -173,7 +173,7 @@ fn run_checked(
     eprintln!("{} ({profile}): {}", ls.name, spec.reproduces);
     let (scenes, _) = stage("load scenes", || Scenes::build(spec, &ls.path, scenes_path));
     let scenes = scenes?;
-    let kind = crate::experiment::kind::of(&spec.render);
+    let kind = crate::experiment::kinds::of(&spec.render);
     if let Some((field, message)) = scenes.scenes.iter().find_map(|bs| kind.scene_problem(bs)) {
         return Err(crate::experiment::spec::SpecError::Invalid {
             file: ls.path.clone(),

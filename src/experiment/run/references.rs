@@ -4,7 +4,7 @@
 use super::state::{mean_sd, SceneState};
 use super::steps::Runner;
 use crate::experiment::backend::{Casters, ComputeBackend};
-use crate::experiment::kind::Kind;
+use crate::experiment::kinds::Kind;
 use crate::experiment::metrics::{rms_u8, rms_unquantised};
 use crate::experiment::progress::stage;
 use crate::experiment::truth_cache::{load_or_compute, TruthInputs, TruthOutcome};
@@ -99,9 +99,9 @@ impl Runner<'_> {
         let mut refs = Vec::new();
         for &sd in &seeds[1..] {
             let rays = RaySet::new(k, sd);
-            let values =
-                self.cpu
-                    .raycast_estimate(&casters, st.estimator.as_ref(), st.at(), &rays)?;
+            let values = self
+                .cpu
+                .raycast_estimate(&casters, st.quantity(), st.at(), &rays)?;
             let img = st.image(bs, &values).map(|(i, _)| i);
             refs.push((values, img));
         }
@@ -136,7 +136,7 @@ pub(super) fn raycast_truth_errors(
     };
     for &sd in &seeds[1..] {
         let rays = RaySet::new(k, sd);
-        let values = be.raycast_estimate(&casters, st.estimator.as_ref(), st.at(), &rays)?;
+        let values = be.raycast_estimate(&casters, st.quantity(), st.at(), &rays)?;
         out.extend(st.truth_errors(&values).map(|e| e.all));
     }
     Ok(out)

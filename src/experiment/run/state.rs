@@ -1,10 +1,12 @@
 //! Per-scene state of a run: the render kind's points and estimator, the reference tracer, the
 //! G-buffer, the same-ray reference and its image, and the ray-cast times.
 
-use super::super::kind::Kind;
+use super::super::kinds::Kind;
 use super::super::progress::stage;
 use super::super::scenes::BuiltScene;
 use super::super::spec::Backend;
+use crate::experiment::backend::Quantity;
+use crate::experiment::backend_gpu::GpuQuantity;
 use crate::experiment::metrics::{rms_u8, rms_unquantised, rms_unquantised_where};
 use crate::render::estimator::{Estimator, Points};
 use crate::render::image::GrayImage;
@@ -21,11 +23,13 @@ pub(super) struct SceneState {
     pub(super) at: EvalPoints,
     /// The kind's estimator on this scene.
     pub(super) estimator: Box<dyn Estimator>,
+    /// Its GPU kernels ([`crate::experiment::kinds::Setup::gpu`]).
+    pub(super) gpu: Option<Box<dyn GpuQuantity>>,
     /// The ray offset (model units).
     pub(super) offset: f32,
-    /// The kind's shading factor per point ([`crate::experiment::kind::Setup::shading`]).
+    /// The kind's shading factor per point ([`crate::experiment::kinds::Setup::shading`]).
     pub(super) shading: Option<Vec<f32>>,
-    /// The kind's second reference ([`crate::experiment::kind::Setup::second_reference`]) and
+    /// The kind's second reference ([`crate::experiment::kinds::Setup::second_reference`]) and
     /// its image on the first seed's rays, once the reference step has made it.
     pub(super) second: Option<(&'static str, Box<dyn Estimator>)>,
     pub(super) second_image: Option<GrayImage>,
@@ -75,6 +79,7 @@ impl SceneState {
         SceneState {
             at: setup.points,
             estimator: setup.estimator,
+            gpu: setup.gpu,
             offset: setup.offset,
             shading: setup.shading,
             second: setup.second_reference,
@@ -91,6 +96,14 @@ impl SceneState {
             raycast_s: HashMap::new(),
             raycast_kernel_s: HashMap::new(),
             embree: None,
+        }
+    }
+
+    /// The kind's quantity: its estimator and GPU kernels.
+    pub(super) fn quantity(&self) -> Quantity<'_> {
+        Quantity {
+            estimator: self.estimator.as_ref(),
+            gpu: self.gpu.as_deref(),
         }
     }
 

@@ -5,9 +5,9 @@
 use super::references::{raycast_truth_errors, seed_errors, SeedErrors};
 use super::state::{mean_sd, CellResult, SceneState};
 use super::RunOptions;
-use crate::experiment::backend::{self, Casters, ComputeBackend, CpuBackend};
+use crate::experiment::backend::{self, Casters, ComputeBackend, CpuBackend, Quantity};
 use crate::experiment::fields::{derive, Supplied};
-use crate::experiment::kind::Kind;
+use crate::experiment::kinds::Kind;
 use crate::experiment::metrics::{
     grain, image_errors, rms_u8, rms_unquantised, vertex_errors, ErrorStats,
 };
@@ -78,7 +78,7 @@ impl<'a> Runner<'a> {
         }
         Ok(Runner {
             spec,
-            kind: crate::experiment::kind::of(&spec.render),
+            kind: crate::experiment::kinds::of(&spec.render),
             plan,
             scenes,
             opts,
@@ -210,9 +210,9 @@ impl<'a> Runner<'a> {
             tracer: &st.tracer,
         };
         let msg = format!("{}: ray-cast reference, {} rays", bs.name, k * k);
-        let est = st.estimator.as_ref();
+        let q = st.quantity();
         let (values, s, _) = stage_adaptive(&msg, short, reps, || {
-            cpu.raycast_estimate(&casters, est, st.at(), &rays)
+            cpu.raycast_estimate(&casters, q, st.at(), &rays)
         })?;
         st.raycast_s.insert((Backend::Cpu, k), s);
         st.reference = values;
@@ -228,7 +228,8 @@ impl<'a> Runner<'a> {
             shaded.save_png(&p).map_err(Error::io(&p))?;
         }
         if let Some((name, est)) = &st.second {
-            let values = cpu.raycast_estimate(&casters, est.as_ref(), st.at(), &rays)?;
+            let values =
+                cpu.raycast_estimate(&casters, Quantity::cpu(est.as_ref()), st.at(), &rays)?;
             if let Some((img, _)) = st.image(bs, &values) {
                 let p = out.join(format!("images/{}-reference-{name}.png", bs.name));
                 img.save_png(&p).map_err(Error::io(&p))?;
@@ -282,7 +283,7 @@ impl<'a> Runner<'a> {
             tracer: &st.tracer,
         };
         let msg = format!("{}: ray cast, {} rays ({})", bs.name, k * k, b.name());
-        let eval = be.casters(&casters, st.estimator.as_ref())?;
+        let eval = be.casters(&casters, st.quantity())?;
         let mut kernel_s = None;
         let (values, s, _) = stage_adaptive(&msg, short, reps, || {
             let o = eval.estimate(st.at(), &rays)?;
@@ -415,12 +416,11 @@ impl<'a> Runner<'a> {
         id: &str,
     ) -> Result<(Evaluated, Vec<FieldSweepRow>)> {
         let st = self.states[c.scene].as_ref().expect("scene state");
-        let est = st.estimator.as_ref();
         let be = self.backends[&c.backend].as_ref();
         let (spec, k) = (self.spec, self.plan.render_k);
         let (short, reps) = (self.opts.short_stage_s, self.opts.repeats);
         let msg = format!("[{}/{}] lookup {id}", self.done, self.lookups);
-        let eval = be.fields(&fields.scene, est)?;
+        let eval = be.fields(&fields.scene, st.quantity())?;
         let mut ao_kernel_s = None;
         let rays = RaySet::new(k, spec.reference.seed);
         let (first, ao_s, _) = stage_adaptive(&msg, short, reps, || {

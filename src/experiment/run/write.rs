@@ -157,7 +157,7 @@ impl Runner<'_> {
             "profile": if opts.quick { "quick" } else { "full" },
             "meta": meta,
             "render": self.kind.name(),
-            "rays_per_point": spec.render.rays_per_point(),
+            "rays_per_point": spec.render.rays_per_point,
             "reference_rays_per_point": spec.reference.rays_per_point,
             "seed": spec.reference.seed,
             "seeds": spec.reference.seeds,

@@ -1,0 +1,225 @@
+//! Render kinds as plug-ins: what a spec's `render` computes, behind one interface ([`Kind`])
+//! that the planner, the runner, the backends and the row writer work through, and a registry
+//! ([`KindEntry`], [`register`], [`lookup`]) that `render.what` is read through.
+//!
+//! A kind is one file of this folder (`vertex_ao.rs`, `image_ao.rs`, `shadows.rs`,
+//! `reflections.rs`) and one line of [`BUILT_IN`]. It owns
+//! - its options: the keys of `render` beside the four every kind reads ([`RenderSpec`]'s
+//!   `what`, `rays_per_point`, `image`, `intra_bias`), read in a second step into the kind's
+//!   own struct, unknown keys refused ([`KindEntry::read`], [`KindOptions`]);
+//! - their validation ([`KindOptions::validate`], before any work);
+//! - what it needs of a scene ([`Needs`]: a view with its G-buffer, normal fields);
+//! - its evaluation points, its [`Estimator`] and, where one exists, its GPU kernels
+//!   ([`Kind::setup`] → [`Setup`], with [`Setup::gpu`]);
+//! - the metric columns it fills ([`Columns`]).
+//!
+//! Everything else (the same-ray reference, the seeds, the converged reference and its cache,
+//! the sweeps, the images, the tables) is the runner's, the same for every kind.
+//! ARCHITECTURE.md lists the files that add a kind.
+//!
+//! Values per point are one scalar in \[0, 1\] (the images, the 0–255 RMS and the tables assume
+//! it); a kind with channels (RGB, a bent normal) cannot be added yet.
+
+pub mod ao;
+pub mod image_ao;
+pub mod reflections;
+pub mod shadows;
+pub mod vertex_ao;
+
+use super::backend_gpu::GpuQuantity;
+use super::scenes::BuiltScene;
+use super::spec::{ImageSpec, RenderSpec, Spec, SpecError};
+use super::validate::Validator;
+use crate::field::lookup::{IntraBias, LookupOptions};
+use crate::field::Selection;
+use crate::render::estimator::Estimator;
+use crate::render::points::{EvalPoints, GBuffer};
+use std::sync::RwLock;
+
+/// What a kind needs built before it can run.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Needs {
+    /// A camera and the G-buffer of its view (the points are pixels).
+    pub view: bool,
+    /// Normal fields beside the distance fields (reflections).
+    pub normal_field: bool,
+}
+
+/// The metric columns a kind fills beside the ones every kind has (`rms_vs_truth` and its
+/// crease/interior split, over the evaluation points).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Columns {
+    /// Per-point values whose unquantised RMS is `rms_vertex` (the 2008 paper's per-vertex AO).
+    pub vertex: bool,
+}
+
+/// A kind set up on one scene: its points, its estimator, its ray offset.
+pub struct Setup {
+    pub points: EvalPoints,
+    pub estimator: Box<dyn Estimator>,
+    /// The estimator's GPU kernels (field lookup and ray casting, on the CPU path's rays); none:
+    /// the `gpu` backend refuses the kind, naming it.
+    pub gpu: Option<Box<dyn GpuQuantity>>,
+    /// The largest distance a ray origin moves along its normal (model units; each point's is
+    /// its instance's, `render::ao::instance_epsilon`), for run.json.
+    pub offset: f32,
+    /// A per-point factor in \[0, 1\] that turns the kind's values into a shaded picture,
+    /// written beside each value image as `-shaded.png` (shadows: the unshadowed direct light,
+    /// so that value × factor is the shadowed image); none: no such picture.
+    pub shading: Option<Vec<f32>>,
+    /// A second reference the cells' images are also measured against (`rms_image_vs_second`):
+    /// its name and its estimator, evaluated once per scene by ray casting on the first seed's
+    /// rays (reflections: the perfect mirror beside the glossy lobe). None: no such column.
+    pub second_reference: Option<(&'static str, Box<dyn Estimator>)>,
+}
+
+/// A render kind, bound to a spec's `render`.
+pub trait Kind: Sync {
+    /// The spec's name for it ("vertex_ao").
+    fn name(&self) -> &'static str;
+    /// The `render` it was made from (the keys every kind reads are there).
+    fn render(&self) -> &RenderSpec;
+    /// What it needs built.
+    fn needs(&self) -> Needs;
+    /// Which metric columns it fills.
+    fn columns(&self) -> Columns;
+    /// Rays per evaluation point (k²).
+    fn rays_per_point(&self) -> u32 {
+        self.render().rays_per_point
+    }
+    /// Rays one evaluation casts per point (k², times the lights for shadows): the count the
+    /// tables' rays per second are of.
+    fn rays_cast_per_point(&self) -> u64 {
+        self.rays_per_point() as u64
+    }
+    /// The image, when the spec renders one (a view kind always has one).
+    fn image(&self) -> Option<&ImageSpec> {
+        self.render().image.as_ref()
+    }
+    /// The most evaluation points a scene can have (the plan's ray counts, before any scene
+    /// state is built).
+    fn max_points(&self, scene: &BuiltScene) -> u64;
+    /// Its points and estimator on `scene` (`view`: the G-buffer of the spec's image, when
+    /// there is one).
+    fn setup(&self, scene: &BuiltScene, view: Option<&GBuffer>) -> Setup;
+    /// How fields are read for it, with the cell's map selection: `render.intra_bias` when the
+    /// spec fixes it, else the field's own tolerance.
+    fn lookup_options(&self, selection: Selection) -> LookupOptions {
+        LookupOptions {
+            selection,
+            intra_bias: self
+                .render()
+                .intra_bias
+                .map(IntraBias::Fixed)
+                .unwrap_or(LookupOptions::default().intra_bias),
+        }
+    }
+    /// What is wrong with a built scene for this kind, before any work: (the spec field, why).
+    fn scene_problem(&self, _scene: &BuiltScene) -> Option<(String, String)> {
+        None
+    }
+    /// The normal field precisions (bits per component) the cells sweep, for a kind that reads
+    /// normal fields ([`Needs::normal_field`]); empty for the others.
+    fn normal_bits(&self) -> Vec<u32> {
+        Vec::new()
+    }
+}
+
+/// A kind's own options: the keys of `render` beside `what`, `rays_per_point`, `image` and
+/// `intra_bias`, as its plug-in read them.
+pub trait KindOptions: std::fmt::Debug + Send + Sync {
+    /// Its keys as JSON (written back into `spec.json` and `run.json`; [`KindEntry::read`] of
+    /// them gives the same options).
+    fn to_json(&self) -> serde_json::Map<String, serde_json::Value>;
+    /// A boxed copy.
+    fn clone_box(&self) -> Box<dyn KindOptions>;
+    /// What serde cannot check, on one profile of `spec` (`render` is `spec.render`), each error
+    /// naming the field (`v` names the file).
+    fn validate(&self, render: &RenderSpec, spec: &Spec, v: &Validator) -> Result<(), SpecError>;
+    /// The kind on `render` (whose `options` are these).
+    fn kind(&self, render: &RenderSpec) -> Box<dyn Kind>;
+}
+
+/// A kind in the registry: its name in specs and how its options are read.
+#[derive(Clone, Copy)]
+pub struct KindEntry {
+    /// `render.what`.
+    pub name: &'static str,
+    /// One line for `experiment --help` and errors.
+    pub about: &'static str,
+    /// Reads the kind's own keys (a JSON object without the four every kind reads), refusing a
+    /// key it does not read.
+    pub read: fn(serde_json::Value) -> Result<Box<dyn KindOptions>, serde_json::Error>,
+}
+
+/// [`KindEntry::read`] for an options type that serde reads (with `deny_unknown_fields`).
+pub fn read_as<T>(v: serde_json::Value) -> Result<Box<dyn KindOptions>, serde_json::Error>
+where
+    T: serde::de::DeserializeOwned + KindOptions + 'static,
+{
+    Ok(Box::new(serde_json::from_value::<T>(v)?))
+}
+
+/// [`KindOptions::to_json`] for an options type that serde writes as an object.
+pub fn to_json_of<T: serde::Serialize>(t: &T) -> serde_json::Map<String, serde_json::Value> {
+    match serde_json::to_value(t) {
+        Ok(serde_json::Value::Object(m)) => m,
+        // Options are structs of plain values: they always write an object.
+        other => unreachable!("kind options must serialise as an object, not {other:?}"),
+    }
+}
+
+/// The kinds of this build, the first being the default `what`.
+pub const BUILT_IN: &[KindEntry] = &[
+    vertex_ao::ENTRY,
+    image_ao::ENTRY,
+    shadows::ENTRY,
+    reflections::ENTRY,
+];
+
+/// Kinds added at run time by [`register`] (a library user's own, or a test's).
+static REGISTERED: RwLock<Vec<KindEntry>> = RwLock::new(Vec::new());
+
+/// Adds a kind to the registry; refused when its name is taken.
+pub fn register(entry: KindEntry) -> Result<(), String> {
+    let mut extra = REGISTERED.write().unwrap_or_else(|e| e.into_inner());
+    if lookup_in(&extra, entry.name).is_some() {
+        return Err(format!("a render kind \"{}\" exists already", entry.name));
+    }
+    extra.push(entry);
+    Ok(())
+}
+
+fn lookup_in(extra: &[KindEntry], name: &str) -> Option<KindEntry> {
+    BUILT_IN
+        .iter()
+        .chain(extra.iter())
+        .find(|e| e.name == name)
+        .copied()
+}
+
+/// The registered kind named `name`.
+pub fn lookup(name: &str) -> Option<KindEntry> {
+    let extra = REGISTERED.read().unwrap_or_else(|e| e.into_inner());
+    lookup_in(&extra, name)
+}
+
+/// Every registered kind's name, built-in ones first.
+pub fn names() -> Vec<&'static str> {
+    let extra = REGISTERED.read().unwrap_or_else(|e| e.into_inner());
+    BUILT_IN
+        .iter()
+        .chain(extra.iter())
+        .map(|e| e.name)
+        .collect()
+}
+
+/// The kind of a spec's `render`.
+pub fn of(render: &RenderSpec) -> Box<dyn Kind> {
+    render.options.kind(render)
+}
+
+/// The pixels of an image (none without one): the most points a per-pixel kind can have.
+pub fn pixels(image: Option<&ImageSpec>) -> u64 {
+    image.map_or(0, |i| i.width as u64 * i.height as u64)
+}
