@@ -1,0 +1,219 @@
+//! A render kind added through the registry alone: a toy kind ("constant", every point's value
+//! its `level` key) defined here, outside the crate, registered at run time, read from a spec in
+//! two steps, validated, planned, run end to end and written as a table, with no file of the
+//! crate changed. ARCHITECTURE.md's "Adding a render kind" lists what an in-crate kind takes
+//! instead: its file under `src/experiment/kinds/` and one line of `kinds::BUILT_IN`.
+
+use std::path::Path;
+use visfield::experiment::kinds::{
+    self, read_as, to_json_of, Columns, Kind, KindEntry, KindOptions, Needs, Setup,
+};
+use visfield::experiment::outputs::{read_csv, Row};
+use visfield::experiment::run::run;
+use visfield::experiment::scenes::BuiltScene;
+use visfield::experiment::spec::{RenderSpec, Spec, SpecError};
+use visfield::experiment::validate::Validator;
+use visfield::render::estimator::{Estimator, Points};
+use visfield::render::points::{EvalPoints, GBuffer};
+use visfield::render::truth::{Truth, TruthOptions};
+use visfield::sampling::rays::RaySet;
+use visfield::visibility::Visibility;
+
+mod common;
+use common::{loaded, options, tiny, ONE_FIELD};
+
+/// The toy kind's own keys.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ConstantOptions {
+    /// Every point's value, in [0, 1].
+    level: f32,
+}
+
+/// An estimator that asks nothing of visibility: `level` at every point, converged at once.
+struct Constant(f32);
+
+impl Estimator for Constant {
+    fn name(&self) -> &'static str {
+        "constant"
+    }
+
+    fn estimate(&self, _vis: &dyn Visibility, at: Points, _rays: &RaySet) -> Vec<f32> {
+        vec![self.0; at.len()]
+    }
+
+    fn converged(&self, _vis: &dyn Visibility, at: Points, t: &TruthOptions) -> Truth {
+        Truth {
+            ao: vec![self.0; at.len()],
+            stderr: vec![0.0; at.len()],
+            rays_per_point: t.batches * t.start_k * t.start_k,
+            k: t.start_k,
+            batches: t.batches,
+            rounds: vec![(t.batches * t.start_k * t.start_k, 0.0)],
+        }
+    }
+
+    fn key(&self) -> serde_json::Map<String, serde_json::Value> {
+        let mut m = serde_json::Map::new();
+        m.insert("level".into(), serde_json::json!(self.0));
+        m
+    }
+}
+
+impl KindOptions for ConstantOptions {
+    fn to_json(&self) -> serde_json::Map<String, serde_json::Value> {
+        to_json_of(self)
+    }
+
+    fn clone_box(&self) -> Box<dyn KindOptions> {
+        Box::new(self.clone())
+    }
+
+    fn validate(&self, _r: &RenderSpec, _s: &Spec, v: &Validator) -> Result<(), SpecError> {
+        if !(0.0..=1.0).contains(&self.level) {
+            return Err(v.err(
+                "render.level",
+                format!("{} is outside [0, 1]", self.level),
+            ));
+        }
+        Ok(())
+    }
+
+    fn kind(&self, render: &RenderSpec) -> Box<dyn Kind> {
+        Box::new(ConstantKind {
+            render: render.clone(),
+            level: self.level,
+        })
+    }
+}
+
+struct ConstantKind {
+    render: RenderSpec,
+    level: f32,
+}
+
+impl Kind for ConstantKind {
+    fn name(&self) -> &'static str {
+        "constant"
+    }
+
+    fn render(&self) -> &RenderSpec {
+        &self.render
+    }
+
+    fn needs(&self) -> Needs {
+        Needs::default()
+    }
+
+    fn columns(&self) -> Columns {
+        Columns { vertex: true }
+    }
+
+    fn max_points(&self, scene: &BuiltScene) -> u64 {
+        scene.receiver_vertices() as u64
+    }
+
+    fn setup(&self, scene: &BuiltScene, _view: Option<&GBuffer>) -> Setup {
+        let points = EvalPoints::vertices(&scene.scene);
+        Setup {
+            offset: points.max_offset(),
+            points,
+            estimator: Box::new(Constant(self.level)),
+            gpu: None,
+            shading: None,
+            second_reference: None,
+        }
+    }
+}
+
+const CONSTANT: KindEntry = KindEntry {
+    name: "constant",
+    about: "a toy kind: every point's value is `level`",
+    read: read_as::<ConstantOptions>,
+};
+
+fn register_once() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| kinds::register(CONSTANT).expect("first registration"));
+}
+
+fn constant_spec(render_keys: &str) -> String {
+    tiny(ONE_FIELD, "").replace(
+        r#""render": { "rays_per_point": 16"#,
+        &format!(r#""render": {{ "what": "constant", {render_keys}, "rays_per_point": 16"#),
+    )
+}
+
+#[test]
+fn a_kind_registered_at_run_time_is_read_validated_and_run_end_to_end() {
+    register_once();
+    assert!(kinds::names().contains(&"constant"));
+    let dir = tempfile::tempdir().unwrap();
+    let ls = loaded(dir.path(), &constant_spec(r#""level": 0.25"#));
+    assert_eq!(ls.spec.render.what, "constant");
+    let out = dir.path().join("out");
+    let report = run(&ls, &options(out.clone())).unwrap();
+    let rows: Vec<Row> = read_csv(&out.join("table.csv")).unwrap();
+    assert_eq!(rows, report.rows);
+    assert_eq!(rows.len(), 1);
+    let r = &rows[0];
+    // The field and the ray cast both give 0.25 everywhere, and so does the truth: every error
+    // is exactly 0 (for this kind, an exact property, not a suspect one).
+    assert_eq!(r.receiver_points, 243);
+    assert_eq!(r.rms_vertex, Some(0.0));
+    assert_eq!(r.rms_image, Some(0.0));
+    assert_eq!(r.rms_vs_truth, Some(0.0));
+    // The per-point values written beside the table are the kind's, in every column.
+    let text = std::fs::read_to_string(out.join("ao_tiny.csv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let value_columns: Vec<usize> = header
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| !["point", "x", "y", "z", "crease", "truth_stderr"].contains(c))
+        .map(|(i, _)| i)
+        .collect();
+    assert_eq!(value_columns.len(), 3, "{header:?}");
+    let mut n = 0;
+    for line in lines {
+        let cells: Vec<&str> = line.split(',').collect();
+        for &i in &value_columns {
+            assert_eq!(cells[i].parse::<f32>().unwrap(), 0.25, "{line}");
+        }
+        n += 1;
+    }
+    assert_eq!(n, 243);
+    // run.json carries the kind's own key back.
+    let meta = std::fs::read_to_string(out.join("run.json")).unwrap();
+    let meta: serde_json::Value = serde_json::from_str(&meta).unwrap();
+    assert_eq!(
+        meta["effective_spec"]["render"]["level"],
+        serde_json::json!(0.25)
+    );
+}
+
+#[test]
+fn a_registered_kind_refuses_unknown_keys_bad_values_and_a_second_registration() {
+    register_once();
+    let parse = |t: &str| Spec::parse(t, Path::new("specs/toy.json")).map_err(|e| e.to_string());
+    let e = parse(&constant_spec(r#""level": 0.5, "colour": 1"#)).unwrap_err();
+    assert!(
+        e.contains("unknown field `colour`") && e.contains("constant"),
+        "{e}"
+    );
+    let e = parse(&constant_spec(r#""level": 2"#)).unwrap_err();
+    assert!(e.contains("field `render.level`") && e.contains('2'), "{e}");
+    let e = parse(&constant_spec(r#""lights": []"#)).unwrap_err();
+    assert!(e.contains("lights") && e.contains("constant"), "{e}");
+    // Names are unique, the built-in ones included.
+    assert!(kinds::register(CONSTANT).is_err());
+    assert!(kinds::register(KindEntry {
+        name: "shadows",
+        ..CONSTANT
+    })
+    .is_err());
+    // An unknown kind lists the registered ones.
+    let e = parse(&constant_spec(r#""level": 0.5"#).replace("\"constant\"", "\"bent_normals\""))
+        .unwrap_err();
+    assert!(e.contains("bent_normals") && e.contains("\"constant\""), "{e}");
+}
