@@ -266,13 +266,19 @@ fn every_module_imports_only_what_the_architecture_table_allows() {
 fn the_import_scanner_finds_grouped_nested_and_climbing_paths() {
     // The scanner itself, on lines written to break it: a test that cannot fail is worth
     // nothing, so it must see each of these.
-    assert_eq!(named_modules("use crate::render::Visibility;", 0), ["render"]);
+    assert_eq!(
+        named_modules("use crate::render::Visibility;", 0),
+        ["render"]
+    );
     assert_eq!(
         named_modules("use crate::{field::X, render::{a, b}, trace};", 0),
         ["field", "render", "trace"]
     );
     assert_eq!(
-        named_modules("let t = crate::trace::Tracer::new(&crate::geometry::x());", 0),
+        named_modules(
+            "let t = crate::trace::Tracer::new(&crate::geometry::x());",
+            0
+        ),
         ["trace", "geometry"]
     );
     assert_eq!(named_modules("use super::super::render::X;", 2), ["render"]);
@@ -281,9 +287,6 @@ fn the_import_scanner_finds_grouped_nested_and_climbing_paths() {
     let code = code_lines(
         "use crate::a;\n// use crate::b;\n#[cfg(test)]\nmod tests {\n    use crate::c;\n}\nuse crate::d; // crate::e\n",
     );
-    let names: Vec<String> = code
-        .iter()
-        .flat_map(|(_, l)| named_modules(l, 0))
-        .collect();
+    let names: Vec<String> = code.iter().flat_map(|(_, l)| named_modules(l, 0)).collect();
     assert_eq!(names, ["a", "d"]);
 }

@@ -71,10 +71,7 @@ impl KindOptions for ConstantOptions {
 
     fn validate(&self, _r: &RenderSpec, _s: &Spec, v: &Validator) -> Result<(), SpecError> {
         if !(0.0..=1.0).contains(&self.level) {
-            return Err(v.err(
-                "render.level",
-                format!("{} is outside [0, 1]", self.level),
-            ));
+            return Err(v.err("render.level", format!("{} is outside [0, 1]", self.level)));
         }
         Ok(())
     }
@@ -215,5 +212,8 @@ fn a_registered_kind_refuses_unknown_keys_bad_values_and_a_second_registration()
     // An unknown kind lists the registered ones.
     let e = parse(&constant_spec(r#""level": 0.5"#).replace("\"constant\"", "\"bent_normals\""))
         .unwrap_err();
-    assert!(e.contains("bent_normals") && e.contains("\"constant\""), "{e}");
+    assert!(
+        e.contains("bent_normals") && e.contains("\"constant\""),
+        "{e}"
+    );
 }

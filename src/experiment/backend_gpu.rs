@@ -1,8 +1,8 @@
 //! The GPU backend of a run (Gaitatzes, Andreadis, Papaioannou, Chrysanthou, WSCG 2010: field
 //! lookup on the GPU, compared there with a GPU BVH ray caster): field-lookup AO through
-//! [`FieldAoKernel`], field-lookup soft shadows (§4.2) through [`FieldShadowKernel`],
+//! [`crate::gpu::FieldAoKernel`], field-lookup soft shadows (§4.2) through [`crate::gpu::FieldShadowKernel`],
 //! field-lookup glossy reflections (§4.2, with the normal fields) through
-//! [`FieldReflectKernel`], and ray-cast AO, shadows and reflections through [`GpuTracer`] (an
+//! [`crate::gpu::FieldReflectKernel`], and ray-cast AO, shadows and reflections through [`GpuTracer`] (an
 //! obvhs CWBVH in WGSL), on the rays of the CPU path (the same seeded k² cell centres, rotated
 //! per point by the same angles, from the same offset origins; for shadows mapped into each
 //! light's cone, for reflections into the Phong lobe about the mirror direction, as on the
