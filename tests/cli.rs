@@ -128,10 +128,87 @@ fn check_exits_non_zero_naming_the_cell_only_when_a_threshold_is_passed() {
     let o = experiment(&["check", &lax, "--quick", "--no-cache", "--out", out]);
     assert!(o.status.success(), "{}", text(&o));
     assert!(
-        text(&o).contains("1 threshold(s), 0 failure(s)"),
+        text(&o).contains(
+            "1 threshold(s) (not a shipped spec: no committed run compared), 0 failure(s)"
+        ),
         "{}",
         text(&o)
     );
+}
+
+/// `check` against a committed run fails on a doubled error and on an error of 0, naming the
+/// cell and the committed value; the same run passes.
+#[test]
+fn check_against_the_committed_run_fails_on_a_doubled_error_and_on_zero() {
+    let dir = tempfile::tempdir().unwrap();
+    let spec = tiny_spec(dir.path(), 255.0);
+    let name = Path::new(&spec)
+        .file_stem()
+        .unwrap()
+        .to_str()
+        .unwrap()
+        .to_string();
+    let committed = dir.path().join("committed");
+    let o = experiment(&[
+        "run",
+        &spec,
+        "--quick",
+        "--no-cache",
+        "--out",
+        committed.join(&name).to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let table = committed.join(&name).join("table.csv");
+    let original = std::fs::read_to_string(&table).unwrap();
+    let check = || {
+        let out = dir.path().join("out");
+        experiment(&[
+            "check",
+            &spec,
+            "--quick",
+            "--no-cache",
+            "--against",
+            committed.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+    };
+    let o = check();
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(text(&o).contains("0 failure(s)"), "{}", text(&o));
+    // The committed run with its rms_image scaled: ×0.5 (so ours reads as doubled) and ×0 (a
+    // committed 0 admits only 0, and ours is not 0; the same rule fails an error that drops to 0).
+    let header: Vec<&str> = original.lines().next().unwrap().split(',').collect();
+    let col = header.iter().position(|c| *c == "rms_image").unwrap();
+    for factor in [0.5, 0.0] {
+        let doctored: Vec<String> = original
+            .lines()
+            .enumerate()
+            .map(|(i, l)| {
+                if i == 0 {
+                    return l.to_string();
+                }
+                let mut cells: Vec<String> = l.split(',').map(str::to_string).collect();
+                let v: f64 = cells[col].parse().unwrap();
+                assert!(v > 0.0, "the tiny spec's field is not exact: {v}");
+                cells[col] = (v * factor).to_string();
+                cells.join(",")
+            })
+            .collect();
+        std::fs::write(&table, doctored.join("\n") + "\n").unwrap();
+        let o = check();
+        let t = text(&o);
+        assert_eq!(o.status.code(), Some(1), "{factor}: {t}");
+        assert!(
+            t.contains("FAIL") && t.contains("rms_image") && t.contains("committed"),
+            "{factor}: {t}"
+        );
+    }
+    // No committed run at all: a failure, not a pass.
+    std::fs::remove_file(&table).unwrap();
+    let o = check();
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    assert!(text(&o).contains("no committed run"), "{}", text(&o));
 }
 
 /// Sizes over `--max-memory-mib` are refused with their size before anything is baked (at a

@@ -1,29 +1,62 @@
-//! `experiment check`: RMS thresholds per cell. A threshold applies to every cell matching its
-//! axes (an axis left out matches any value); a cell fails when its RMS exceeds the maximum.
+//! `experiment check`: RMS thresholds per cell, and every cell against the committed run of the
+//! same spec and profile.
+//!
+//! A spec's threshold applies to every cell matching its axes (an axis left out matches any
+//! value); a cell fails when its RMS exceeds the maximum ([`check_rows`]). Besides, every cell's
+//! errors (`rms_vertex`, `rms_image`, `rms_vs_truth`) are compared with the same cell of the
+//! committed `table.csv` (`results/quick/NAME` for `--quick`, `results/NAME` for a full check):
+//! two-sided, a value more than [`COMMITTED_TOLERANCE`] times the committed one or less than
+//! its inverse fails, so a doubled error fails and so does an error that drops to 0 (a silent
+//! fallback to ray casting, a field that reads the reference) ([`check_committed`]).
 
 use super::outputs::Row;
 use super::plan::Cell;
 use super::spec::Threshold;
 use crate::field::FieldParams;
 
-/// A cell whose RMS passed its threshold.
+/// How far a cell's error may move from the committed run's, as a factor either way.
+pub const COMMITTED_TOLERANCE: f64 = 1.25;
+
+/// What a failing cell broke.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Rule {
+    /// The spec's threshold: at most this.
+    Max(f64),
+    /// The committed run's value: within [`COMMITTED_TOLERANCE`] of it either way.
+    Committed(f64),
+    /// The committed run has no such cell (or no such value).
+    NotCommitted,
+}
+
+/// A cell whose RMS broke a rule.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Failure {
     /// The cell id.
     pub cell: String,
-    /// "rms_vertex" or "rms_image".
+    /// "rms_vertex", "rms_image" or "rms_vs_truth".
     pub metric: &'static str,
     pub value: f64,
-    pub max: f64,
+    pub rule: Rule,
 }
 
 impl std::fmt::Display for Failure {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "{}: {} {:.4} exceeds its threshold {:.4}",
-            self.cell, self.metric, self.value, self.max
-        )
+        let (cell, metric, v) = (&self.cell, self.metric, self.value);
+        match self.rule {
+            Rule::Max(max) => write!(f, "{cell}: {metric} {v:.4} exceeds its threshold {max:.4}"),
+            Rule::Committed(c) => write!(
+                f,
+                "{cell}: {metric} {v:.4} is outside {:.4} ..= {:.4}, the committed {c:.4} within \
+                 a factor {COMMITTED_TOLERANCE} either way",
+                c / COMMITTED_TOLERANCE,
+                c * COMMITTED_TOLERANCE
+            ),
+            Rule::NotCommitted => write!(
+                f,
+                "{cell}: {metric} {v:.4} has no committed value to compare with (regenerate and \
+                 commit the run: `experiment all`, or `experiment all --quick` for results/quick)"
+            ),
+        }
     }
 }
 
@@ -77,11 +110,105 @@ pub fn check_rows(thresholds: &[Threshold], rows: &[Row]) -> Vec<Failure> {
                         cell: r.cell.clone(),
                         metric,
                         value: v,
-                        max,
+                        rule: Rule::Max(max),
                     });
                 }
             }
         }
     }
     out
+}
+
+/// The errors of a row that the committed run is compared on.
+fn compared(r: &Row) -> [(&'static str, Option<f64>); 3] {
+    [
+        ("rms_vertex", r.rms_vertex),
+        ("rms_image", r.rms_image),
+        ("rms_vs_truth", r.rms_vs_truth),
+    ]
+}
+
+/// Every row's errors against the same cell (scene and cell id) of `committed`, two-sided:
+/// a value outside `committed / COMMITTED_TOLERANCE ..= committed × COMMITTED_TOLERANCE` fails,
+/// as does a value the run measured that the committed run lacks, or one it lost (NaN or
+/// missing where the committed run has one). A committed 0 admits only 0.
+pub fn check_committed(rows: &[Row], committed: &[Row]) -> Vec<Failure> {
+    let mut out = Vec::new();
+    for r in rows {
+        let c = committed
+            .iter()
+            .find(|c| c.scene == r.scene && c.cell == r.cell);
+        let theirs = c.map(compared);
+        for (i, (metric, value)) in compared(r).into_iter().enumerate() {
+            let base = theirs.and_then(|t| t[i].1).filter(|b| b.is_finite());
+            let fail = |value: f64, rule| Failure {
+                cell: r.cell.clone(),
+                metric,
+                value,
+                rule,
+            };
+            match (value, base) {
+                (None, None) => {}
+                (Some(v), None) => out.push(fail(v, Rule::NotCommitted)),
+                (None, Some(b)) => out.push(fail(f64::NAN, Rule::Committed(b))),
+                (Some(v), Some(b)) => {
+                    let inside = v >= b / COMMITTED_TOLERANCE && v <= b * COMMITTED_TOLERANCE;
+                    if !inside {
+                        out.push(fail(v, Rule::Committed(b)));
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A row of the committed quickstart run, renamed and given these errors.
+    fn row(cell: &str, rms: f64) -> Row {
+        let rows: Vec<Row> = crate::experiment::outputs::read_csv(std::path::Path::new(
+            "results/quickstart/table.csv",
+        ))
+        .expect("the committed quickstart table");
+        let mut r = rows[0].clone();
+        r.scene = "s".into();
+        r.cell = cell.into();
+        r.rms_image = Some(rms);
+        r.rms_vertex = None;
+        r.rms_vs_truth = Some(rms + 1.0);
+        r
+    }
+
+    #[test]
+    fn the_committed_run_is_a_two_sided_bound() {
+        let committed = [row("a", 2.0), row("b", 0.5)];
+        // The same values pass, and so does a drift inside the factor.
+        assert!(check_committed(&committed, &committed).is_empty());
+        assert!(check_committed(&[row("a", 2.4)], &committed).is_empty());
+        // A doubled error fails, naming the cell, the metric and the bound.
+        let f = check_committed(&[row("a", 4.0)], &committed);
+        assert_eq!(
+            f.iter().map(|f| f.metric).collect::<Vec<_>>(),
+            ["rms_image", "rms_vs_truth"]
+        );
+        assert!(f[0].to_string().contains("a: rms_image 4.0000"), "{}", f[0]);
+        // An error that drops to 0 fails too (rms_vs_truth stays at 1 inside 1.5 / 1.25).
+        let mut zero = row("b", 0.0);
+        zero.rms_vs_truth = Some(1.5);
+        let f = check_committed(&[zero], &committed);
+        assert_eq!(f.len(), 1);
+        assert_eq!(
+            (f[0].metric, f[0].rule),
+            ("rms_image", Rule::Committed(0.5))
+        );
+        // A value lost, and a cell the committed run lacks.
+        let mut lost = row("a", 2.0);
+        lost.rms_image = None;
+        assert_eq!(check_committed(&[lost], &committed).len(), 1);
+        let f = check_committed(&[row("c", 1.0)], &committed);
+        assert!(f.iter().all(|f| f.rule == Rule::NotCommitted) && f.len() == 2);
+    }
 }

@@ -74,7 +74,9 @@ pub enum Command {
         #[command(flatten)]
         opts: RunArgs,
     },
-    /// Run specs and fail, naming the cells, where an RMS passes its threshold.
+    /// Run specs and fail, naming the cells, where an RMS passes its threshold or moves more
+    /// than a factor 1.25 either way from the committed run (results/quick/NAME with --quick,
+    /// else results/NAME).
     Check {
         /// Specs by name or path (default: every spec of experiments/ and the embedded quickstart).
         names: Vec<String>,
@@ -82,6 +84,11 @@ pub enum Command {
         /// check runs their CPU rows and names the GPU rows it skipped).
         #[arg(long)]
         require_gpu: bool,
+        /// The folder of the committed runs to compare with, one subfolder per spec (default
+        /// results/quick with --quick, else results). Without it, a spec given by path outside
+        /// experiments/ is checked against its thresholds only.
+        #[arg(long)]
+        against: Option<PathBuf>,
         #[command(flatten)]
         opts: RunArgs,
     },
@@ -246,28 +253,51 @@ fn list() -> Result<i32> {
     Ok(code)
 }
 
-/// Runs the specs and checks their thresholds; exit code 1 naming each failure (a cell past
-/// its threshold or a spec that failed to run).
+/// Runs the specs and checks their thresholds and the committed runs
+/// ([`super::check::check_committed`]); exit code 1 naming each failure (a cell past its
+/// threshold, a cell away from its committed value, a spec without a committed run, or a spec
+/// that failed to run).
 /// Every spec by default (the embedded quickstart too), or the ones named. Where no Vulkan
 /// driver is installed and no adapter was named, the specs' "gpu" rows are left out, loudly,
 /// unless `require_gpu` makes that a failure.
-fn check(names: &[String], args: &RunArgs, require_gpu: bool) -> Result<i32> {
-    let mut specs: Vec<Result<LoadedSpec>> = Vec::new();
+fn check(
+    names: &[String],
+    args: &RunArgs,
+    require_gpu: bool,
+    against: Option<&Path>,
+) -> Result<i32> {
+    // Each spec, and whether it is shipped (in experiments/, or the quickstart): a shipped spec
+    // must have a committed run to compare with.
+    let mut specs: Vec<(Result<LoadedSpec>, bool)> = Vec::new();
+    let shipped = discover::spec_paths()?;
     if names.is_empty() {
         specs.extend(
-            discover::spec_paths()?
+            shipped
                 .iter()
-                .map(|p| Ok(LoadedSpec::load(p)?)),
+                .map(|p| (LoadedSpec::load(p).map_err(Into::into), true)),
         );
-        specs.push(super::quickstart::spec());
+        specs.push((super::quickstart::spec(), true));
     } else {
         for n in names {
             specs.push(match n.as_str() {
-                "quickstart" => super::quickstart::spec(),
-                _ => discover::find(n).and_then(|p| Ok(LoadedSpec::load(&p)?)),
+                "quickstart" => (super::quickstart::spec(), true),
+                _ => match discover::find(n) {
+                    Ok(p) => {
+                        let ours = shipped.iter().any(|s| same_file(s, &p));
+                        (LoadedSpec::load(&p).map_err(Into::into), ours)
+                    }
+                    Err(e) => (Err(e), true),
+                },
             });
         }
     }
+    let committed_root = against.map(Path::to_path_buf).unwrap_or_else(|| {
+        PathBuf::from(if args.quick {
+            "results/quick"
+        } else {
+            "results"
+        })
+    });
     let parent = args.out.clone().unwrap_or_else(|| {
         std::env::temp_dir().join(if args.quick {
             "visfield-check-quick"
@@ -278,7 +308,7 @@ fn check(names: &[String], args: &RunArgs, require_gpu: bool) -> Result<i32> {
     let mut failed = Vec::new();
     // Opening a device takes a while: probed once, for the first spec with GPU rows.
     let missing_vulkan = std::cell::OnceCell::new();
-    for ls in specs {
+    for (ls, shipped) in specs {
         let mut ls = match ls {
             Ok(ls) => ls,
             Err(e) => {
@@ -305,9 +335,28 @@ fn check(names: &[String], args: &RunArgs, require_gpu: bool) -> Result<i32> {
         }
         match run_loaded(&ls, args, Some(&parent)) {
             Ok(report) => {
-                let f = super::check::check_rows(&report.thresholds, &report.rows);
+                let mut f = super::check::check_rows(&report.thresholds, &report.rows);
+                let committed = committed_root.join(&name).join("table.csv");
+                let compared = if shipped || against.is_some() {
+                    match super::outputs::read_csv(&committed) {
+                        Ok(rows) => {
+                            f.extend(super::check::check_committed(&report.rows, &rows));
+                            format!(" and the committed {}", committed.display())
+                        }
+                        Err(e) => {
+                            failed.push(format!(
+                                "{name}: no committed run to compare with ({e}); regenerate it \
+                                 with `experiment {name}{}` and commit it",
+                                if args.quick { " --quick" } else { "" }
+                            ));
+                            String::new()
+                        }
+                    }
+                } else {
+                    " (not a shipped spec: no committed run compared)".into()
+                };
                 println!(
-                    "{name}: {} cell(s), {} threshold(s), {} failure(s) ({:.1} s)",
+                    "{name}: {} cell(s), {} threshold(s){compared}, {} failure(s) ({:.1} s)",
                     report.rows.len(),
                     report.thresholds.len(),
                     f.len(),
@@ -322,6 +371,14 @@ fn check(names: &[String], args: &RunArgs, require_gpu: bool) -> Result<i32> {
         println!("FAIL {f}");
     }
     Ok(i32::from(!failed.is_empty()))
+}
+
+/// Whether two paths name the same file.
+fn same_file(a: &Path, b: &Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => a == b,
+    }
 }
 
 fn plots(names: &[String], quick: bool, dir: Option<&Path>) -> Result<()> {
@@ -442,8 +499,9 @@ pub fn run(cli: Cli) -> Result<i32> {
         Command::Check {
             names,
             require_gpu,
+            against,
             opts,
-        } => return check(&names, &opts, require_gpu),
+        } => return check(&names, &opts, require_gpu, against.as_deref()),
         Command::All { opts } => {
             for p in discover::spec_paths()? {
                 let parent = opts.out.clone();
