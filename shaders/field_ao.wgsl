@@ -8,40 +8,8 @@
 // `probe_main` answers single lookups (nearest map, texel, both selections) so that the host
 // can compare every stage with the CPU path.
 
-// Mirrors `AoParamsGpu` (src/gpu/field_ao.rs), 48 bytes.
-struct Params {
-    // Receiver points in this dispatch.
-    point_count: u32,
-    // Rays per point (the base directions in `dirs`).
-    rays_per_point: u32,
-    // Field instances.
-    instance_count: u32,
-    // Invocations per row of the dispatch grid (i = gid.x + gid.y * row_stride).
-    row_stride: u32,
-    // Selection (SELECT_NEAREST, SELECT_INTERPOLATED); the kernels read the pipeline's
-    // constant AO_SELECTION, which the host sets to the same.
-    selection: u32,
-    // Rays one invocation traces.
-    rays_per_invocation: u32,
-    // Invocations per point.
-    invocations_per_point: u32,
-    // Trips of the completion loop (loop_budget.wgsl).
-    completion_trips: u32,
-    // Ray origin offset along the normal.
-    origin_offset: f32,
-    // Largest hit distance.
-    tmax: f32,
-    // Intra-object bias: a fraction of 2R, or the scale of the field's own tolerance.
-    intra_bias: f32,
-    // 1 when `intra_bias` scales the field's own tolerance (`IntraBias::Auto`), else 0.
-    intra_auto: u32,
-}
-
-// The kernel's own bindings (src/gpu/field_ao.rs); `tables`, `mesh`, `instances` and the stored
-// distances are the field group's (src/gpu/field_binding.rs).
-@group(0) @binding(0) var<uniform> params: Params;
-@group(0) @binding(1) var<storage, read> receivers: array<Receiver>;
-@group(0) @binding(2) var<storage, read_write> out: array<u32>;
+// `params`, `receivers` and `out` are the field kernels' shared header (shaders/field_kernel.wgsl);
+// the kernel's own bindings follow (src/gpu/field_ao.rs).
 @group(0) @binding(3) var<storage, read> dirs: array<vec4<f32>>;
 
 // Rays are answered in two steps per round of AO_CHUNK rays an invocation: every invocation

@@ -6,39 +6,8 @@
 // rays and of all its rays; the host adds up a point's runs in f64 and divides. An invocation
 // whose loops the driver cut short writes CUT_SHORT first instead (shaders/loop_budget.wgsl).
 
-// Mirrors `ShadowParamsGpu` (src/gpu/field_shadow.rs), 48 bytes.
-struct Params {
-    // Receiver points in this dispatch.
-    point_count: u32,
-    // Samples per light (k², the cone samples in `samples`).
-    cells: u32,
-    // Lights.
-    light_count: u32,
-    // Invocations per row of the dispatch grid (i = gid.x + gid.y * row_stride).
-    row_stride: u32,
-    // Field instances.
-    instance_count: u32,
-    // Selection (SELECT_NEAREST, SELECT_INTERPOLATED).
-    selection: u32,
-    // Rays one invocation traces.
-    rays_per_invocation: u32,
-    // Invocations per point.
-    invocations_per_point: u32,
-    // Trips of the completion loop (loop_budget.wgsl).
-    completion_trips: u32,
-    // Ray origin offset along the normal.
-    origin_offset: f32,
-    // Intra-object bias: a fraction of 2R, or the scale of the field's own tolerance.
-    intra_bias: f32,
-    // 1 when `intra_bias` scales the field's own tolerance (`IntraBias::Auto`), else 0.
-    intra_auto: u32,
-}
-
-// The kernel's own bindings (src/gpu/field_shadow.rs); `tables`, `mesh`, `instances` and the
-// stored distances are the field group's (src/gpu/field_binding.rs).
-@group(0) @binding(0) var<uniform> params: Params;
-@group(0) @binding(1) var<storage, read> receivers: array<Receiver>;
-@group(0) @binding(2) var<storage, read_write> out: array<u32>;
+// `params`, `receivers` and `out` are the field kernels' shared header (shaders/field_kernel.wgsl);
+// the kernel's own bindings follow (src/gpu/field_shadow.rs).
 @group(0) @binding(3) var<storage, read> samples: array<ConeSample>;
 @group(0) @binding(4) var<storage, read> lights: array<Light>;
 
@@ -59,7 +28,7 @@ fn shadow_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     if i >= params.point_count * per_point {
         return;
     }
-    let cells = params.cells;
+    let cells = params.rays_per_point;
     let first = (i % per_point) * params.rays_per_invocation;
     let last = min(first + params.rays_per_invocation, cells * params.light_count);
     let rc = receivers[i / per_point];
