@@ -6,7 +6,7 @@
 
 use std::path::Path;
 use visfield::experiment::kinds::{
-    self, read_as, to_json_of, Columns, Kind, KindEntry, KindOptions, Needs, Setup,
+    self, read_as, Columns, Kind, KindEntry, KindOptions, Needs, Setup,
 };
 use visfield::experiment::outputs::{read_csv, Row};
 use visfield::experiment::run::run;
@@ -61,14 +61,6 @@ impl Estimator for Constant {
 }
 
 impl KindOptions for ConstantOptions {
-    fn to_json(&self) -> serde_json::Map<String, serde_json::Value> {
-        to_json_of(self)
-    }
-
-    fn clone_box(&self) -> Box<dyn KindOptions> {
-        Box::new(self.clone())
-    }
-
     fn validate(&self, _r: &RenderSpec, _s: &Spec, v: &Validator) -> Result<(), SpecError> {
         if !(0.0..=1.0).contains(&self.level) {
             return Err(v.err("render.level", format!("{} is outside [0, 1]", self.level)));

@@ -1,18 +1,23 @@
 //! What the two AO kinds share (Gaitatzes, Chrysanthou, Papaioannou, WSCG 2008; per pixel:
 //! Gaitatzes, Andreadis, Papaioannou, Chrysanthou, WSCG 2010): their options (`max_distance`,
-//! `falloff`) and their validation, the estimator, and the GPU's AO kernels.
+//! `falloff`) and their validation, the estimator, the GPU's AO kernels, and the kind itself
+//! ([`AoKind`]), generic over where it evaluates ([`AoPoints`]: `vertex_ao.rs`, `image_ao.rs`).
 
 use super::super::backend::{Estimate, Eval};
 use super::super::backend_gpu::{traced, GpuQuantity, KernelEval};
-use super::super::spec::{Backend, Spec, SpecError};
+use super::super::scenes::BuiltScene;
+use super::super::spec::{Backend, RenderSpec, Spec, SpecError};
 use super::super::validate::Validator;
 use super::super::Result;
+use super::{Columns, Kind, KindOptions, Needs, Setup};
 use crate::field::scene::FieldScene;
 use crate::gpu::{FieldAoKernel, FieldGpuOptions, GpuContext, GpuTracer};
 use crate::render::ao::{AoOptions, Falloff};
 use crate::render::estimator::{AoEstimator, Points};
+use crate::render::points::{EvalPoints, GBuffer};
 use crate::sampling::rays::RaySet;
 use serde::{Deserialize, Serialize};
+use std::marker::PhantomData;
 
 /// The options of the AO kinds.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -96,5 +101,88 @@ impl GpuQuantity for AoGpu {
 
     fn trace(&self, tracer: &GpuTracer, at: Points, rays: &RaySet) -> Result<Estimate> {
         traced(tracer.ao(at.points, at.normals, rays, &self.0))
+    }
+}
+
+/// Where an AO kind evaluates, the one thing the AO kinds differ in.
+pub trait AoPoints: Clone + std::fmt::Debug + Send + Sync + 'static {
+    /// The kind's name (`render.what`).
+    const NAME: &'static str;
+    /// What it needs built.
+    fn needs() -> Needs;
+    /// Which metric columns it fills.
+    fn columns() -> Columns;
+    /// The most points a scene can have.
+    fn max_points(render: &RenderSpec, scene: &BuiltScene) -> u64;
+    /// The points on `scene` (`view`: the G-buffer, for a kind that needs one).
+    fn points(scene: &BuiltScene, view: Option<&GBuffer>) -> EvalPoints;
+}
+
+/// The options of an AO kind evaluated at `P`: [`AoRender`]'s keys.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(transparent)]
+pub struct AoKindOptions<P: AoPoints> {
+    pub ao: AoRender,
+    #[serde(skip)]
+    points: PhantomData<P>,
+}
+
+impl<P: AoPoints> KindOptions for AoKindOptions<P> {
+    fn validate(
+        &self,
+        _render: &RenderSpec,
+        spec: &Spec,
+        v: &Validator,
+    ) -> std::result::Result<(), SpecError> {
+        self.ao.validate(spec, v)
+    }
+
+    fn kind(&self, render: &RenderSpec) -> Box<dyn Kind> {
+        Box::new(AoKind::<P> {
+            render: render.clone(),
+            ao: self.ao.clone(),
+            points: PhantomData,
+        })
+    }
+}
+
+/// An AO kind on one spec's `render`, evaluated at `P`.
+pub struct AoKind<P: AoPoints> {
+    render: RenderSpec,
+    ao: AoRender,
+    points: PhantomData<P>,
+}
+
+impl<P: AoPoints> Kind for AoKind<P> {
+    fn name(&self) -> &'static str {
+        P::NAME
+    }
+
+    fn render(&self) -> &RenderSpec {
+        &self.render
+    }
+
+    fn needs(&self) -> Needs {
+        P::needs()
+    }
+
+    fn columns(&self) -> Columns {
+        P::columns()
+    }
+
+    fn max_points(&self, scene: &BuiltScene) -> u64 {
+        P::max_points(&self.render, scene)
+    }
+
+    fn setup(&self, scene: &BuiltScene, view: Option<&GBuffer>) -> Setup {
+        let points = P::points(scene, view);
+        Setup {
+            offset: points.max_offset(),
+            points,
+            estimator: Box::new(self.ao.estimator()),
+            gpu: Some(self.ao.gpu()),
+            shading: None,
+            second_reference: None,
+        }
     }
 }

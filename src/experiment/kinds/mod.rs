@@ -126,18 +126,37 @@ pub trait Kind: Sync {
 }
 
 /// A kind's own options: the keys of `render` beside `what`, `rays_per_point`, `image` and
-/// `intra_bias`, as its plug-in read them.
-pub trait KindOptions: std::fmt::Debug + Send + Sync {
-    /// Its keys as JSON (written back into `spec.json` and `run.json`; [`KindEntry::read`] of
-    /// them gives the same options).
-    fn to_json(&self) -> serde_json::Map<String, serde_json::Value>;
-    /// A boxed copy.
-    fn clone_box(&self) -> Box<dyn KindOptions>;
+/// `intra_bias`, as its plug-in read them. Writing them back and copying them come with any
+/// `Serialize + Clone` type ([`OptionsBase`]).
+pub trait KindOptions: OptionsBase + std::fmt::Debug + Send + Sync {
     /// What serde cannot check, on one profile of `spec` (`render` is `spec.render`), each error
     /// naming the field (`v` names the file).
     fn validate(&self, render: &RenderSpec, spec: &Spec, v: &Validator) -> Result<(), SpecError>;
     /// The kind on `render` (whose `options` are these).
     fn kind(&self, render: &RenderSpec) -> Box<dyn Kind>;
+}
+
+/// What every kind's options do alike, given to any `Serialize + Clone` options type.
+pub trait OptionsBase {
+    /// Its keys as JSON (written back into `spec.json` and `run.json`; [`KindEntry::read`] of
+    /// them gives the same options).
+    fn to_json(&self) -> serde_json::Map<String, serde_json::Value>;
+    /// A boxed copy.
+    fn clone_box(&self) -> Box<dyn KindOptions>;
+}
+
+impl<T: KindOptions + serde::Serialize + Clone + 'static> OptionsBase for T {
+    fn to_json(&self) -> serde_json::Map<String, serde_json::Value> {
+        match serde_json::to_value(self) {
+            Ok(serde_json::Value::Object(m)) => m,
+            // Options are structs of plain values: they always write an object.
+            other => unreachable!("kind options must serialise as an object, not {other:?}"),
+        }
+    }
+
+    fn clone_box(&self) -> Box<dyn KindOptions> {
+        Box::new(self.clone())
+    }
 }
 
 /// A kind in the registry: its name in specs and how its options are read.
@@ -158,15 +177,6 @@ where
     T: serde::de::DeserializeOwned + KindOptions + 'static,
 {
     Ok(Box::new(serde_json::from_value::<T>(v)?))
-}
-
-/// [`KindOptions::to_json`] for an options type that serde writes as an object.
-pub fn to_json_of<T: serde::Serialize>(t: &T) -> serde_json::Map<String, serde_json::Value> {
-    match serde_json::to_value(t) {
-        Ok(serde_json::Value::Object(m)) => m,
-        // Options are structs of plain values: they always write an object.
-        other => unreachable!("kind options must serialise as an object, not {other:?}"),
-    }
 }
 
 /// The kinds of this build, the first being the default `what`.

@@ -6,7 +6,7 @@
 //! `lights` and `gloss`.
 
 use super::shadows::lights_in_frame;
-use super::{read_as, to_json_of, Columns, Kind, KindEntry, KindOptions, Needs, Setup};
+use super::{read_as, Columns, Kind, KindEntry, KindOptions, Needs, Setup};
 use crate::experiment::backend::{Estimate, Eval};
 use crate::experiment::backend_gpu::{traced, GpuQuantity, KernelEval};
 use crate::experiment::scenes::BuiltScene;
@@ -76,14 +76,6 @@ pub struct ReflectionRender {
 }
 
 impl KindOptions for ReflectionRender {
-    fn to_json(&self) -> serde_json::Map<String, serde_json::Value> {
-        to_json_of(self)
-    }
-
-    fn clone_box(&self) -> Box<dyn KindOptions> {
-        Box::new(self.clone())
-    }
-
     /// The lights as for shadows, a Phong exponent positive and finite, albedo and sky in
     /// \[0, 1\], normal precisions 8 or 16 bits, each once.
     fn validate(

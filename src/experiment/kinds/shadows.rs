@@ -3,7 +3,7 @@
 //! `render::shadow` at every receiver pixel, its shadow rays answered by ray casting or by the
 //! fields; needs `image` and `lights`.
 
-use super::{read_as, to_json_of, Columns, Kind, KindEntry, KindOptions, Needs, Setup};
+use super::{read_as, Columns, Kind, KindEntry, KindOptions, Needs, Setup};
 use crate::experiment::backend::{Estimate, Eval};
 use crate::experiment::backend_gpu::{traced, GpuQuantity, KernelEval};
 use crate::experiment::scenes::BuiltScene;
@@ -34,14 +34,6 @@ pub struct ShadowRender {
 }
 
 impl KindOptions for ShadowRender {
-    fn to_json(&self) -> serde_json::Map<String, serde_json::Value> {
-        to_json_of(self)
-    }
-
-    fn clone_box(&self) -> Box<dyn KindOptions> {
-        Box::new(self.clone())
-    }
-
     fn validate(
         &self,
         _render: &RenderSpec,
