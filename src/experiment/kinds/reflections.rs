@@ -5,7 +5,7 @@
 //! lobe is also measured against the perfect mirror (`second_reference`). Needs `image`,
 //! `lights` and `gloss`.
 
-use super::shadows::lights_in_frame;
+use super::shadows::{lights_in_frame, validate_lights};
 use super::{read_as, Columns, Kind, KindEntry, KindOptions, Needs, Setup};
 use crate::experiment::backend::{Estimate, Eval};
 use crate::experiment::backend_gpu::{traced, GpuQuantity, KernelEval};
@@ -84,13 +84,7 @@ impl KindOptions for ReflectionRender {
         _spec: &Spec,
         v: &Validator,
     ) -> std::result::Result<(), SpecError> {
-        if self.lights.is_empty() {
-            return Err(v.err(
-                "render.lights",
-                "is empty: \"reflections\" needs at least one light".into(),
-            ));
-        }
-        v.lights(&self.lights)?;
+        validate_lights(ENTRY.name, &self.lights, v)?;
         if let Gloss::Phong { exponent } = self.gloss {
             if !(exponent > 0.0 && exponent.is_finite()) {
                 return Err(v.err(

@@ -40,13 +40,7 @@ impl KindOptions for ShadowRender {
         _spec: &Spec,
         v: &Validator,
     ) -> std::result::Result<(), SpecError> {
-        if self.lights.is_empty() {
-            return Err(v.err(
-                "render.lights",
-                "is empty: \"shadows\" needs at least one light".into(),
-            ));
-        }
-        v.lights(&self.lights)
+        validate_lights(ENTRY.name, &self.lights, v)
     }
 
     fn kind(&self, render: &RenderSpec) -> Box<dyn Kind> {
@@ -61,6 +55,21 @@ impl KindOptions for ShadowRender {
 pub struct Shadows {
     render: RenderSpec,
     opts: ShadowRender,
+}
+
+/// A kind's lights: at least one, each valid ([`Validator::lights`]).
+pub fn validate_lights(
+    kind: &str,
+    lights: &[SphereLight],
+    v: &Validator,
+) -> std::result::Result<(), SpecError> {
+    if lights.is_empty() {
+        return Err(v.err(
+            "render.lights",
+            format!("is empty: \"{kind}\" needs at least one light"),
+        ));
+    }
+    v.lights(lights)
 }
 
 /// Lights in the scene's frame (moved as the camera is).
