@@ -19,6 +19,7 @@ pub mod figures;
 pub mod kind;
 pub mod meta;
 pub mod metrics;
+pub mod models_cmd;
 pub mod outputs;
 pub mod performance;
 pub mod plan;

@@ -171,6 +171,10 @@ fn run_checked(
         "scenes"
     };
     eprintln!("{} ({profile}): {}", ls.name, spec.reproduces);
+    crate::experiment::models_cmd::require(
+        &ls.name,
+        crate::experiment::models_cmd::spec_models(spec),
+    )?;
     let (scenes, _) = stage("load scenes", || Scenes::build(spec, &ls.path, scenes_path));
     let scenes = scenes?;
     let kind = crate::experiment::kind::of(&spec.render);
