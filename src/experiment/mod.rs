@@ -20,6 +20,7 @@ pub mod kind;
 pub mod meta;
 pub mod metrics;
 pub mod models_cmd;
+pub mod models_fetch;
 pub mod outputs;
 pub mod performance;
 pub mod plan;

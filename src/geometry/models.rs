@@ -53,6 +53,25 @@ pub struct ModelEntry {
     pub licence: String,
     /// Where the file came from (repository @ commit, path).
     pub source: String,
+    /// Where `experiment models fetch` downloads it: the source commit's raw file, or the zip
+    /// archive holding it (`member`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub url: Option<String>,
+    /// The file's name inside the zip archive at `url`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub member: Option<String>,
+    /// Lower-case hex SHA-256 of the archive at `url` (with `member`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub archive_sha256: Option<String>,
+    /// Size of the archive at `url` in bytes (with `member`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub archive_bytes: Option<u64>,
+    /// How we made a file that no public source holds, and what of it can be made again.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub derived: Option<String>,
+    /// Whether its licence restricts use (shown before a download).
+    #[serde(default)]
+    pub restricted: bool,
     /// Whether [`Mesh::load_obj`] can read it (OBJ files only).
     pub loadable: bool,
     /// Why it is not loadable, or other remarks.
@@ -155,6 +174,18 @@ impl ModelRegistry {
                 return Err(err(format!(
                     "models[{i}].sha256: `{}` is not 64 lower-case hex digits",
                     e.sha256
+                )));
+            }
+            if let Some(url) = &e.url {
+                if !(url.starts_with("https://") || url.starts_with("http://")) {
+                    return Err(err(format!(
+                        "models[{i}].url: `{url}` is not an http(s) URL"
+                    )));
+                }
+            }
+            if e.member.is_some() && (e.archive_sha256.is_none() || e.archive_bytes.is_none()) {
+                return Err(err(format!(
+                    "models[{i}].member: needs archive_sha256 and archive_bytes"
                 )));
             }
         }
@@ -382,6 +413,32 @@ mod tests {
                 assert_eq!(format!("{}.obj", e.name), e.file);
             }
         }
+        // Every model is either downloadable from a pinned commit or says how we derived it.
+        for e in &r.entries {
+            match (&e.url, &e.derived) {
+                (Some(url), None) => {
+                    let commit = url
+                        .strip_prefix("https://raw.githubusercontent.com/")
+                        .and_then(|p| p.split('/').nth(2))
+                        .unwrap_or_default();
+                    assert!(
+                        commit.len() == 40 && commit.bytes().all(|b| b.is_ascii_hexdigit()),
+                        "{}: {url}",
+                        e.name
+                    );
+                }
+                (None, Some(_)) => assert!(
+                    e.source.starts_with("derived by us") || e.source.contains("converted by us"),
+                    "{}",
+                    e.name
+                ),
+                other => panic!("{}: url and derived {other:?}", e.name),
+            }
+        }
+        assert_eq!(
+            r.get("sponza").unwrap().member.as_deref(),
+            Some("sponza.obj")
+        );
         assert_eq!(r.get("bunny_npm").unwrap().triangles, 3674);
         assert_eq!(r.get("stanford-bunny_39k").unwrap().triangles, 38889);
     }
