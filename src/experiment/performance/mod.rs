@@ -414,6 +414,7 @@ fn ordinal(n: usize) -> String {
 
 /// Runs the three sweeps into `out` (see the module docs).
 pub fn run(out: &Path, quick: bool, supply: &FieldSupply) -> Result<Vec<PerfRow>> {
+    crate::experiment::progress::begin_run();
     super::models_cmd::require("performance", models(quick))?;
     super::run::ensure_writable(out)?;
     let meta = super::meta::RunMeta::collect(None);
@@ -491,6 +492,7 @@ pub fn run(out: &Path, quick: bool, supply: &FieldSupply) -> Result<Vec<PerfRow>
     super::outputs::write_csv(&out.join("table.csv"), &table)?;
     plots(out, &table)?;
     let json = out.join("run.json");
+    let meta = meta.timed();
     crate::io::write_atomic(&json, meta.to_json().as_bytes()).map_err(Error::io(&json))?;
     println!("performance: {} row(s) -> {}", table.len(), out.display());
     Ok(table)
