@@ -85,8 +85,8 @@ pub fn fetch_model(entry: &ModelEntry, dir: &Path, opts: &FetchOptions) -> Resul
         ));
     };
     std::fs::create_dir_all(dir).map_err(Error::io(dir))?;
-    match &entry.member {
-        None => {
+    match (&entry.member, &entry.convert) {
+        (None, None) => {
             let part = dir.join(format!(".{}.part", entry.file));
             let resumed_from = download(url, &part, entry.bytes, &entry.sha256, &what, opts)?;
             std::fs::rename(&part, &target).map_err(Error::io(&target))?;
@@ -95,21 +95,33 @@ pub fn fetch_model(entry: &ModelEntry, dir: &Path, opts: &FetchOptions) -> Resul
                 resumed_from,
             })
         }
-        Some(member) => {
+        (member, _) => {
             let (Some(archive_sha), Some(archive_bytes)) =
                 (&entry.archive_sha256, entry.archive_bytes)
             else {
                 return Err(Error::invalid(
                     what,
-                    "`member` needs `archive_sha256` and `archive_bytes` in data/models.json",
+                    "`member` and `convert` need `archive_sha256` and `archive_bytes` in \
+                     data/models.json",
                 ));
             };
             let archive = url.rsplit('/').next().unwrap_or("archive");
             let part = dir.join(format!(".{archive}.part"));
             let resumed_from = download(url, &part, archive_bytes, archive_sha, &what, opts)?;
-            let zip = std::fs::read(&part).map_err(Error::io(&part))?;
-            let bytes = zip_member(&zip, member)
-                .map_err(|m| Error::invalid(format!("{what}: {url}"), m))?;
+            let archive_bytes = std::fs::read(&part).map_err(Error::io(&part))?;
+            let member = member.as_deref().unwrap_or("");
+            let extracted = if member.is_empty() {
+                Ok(archive_bytes)
+            } else if url.ends_with(".zip") {
+                zip_member(&archive_bytes, member)
+            } else {
+                tgz_member(&archive_bytes, member)
+            };
+            let mut bytes = extracted.map_err(|m| Error::invalid(format!("{what}: {url}"), m))?;
+            if let Some(recipe) = &entry.convert {
+                bytes = convert(recipe, &bytes)
+                    .map_err(|m| Error::invalid(format!("{what}: {url} {member}"), m))?;
+            }
             let actual = crate::io::sha256_hex(&bytes);
             if actual != entry.sha256 {
                 return Err(Error::invalid(
@@ -252,6 +264,197 @@ fn download(
     Ok(resumed_from)
 }
 
+/// The bytes of `name` in the gzipped tar archive `tgz` (an npm package).
+fn tgz_member(tgz: &[u8], name: &str) -> std::result::Result<Vec<u8>, String> {
+    let bad = || "not a gzip archive this reader understands".to_string();
+    // RFC 1952: a 10-byte header, then optional fields by the flag bits.
+    if tgz.len() < 18 || tgz[0..3] != [0x1f, 0x8b, 8] {
+        return Err(bad());
+    }
+    let flags = tgz[3];
+    let mut at = 10;
+    if flags & 4 != 0 {
+        let n = tgz.get(at..at + 2).ok_or_else(bad)?;
+        at += 2 + u16::from_le_bytes([n[0], n[1]]) as usize;
+    }
+    for bit in [8u8, 16] {
+        if flags & bit != 0 {
+            at += tgz
+                .get(at..)
+                .ok_or_else(bad)?
+                .iter()
+                .position(|&b| b == 0)
+                .ok_or_else(bad)?
+                + 1;
+        }
+    }
+    if flags & 2 != 0 {
+        at += 2;
+    }
+    let tar =
+        miniz_oxide::inflate::decompress_to_vec_with_limit(tgz.get(at..).ok_or_else(bad)?, 1 << 30)
+            .map_err(|e| format!("cannot inflate: {e:?}"))?;
+    let mut at = 0;
+    while at + 512 <= tar.len() && tar[at] != 0 {
+        let header = &tar[at..at + 512];
+        let end = header[..100].iter().position(|&b| b == 0).unwrap_or(100);
+        let size_text = String::from_utf8_lossy(&header[124..136]);
+        let size =
+            usize::from_str_radix(size_text.trim_matches(|c: char| c == '\0' || c == ' '), 8)
+                .map_err(|_| format!("tar header size `{size_text}`"))?;
+        if &header[..end] == name.as_bytes() {
+            return tar
+                .get(at + 512..at + 512 + size)
+                .map(<[u8]>::to_vec)
+                .ok_or_else(|| format!("{name}: truncated in the archive"));
+        }
+        at += 512 + size.div_ceil(512) * 512;
+    }
+    Err(format!("no member `{name}`"))
+}
+
+/// Runs the recipe `recipe` (`data/models.json` `convert`) on a downloaded member.
+fn convert(recipe: &str, member: &[u8]) -> std::result::Result<Vec<u8>, String> {
+    match recipe {
+        "bunny-js-to-obj" => bunny_js_to_obj(member),
+        "igea-ply-to-obj" => igea_ply_to_obj(member),
+        other => Err(format!("unknown recipe `{other}`")),
+    }
+}
+
+/// npm bunny@1.0.1's `index.js` (`exports.positions=[[x,y,z],...]` and
+/// `exports.cells=[[i,j,k],...]`, 0-based) as the OBJ of `bunny_npm`: one comment line, each
+/// coordinate's text as the file has it, faces 1-based.
+fn bunny_js_to_obj(js: &[u8]) -> std::result::Result<Vec<u8>, String> {
+    let js = std::str::from_utf8(js).map_err(|e| format!("index.js: {e}"))?;
+    let array = |key: &str| -> std::result::Result<Vec<Vec<&str>>, String> {
+        let start = js
+            .find(key)
+            .ok_or_else(|| format!("index.js: no `{key}`"))?
+            + key.len();
+        let body = &js[start..];
+        let end = body
+            .find("]]")
+            .ok_or_else(|| format!("index.js: `{key}` not closed"))?;
+        let inner = body[..end]
+            .strip_prefix("[[")
+            .ok_or_else(|| format!("index.js: `{key}` is not an array of arrays"))?;
+        Ok(inner.split("],[").map(|t| t.split(',').collect()).collect())
+    };
+    let mut out = String::from(
+        "# Stanford bunny (low-res), converted from npm package bunny@1.0.1 (index.js \
+         positions/cells); faces are 1-based\n",
+    );
+    for p in array("exports.positions=")? {
+        if p.len() != 3 || p.iter().any(|t| t.parse::<f64>().is_err()) {
+            return Err(format!("index.js: position {p:?}"));
+        }
+        out.push_str(&format!("v {}\n", p.join(" ")));
+    }
+    for c in array("exports.cells=")? {
+        let idx: Vec<usize> = c
+            .iter()
+            .map(|t| t.parse::<usize>().map(|i| i + 1))
+            .collect::<std::result::Result<_, _>>()
+            .map_err(|_| format!("index.js: cell {c:?}"))?;
+        out.push_str(&format!(
+            "f {}\n",
+            idx.iter()
+                .map(usize::to_string)
+                .collect::<Vec<_>>()
+                .join(" ")
+        ));
+    }
+    Ok(out.into_bytes())
+}
+
+/// igea.ply (binary little-endian PLY: `vertex` x y z floats, then one `tristrips` list of int
+/// indices with -1 restarts) as the OBJ of `igea`: one comment line, each coordinate as C's
+/// `%g` prints it ([`format_g`]), each strip unrolled with alternating winding (odd triangles
+/// swap their first two corners), triangles with a repeated corner dropped, faces 1-based.
+fn igea_ply_to_obj(ply: &[u8]) -> std::result::Result<Vec<u8>, String> {
+    let marker = b"end_header\n";
+    let body = ply
+        .windows(marker.len())
+        .position(|w| w == marker)
+        .ok_or("igea.ply: no end_header")?
+        + marker.len();
+    let header = String::from_utf8_lossy(&ply[..body]);
+    let count = |element: &str| -> std::result::Result<usize, String> {
+        header
+            .lines()
+            .find_map(|l| l.strip_prefix(&format!("element {element} ")))
+            .and_then(|n| n.trim().parse().ok())
+            .ok_or_else(|| format!("igea.ply: no `element {element}` count"))
+    };
+    let (vertices, strips) = (count("vertex")?, count("tristrips")?);
+    if !header.contains("binary_little_endian") || strips != 1 {
+        return Err("igea.ply: expected binary little-endian with one tristrips list".into());
+    }
+    let word = |at: usize| -> std::result::Result<[u8; 4], String> {
+        ply.get(at..at + 4)
+            .map(|b| [b[0], b[1], b[2], b[3]])
+            .ok_or_else(|| "igea.ply: truncated".to_string())
+    };
+    let mut out = String::from(
+        "# Igea (Cyberware), converted by us from igea.ply (binary tristrips) of \
+         alecjacobson/common-3d-test-models: strips unrolled with alternating winding, \
+         degenerate triangles dropped; faces 1-based\n",
+    );
+    for i in 0..vertices {
+        let c: Vec<String> = (0..3)
+            .map(|k| word(body + 12 * i + 4 * k).map(|w| format_g(f32::from_le_bytes(w) as f64)))
+            .collect::<std::result::Result<_, _>>()?;
+        out.push_str(&format!("v {}\n", c.join(" ")));
+    }
+    let list = body + 12 * vertices;
+    let n = i32::from_le_bytes(word(list)?);
+    let n = usize::try_from(n).map_err(|_| format!("igea.ply: strip length {n}"))?;
+    let mut strip: Vec<i64> = Vec::new();
+    let mut flush = |strip: &mut Vec<i64>, out: &mut String| {
+        for k in 0..strip.len().saturating_sub(2) {
+            let (mut a, mut b, c) = (strip[k], strip[k + 1], strip[k + 2]);
+            if k % 2 == 1 {
+                std::mem::swap(&mut a, &mut b);
+            }
+            if a != b && b != c && a != c {
+                out.push_str(&format!("f {} {} {}\n", a + 1, b + 1, c + 1));
+            }
+        }
+        strip.clear();
+    };
+    for j in 0..n {
+        match i32::from_le_bytes(word(list + 4 + 4 * j)?) {
+            -1 => flush(&mut strip, &mut out),
+            i if i >= 0 && (i as usize) < vertices => strip.push(i64::from(i)),
+            i => return Err(format!("igea.ply: index {i} of {vertices} vertices")),
+        }
+    }
+    flush(&mut strip, &mut out);
+    Ok(out.into_bytes())
+}
+
+/// `x` as C's (and Python's) `%g` prints it: 6 significant digits, fixed notation for decimal
+/// exponents from -4 to 5, else `d.ddddde±XX`, trailing zeros (and a bare point) removed.
+fn format_g(x: f64) -> String {
+    let strip = |t: &str| -> String {
+        if t.contains('.') {
+            t.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            t.to_string()
+        }
+    };
+    let e = format!("{x:.5e}");
+    let (mantissa, exp) = e.split_once('e').expect("exponent");
+    let exp: i32 = exp.parse().expect("integer exponent");
+    if (-4..6).contains(&exp) {
+        strip(&format!("{x:.*}", (5 - exp) as usize))
+    } else {
+        let sign = if exp < 0 { '-' } else { '+' };
+        format!("{}e{sign}{:02}", strip(mantissa), exp.abs())
+    }
+}
+
 /// The bytes of `name` in the zip archive `zip` (stored or deflated; through the central
 /// directory, so sizes come from it even where the local header defers them).
 fn zip_member(zip: &[u8], name: &str) -> std::result::Result<Vec<u8>, String> {
@@ -310,7 +513,50 @@ fn zip_member(zip: &[u8], name: &str) -> std::result::Result<Vec<u8>, String> {
 
 #[cfg(test)]
 mod tests {
-    use super::zip_member;
+    use super::{bunny_js_to_obj, format_g, tgz_member, zip_member};
+
+    /// C's `%g` (printf("%g") / Python "%g" % x), value by value.
+    #[test]
+    fn format_g_prints_what_printf_prints() {
+        for (x, g) in [
+            (0.0, "0"),
+            (-0.0, "-0"),
+            (1.0, "1"),
+            (0.008178, "0.008178"),
+            (7.7e-05, "7.7e-05"),
+            (0.0001, "0.0001"),
+            (123456.0, "123456"),
+            (1234567.0, "1.23457e+06"),
+            (-0.049669, "-0.049669"),
+            (9.9999996, "10"),
+            (1e-10, "1e-10"),
+            (f32::from_bits(0x3c05fb4d) as f64, "0.00817759"),
+        ] {
+            assert_eq!(format_g(x), g, "{x:e}");
+        }
+    }
+
+    /// An npm package in miniature: index.js in a gzipped tar, found and converted to the OBJ
+    /// the recipe writes (coordinates verbatim, faces 1-based).
+    #[test]
+    fn the_bunny_recipe_reads_index_js_from_a_tgz_and_writes_obj() {
+        let js = b"exports.positions=[[1.5,-0.25,3],[0,1e-3,2],[4,5,6]]\nexports.cells=[[0,2,1]]\n";
+        let mut tar = vec![0u8; 512];
+        tar[..16].copy_from_slice(b"package/index.js");
+        tar[124..136].copy_from_slice(format!("{:011o}\0", js.len()).as_bytes());
+        tar.extend_from_slice(js);
+        tar.resize(512 + js.len().div_ceil(512) * 512 + 1024, 0);
+        let mut tgz = vec![0x1f, 0x8b, 8, 0, 0, 0, 0, 0, 0, 0xff];
+        tgz.extend(miniz_oxide::deflate::compress_to_vec(&tar, 6));
+        tgz.extend_from_slice(&[0; 8]);
+        let member = tgz_member(&tgz, "package/index.js").unwrap();
+        assert_eq!(member, js);
+        assert!(tgz_member(&tgz, "package/other.js").is_err());
+        let obj = String::from_utf8(bunny_js_to_obj(&member).unwrap()).unwrap();
+        let body: Vec<&str> = obj.lines().skip(1).collect();
+        assert_eq!(body, ["v 1.5 -0.25 3", "v 0 1e-3 2", "v 4 5 6", "f 1 3 2"]);
+        assert!(bunny_js_to_obj(b"exports.positions=[[1,x,3]]").is_err());
+    }
 
     /// sponza.zip's layout in miniature: one stored and one deflated member, found through the
     /// central directory and returned byte for byte.

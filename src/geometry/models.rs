@@ -69,6 +69,10 @@ pub struct ModelEntry {
     /// How we made a file that no public source holds, and what of it can be made again.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub derived: Option<String>,
+    /// The recipe `experiment models fetch` runs on the downloaded `member` to derive the file
+    /// (`bunny-js-to-obj`: the arrays of npm bunny's index.js as OBJ).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub convert: Option<String>,
     /// Whether its licence restricts use (shown before a download).
     #[serde(default)]
     pub restricted: bool,
@@ -183,9 +187,11 @@ impl ModelRegistry {
                     )));
                 }
             }
-            if e.member.is_some() && (e.archive_sha256.is_none() || e.archive_bytes.is_none()) {
+            if (e.member.is_some() || e.convert.is_some())
+                && (e.archive_sha256.is_none() || e.archive_bytes.is_none())
+            {
                 return Err(err(format!(
-                    "models[{i}].member: needs archive_sha256 and archive_bytes"
+                    "models[{i}]: `member` and `convert` need archive_sha256 and archive_bytes"
                 )));
             }
         }
@@ -416,13 +422,21 @@ mod tests {
         // Every model is either downloadable from a pinned commit or says how we derived it.
         for e in &r.entries {
             match (&e.url, &e.derived) {
-                (Some(url), None) => {
+                (Some(url), None) if url.starts_with("https://raw.githubusercontent.com/") => {
                     let commit = url
                         .strip_prefix("https://raw.githubusercontent.com/")
                         .and_then(|p| p.split('/').nth(2))
                         .unwrap_or_default();
                     assert!(
                         commit.len() == 40 && commit.bytes().all(|b| b.is_ascii_hexdigit()),
+                        "{}: {url}",
+                        e.name
+                    );
+                }
+                // Derived again on the user's machine from a pinned download.
+                (Some(url), Some(_)) => {
+                    assert!(
+                        e.convert.is_some() && e.member.is_some(),
                         "{}: {url}",
                         e.name
                     );
