@@ -77,8 +77,8 @@ pub fn fetch_model(entry: &ModelEntry, dir: &Path, opts: &FetchOptions) -> Resul
         return Err(Error::invalid(
             what,
             format!(
-                "no public source holds {} (derived by us: {how}); copy it from a machine that \
-                 has it into {} or a folder named by $VISFIELD_MODELS",
+                "no public source holds {}: derived by us, {how}; it goes into {} (or a folder \
+                 named by $VISFIELD_MODELS)",
                 entry.file,
                 dir.display()
             ),
@@ -411,7 +411,7 @@ fn igea_ply_to_obj(ply: &[u8]) -> std::result::Result<Vec<u8>, String> {
     let n = i32::from_le_bytes(word(list)?);
     let n = usize::try_from(n).map_err(|_| format!("igea.ply: strip length {n}"))?;
     let mut strip: Vec<i64> = Vec::new();
-    let mut flush = |strip: &mut Vec<i64>, out: &mut String| {
+    let flush = |strip: &mut Vec<i64>, out: &mut String| {
         for k in 0..strip.len().saturating_sub(2) {
             let (mut a, mut b, c) = (strip[k], strip[k + 1], strip[k + 2]);
             if k % 2 == 1 {
