@@ -109,6 +109,11 @@ pub enum Command {
         #[arg(long)]
         dir: Option<PathBuf>,
     },
+    /// The real meshes of data/models.json: list, verify, fetch from their sources.
+    Models {
+        #[command(subcommand)]
+        command: super::models_cmd::ModelsCommand,
+    },
     /// `experiment NAME ...`: runs experiments/NAME.json.
     #[command(external_subcommand)]
     Named(Vec<String>),
@@ -533,6 +538,7 @@ pub fn run(cli: Cli) -> Result<i32> {
             .unwrap_or_else(|e| e.exit());
             run_one(&discover::find(&name)?, &parsed.opts, None)?;
         }
+        Command::Models { command } => return super::models_cmd::run(command),
         Command::Sampling { out } => {
             super::sampling_report::run(&out).map_err(|e| e.context("sampling"))?
         }

@@ -1,6 +1,10 @@
-//! Run metadata written beside every result: commit, machine, CPU, threads, GPU adapter, date.
+//! Run metadata written beside every result: commit, machine, CPU, threads, GPU adapter, date,
+//! the command line and the wall times. Paths are recorded relative to the crate (or `~`), never
+//! as one machine's absolute folders ([`portable_path`]).
 
+use super::progress::StageTime;
 use serde::{Deserialize, Serialize};
+use std::path::{Component, Path, PathBuf};
 
 /// What made a result.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -25,8 +29,15 @@ pub struct RunMeta {
     pub version: String,
     /// sha256 of the spec text (when a spec made the result).
     pub spec_sha256: Option<String>,
-    /// The command line.
+    /// The command line: the binary by its file name, absolute paths as [`portable_path`]
+    /// writes them.
     pub command: String,
+    /// Seconds from the run's start to this record ([`RunMeta::timed`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wall_s: Option<f64>,
+    /// Each timed stage of the run, in order, with its wall time (repeats included).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub stages: Vec<StageTime>,
     /// 1, 5 and 15 minute load averages when the run started (from /proc/loadavg): timings
     /// taken on a loaded machine are slower and noisier.
     #[serde(default)]
@@ -50,17 +61,118 @@ impl RunMeta {
             date: utc_now_iso8601(),
             version: env!("CARGO_PKG_VERSION").to_string(),
             spec_sha256: spec_text.map(|t| crate::io::sha256_hex(t.as_bytes())),
-            command: std::env::args().collect::<Vec<_>>().join(" "),
+            command: portable_command(std::env::args()),
+            wall_s: None,
+            stages: Vec::new(),
             load_average: std::fs::read_to_string("/proc/loadavg")
                 .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
                 .unwrap_or_else(|_| "unknown".into()),
         }
     }
 
+    /// With the wall time of the run begun on this thread (`progress::begin_run`) and its stages
+    /// so far.
+    pub fn timed(mut self) -> RunMeta {
+        if let Some((wall_s, stages)) = super::progress::run_times() {
+            self.wall_s = Some(wall_s);
+            self.stages = stages;
+        }
+        self
+    }
+
     /// Pretty JSON.
     pub fn to_json(&self) -> String {
         serde_json::to_string_pretty(self).expect("metadata serialises")
     }
+}
+
+/// `path` as a result records it: relative to the crate root when inside it (`cache`,
+/// `experiments/figure6.json`), `~/...` when under the home folder, else relative to the crate
+/// root through `..`; never absolute, so committed outputs name no machine's folders.
+pub fn portable_path(path: &Path) -> String {
+    portable_path_from(
+        path,
+        Path::new(env!("CARGO_MANIFEST_DIR")),
+        home().as_deref(),
+    )
+}
+
+fn home() -> Option<PathBuf> {
+    std::env::var_os("HOME")
+        .map(PathBuf::from)
+        .filter(|h| h.is_absolute())
+}
+
+/// [`portable_path`] against a given crate root and home folder.
+pub fn portable_path_from(path: &Path, root: &Path, home: Option<&Path>) -> String {
+    let norm = |p: &Path| -> PathBuf {
+        let abs = std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
+        let mut out = PathBuf::new();
+        for c in abs.components() {
+            match c {
+                Component::CurDir => {}
+                Component::ParentDir => {
+                    out.pop();
+                }
+                c => out.push(c),
+            }
+        }
+        out
+    };
+    let (path, root) = (norm(path), norm(root));
+    let text = |p: &Path| p.to_string_lossy().replace('\\', "/");
+    if let Ok(rel) = path.strip_prefix(&root) {
+        return if rel.as_os_str().is_empty() {
+            ".".to_string()
+        } else {
+            text(rel)
+        };
+    }
+    if let Some(rel) = home
+        .map(norm)
+        .and_then(|h| path.strip_prefix(&h).ok().map(PathBuf::from))
+    {
+        return format!("~/{}", text(&rel));
+    }
+    let (p, r): (Vec<_>, Vec<_>) = (path.components().collect(), root.components().collect());
+    let common = p.iter().zip(&r).take_while(|(a, b)| a == b).count();
+    let mut rel = PathBuf::new();
+    for _ in common..r.len() {
+        rel.push("..");
+    }
+    for c in &p[common..] {
+        rel.push(c);
+    }
+    text(&rel)
+}
+
+/// The command line as a result records it: the binary by its file name, each absolute path
+/// (also as `--flag=/path`) through [`portable_path`].
+pub fn portable_command(args: impl IntoIterator<Item = String>) -> String {
+    let one = |a: &str| -> String {
+        if Path::new(a).is_absolute() {
+            portable_path(Path::new(a))
+        } else {
+            a.to_string()
+        }
+    };
+    args.into_iter()
+        .enumerate()
+        .map(|(i, a)| {
+            if i == 0 {
+                Path::new(&a)
+                    .file_name()
+                    .map_or(a.clone(), |n| n.to_string_lossy().into_owned())
+            } else if let Some((flag, value)) =
+                a.split_once('=').filter(|(f, _)| f.starts_with("--"))
+            {
+                format!("{flag}={}", one(value))
+            } else {
+                one(&a)
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
 }
 
 fn git_commit() -> String {
@@ -142,6 +254,34 @@ pub fn format_utc(secs: i64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn paths_are_recorded_relative_to_the_crate_or_home_never_absolute() {
+        let root = Path::new("/srv/x/visfield");
+        let home = Some(Path::new("/home/u"));
+        let p = |s: &str| portable_path_from(Path::new(s), root, home);
+        assert_eq!(p("/srv/x/visfield/cache"), "cache");
+        assert_eq!(p("/srv/x/visfield/./results/../cache/f"), "cache/f");
+        assert_eq!(p("/srv/x/visfield"), ".");
+        assert_eq!(
+            p("/home/u/.local/share/visfield/models"),
+            "~/.local/share/visfield/models"
+        );
+        assert_eq!(p("/tmp/out"), "../../../tmp/out");
+        assert_eq!(p("/srv/y"), "../../y");
+        let c = portable_command(
+            [
+                "/opt/bin/experiment",
+                "figure6",
+                "--out",
+                "/tmp/o",
+                "--cache=/tmp/c",
+            ]
+            .map(String::from),
+        );
+        assert!(c.starts_with("experiment figure6 --out "), "{c}");
+        assert!(!c.contains(" /") && !c.contains("=/"), "{c}");
+    }
 
     #[test]
     fn utc_formatting_matches_known_instants() {

@@ -19,6 +19,8 @@ pub mod figures;
 pub mod kinds;
 pub mod meta;
 pub mod metrics;
+pub mod models_cmd;
+pub mod models_fetch;
 pub mod outputs;
 pub mod performance;
 pub mod plan;

@@ -1,5 +1,6 @@
-//! Real meshes by name, found through `$VISFIELD_MODELS`, then `data/models/`, then
-//! `../shared/models/`, each checked against the sha256 in `data/models.json`.
+//! Real meshes by name, found through `$VISFIELD_MODELS`, then the per-user data folder, then
+//! `data/models/`, then `../shared/models/`, each checked against the sha256 in
+//! `data/models.json`.
 //!
 //! The registry (`data/models.json`, embedded at compile time) lists every mesh of the shared
 //! model collection with its file name, sha256, size, counts, licence and source. Mesh files are
@@ -10,8 +11,13 @@
 //! Search order for a model file (first existing file wins; a file that exists but fails the
 //! sha256 check is an error, never silently skipped):
 //! 1. `$VISFIELD_MODELS/` (a folder), when the variable is set;
-//! 2. `data/models/` under the crate root, then under the current directory;
-//! 3. `../shared/models/` relative to the crate root, then to the current directory.
+//! 2. the per-user data folder, [`user_models_dir`] (`$XDG_DATA_HOME/visfield/models`, else
+//!    `~/.local/share/visfield/models`; `%APPDATA%\visfield\models` on Windows);
+//! 3. `data/models/` under the crate root, then under the current directory;
+//! 4. `../shared/models/` relative to the crate root, then to the current directory.
+//!
+//! `experiment models fetch` writes into the first of 1–3 that can be named
+//! ([`fetch_dir`]), so that every later search finds what it fetched.
 //!
 //! Verified hashes are cached in memory per (path, size, mtime), so loading a model twice hashes
 //! its file once.
@@ -47,6 +53,29 @@ pub struct ModelEntry {
     pub licence: String,
     /// Where the file came from (repository @ commit, path).
     pub source: String,
+    /// Where `experiment models fetch` downloads it: the source commit's raw file, or the zip
+    /// archive holding it (`member`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub url: Option<String>,
+    /// The file's name inside the zip archive at `url`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub member: Option<String>,
+    /// Lower-case hex SHA-256 of the archive at `url` (with `member`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub archive_sha256: Option<String>,
+    /// Size of the archive at `url` in bytes (with `member`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub archive_bytes: Option<u64>,
+    /// How we made a file that no public source holds, and what of it can be made again.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub derived: Option<String>,
+    /// The recipe `experiment models fetch` runs on the downloaded `member` to derive the file
+    /// (`bunny-js-to-obj`: the arrays of npm bunny's index.js as OBJ).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub convert: Option<String>,
+    /// Whether its licence restricts use (shown before a download).
+    #[serde(default)]
+    pub restricted: bool,
     /// Whether [`Mesh::load_obj`] can read it (OBJ files only).
     pub loadable: bool,
     /// Why it is not loadable, or other remarks.
@@ -70,8 +99,8 @@ pub enum ModelError {
     #[error("unknown model `{name}`; known models: {}", known.join(", "))]
     Unknown { name: String, known: Vec<String> },
     #[error(
-        "model `{name}` ({file}) not found; tried: {}. Fix: set {MODELS_ENV} to a folder holding \
-         {file}, or copy {file} into data/models/",
+        "model `{name}` ({file}) not found; tried: {}. Fix: `experiment models fetch {name}` \
+         (or set {MODELS_ENV} to a folder holding {file})",
         tried.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ")
     )]
     Missing {
@@ -149,6 +178,20 @@ impl ModelRegistry {
                 return Err(err(format!(
                     "models[{i}].sha256: `{}` is not 64 lower-case hex digits",
                     e.sha256
+                )));
+            }
+            if let Some(url) = &e.url {
+                if !(url.starts_with("https://") || url.starts_with("http://")) {
+                    return Err(err(format!(
+                        "models[{i}].url: `{url}` is not an http(s) URL"
+                    )));
+                }
+            }
+            if (e.member.is_some() || e.convert.is_some())
+                && (e.archive_sha256.is_none() || e.archive_bytes.is_none())
+            {
+                return Err(err(format!(
+                    "models[{i}]: `member` and `convert` need archive_sha256 and archive_bytes"
                 )));
             }
         }
@@ -233,8 +276,11 @@ pub fn search_dirs() -> Vec<PathBuf> {
     let crate_root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let cwd = std::env::current_dir().ok();
     let mut dirs = Vec::new();
-    if let Some(d) = std::env::var_os(MODELS_ENV).filter(|d| !d.is_empty()) {
-        dirs.push(PathBuf::from(d));
+    if let Some(d) = env_models_dir() {
+        dirs.push(d);
+    }
+    if let Some(d) = user_models_dir() {
+        dirs.push(d);
     }
     for rel in ["data/models", "../shared/models"] {
         dirs.push(crate_root.join(rel));
@@ -255,8 +301,67 @@ pub fn search_dirs() -> Vec<PathBuf> {
     unique
 }
 
-/// Streaming SHA-256 of a file, cached per (path, size, mtime).
-fn sha256_file_cached(path: &Path) -> Result<String, ModelError> {
+/// The registered models among `names` whose file none of the default [`search_dirs`] holds
+/// (unknown names count as missing; a file present with a wrong checksum is not missing:
+/// loading it reports the mismatch). Looks at file names only, so it costs no hashing.
+pub fn missing_models<'a>(names: impl IntoIterator<Item = &'a str>) -> Vec<String> {
+    let dirs = search_dirs();
+    let registry = ModelRegistry::embedded();
+    let mut missing: Vec<String> = Vec::new();
+    for name in names {
+        let present = registry
+            .get(name)
+            .is_ok_and(|e| dirs.iter().any(|d| d.join(&e.file).is_file()));
+        if !present && !missing.iter().any(|m| m == name) {
+            missing.push(name.to_string());
+        }
+    }
+    missing
+}
+
+/// What a user missing `missing` is told: "needs a, b: `experiment models fetch a b`".
+pub fn fetch_hint(missing: &[String]) -> String {
+    format!(
+        "needs {}: `experiment models fetch {}`",
+        missing.join(", "),
+        missing.join(" ")
+    )
+}
+
+/// `$VISFIELD_MODELS`, when it is set and not empty.
+pub fn env_models_dir() -> Option<PathBuf> {
+    std::env::var_os(MODELS_ENV)
+        .filter(|d| !d.is_empty())
+        .map(PathBuf::from)
+}
+
+/// The per-user model folder: `$XDG_DATA_HOME/visfield/models`, else
+/// `$HOME/.local/share/visfield/models` (`%APPDATA%\visfield\models` on Windows); `None` when
+/// none of those variables is set to an absolute path.
+pub fn user_models_dir() -> Option<PathBuf> {
+    let var = |name: &str| {
+        std::env::var_os(name)
+            .map(PathBuf::from)
+            .filter(|p| p.is_absolute())
+    };
+    let base = if cfg!(windows) {
+        var("APPDATA")
+    } else {
+        var("XDG_DATA_HOME").or_else(|| var("HOME").map(|h| h.join(".local/share")))
+    };
+    base.map(|b| b.join("visfield").join("models"))
+}
+
+/// Where `experiment models fetch` writes: `$VISFIELD_MODELS`, else the per-user folder, else
+/// `data/models/` under the crate root.
+pub fn fetch_dir() -> PathBuf {
+    env_models_dir()
+        .or_else(user_models_dir)
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("data/models"))
+}
+
+/// Streaming SHA-256 of a file (lower-case hex), cached per (path, size, mtime).
+pub fn sha256_file_cached(path: &Path) -> Result<String, ModelError> {
     type Key = (PathBuf, u64, Option<SystemTime>);
     static CACHE: OnceLock<Mutex<HashMap<Key, String>>> = OnceLock::new();
     let io = |source| ModelError::Io {
@@ -299,16 +404,6 @@ fn sha256_file_cached(path: &Path) -> Result<String, ModelError> {
 mod tests {
     use super::*;
 
-    fn shared_models() -> Option<PathBuf> {
-        let d = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/models");
-        if d.is_dir() {
-            Some(d)
-        } else {
-            println!("note: {} is absent; skipping", d.display());
-            None
-        }
-    }
-
     #[test]
     fn embedded_registry_parses_with_unique_names_and_matching_files() {
         let r = ModelRegistry::embedded();
@@ -324,6 +419,38 @@ mod tests {
                 assert_eq!(format!("{}.obj", e.name), e.file);
             }
         }
+        // Every model is either downloadable from a pinned commit or says how we derived it.
+        for e in &r.entries {
+            match (&e.url, &e.derived) {
+                (Some(url), None) if url.starts_with("https://raw.githubusercontent.com/") => {
+                    let commit = url
+                        .strip_prefix("https://raw.githubusercontent.com/")
+                        .and_then(|p| p.split('/').nth(2))
+                        .unwrap_or_default();
+                    assert!(
+                        commit.len() == 40 && commit.bytes().all(|b| b.is_ascii_hexdigit()),
+                        "{}: {url}",
+                        e.name
+                    );
+                }
+                // Derived again on the user's machine from a pinned download.
+                (Some(url), Some(_)) => {
+                    assert!(e.convert.is_some(), "{}: {url}", e.name);
+                }
+                // Derived by the script it names, which is in the repository.
+                (None, Some(how)) => {
+                    let script = "scripts/derive_decimated.py";
+                    assert!(how.contains(&format!("{script} {}", e.name)), "{how}");
+                    assert!(Path::new(env!("CARGO_MANIFEST_DIR")).join(script).is_file());
+                    assert!(e.source.starts_with("derived by us"), "{}", e.name);
+                }
+                other => panic!("{}: url and derived {other:?}", e.name),
+            }
+        }
+        assert_eq!(
+            r.get("sponza").unwrap().member.as_deref(),
+            Some("sponza.obj")
+        );
         assert_eq!(r.get("bunny_npm").unwrap().triangles, 3674);
         assert_eq!(r.get("stanford-bunny_39k").unwrap().triangles, 38889);
     }
@@ -374,65 +501,7 @@ mod tests {
             );
         }
         assert!(
-            msg.contains(MODELS_ENV) && msg.contains("data/models"),
-            "{msg}"
-        );
-    }
-
-    #[test]
-    fn bunny_npm_resolves_from_shared_and_loads_with_registry_counts() {
-        let Some(shared) = shared_models() else {
-            return;
-        };
-        let reg = ModelRegistry::embedded();
-        let empty = tempfile::tempdir().unwrap();
-        // An earlier folder without the file is skipped.
-        let dirs = [empty.path().to_path_buf(), shared.clone()];
-        let path = reg.resolve_in("bunny_npm", &dirs).unwrap();
-        assert_eq!(path, shared.join("bunny_npm.obj"));
-        let mesh = reg.load_in("bunny_npm", &dirs).unwrap();
-        let entry = reg.get("bunny_npm").unwrap();
-        assert_eq!(
-            mesh.triangle_count() + mesh.dropped_degenerate,
-            entry.triangles
-        );
-        assert_eq!(mesh.triangle_count(), 3674);
-        assert_eq!(mesh.vertex_count(), entry.vertices);
-        // MANIFEST: closed low-res bunny (0 boundary edges).
-        assert!(mesh.is_closed());
-        // The default search order also finds it (through ../shared/models).
-        assert!(reg.resolve("bunny_npm").is_ok());
-    }
-
-    #[test]
-    fn corrupted_copy_reports_expected_and_actual_hash() {
-        let Some(shared) = shared_models() else {
-            return;
-        };
-        let dir = tempfile::tempdir().unwrap();
-        let mut bytes = std::fs::read(shared.join("bunny_npm.obj")).unwrap();
-        bytes[100] ^= 1;
-        std::fs::write(dir.path().join("bunny_npm.obj"), &bytes).unwrap();
-        let reg = ModelRegistry::embedded();
-        // The corrupted copy comes first: it must be reported, not skipped.
-        let e = reg
-            .resolve_in("bunny_npm", &[dir.path().to_path_buf(), shared])
-            .unwrap_err();
-        let actual = crate::io::sha256_hex(&bytes);
-        match &e {
-            ModelError::Mismatch {
-                expected,
-                actual: a,
-                ..
-            } => {
-                assert_eq!(expected, &reg.get("bunny_npm").unwrap().sha256);
-                assert_eq!(a, &actual);
-            }
-            other => panic!("expected a mismatch, got {other}"),
-        }
-        let msg = e.to_string();
-        assert!(
-            msg.contains("bunny_npm.obj") && msg.contains(&actual),
+            msg.contains("`experiment models fetch cow`") && msg.contains(MODELS_ENV),
             "{msg}"
         );
     }

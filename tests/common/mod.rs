@@ -156,3 +156,35 @@ pub fn run_gpu_trials(
         .collect();
     libtest_mimic::run(&args, trials).exit()
 }
+
+/// A test that needs real models: its name, the models it needs (computed when the harness
+/// starts) and its body.
+pub type ModelTrial = (&'static str, fn() -> Vec<String>, fn());
+
+/// The harness of a test binary whose tests need real models (`harness = false`): each test
+/// runs where every model it needs is in a model folder (`geometry::models::search_dirs`,
+/// looked up when the tests run, so a model fetched after the build counts), and is reported
+/// as ignored where one is missing, the reason naming the models and the command that fetches
+/// them ("needs stanford-bunny_39k: `experiment models fetch stanford-bunny_39k`"); a skipped
+/// test never shows as passed.
+pub fn run_model_trials(trials: &[ModelTrial]) -> ! {
+    use visfield::geometry::models::{fetch_hint, missing_models};
+    let args = libtest_mimic::Arguments::from_args();
+    let trials = trials
+        .iter()
+        .map(|&(name, needs, f)| {
+            libtest_mimic::Trial::ignorable_test(name, move || {
+                let needs = needs();
+                let missing = missing_models(needs.iter().map(String::as_str));
+                if !missing.is_empty() {
+                    return Ok(libtest_mimic::Completion::ignored_with(fetch_hint(
+                        &missing,
+                    )));
+                }
+                f();
+                Ok(libtest_mimic::Completion::Completed)
+            })
+        })
+        .collect();
+    libtest_mimic::run(&args, trials).exit()
+}

@@ -131,7 +131,18 @@ fn field_params((count, res, precision): (usize, u32, Precision)) -> FieldParams
     }
 }
 
-/// A caster by name: a model of `../shared/models` or `supershape` (261,120 triangles).
+/// The registered models among the casters of the quick or the full profile (`supershape` is
+/// generated).
+pub fn models(quick: bool) -> Vec<&'static str> {
+    Profile::new(quick)
+        .models
+        .into_iter()
+        .filter(|m| *m != "supershape")
+        .collect()
+}
+
+/// A caster by name: a registered model (`geometry::models`) or `supershape` (261,120
+/// triangles).
 fn caster(name: &str) -> Result<LoadedMesh> {
     let mesh: Mesh = if name == "supershape" {
         supershape(&Supershape::default(), 261_120).map_err(Error::geometry("supershape"))?
@@ -403,6 +414,8 @@ fn ordinal(n: usize) -> String {
 
 /// Runs the three sweeps into `out` (see the module docs).
 pub fn run(out: &Path, quick: bool, supply: &FieldSupply) -> Result<Vec<PerfRow>> {
+    crate::experiment::progress::begin_run();
+    super::models_cmd::require("performance", models(quick))?;
     super::run::ensure_writable(out)?;
     let meta = super::meta::RunMeta::collect(None);
     let prof = Profile::new(quick);
@@ -479,6 +492,7 @@ pub fn run(out: &Path, quick: bool, supply: &FieldSupply) -> Result<Vec<PerfRow>
     super::outputs::write_csv(&out.join("table.csv"), &table)?;
     plots(out, &table)?;
     let json = out.join("run.json");
+    let meta = meta.timed();
     crate::io::write_atomic(&json, meta.to_json().as_bytes()).map_err(Error::io(&json))?;
     println!("performance: {} row(s) -> {}", table.len(), out.display());
     Ok(table)

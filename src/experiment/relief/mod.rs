@@ -429,6 +429,7 @@ fn run_pass(
 /// Runs the tables at 256² pixels (`quick`: 64², one timing) and writes `out/`; with `gpu`,
 /// every setting also runs on that adapter (the `gpu_*` columns).
 pub fn run(out: &Path, quick: bool, gpu: Option<AdapterPreference>) -> Result<Vec<ReliefRow>> {
+    crate::experiment::progress::begin_run();
     crate::experiment::run::ensure_writable(out)?;
     let mut meta = crate::experiment::meta::RunMeta::collect(None);
     let ctx = gpu_context(gpu)?;
@@ -533,6 +534,7 @@ pub fn run(out: &Path, quick: bool, gpu: Option<AdapterPreference>) -> Result<Ve
     plots::exact_grid(&out.join("images.png"), &exact_60)?;
     plots::quality_grids(out, size)?;
     let json = out.join("run.json");
+    let meta = meta.timed();
     crate::io::write_atomic(&json, meta.to_json().as_bytes()).map_err(Error::io(&json))?;
     println!("relief: {} row(s) -> {}", rows.len(), out.display());
     Ok(rows)

@@ -134,6 +134,7 @@ pub fn ensure_writable(dir: &Path) -> Result<()> {
 /// Runs `ls` (or prints its plan with `dry_run`).
 pub fn run(ls: &LoadedSpec, opts: &RunOptions) -> Result<RunReport> {
     let started = std::time::Instant::now();
+    crate::experiment::progress::begin_run();
     let spec = ls.spec.profile(opts.quick);
     let profile = if opts.quick { "quick" } else { "full" };
     let out_existed = opts.out.exists();
@@ -171,6 +172,10 @@ fn run_checked(
         "scenes"
     };
     eprintln!("{} ({profile}): {}", ls.name, spec.reproduces);
+    crate::experiment::models_cmd::require(
+        &ls.name,
+        crate::experiment::models_cmd::spec_models(spec),
+    )?;
     let (scenes, _) = stage("load scenes", || Scenes::build(spec, &ls.path, scenes_path));
     let scenes = scenes?;
     let kind = crate::experiment::kinds::of(&spec.render);

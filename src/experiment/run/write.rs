@@ -114,7 +114,7 @@ impl Runner<'_> {
             outputs::write_csv(&out.join("paper_vs_ours.csv"), &pv)?;
         }
         self.write_point_ao()?;
-        let mut meta = crate::experiment::meta::RunMeta::collect(Some(&ls.text));
+        let mut meta = crate::experiment::meta::RunMeta::collect(Some(&ls.text)).timed();
         meta.gpu_adapter = self.backends.get(&Backend::Gpu).map(|be| be.adapter());
         let scene_info: Vec<_> = self
             .scenes
@@ -152,7 +152,7 @@ impl Runner<'_> {
         let plan = self.plan;
         let summary = serde_json::json!({
             "spec": ls.name,
-            "spec_file": ls.path,
+            "spec_file": crate::experiment::meta::portable_path(&ls.path),
             "reproduces": spec.reproduces,
             "profile": if opts.quick { "quick" } else { "full" },
             "meta": meta,
@@ -166,7 +166,7 @@ impl Runner<'_> {
                 "stages under {} s: best of {} runs",
                 opts.short_stage_s, opts.repeats
             ),
-            "cache": opts.supply.cache,
+            "cache": opts.supply.cache.as_deref().map(crate::experiment::meta::portable_path),
             "cache_limit_bytes": opts.supply.cache_limit,
             "plan": {
                 "cells": plan.cells.len(),

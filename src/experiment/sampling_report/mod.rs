@@ -91,6 +91,7 @@ struct MeasureRow {
 
 /// Runs the report into `out` (created if missing).
 pub fn run(out: &Path) -> Result<()> {
+    crate::experiment::progress::begin_run();
     // An output folder that cannot be written fails before the work, not after it.
     crate::experiment::run::ensure_writable(out)?;
     // Timings depend on what else runs on the machine: the metadata records the load average.
@@ -181,7 +182,7 @@ pub fn run(out: &Path) -> Result<()> {
     }
 
     let run = serde_json::json!({
-        "meta": meta,
+        "meta": meta.timed(),
         "check_directions": CHECK_DIRECTIONS,
         "timing": format!(
             "single thread, minimum over {TIMING_PASSES} passes of {TIMING_QUERIES} seeded queries"

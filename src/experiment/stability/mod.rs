@@ -85,6 +85,7 @@ pub const CASES: &[Case] = &[
 /// Runs every case and writes `out/cases.csv` and `out/run.json` (atomically). Returns the
 /// rows; the error names the failing rows when any case fails (the files are written first).
 pub fn run(out: &Path) -> Result<Vec<StabilityRow>> {
+    crate::experiment::progress::begin_run();
     crate::experiment::run::ensure_writable(out)?;
     let meta = crate::experiment::meta::RunMeta::collect(None);
     let mut rows = Vec::new();
@@ -101,6 +102,7 @@ pub fn run(out: &Path) -> Result<Vec<StabilityRow>> {
     }
     crate::experiment::outputs::write_csv(&out.join("cases.csv"), &rows)?;
     let json = out.join("run.json");
+    let meta = meta.timed();
     crate::io::write_atomic(&json, meta.to_json().as_bytes()).map_err(Error::io(&json))?;
     let failed: Vec<String> = rows
         .iter()
