@@ -374,7 +374,8 @@ impl Ctx<'_> {
         Ok(())
     }
 
-    /// Lights: finite centres within the world's range, positive finite radius and intensity.
+    /// Lights: finite centres within the world's range, a radius of 0 (a point light) or positive
+    /// within that range, a positive finite intensity.
     fn lights(&self, lights: &[crate::render::shadow::SphereLight]) -> Result<(), SpecError> {
         for (i, l) in lights.iter().enumerate() {
             let at = |f: &str| format!("render.lights[{i}].{f}");
@@ -390,10 +391,21 @@ impl Ctx<'_> {
                     ),
                 ));
             }
-            for (f, v) in [("radius", l.radius), ("intensity", l.intensity)] {
-                if !(v > 0.0 && v.is_finite()) {
-                    return Err(self.err(&at(f), format!("{v} must be positive and finite")));
-                }
+            let max = super::scenes::MAX_WORLD_COORDINATE;
+            if !(l.radius >= 0.0 && l.radius <= max) {
+                return Err(self.err(
+                    &at("radius"),
+                    format!(
+                        "{} must be 0 (a point light) or positive, at most {max:e}",
+                        l.radius
+                    ),
+                ));
+            }
+            if !(l.intensity > 0.0 && l.intensity.is_finite()) {
+                return Err(self.err(
+                    &at("intensity"),
+                    format!("{} must be positive and finite", l.intensity),
+                ));
             }
         }
         Ok(())

@@ -63,7 +63,10 @@ fn cone_samples_stay_in_the_cone_and_cover_its_solid_angle_evenly() {
     let rays = RaySet::new(k, 3);
     let mut sq = Vec::new();
     rays.fill_square(0, &mut sq);
-    let dirs: Vec<Vec3> = sq.iter().map(|&u| square_to_cone(u, cos_max)).collect();
+    let dirs: Vec<Vec3> = sq
+        .iter()
+        .map(|&u| square_to_cone(u, 1.0 - cos_max))
+        .collect();
     assert!(dirs
         .iter()
         .all(|d| (d.length() - 1.0).abs() < 1e-5 && d.z >= cos_max - 1e-6));
