@@ -260,7 +260,13 @@ impl Kind for Shadows {
     }
 
     fn rays_cast_per_point(&self) -> u64 {
-        self.0.rays_per_point as u64 * self.0.lights.len() as u64
+        // A point light (radius 0) casts one ray per point, a sphere light k².
+        let k2 = self.0.rays_per_point as u64;
+        self.0
+            .lights
+            .iter()
+            .map(|l| if l.radius == 0.0 { 1 } else { k2 })
+            .sum()
     }
 
     fn image(&self) -> Option<&ImageSpec> {
