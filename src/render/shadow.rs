@@ -279,10 +279,32 @@ pub fn shadow_at_points<V: Visibility + ?Sized>(
     )
 }
 
-/// The unshadowed direct light at every point, normalised to the brightest (in \[0, 1\]): the
-/// light fraction's denominator Σ weight over the shadow directions of `rays` (n·ω-weighted
-/// light reaching the point with nothing in the way), divided by its largest value over the
-/// points. Times the light fraction it is the shadowed image of a white diffuse receiver.
+/// The unshadowed direct light at every point: the light fraction's denominator Σ weight over
+/// the shadow directions of `rays` (n·ω-weighted light reaching the point with nothing in the
+/// way; for a point on a sphere light's axis, facing it, π · intensity · sin²θ_max up to the
+/// stratification, intensity / d² for a point light).
+///
+/// # Panics
+/// If `points` and `normals` differ in length.
+pub fn unshadowed_light(
+    points: &[Vec3],
+    normals: &[Vec3],
+    rays: &RaySet,
+    opts: &ShadowOptions,
+) -> Vec<f64> {
+    per_point(
+        "unshadowed_light",
+        points,
+        normals,
+        |sc: &mut ShadowScratch, i, p, n| {
+            shadow_rays(i, p, n, rays, opts, sc);
+            sc.weights.iter().sum()
+        },
+    )
+}
+
+/// [`unshadowed_light`] normalised to the brightest point (in \[0, 1\]). Times the light
+/// fraction it is the shadowed image of a white diffuse receiver.
 ///
 /// # Panics
 /// If `points` and `normals` differ in length.
@@ -292,15 +314,7 @@ pub fn direct_light(
     rays: &RaySet,
     opts: &ShadowOptions,
 ) -> Vec<f32> {
-    let raw: Vec<f64> = per_point(
-        "direct_light",
-        points,
-        normals,
-        |sc: &mut ShadowScratch, i, p, n| {
-            shadow_rays(i, p, n, rays, opts, sc);
-            sc.weights.iter().sum()
-        },
-    );
+    let raw = unshadowed_light(points, normals, rays, opts);
     let top = raw.iter().copied().fold(0.0f64, f64::max);
     raw.iter()
         .map(|&e| if top > 0.0 { (e / top) as f32 } else { 0.0 })

@@ -14,10 +14,14 @@
 //! - [`hard`]: receivers touching the caster, thin sheets, casters 1000× larger and smaller,
 //!   concave casters, overlapping bounding spheres, a receiver inside a caster's sphere.
 //! - [`determinism`]: 1 and 2 threads give bit-identical fields and images.
+//! - [`lights`]: the 2010 kinds: sphere lights from r/d = 0.5 to 1e-7, a sun and point lights,
+//!   unoccluded and behind an exact sphere (the caps' closed forms), a light below the
+//!   receiving surface, Phong lobes by exponent decade, a mirror at grazing incidence.
 
 pub mod determinism;
 pub mod hard;
 pub mod layouts;
+pub mod lights;
 pub mod scale;
 pub mod scene_ao;
 pub mod sphere;
@@ -80,6 +84,11 @@ pub const CASES: &[Case] = &[
     ("overlapping_spheres", hard::overlapping_spheres),
     ("receiver_inside_caster_sphere", hard::inside_sphere),
     ("thread_determinism", determinism::threads),
+    ("sphere_light_unoccluded", lights::unoccluded),
+    ("sphere_light_behind_sphere_occluder", lights::behind_sphere),
+    ("light_below_receiver", lights::below_surface),
+    ("phong_lobe_by_exponent", lights::phong_lobes),
+    ("mirror_grazing", lights::mirror_grazing),
 ];
 
 /// Runs every case and writes `out/cases.csv` and `out/run.json` (atomically). Returns the
