@@ -50,6 +50,7 @@ case_tests!(
     thread_determinism,
     sphere_light_unoccluded,
     sphere_light_behind_sphere_occluder,
+    light_grazing_caster_sphere,
     light_below_receiver,
     phong_lobe_by_exponent,
     mirror_grazing,

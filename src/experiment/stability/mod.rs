@@ -15,7 +15,8 @@
 //!   concave casters, overlapping bounding spheres, a receiver inside a caster's sphere.
 //! - [`determinism`]: 1 and 2 threads give bit-identical fields and images.
 //! - [`lights`]: the 2010 kinds: sphere lights from r/d = 0.5 to 1e-7, a sun and point lights,
-//!   unoccluded and behind an exact sphere (the caps' closed forms), a light below the
+//!   unoccluded and behind an exact sphere (the caps' closed forms), lights grazing a caster's
+//!   bounding sphere, a light below the
 //!   receiving surface, Phong lobes by exponent decade, a mirror at grazing incidence.
 
 pub mod determinism;
@@ -86,6 +87,7 @@ pub const CASES: &[Case] = &[
     ("thread_determinism", determinism::threads),
     ("sphere_light_unoccluded", lights::unoccluded),
     ("sphere_light_behind_sphere_occluder", lights::behind_sphere),
+    ("light_grazing_caster_sphere", lights::grazing_caster_sphere),
     ("light_below_receiver", lights::below_surface),
     ("phong_lobe_by_exponent", lights::phong_lobes),
     ("mirror_grazing", lights::mirror_grazing),
