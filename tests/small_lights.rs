@@ -223,13 +223,30 @@ fn gpu_images_hold_their_shadow_and_match_the_cpu() {
     }
 }
 
+/// The GPU rows of `experiment stability` pass.
+fn stability_gpu_rows_pass() {
+    let Some(ctx) = gpu_context() else { return };
+    let rows = visfield::experiment::stability::lights_gpu::gpu_rows(ctx).unwrap();
+    assert_eq!(rows.len(), 3);
+    for r in &rows {
+        eprintln!(
+            "{}: {:e} (tolerance {:e})",
+            r.quantity, r.max_error, r.tolerance
+        );
+        assert!(r.pass && r.max_error.is_finite(), "{r:?}");
+    }
+}
+
 fn main() {
     common::run_gpu_trials(
         "small_lights",
-        &[(
-            "gpu_images_hold_their_shadow_and_match_the_cpu",
-            gpu_images_hold_their_shadow_and_match_the_cpu,
-        )],
+        &[
+            (
+                "gpu_images_hold_their_shadow_and_match_the_cpu",
+                gpu_images_hold_their_shadow_and_match_the_cpu,
+            ),
+            ("stability_gpu_rows_pass", stability_gpu_rows_pass),
+        ],
         &[(
             "cpu_images_hold_their_shadow_down_to_a_point_light",
             cpu_images_hold_their_shadow_down_to_a_point_light,

@@ -34,7 +34,7 @@ use crate::sampling::rays::RaySet;
 use glam::{DVec3, Vec2, Vec3};
 
 /// The angular radii sin θ_max = r/d of the sphere-light rows.
-const SIZES: [f64; 8] = [0.5, 1e-1, 1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7];
+pub(super) const SIZES: [f64; 8] = [0.5, 1e-1, 1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7];
 
 /// k of the light cases' ray sets (k² = 1024 rays per light).
 const K: u32 = 32;
@@ -92,7 +92,7 @@ impl Visibility for Nothing {
     }
 }
 
-fn opts(center: DVec3, radius: f64) -> ShadowOptions {
+pub(super) fn opts(center: DVec3, radius: f64) -> ShadowOptions {
     ShadowOptions {
         offset: 0.0,
         lights: vec![SphereLight {
@@ -104,7 +104,7 @@ fn opts(center: DVec3, radius: f64) -> ShadowOptions {
 }
 
 /// `n` receivers at the origin facing +z, each its own seeded rotation.
-fn at_origin(n: usize) -> (Vec<Vec3>, Vec<Vec3>) {
+pub(super) fn at_origin(n: usize) -> (Vec<Vec3>, Vec<Vec3>) {
     (vec![Vec3::ZERO; n], vec![Vec3::Z; n])
 }
 

@@ -17,12 +17,14 @@
 //! - [`lights`]: the 2010 kinds: sphere lights from r/d = 0.5 to 1e-7, a sun and point lights,
 //!   unoccluded and behind an exact sphere (the caps' closed forms), lights grazing a caster's
 //!   bounding sphere, a light below the
-//!   receiving surface, Phong lobes by exponent decade, a mirror at grazing incidence.
+//!   receiving surface, Phong lobes by exponent decade, a mirror at grazing incidence;
+//!   [`lights_gpu`], their GPU rows where an adapter runs (left out, and said so, without one).
 
 pub mod determinism;
 pub mod hard;
 pub mod layouts;
 pub mod lights;
+pub mod lights_gpu;
 pub mod scale;
 pub mod scene_ao;
 pub mod sphere;
@@ -109,6 +111,27 @@ pub fn run(out: &Path) -> Result<Vec<StabilityRow>> {
             t.elapsed().as_secs_f64()
         );
         rows.extend(r);
+    }
+    // The GPU rows where an adapter runs ($VISFIELD_ADAPTER, else auto); without a Vulkan
+    // driver they are left out, and said so.
+    let pref = crate::gpu::AdapterPreference::from_env();
+    let fallback = matches!(pref, crate::gpu::AdapterPreference::Auto);
+    match crate::gpu::GpuContext::new(pref) {
+        Ok(ctx) => {
+            let t = std::time::Instant::now();
+            let r = lights_gpu::gpu_rows(&ctx)?;
+            eprintln!(
+                "stability: gpu_sphere_lights: {} row(s), {} failing ({:.2} s)",
+                r.len(),
+                r.iter().filter(|r| !r.pass).count(),
+                t.elapsed().as_secs_f64()
+            );
+            rows.extend(r);
+        }
+        Err(crate::gpu::GpuError::NoAdapter) if fallback => {
+            eprintln!("stability: no Vulkan adapter, the GPU rows are left out");
+        }
+        Err(e) => return Err(Error::Gpu(e).context("stability")),
     }
     crate::experiment::outputs::write_csv(&out.join("cases.csv"), &rows)?;
     let json = out.join("run.json");
