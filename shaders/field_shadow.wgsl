@@ -46,7 +46,7 @@ fn shadow_main(@builtin(global_invocation_id) gid: vec3<u32>) {
             continue;
         }
         for (; r < end; r++) {
-            let ray = shadow_ray(cone, samples[r - li * cells], rc.rotation_cos, rc.rotation_sin, nrm);
+            let ray = shadow_ray(cone, r - li * cells, samples[r - li * cells], rc.rotation_cos, rc.rotation_sin, nrm);
             if ray.weight <= 0.0 {
                 continue;
             }

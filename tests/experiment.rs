@@ -770,6 +770,32 @@ fn cameras_are_validated_and_an_image_without_receivers_is_an_error() {
     );
     let e = error_of(&image(&cam("[1e39, 0, 0]", "[0, 0, 0]", "40")).replace("1e39", "1e300"));
     assert!(e.contains("render.image.camera"), "{e}");
+    // An eye at 1e30 is beyond the coordinates' range, named so (once "up along the view").
+    let e = error_of(&image(&cam("[1e30, 1e30, 1e30]", "[0, 0, 0]", "40")));
+    assert!(
+        e.contains("render.image.camera.eye") && e.contains("range of every spec coordinate"),
+        "{e}"
+    );
+    // Everything moved by 1e12: the camera's f32 coordinates cannot tell eye from target.
+    let e = error_of(&image(&cam(
+        "[1000000000002, 1000000000002, 1000000000002]",
+        "[1000000000000.4, 1000000000000.3, 1000000000000.4]",
+        "40",
+    )));
+    assert!(
+        e.contains("render.image.camera.target") && e.contains("spaced") && e.contains("1.2e5"),
+        "{e}"
+    );
+    // At 1e7 the eye is 2 from the target but only 2 f32 steps: the precision limit, by name.
+    let e = error_of(&image(&cam(
+        "[10000002, 2, 2]",
+        "[10000000, 0.3, 0.4]",
+        "40",
+    )));
+    assert!(
+        e.contains("render.image.camera.target") && e.contains("precision limit"),
+        "{e}"
+    );
 
     // Looking away from the scene: no receiver pixel.
     let dir = tempfile::tempdir().unwrap();

@@ -29,9 +29,8 @@ use visfield::field::{Precision, Selection, VisibilityField};
 use visfield::geometry::Similarity;
 use visfield::gpu::{FieldGpuOptions, FieldLayout, FieldShadowKernel, GpuError, GpuTracer};
 use visfield::render::ao::AoOptions;
-use visfield::render::shadow::{shadow_at_points, square_to_cone, ShadowOptions, SphereLight};
+use visfield::render::shadow::{shadow_at_points, LightCone, ShadowOptions, SphereLight};
 use visfield::sampling::rays::RaySet;
-use visfield::sampling::Frame;
 use visfield::trace::Tracer;
 use visfield::visibility::Visibility;
 
@@ -120,31 +119,21 @@ fn shadow_rays(
     let (s, c) = rays.rotation(i);
     let mut squares = Vec::new();
     rays.fill_square(i, &mut squares);
-    let k2 = squares.len().max(1) as f64;
     let (mut dirs, mut tmaxs, mut weights) = (Vec::new(), Vec::new(), Vec::new());
     for light in &opts.lights {
-        let to = light.center - origin;
-        let d2 = to.length_squared();
-        let r2 = light.radius * light.radius;
-        if d2 <= r2 {
+        let Some(cone) = LightCone::new(light, origin, squares.len()) else {
             continue;
-        }
-        let axis = to / d2.sqrt();
-        let cos_max = (1.0 - r2 / d2).max(0.0).sqrt();
-        let omega = std::f64::consts::TAU * (1.0 - cos_max as f64);
-        let frame = Frame::from_normal(axis);
-        for &u in &squares {
-            let l = square_to_cone(u, cos_max);
-            let l = Vec3::new(c * l.x - s * l.y, s * l.x + c * l.y, l.z);
-            let dir = frame.to_world(l).normalize();
+        };
+        let samples = if cone.point { 1 } else { squares.len() };
+        for &u in &squares[..samples] {
+            let dir = cone.direction(u, s, c);
             let cos_n = n.dot(dir);
             if cos_n <= 0.0 {
                 continue;
             }
-            let b = dir.dot(to);
             dirs.push(dir);
-            tmaxs.push(b - (b * b - (d2 - r2)).max(0.0).sqrt());
-            weights.push(light.intensity as f64 * cos_n as f64 * omega / k2);
+            tmaxs.push(cone.far_end(dir));
+            weights.push(cone.weight_scale * cos_n as f64);
         }
     }
     (origin, dirs, tmaxs, weights)

@@ -49,6 +49,20 @@ fn lights_are_read_and_bad_ones_refused_naming_the_field() {
         e.contains("field `render.lights[0].radius`") && e.contains("-0.3"),
         "{e}"
     );
+    // Radius 0 is a point light; above the world's range, or not a number, is refused.
+    Spec::parse(
+        &shadows(&LIGHTS.replace("\"radius\": 0.3", "\"radius\": 0"), ""),
+        Path::new("ok.json"),
+    )
+    .unwrap();
+    let e = error_of(&shadows(
+        &LIGHTS.replace("\"radius\": 0.3", "\"radius\": 2e18"),
+        "",
+    ));
+    assert!(
+        e.contains("field `render.lights[0].radius`") && e.contains("point light"),
+        "{e}"
+    );
     let e = error_of(&shadows(
         &LIGHTS.replace("\"intensity\": 2", "\"intensity\": 0"),
         "",

@@ -48,6 +48,12 @@ case_tests!(
     overlapping_spheres,
     receiver_inside_caster_sphere,
     thread_determinism,
+    sphere_light_unoccluded,
+    sphere_light_behind_sphere_occluder,
+    light_grazing_caster_sphere,
+    light_below_receiver,
+    phong_lobe_by_exponent,
+    mirror_grazing,
 );
 
 /// Translated by 1e4 and 1e6, and a mesh with its coordinates at 1e4: equal AO within 1/255

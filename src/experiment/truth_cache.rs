@@ -26,8 +26,9 @@ use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
 const MAGIC: &[u8; 8] = b"VTRUTHCA";
-/// Bumped whenever the payload layout or the estimator changes.
-pub const FORMAT_VERSION: u32 = 1;
+/// Bumped whenever the payload layout or the estimator changes (2: the shadow rays' cone
+/// without cancellation, where small lights read 1 before).
+pub const FORMAT_VERSION: u32 = 2;
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 struct TruthHeader {

@@ -310,8 +310,8 @@ impl Validator<'_> {
         Ok(())
     }
 
-    /// The AO kinds' options.
-    /// Lights: finite centres within the world's range, positive finite radius and intensity.
+    /// Lights: finite centres within the world's range, a radius of 0 (a point light) or positive
+    /// within that range, a positive finite intensity.
     pub fn lights(&self, lights: &[crate::render::shadow::SphereLight]) -> Result<(), SpecError> {
         for (i, l) in lights.iter().enumerate() {
             let at = |f: &str| format!("render.lights[{i}].{f}");
@@ -327,10 +327,21 @@ impl Validator<'_> {
                     ),
                 ));
             }
-            for (f, v) in [("radius", l.radius), ("intensity", l.intensity)] {
-                if !(v > 0.0 && v.is_finite()) {
-                    return Err(self.err(&at(f), format!("{v} must be positive and finite")));
-                }
+            let max = super::scenes::MAX_WORLD_COORDINATE;
+            if !(l.radius >= 0.0 && l.radius <= max) {
+                return Err(self.err(
+                    &at("radius"),
+                    format!(
+                        "{} must be 0 (a point light) or positive, at most {max:e}",
+                        l.radius
+                    ),
+                ));
+            }
+            if !(l.intensity > 0.0 && l.intensity.is_finite()) {
+                return Err(self.err(
+                    &at("intensity"),
+                    format!("{} must be positive and finite", l.intensity),
+                ));
             }
         }
         Ok(())
@@ -499,20 +510,56 @@ impl Validator<'_> {
     }
 }
 
-/// What is wrong with a camera, if anything: (its field, why). A camera must be finite, look
-/// somewhere (eye ≠ target), have an up hint not along the view, and a field of view in
-/// (0°, 180°).
+/// The f32 steps of a camera's coordinates its eye must be from its target: the view direction
+/// then holds to 1e-3 rad, about a pixel of a 1000-pixel, 60° image.
+const CAMERA_DIRECTION_STEPS: f64 = 1e3;
+
+/// What is wrong with a camera, if anything: (its field, why). A camera must be finite, within
+/// the spec coordinates' range (±1.15e18), look somewhere (its target more than
+/// [`CAMERA_DIRECTION_STEPS`] f32 steps from its eye), have an up hint not along the view, and
+/// a field of view in (0°, 180°).
 fn camera_problem(cam: &crate::render::camera::Camera) -> Option<(&'static str, String)> {
     for (field, v) in [("eye", cam.eye), ("target", cam.target), ("up", cam.up)] {
         if !v.is_finite() {
             return Some((field, format!("{v} is not finite")));
         }
     }
-    let view = cam.target - cam.eye;
-    if !(view.length() > 0.0 && (view / view.length()).is_finite()) {
-        return Some(("target", "equals the eye: the camera looks nowhere".into()));
+    let max = super::scenes::MAX_WORLD_COORDINATE;
+    for (field, v) in [("eye", cam.eye), ("target", cam.target)] {
+        if v.abs().max_element() > max {
+            return Some((
+                field,
+                format!("{v} is beyond ±{max:e}, the range of every spec coordinate"),
+            ));
+        }
     }
-    let side = view.normalize().cross(cam.up);
+    // A spec camera's coordinates are f32: at magnitude m they are spaced about m·2⁻²³, and
+    // the view direction is only as good as that spacing over the eye's distance to the target.
+    let m = cam.eye.abs().max(cam.target.abs()).max_element() as f64;
+    let spacing = m * f32::EPSILON as f64;
+    let view = (cam.target.as_dvec3() - cam.eye.as_dvec3()).length();
+    if view == 0.0 {
+        let limit = if m >= 1.0 {
+            format!(" (f32 coordinates, spaced {spacing:.1e} at {m:.1e}: nearer points are one)")
+        } else {
+            String::new()
+        };
+        return Some((
+            "target",
+            format!("equals the eye{limit}: the camera looks nowhere"),
+        ));
+    }
+    if view < CAMERA_DIRECTION_STEPS * spacing {
+        return Some((
+            "target",
+            format!(
+                "is {view:.3e} from the eye, under {CAMERA_DIRECTION_STEPS} f32 steps ({spacing:.1e} \
+                 at {m:.1e}): the view direction cannot be resolved to 1e-3 rad (precision limit \
+                 of a spec camera's f32 coordinates; move the scene and the camera nearer the origin)"
+            ),
+        ));
+    }
+    let side = (cam.target - cam.eye).normalize().cross(cam.up);
     if !(side.length() > 1e-6 && side.normalize().is_finite()) {
         return Some(("up", format!("{} is zero or along the view", cam.up)));
     }

@@ -9,7 +9,10 @@
 //! Deviation from the CPU path: the ray weights (intensity · n·ω · Ω / k²) are computed and
 //! summed in f32 on the device (the host uses f64); the host adds up the partial sums of a
 //! point's invocations in f64. The light fraction differs from the host's by a few f32
-//! roundings relative (about 1e-7 per ray added) when the same rays are blocked.
+//! roundings relative (about 1e-7 per ray added) when the same rays are blocked. The f32
+//! weights hold while r²/d² stays in f32's normal range, an angular radius r/d above about
+//! 1e-19 (the host's f64 weights reach r/d ≈ 1e-150); a smaller light weighs 0 on the device,
+//! and a point lit by it alone reads 1. Use radius 0 (a point light) for such lights.
 
 use super::context::GpuContext;
 use super::GpuError;
@@ -18,7 +21,7 @@ use crate::sampling::rays::RaySet;
 use crate::sampling::warp::square_to_concentric_disk;
 
 /// Twin of WGSL `Light` (shaders/shadow_rays.wgsl): one spherical light
-/// ([`SphereLight`]).
+/// ([`SphereLight`]; radius 0, a point light).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub(crate) struct LightGpu {
@@ -123,20 +126,21 @@ mod tests {
 
     #[test]
     fn disk_samples_give_the_cpu_cone_directions_bit_for_bit() {
-        // The kernels compute (c_φ sin θ, s_φ sin θ, cos θ) with cos θ = 1 − ρ²(1 − cos θ_max),
-        // sin θ = √max(1 − cos², 0): square_to_cone's expressions in its order.
+        // The kernels compute t = ρ²(1 − cos θ_max), sin θ = √max(t(2 − t), 0) and
+        // (c_φ sin θ, s_φ sin θ, 1 − t): square_to_cone's expressions in its order, down to
+        // the point-light limit.
         for k in [1u32, 3, 4, 7] {
             let set = RaySet::new(k, 5);
             let samples = cone_samples(&set).unwrap();
             let mut squares = Vec::new();
             set.fill_square(1234, &mut squares);
             assert_eq!(samples.len(), squares.len());
-            for cos_max in [0.0f32, 0.3, 0.9, 0.999_99, 1.0] {
+            for omc in [1.0f32, 0.7, 0.1, 1e-5, 3e-9, 1e-30, 0.0] {
                 for (s, &u) in samples.iter().zip(&squares) {
-                    let cos = 1.0 - s.radius_sq * (1.0 - cos_max);
-                    let sin = (1.0 - cos * cos).max(0.0).sqrt();
-                    let g = Vec3::new(s.azimuth_cos * sin, s.azimuth_sin * sin, cos);
-                    assert_eq!(g, square_to_cone(u, cos_max), "k {k}, cos_max {cos_max}");
+                    let t = s.radius_sq * omc;
+                    let sin = (t * (2.0 - t)).max(0.0).sqrt();
+                    let g = Vec3::new(s.azimuth_cos * sin, s.azimuth_sin * sin, 1.0 - t);
+                    assert_eq!(g, square_to_cone(u, omc), "k {k}, 1 − cos θ_max {omc}");
                 }
             }
         }

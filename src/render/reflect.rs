@@ -9,7 +9,8 @@
 //!
 //! - `Mirror`: the single ray along r;
 //! - `Phong { exponent }`: k² directions about r with density ∝ cos^exponent of their angle
-//!   to r (cos α = u^(1/(exponent+1)), φ = 2πu'), from the point's stratified square samples
+//!   to r (cos α = u^(1/(exponent+1)), φ = 2πu', [`square_to_phong`], exact in the tails of
+//!   the exponents' range), from the point's stratified square samples
 //!   ([`RaySet::fill_square`]), turned about r by the point's seeded rotation. Directions with
 //!   n·ω ≤ 0 (below the surface) are dropped.
 //!
@@ -74,13 +75,17 @@ impl ReflectOptions {
     }
 }
 
-/// A square sample mapped to the Phong lobe of `exponent` about +z.
+/// A square sample mapped to the Phong lobe of `exponent` about +z: cos α = u^(1/(exponent+1)),
+/// φ = 2πu'. Across the exponents' range (1e-3 … 1e7 and beyond) the angle comes from
+/// t = 1 − cos α = −expm1(ln u / (exponent + 1)) in f64 and sin α = √(t(2 − t)), never from a
+/// cos α rounded to f32 (which is 1 for most u once the exponent passes about 1e6, collapsing
+/// the lobe onto its axis); the f32 direction is (sin α cos φ, sin α sin φ, 1 − t).
 #[inline]
 pub fn square_to_phong(u: Vec2, exponent: f32) -> Vec3 {
-    let cos = u.x.powf(1.0 / (exponent + 1.0));
-    let sin = (1.0 - cos * cos).max(0.0).sqrt();
+    let t = -((u.x as f64).ln() / (exponent as f64 + 1.0)).exp_m1();
+    let sin = (t * (2.0 - t)).max(0.0).sqrt() as f32;
     let phi = std::f32::consts::TAU * u.y;
-    Vec3::new(sin * phi.cos(), sin * phi.sin(), cos)
+    Vec3::new(sin * phi.cos(), sin * phi.sin(), (1.0 - t) as f32)
 }
 
 /// The radiance a reflection ray brings back from `hit` (see the module docs).

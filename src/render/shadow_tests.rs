@@ -60,7 +60,10 @@ fn cone_samples_stay_in_the_cone_and_cover_its_solid_angle_evenly() {
     let rays = RaySet::new(k, 3);
     let mut sq = Vec::new();
     rays.fill_square(0, &mut sq);
-    let dirs: Vec<Vec3> = sq.iter().map(|&u| square_to_cone(u, cos_max)).collect();
+    let dirs: Vec<Vec3> = sq
+        .iter()
+        .map(|&u| square_to_cone(u, 1.0 - cos_max))
+        .collect();
     assert!(dirs
         .iter()
         .all(|d| (d.length() - 1.0).abs() < 1e-5 && d.z >= cos_max - 1e-6));
@@ -210,4 +213,185 @@ fn field_and_ray_casting_agree_on_shadow_rays_of_a_convex_caster() {
             / p.len() as f64)
             .sqrt();
     assert!(rms < 2.0, "RMS {rms} (0–255)");
+}
+
+/// 1 − cos θ_max against f64 references that share none of its arithmetic: the series
+/// q/2 + q²/8 + q³/16 + 5q⁴/128 (truncation under q⁵) below q = 1e-4, 1 − √(1 − q) in f64 above
+/// (an absolute error of 1e-16, relative 1e-12 there). The f64 form within 4 ulp (plus the
+/// reference's 1e-16 above q = 1e-4) all the way down to q = 1e-300, the f32 form within 4 f32 ulp down to f32's normal range.
+#[test]
+fn one_minus_cos_max_holds_to_the_point_light_limit() {
+    let reference = |q: f64| {
+        if q < 1e-4 {
+            q / 2.0 + q * q / 8.0 + q * q * q / 16.0 + 5.0 * q.powi(4) / 128.0
+        } else {
+            1.0 - (1.0 - q).sqrt()
+        }
+    };
+    for e in 0..=300 {
+        for m in [1.0, 3.7] {
+            let q = m * 10f64.powi(-e);
+            if q > 1.0 {
+                continue;
+            }
+            let want = reference(q);
+            let got = one_minus_cos_max(q);
+            let tol = 4.0 * f64::EPSILON * want + if q < 1e-4 { 0.0 } else { 2.3e-16 };
+            assert!((got - want).abs() <= tol, "q {q:e}: {got:e} vs {want:e}");
+            let q32 = q as f32;
+            if q32 >= f32::MIN_POSITIVE {
+                let want = reference(q32 as f64);
+                let got = one_minus_cos_max_f32(q32) as f64;
+                let tol = 4.0 * f32::EPSILON as f64 * want;
+                assert!(
+                    (got - want).abs() <= tol,
+                    "f32 q {q:e}: {got:e} vs {want:e}"
+                );
+            }
+        }
+    }
+    assert_eq!(one_minus_cos_max(0.0), 0.0);
+    assert_eq!(one_minus_cos_max(1.0), 1.0);
+}
+
+/// In a cone of half-angle θ_max from 1e-2 down to 1e-9 rad, far below where cos θ_max rounds to
+/// 1 in f32 (3.5e-4), the directions stay in the cone, reach out to the outermost cell centres
+/// (ρ = 1 − 1/k) and cover it evenly: the share inside θ_max/√2 is the solid angle's half
+/// within the stratification's 2/k.
+#[test]
+fn cone_directions_keep_their_spread_down_to_tiny_cones() {
+    let k = 16u32;
+    let rays = RaySet::new(k, 3);
+    let mut sq = Vec::new();
+    rays.fill_square(0, &mut sq);
+    for theta_max in [1e-2f64, 1e-4, 1e-6, 1e-9] {
+        let omc = one_minus_cos_max_f32(theta_max.sin().powi(2) as f32);
+        let angles: Vec<f64> = sq
+            .iter()
+            .map(|&u| {
+                let d = square_to_cone(u, omc);
+                (d.x as f64).hypot(d.y as f64).atan2(d.z as f64)
+            })
+            .collect();
+        let widest = angles.iter().copied().fold(0.0, f64::max);
+        assert!(
+            widest <= theta_max * (1.0 + 1e-5),
+            "θ_max {theta_max:e}: {widest:e}"
+        );
+        let outer = 1.0 - 1.0 / k as f64;
+        assert!(
+            widest >= 0.99 * outer * theta_max,
+            "θ_max {theta_max:e}: widest {widest:e}"
+        );
+        let inner = angles
+            .iter()
+            .filter(|&&a| a <= theta_max / 2f64.sqrt())
+            .count() as f64
+            / angles.len() as f64;
+        assert!(
+            (inner - 0.5).abs() <= 2.0 / k as f64,
+            "θ_max {theta_max:e}: {inner}"
+        );
+    }
+}
+
+/// The far end of every shadow ray lies between the light's near pole and its tangent points,
+/// t ∈ [d − r, √(d² − r²)] (to 4 f32 ulp), down to r = 1e-6 at d = 3, where the root in its
+/// textbook form b − √(b² − (d² − r²)) cancels in f32 (b² − (d² − r²) ≈ 1e-12 against an
+/// ulp of 9, 1e-6) and ends up to 1e-3 short. Where the light is larger than the f32 direction's
+/// own error, t also matches that root taken in f64 along the direction normalised in f64,
+/// within 4 ulp and the root's conditioning (an error δ in h² moves it by δ / 2√(r² − h²)).
+#[test]
+fn the_far_end_is_the_near_root_without_cancellation() {
+    let origin = Vec3::new(0.1, -0.2, 0.05);
+    let rays = RaySet::new(6, 9);
+    let mut sq = Vec::new();
+    rays.fill_square(4, &mut sq);
+    let (s, c) = rays.rotation(4);
+    let eps = f32::EPSILON as f64;
+    for radius in [0.5f32, 1e-2, 1e-3, 1e-6, 1e-20, 0.0] {
+        let light = SphereLight {
+            center: Vec3::new(1.0, 2.0, 2.0),
+            radius,
+            intensity: 1.0,
+        };
+        let cone = LightCone::new(&light, origin, sq.len()).unwrap();
+        let to = cone.to.as_dvec3();
+        let d = to.length();
+        let r2 = (radius as f64).powi(2);
+        for &u in &sq {
+            let dir = cone.direction(u, s, c);
+            let got = cone.far_end(dir) as f64;
+            let (lo, hi) = (d - radius as f64, (d * d - r2).sqrt());
+            assert!(
+                got >= lo * (1.0 - 4.0 * eps) && got <= hi * (1.0 + 4.0 * eps),
+                "r {radius}: {got} outside [{lo}, {hi}]"
+            );
+            if radius >= 1e-3 {
+                let unit = dir.as_dvec3();
+                let b = unit.dot(to) / unit.length();
+                let disc = (b * b - (d * d - r2)).max(eps * r2);
+                let want = b - disc.sqrt();
+                let got = got * unit.length();
+                let tol = 4.0 * eps * d + 2.0 * eps * d * d / disc.sqrt();
+                assert!((got - want).abs() <= tol, "r {radius}: {got} vs {want}");
+            }
+        }
+    }
+}
+
+/// A point light (radius 0) at (0, 0, 10) over the half-plane z = 5, x < 0: the ray from (x, y, 0)
+/// crosses the plane at x/2, so a point is lit exactly when x > 0, the hard shadow. One ray per
+/// point: the unshadowed light is (n·ω)/d² = 10/d³, whatever k, and a sphere light of radius
+/// 1e-6 gives the same shadow.
+#[test]
+fn a_point_light_casts_the_exact_hard_shadow_with_one_ray() {
+    let z = 5.0;
+    let tracer = Tracer::new(&[
+        [
+            Vec3::new(-50.0, -50.0, z),
+            Vec3::new(0.0, -50.0, z),
+            Vec3::new(0.0, 50.0, z),
+        ],
+        [
+            Vec3::new(-50.0, -50.0, z),
+            Vec3::new(0.0, 50.0, z),
+            Vec3::new(-50.0, 50.0, z),
+        ],
+    ]);
+    let p: Vec<Vec3> = (1..=40)
+        .map(|i| {
+            let x = 0.01 * (i as f32 - 20.5);
+            Vec3::new(x, 0.003 * i as f32, 0.0)
+        })
+        .collect();
+    let n = vec![Vec3::Z; p.len()];
+    let mut opts = light_above();
+    opts.lights[0].radius = 0.0;
+    for k in [1u32, 4] {
+        let v = shadow_at_points(&tracer, &p, &n, &RaySet::new(k, 3), &opts);
+        for (q, &x) in p.iter().zip(&v) {
+            assert_eq!(x, if q.x > 0.0 { 1.0 } else { 0.0 }, "k {k}, point {q}");
+        }
+    }
+    let light = |k| direct_light(&p, &n, &RaySet::new(k, 3), &opts);
+    assert_eq!(light(1), light(5));
+    let exact: Vec<f64> = p
+        .iter()
+        .map(|q| {
+            10.0 / ((q.as_dvec3() - glam::DVec3::new(0.0, 0.0, 10.0))
+                .length()
+                .powi(3))
+        })
+        .collect();
+    let top = exact.iter().copied().fold(0.0, f64::max);
+    for (e, g) in exact.iter().zip(light(4)) {
+        assert!((e / top - g as f64).abs() < 1e-6, "{e} {g}");
+    }
+    opts.lights[0].radius = 1e-6;
+    let small = shadow_at_points(&tracer, &p, &n, &RaySet::new(4, 3), &opts);
+    assert!(p
+        .iter()
+        .zip(&small)
+        .all(|(q, &x)| x == if q.x > 0.0 { 1.0 } else { 0.0 }));
 }

@@ -103,8 +103,14 @@ impl Kind for Shadows {
         Columns { vertex: false }
     }
 
+    /// A point light (radius 0) casts one ray per point, a sphere light k².
     fn rays_cast_per_point(&self) -> u64 {
-        self.rays_per_point() as u64 * self.opts.lights.len() as u64
+        let k2 = self.rays_per_point() as u64;
+        self.opts
+            .lights
+            .iter()
+            .map(|l| if l.radius == 0.0 { 1 } else { k2 })
+            .sum()
     }
 
     fn max_points(&self, _scene: &BuiltScene) -> u64 {

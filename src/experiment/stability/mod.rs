@@ -14,10 +14,17 @@
 //! - [`hard`]: receivers touching the caster, thin sheets, casters 1000× larger and smaller,
 //!   concave casters, overlapping bounding spheres, a receiver inside a caster's sphere.
 //! - [`determinism`]: 1 and 2 threads give bit-identical fields and images.
+//! - [`lights`]: the 2010 kinds: sphere lights from r/d = 0.5 to 1e-7, a sun and point lights,
+//!   unoccluded and behind an exact sphere (the caps' closed forms), lights grazing a caster's
+//!   bounding sphere, a light below the
+//!   receiving surface, Phong lobes by exponent decade, a mirror at grazing incidence;
+//!   [`lights_gpu`], their GPU rows where an adapter runs (left out, and said so, without one).
 
 pub mod determinism;
 pub mod hard;
 pub mod layouts;
+pub mod lights;
+pub mod lights_gpu;
 pub mod scale;
 pub mod scene_ao;
 pub mod sphere;
@@ -80,6 +87,12 @@ pub const CASES: &[Case] = &[
     ("overlapping_spheres", hard::overlapping_spheres),
     ("receiver_inside_caster_sphere", hard::inside_sphere),
     ("thread_determinism", determinism::threads),
+    ("sphere_light_unoccluded", lights::unoccluded),
+    ("sphere_light_behind_sphere_occluder", lights::behind_sphere),
+    ("light_grazing_caster_sphere", lights::grazing_caster_sphere),
+    ("light_below_receiver", lights::below_surface),
+    ("phong_lobe_by_exponent", lights::phong_lobes),
+    ("mirror_grazing", lights::mirror_grazing),
 ];
 
 /// Runs every case and writes `out/cases.csv` and `out/run.json` (atomically). Returns the
@@ -99,6 +112,27 @@ pub fn run(out: &Path) -> Result<Vec<StabilityRow>> {
             t.elapsed().as_secs_f64()
         );
         rows.extend(r);
+    }
+    // The GPU rows where an adapter runs ($VISFIELD_ADAPTER, else auto); without a Vulkan
+    // driver they are left out, and said so.
+    let pref = crate::gpu::AdapterPreference::from_env();
+    let fallback = matches!(pref, crate::gpu::AdapterPreference::Auto);
+    match crate::gpu::GpuContext::new(pref) {
+        Ok(ctx) => {
+            let t = std::time::Instant::now();
+            let r = lights_gpu::gpu_rows(&ctx)?;
+            eprintln!(
+                "stability: gpu_sphere_lights: {} row(s), {} failing ({:.2} s)",
+                r.len(),
+                r.iter().filter(|r| !r.pass).count(),
+                t.elapsed().as_secs_f64()
+            );
+            rows.extend(r);
+        }
+        Err(crate::gpu::GpuError::NoAdapter) if fallback => {
+            eprintln!("stability: no Vulkan adapter, the GPU rows are left out");
+        }
+        Err(e) => return Err(Error::Gpu(e).context("stability")),
     }
     crate::experiment::outputs::write_csv(&out.join("cases.csv"), &rows)?;
     let json = out.join("run.json");
