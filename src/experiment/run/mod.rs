@@ -171,7 +171,9 @@ fn run_checked(
         "scenes"
     };
     eprintln!("{} ({profile}): {}", ls.name, spec.reproduces);
-    let (scenes, _) = stage("load scenes", || Scenes::build(spec, &ls.path, scenes_path));
+    let (scenes, _) = stage("load scenes", || {
+        Scenes::build_within(spec, &ls.path, scenes_path, opts.supply.memory_limit)
+    });
     let scenes = scenes?;
     let kind = crate::experiment::kind::of(&spec.render);
     if let Some((field, message)) = scenes.scenes.iter().find_map(|bs| kind.scene_problem(bs)) {
