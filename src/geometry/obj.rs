@@ -43,9 +43,16 @@ impl Mesh {
         let (models, _materials) =
             tobj::load_obj_buf(&mut reader, &options, |_| Ok(Default::default())).map_err(|e| {
                 let line = reader.line_number();
+                let what = match e {
+                    // tobj reads lines as UTF-8 text: binary data stops it here.
+                    tobj::LoadError::ReadError if !reader.io_error => {
+                        "not text (binary data? an OBJ file is text)".to_string()
+                    }
+                    e => e.to_string(),
+                };
                 GeometryError::invalid(
                     &display,
-                    format!("OBJ parse error at or before line {line}: {e}"),
+                    format!("OBJ parse error at or before line {line}: {what}"),
                 )
             })?;
         if reader.io_error {

@@ -154,6 +154,9 @@ impl Mesh {
 
 fn parse_header(bytes: &[u8], file: &str) -> Result<Header, GeometryError> {
     let bad = |m: String| GeometryError::invalid(file, m);
+    if !(bytes.starts_with(b"ply\n") || bytes.starts_with(b"ply\r\n")) {
+        return Err(bad("not a PLY file: the first line is not `ply`".into()));
+    }
     let mut lines = Vec::new();
     let mut start = 0;
     let mut body = None;
@@ -171,9 +174,6 @@ fn parse_header(bytes: &[u8], file: &str) -> Result<Header, GeometryError> {
             body = Some(start.min(bytes.len()));
             break;
         }
-    }
-    if lines.first().map(|l| l.trim()) != Some("ply") {
-        return Err(bad("not a PLY file: the first line is not `ply`".into()));
     }
     let body = body.ok_or_else(|| bad("the header has no `end_header` line".into()))?;
     let mut format = None;
@@ -394,6 +394,8 @@ struct Binary<'a> {
     bytes: &'a [u8],
     at: usize,
     big: bool,
+    /// The body's offset in the file (for the byte offsets of errors).
+    base: usize,
 }
 
 impl Binary<'_> {
@@ -421,11 +423,14 @@ impl Binary<'_> {
 
 impl Body for Binary<'_> {
     fn next(&mut self, e: &Element, k: u64) -> Result<Values, String> {
+        let base = self.base;
         let truncated = |at: usize| {
             format!(
                 "truncated: {} element {k} of {} the header declares runs past the file's end \
-                 (byte {at})",
-                e.name, e.count
+                 (byte {})",
+                e.name,
+                e.count,
+                base + at
             )
         };
         let mut out = Vec::with_capacity(e.properties.len());
@@ -505,6 +510,7 @@ fn parse(bytes: &[u8], file: &str) -> Result<(Vec<Vec3>, Vec<[u32; 3]>), Geometr
             bytes: body,
             at: 0,
             big: f == Format::Big,
+            base: h.body,
         }),
     };
     let mut positions = Vec::new();
