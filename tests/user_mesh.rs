@@ -274,6 +274,64 @@ fn a_registry_model_and_its_file_by_path_give_the_same_numbers() {
     );
 }
 
+/// `experiment try` on an OBJ outside the repository: the table, images, plots and the spec,
+/// a verdict per CPU row computed from the table, and the spec reruns to the same numbers.
+fn try_writes_table_images_plots_and_a_spec_that_reruns() {
+    use visfield::experiment::try_mesh::{self, TryKind};
+    let dir = tempfile::tempdir().unwrap();
+    let m = test_mesh(dir.path());
+    let mesh = dir.path().join("my mesh.obj");
+    std::fs::write(&mesh, obj_text(&m)).unwrap();
+    let out = dir.path().join("results").join("try");
+    let mut o = options(out.clone());
+    o.quick = true;
+    let (report, verdicts) = try_mesh::run(&mesh, TryKind::Ao, &o).unwrap();
+    for f in [
+        "table.csv",
+        "run.json",
+        "spec.json",
+        "pareto.png",
+        "images.png",
+    ] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    let images: Vec<_> = std::fs::read_dir(out.join("images")).unwrap().collect();
+    assert!(images.len() >= 3, "{images:?}");
+    // One verdict per field size (the quick profile's 290 and 1090 × 32², u8), its numbers the
+    // table's.
+    assert_eq!(verdicts.len(), 2, "{verdicts:?}");
+    assert_eq!(report.rows.len(), 2);
+    for (v, r) in verdicts.iter().zip(&report.rows) {
+        let head = format!(
+            "{} × 32² u8: RMS {:.1} of 255, ",
+            r.positional_samples,
+            r.rms_image.unwrap()
+        );
+        assert!(v.starts_with(&head), "{v} vs {head}");
+        assert!(
+            v.ends_with(&format!("{:.1} MiB", r.field_bytes as f64 / 1048576.0)),
+            "{v}"
+        );
+        let speed = r.raycast_s.unwrap() / r.ao_s;
+        let word = if speed >= 1.0 { "faster" } else { "slower" };
+        assert!(v.contains(&format!("× {word} than ray casting")), "{v}");
+    }
+    // The spec names the mesh relative to its own folder, and reruns with `run`.
+    let spec = std::fs::read_to_string(out.join("spec.json")).unwrap();
+    assert!(spec.contains(r#""file": "../../my mesh.obj""#), "{spec}");
+    let first = non_time_columns(&out);
+    let ls = LoadedSpec::load(&out.join("spec.json")).unwrap();
+    run(&ls, &o).unwrap();
+    assert_eq!(non_time_columns(&out), first);
+    // A format no loader reads is refused before any work, and leaves no folder.
+    let stl = dir.path().join("m.stl");
+    std::fs::write(&stl, "solid").unwrap();
+    let o = options(dir.path().join("stl-out"));
+    let e = try_mesh::run(&stl, TryKind::Ao, &o).unwrap_err().chain();
+    assert!(e.contains("m.stl") && e.contains(".obj, .ply"), "{e}");
+    assert!(!dir.path().join("stl-out").exists());
+}
+
 /// The registry's `bunny_npm.obj` where the registry finds it, absolute.
 fn bunny_npm() -> Option<PathBuf> {
     visfield::geometry::models::ModelRegistry::embedded()
@@ -309,6 +367,10 @@ fn main() {
         trial(
             "the_cache_keys_on_content_a_renamed_file_reuses_its_field_an_edited_one_bakes",
             the_cache_keys_on_content_a_renamed_file_reuses_its_field_an_edited_one_bakes,
+        ),
+        trial(
+            "try_writes_table_images_plots_and_a_spec_that_reruns",
+            try_writes_table_images_plots_and_a_spec_that_reruns,
         ),
         trial(
             "a_registry_model_and_its_file_by_path_give_the_same_numbers",

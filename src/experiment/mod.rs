@@ -33,6 +33,7 @@ pub mod spec;
 pub mod spec_mesh;
 pub mod stability;
 pub mod truth_cache;
+pub mod try_mesh;
 pub mod user_mesh;
 pub mod validate;
 
