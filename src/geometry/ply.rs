@@ -307,8 +307,9 @@ type Values = Vec<Vec<f64>>;
 
 /// Reads the body's element instances one after another.
 trait Body {
-    /// The next instance of `e` (number `k`), or the error naming it.
-    fn next(&mut self, e: &Element, k: u64) -> Result<Values, String>;
+    /// Reads the next instance of `e` (number `k`) into `out` (one entry per property, reused
+    /// from instance to instance), or the error naming it.
+    fn next(&mut self, e: &Element, k: u64, out: &mut Values) -> Result<(), String>;
     /// An error if anything but whitespace (ASCII) or nothing (binary) is left.
     fn finish(&mut self) -> Result<(), String>;
 }
@@ -319,7 +320,7 @@ struct Ascii<'a> {
 }
 
 impl Body for Ascii<'_> {
-    fn next(&mut self, e: &Element, k: u64) -> Result<Values, String> {
+    fn next(&mut self, e: &Element, k: u64, out: &mut Values) -> Result<(), String> {
         let (i, line) = loop {
             match self.lines.next() {
                 Some((_, l)) if l.trim().is_empty() => continue,
@@ -342,8 +343,9 @@ impl Body for Ascii<'_> {
                 )
             })
         };
-        let mut out = Vec::with_capacity(e.properties.len());
-        for p in &e.properties {
+        out.resize_with(e.properties.len(), Vec::new);
+        for (slot, p) in out.iter_mut().zip(&e.properties) {
+            slot.clear();
             let num = |w: &str, name: &str| {
                 w.parse::<f64>().map_err(|_| {
                     format!(
@@ -353,7 +355,7 @@ impl Body for Ascii<'_> {
                 })
             };
             match p {
-                Property::Scalar(_, name) => out.push(vec![num(word(name)?, name)?]),
+                Property::Scalar(_, name) => slot.push(num(word(name)?, name)?),
                 Property::List(_, _, name) => {
                     let w = word(name)?;
                     let n = w.parse::<u32>().map_err(|_| {
@@ -362,11 +364,9 @@ impl Body for Ascii<'_> {
                             e.name
                         )
                     })?;
-                    let mut items = Vec::with_capacity(n.min(64) as usize);
                     for _ in 0..n {
-                        items.push(num(word(name)?, name)?);
+                        slot.push(num(word(name)?, name)?);
                     }
-                    out.push(items);
                 }
             }
         }
@@ -376,7 +376,7 @@ impl Body for Ascii<'_> {
                 e.name
             ));
         }
-        Ok(out)
+        Ok(())
     }
 
     fn finish(&mut self) -> Result<(), String> {
@@ -422,7 +422,7 @@ impl Binary<'_> {
 }
 
 impl Body for Binary<'_> {
-    fn next(&mut self, e: &Element, k: u64) -> Result<Values, String> {
+    fn next(&mut self, e: &Element, k: u64, out: &mut Values) -> Result<(), String> {
         let base = self.base;
         let truncated = |at: usize| {
             format!(
@@ -433,11 +433,12 @@ impl Body for Binary<'_> {
                 base + at
             )
         };
-        let mut out = Vec::with_capacity(e.properties.len());
-        for p in &e.properties {
+        out.resize_with(e.properties.len(), Vec::new);
+        for (slot, p) in out.iter_mut().zip(&e.properties) {
+            slot.clear();
             match p {
                 Property::Scalar(s, _) => {
-                    out.push(vec![self.read(*s).ok_or_else(|| truncated(self.at))?])
+                    slot.push(self.read(*s).ok_or_else(|| truncated(self.at))?)
                 }
                 Property::List(c, t, name) => {
                     let n = self.read(*c).ok_or_else(|| truncated(self.at))?;
@@ -451,15 +452,13 @@ impl Body for Binary<'_> {
                     if n.saturating_mul(t.size()) > self.bytes.len() - self.at {
                         return Err(truncated(self.at));
                     }
-                    let mut items = Vec::with_capacity(n);
                     for _ in 0..n {
-                        items.push(self.read(*t).ok_or_else(|| truncated(self.at))?);
+                        slot.push(self.read(*t).ok_or_else(|| truncated(self.at))?);
                     }
-                    out.push(items);
                 }
             }
         }
-        Ok(out)
+        Ok(())
     }
 
     fn finish(&mut self) -> Result<(), String> {
@@ -515,6 +514,7 @@ fn parse(bytes: &[u8], file: &str) -> Result<(Vec<Vec3>, Vec<[u32; 3]>), Geometr
     };
     let mut positions = Vec::new();
     let mut triangles = Vec::new();
+    let mut values = Values::new();
     let vertex_count = h
         .elements
         .iter()
@@ -523,11 +523,15 @@ fn parse(bytes: &[u8], file: &str) -> Result<(Vec<Vec3>, Vec<[u32; 3]>), Geometr
     for e in &h.elements {
         let is_vertex = e.name == "vertex";
         let is_face = e.name == "face";
+        // Counts checked against the bytes above, so these reservations are bounded by the file.
         if is_vertex {
             positions.reserve(e.count as usize);
+        } else if is_face {
+            triangles.reserve(e.count as usize);
         }
         for k in 0..e.count {
-            let v = reader.next(e, k).map_err(bad)?;
+            reader.next(e, k, &mut values).map_err(bad)?;
+            let v = &values;
             if is_vertex {
                 let p = Vec3::from_array(lay.xyz.map(|i| v[i][0] as f32));
                 if !p.is_finite() {
