@@ -238,12 +238,12 @@ fn truncated_files_are_refused() {
     let text = ascii_ply(4, 4, TETRA_BODY);
     refused(
         "cut_ascii.ply",
-        text[..text.len() - 8].as_bytes(),
+        &text.as_bytes()[..text.len() - 8],
         &["truncated"],
     );
     refused(
         "cut_line.ply",
-        text[..text.len() - 3].as_bytes(),
+        &text.as_bytes()[..text.len() - 3],
         &["line 17", "face element 3", "no vertex_indices"],
     );
     // An OBJ cut inside a face line: an error, or fewer whole faces (tests in geometry::obj).
