@@ -332,6 +332,32 @@ fn try_writes_table_images_plots_and_a_spec_that_reruns() {
     assert!(!dir.path().join("stl-out").exists());
 }
 
+/// `experiment --help` names `try` and the file form of a spec's mesh; `experiment try --help`
+/// its kinds.
+fn help_mentions_try_and_the_mesh_file_key() {
+    let help = |args: &[&str]| {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_experiment"))
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{args:?}");
+        String::from_utf8(o.stdout).unwrap()
+    };
+    let top = help(&["--help"]);
+    assert!(
+        top.contains("  try ") && top.contains(r#"{"mesh": {"file": "PATH"}}"#),
+        "{top}"
+    );
+    let t = help(&["try", "--help"]);
+    assert!(
+        t.contains("<MESH>")
+            && t.contains("ao")
+            && t.contains("shadows")
+            && t.contains("reflections"),
+        "{t}"
+    );
+}
+
 /// The registry's `bunny_npm.obj` where the registry finds it, absolute.
 fn bunny_npm() -> Option<PathBuf> {
     visfield::geometry::models::ModelRegistry::embedded()
@@ -367,6 +393,10 @@ fn main() {
         trial(
             "the_cache_keys_on_content_a_renamed_file_reuses_its_field_an_edited_one_bakes",
             the_cache_keys_on_content_a_renamed_file_reuses_its_field_an_edited_one_bakes,
+        ),
+        trial(
+            "help_mentions_try_and_the_mesh_file_key",
+            help_mentions_try_and_the_mesh_file_key,
         ),
         trial(
             "try_writes_table_images_plots_and_a_spec_that_reruns",

@@ -76,9 +76,11 @@ pub enum Command {
         #[command(flatten)]
         opts: RunArgs,
     },
-    /// Does a field suit your own mesh? Fits MESH (OBJ or PLY) to a unit sphere on a floor,
-    /// bakes fields at a few sizes and runs them against ray casting (and Embree where built):
-    /// table, images, plots, a verdict per size, and OUT/spec.json to edit and rerun with `run`.
+    /// Does a field suit your own mesh (OBJ or PLY)? A verdict per field size.
+    ///
+    /// Fits MESH to a unit sphere on a floor, bakes fields at a few sizes and runs them against
+    /// ray casting (and Embree where built): table, images, plots, a verdict per size, and
+    /// OUT/spec.json to edit and rerun with `run`.
     Try {
         /// The mesh file (.obj or .ply).
         mesh: PathBuf,
