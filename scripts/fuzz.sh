@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Fuzzes the spec parser and mesh validation for a bounded time per target (default 60 s):
+# Fuzzes the spec parser, mesh validation and the OBJ and PLY loaders for a bounded time per
+# target (default 60 s):
 #   scripts/fuzz.sh [SECONDS] [TARGET...]
 # Needs cargo-fuzz (`cargo install cargo-fuzz`). On a stable toolchain, RUSTC_BOOTSTRAP=1 lets
 # cargo-fuzz use the sanitizer flags it needs. A crash is saved under fuzz/artifacts/TARGET/;
@@ -10,7 +11,7 @@ cd "$(dirname "$0")/../fuzz"
 secs="${1:-60}"
 shift || true
 targets=("$@")
-if [ ${#targets[@]} -eq 0 ]; then targets=(spec mesh_parts obj); fi
+if [ ${#targets[@]} -eq 0 ]; then targets=(spec mesh_parts obj ply); fi
 export RUSTC_BOOTSTRAP=1
 status=0
 for t in "${targets[@]}"; do

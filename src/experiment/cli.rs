@@ -16,7 +16,9 @@ use std::path::{Path, PathBuf};
     about,
     long_about = None,
     after_help = "Run a spec by name: `experiment NAME [--quick] [--out DIR] [--dry-run]` runs \
-                  experiments/NAME.json (see `experiment list`; `experiment NAME --help`)."
+                  experiments/NAME.json (see `experiment list`; `experiment NAME --help`).\n\
+                  Your own mesh: `experiment try MESH.obj|MESH.ply [--kind ao|shadows|reflections] \
+                  [--quick]` (or {\"mesh\": {\"file\": \"PATH\"}} in a spec)."
 )]
 pub struct Cli {
     #[command(subcommand)]
@@ -71,6 +73,20 @@ pub enum Command {
     Run {
         /// The spec (JSON).
         spec: PathBuf,
+        #[command(flatten)]
+        opts: RunArgs,
+    },
+    /// Does a field suit your own mesh (OBJ or PLY)? A verdict per field size.
+    ///
+    /// Fits MESH to a unit sphere on a floor, bakes fields at a few sizes and runs them against
+    /// ray casting (and Embree where built): table, images, plots, a verdict per size, and
+    /// OUT/spec.json to edit and rerun with `run`.
+    Try {
+        /// The mesh file (.obj or .ply).
+        mesh: PathBuf,
+        /// What is rendered on the floor.
+        #[arg(long, value_enum, default_value = "ao")]
+        kind: super::try_mesh::TryKind,
         #[command(flatten)]
         opts: RunArgs,
     },
@@ -492,6 +508,28 @@ pub fn run(cli: Cli) -> Result<i32> {
         }
         Command::Run { spec, opts } => {
             run_one(&spec, &opts, None)?;
+        }
+        Command::Try { mesh, kind, opts } => {
+            let name = format!("try_{}", super::try_mesh::stem(&mesh));
+            let o = opts.options(&name, None)?;
+            let (report, verdicts) = super::try_mesh::run(&mesh, kind, &o)?;
+            if o.dry_run {
+                print!("{}", report.plan_text);
+                return Ok(0);
+            }
+            println!(
+                "\n{}: field lookup against ray casting on the same rays",
+                mesh.display()
+            );
+            for v in verdicts {
+                println!("  {v}");
+            }
+            println!(
+                "  outputs: {}; edit and rerun: experiment run {} --out {}",
+                o.out.display(),
+                o.out.join("spec.json").display(),
+                o.out.display()
+            );
         }
         Command::Performance { opts } => {
             let o = opts.options("performance", None)?;

@@ -32,8 +32,11 @@ pub mod run;
 pub mod sampling_report;
 pub mod scenes;
 pub mod spec;
+pub mod spec_mesh;
 pub mod stability;
 pub mod truth_cache;
+pub mod try_mesh;
+pub mod user_mesh;
 pub mod validate;
 
 pub use error::{Error, Result, ResultExt};

@@ -7,6 +7,7 @@
 //! the intra-object path of the lookup, and by its own triangles in the reference.
 
 use super::spec::{MeshSource, Spec, SpecError, TransformSpec};
+use super::user_mesh::{self, FileRecord};
 use super::{Error, Result};
 use crate::geometry::procedural::{self, Supershape};
 use crate::geometry::rebase::{
@@ -34,6 +35,8 @@ pub struct LoadedMesh {
     /// Where the file's coordinates were moved from ([`centred_mesh`]): zero unless the model
     /// lies far from its file's origin.
     pub model_origin: DVec3,
+    /// For a user's mesh file: what `run.json` records of it.
+    pub file: Option<FileRecord>,
 }
 
 /// One scene of the spec.
@@ -116,8 +119,21 @@ pub struct Scenes {
 
 impl Scenes {
     /// Loads and places the meshes of `spec`'s scenes; `path` is where the scenes live in the
-    /// file (`scenes` or `quick.scenes`), for error messages.
+    /// file (`scenes` or `quick.scenes`), for error messages. Mesh files must fit half the
+    /// machine's memory ([`Scenes::build_within`]).
     pub fn build(spec: &Spec, file: &Path, path: &str) -> Result<Scenes, SpecError> {
+        Scenes::build_within(spec, file, path, crate::field::default_memory_limit())
+    }
+
+    /// [`Scenes::build`] with the memory limit that every mesh file's sizes are checked against
+    /// before any mesh is loaded ([`user_mesh::precheck`]).
+    pub fn build_within(
+        spec: &Spec,
+        file: &Path,
+        path: &str,
+        memory_limit: u64,
+    ) -> Result<Scenes, SpecError> {
+        user_mesh::precheck(spec, file, path, memory_limit)?;
         let mut out = Scenes::default();
         let mut sources: Vec<MeshSource> = Vec::new();
         for (si, sc) in spec.scenes.iter().enumerate() {
@@ -128,11 +144,12 @@ impl Scenes {
                 let m = match sources.iter().position(|s| s == &inst.mesh) {
                     Some(m) => m,
                     None => {
-                        let mesh = build_mesh(&inst.mesh).map_err(|e| SpecError::Invalid {
-                            file: file.to_path_buf(),
-                            field: at.clone(),
-                            message: e.chain(),
-                        })?;
+                        let (mesh, record) =
+                            build_mesh(&inst.mesh, file).map_err(|e| SpecError::Invalid {
+                                file: file.to_path_buf(),
+                                field: at.clone(),
+                                message: e.chain(),
+                            })?;
                         let (mesh, model_origin) = centred_mesh(mesh);
                         sources.push(inst.mesh.clone());
                         out.meshes.push(LoadedMesh {
@@ -140,6 +157,7 @@ impl Scenes {
                             sha256: mesh_sha256(&mesh),
                             mesh: Arc::new(mesh),
                             model_origin,
+                            file: record,
                         });
                         out.meshes.len() - 1
                     }
@@ -214,10 +232,15 @@ impl Scenes {
 /// Morton-code resolution of the BVH builders (see `Scenes::build`).
 pub const MIN_INSTANCE_TO_SCENE: f32 = 1.0 / 2_097_152.0;
 
-/// Loads or generates a mesh.
-pub fn build_mesh(src: &MeshSource) -> Result<Mesh> {
+/// Loads or generates a mesh; a mesh file (relative to the folder of `spec_file`) comes with
+/// its record.
+pub fn build_mesh(src: &MeshSource, spec_file: &Path) -> Result<(Mesh, Option<FileRecord>)> {
     let r = match src {
-        MeshSource::Model(name) => return Ok(models::load_model(name)?),
+        MeshSource::Model(name) => return Ok((models::load_model(name)?, None)),
+        MeshSource::File(f) => {
+            let (mesh, record) = user_mesh::load(spec_file, f)?;
+            return Ok((mesh, Some(record)));
+        }
         MeshSource::Corner { n } => procedural::corner(*n),
         MeshSource::CubeWithHole { size, hole } => procedural::cube_with_hole(*size, *hole),
         MeshSource::Supershape { triangles } => {
@@ -235,7 +258,7 @@ pub fn build_mesh(src: &MeshSource) -> Result<Mesh> {
             slices,
         } => procedural::ellipsoid(*radii, *stacks, *slices),
     };
-    r.map_err(Error::geometry(src.label()))
+    r.map(|m| (m, None)).map_err(Error::geometry(src.label()))
 }
 
 /// The placement described by `t` (see [`TransformSpec`]) of `mesh`, whose model-space points

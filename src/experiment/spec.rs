@@ -135,12 +135,18 @@ pub struct InstanceSpec {
     pub transform: TransformSpec,
 }
 
-/// Where a mesh comes from.
+/// Where a mesh comes from. Its JSON is one key naming the kind (`{"model": NAME}`,
+/// `{"corner": {"n": 33}}`, ...), or a user's file with an optional pin
+/// (`{"file": "PATH", "sha256": "…"}`); the (de)serialisation lives in `spec_mesh.rs`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case", deny_unknown_fields)]
+#[serde(remote = "Self", rename_all = "snake_case", deny_unknown_fields)]
 pub enum MeshSource {
     /// A model from the registry, by name (`{"model": "stanford-bunny_39k"}`).
     Model(String),
+    /// A user's OBJ or PLY file (`{"file": "PATH", "sha256": "…"}`), PATH relative to the
+    /// spec file's folder.
+    #[serde(skip)]
+    File(super::spec_mesh::MeshFile),
     /// The 2008 paper's corner receiver: three unit squares, n × n vertices each.
     Corner { n: usize },
     /// A closed cube of side `size` with a square through-hole of side `hole`.
@@ -169,6 +175,7 @@ impl MeshSource {
     pub fn label(&self) -> String {
         match self {
             MeshSource::Model(m) => m.clone(),
+            MeshSource::File(f) => f.label(),
             MeshSource::Corner { n } => format!("corner{n}"),
             MeshSource::CubeWithHole { size, hole } => format!("cube_with_hole{size}x{hole}"),
             MeshSource::Supershape { triangles } => format!("supershape{triangles}"),

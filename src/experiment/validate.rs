@@ -383,6 +383,22 @@ impl Validator<'_> {
                 }
                 Ok(())
             }
+            MeshSource::File(f) => {
+                if f.file.trim().is_empty() {
+                    return Err(self.err(&format!("{path}.file"), "an empty path".into()));
+                }
+                crate::geometry::MeshFormat::of(std::path::Path::new(&f.file))
+                    .map_err(|e| self.err(&format!("{path}.file"), e.to_string()))?;
+                match &f.sha256 {
+                    Some(h) if !(h.len() == 64 && h.bytes().all(|b| b.is_ascii_hexdigit())) => {
+                        Err(self.err(
+                            &format!("{path}.sha256"),
+                            format!("`{h}` is not a sha256 (64 hexadecimal digits)"),
+                        ))
+                    }
+                    _ => Ok(()),
+                }
+            }
             MeshSource::Corner { n } if *n < 2 => bad("corner: n must be at least 2"),
             MeshSource::CubeWithHole { size, hole }
                 if !(pos(*size) && pos(*hole) && hole < size) =>

@@ -6,8 +6,9 @@
 //! normal `(b − a) × (c − a)` points to; closed procedural meshes are oriented outward. Vertex
 //! normals are always area-weighted averages of face normals (see [`Mesh`]).
 //!
-//! - [`Mesh`]: validated indexed meshes, OBJ loading ([`Mesh::load_obj`]), area, volume,
-//!   closedness.
+//! - [`Mesh`]: validated indexed meshes, OBJ loading ([`Mesh::load_obj`]), PLY loading (ASCII
+//!   and binary, [`Mesh::load_ply`]), either by extension ([`Mesh::load_file`], [`MeshFormat`]),
+//!   area, volume, closedness.
 //! - [`minimal_bounding_sphere`]: exact minimal enclosing spheres (Welzl).
 //! - [`Similarity`], [`Instance`], [`Scene`]: meshes placed in the world with caster / receiver
 //!   roles.
@@ -18,11 +19,14 @@
 mod bounds;
 mod instance;
 mod mesh;
+mod mesh_file;
 pub mod models;
 mod obj;
+mod ply;
 pub mod procedural;
 pub mod rebase;
 
 pub use bounds::{minimal_bounding_sphere, Sphere};
 pub use instance::{Instance, Scene, Similarity};
 pub use mesh::{GeometryError, Mesh};
+pub use mesh_file::{MeshFileCounts, MeshFormat};

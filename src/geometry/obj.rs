@@ -22,12 +22,18 @@ impl Mesh {
     /// parsing stopped, a non-finite vertex with its line, an out-of-range face index, or no
     /// non-degenerate triangle.
     pub fn load_obj(path: &Path) -> Result<Mesh, GeometryError> {
+        Mesh::load_obj_with(path, &|_| {})
+    }
+
+    /// [`Mesh::load_obj`], calling `progress` with the bytes read so far every few MiB.
+    pub fn load_obj_with(path: &Path, progress: &dyn Fn(u64)) -> Result<Mesh, GeometryError> {
         let file = std::fs::File::open(path).map_err(|source| GeometryError::Io {
             path: path.to_path_buf(),
             source,
         })?;
         let display = path.display().to_string();
         let mut reader = LineCountingReader::new(BufReader::with_capacity(1 << 16, file));
+        reader.progress = Some(progress);
         let options = tobj::LoadOptions {
             triangulate: true,
             single_index: false,
@@ -37,9 +43,16 @@ impl Mesh {
         let (models, _materials) =
             tobj::load_obj_buf(&mut reader, &options, |_| Ok(Default::default())).map_err(|e| {
                 let line = reader.line_number();
+                let what = match e {
+                    // tobj reads lines as UTF-8 text: binary data stops it here.
+                    tobj::LoadError::ReadError if !reader.io_error => {
+                        "not text (binary data? an OBJ file is text)".to_string()
+                    }
+                    e => e.to_string(),
+                };
                 GeometryError::invalid(
                     &display,
-                    format!("OBJ parse error at or before line {line}: {e}"),
+                    format!("OBJ parse error at or before line {line}: {what}"),
                 )
             })?;
         if reader.io_error {
@@ -125,18 +138,35 @@ fn first_non_finite_vertex_line(path: &Path) -> Option<(usize, usize)> {
 
 /// A `BufRead` that counts the newlines consumed, so that a parse error reported by `tobj` (which
 /// reads line by line) can name the line it stopped at.
-struct LineCountingReader<R> {
+struct LineCountingReader<'p, R> {
     inner: R,
     newlines: usize,
     io_error: bool,
+    /// Bytes consumed, and the last count reported to `progress`.
+    bytes: u64,
+    reported: u64,
+    progress: Option<&'p dyn Fn(u64)>,
 }
 
-impl<R: BufRead> LineCountingReader<R> {
+impl<R: BufRead> LineCountingReader<'_, R> {
     fn new(inner: R) -> Self {
         LineCountingReader {
             inner,
             newlines: 0,
             io_error: false,
+            bytes: 0,
+            reported: 0,
+            progress: None,
+        }
+    }
+
+    fn advance(&mut self, n: usize) {
+        self.bytes += n as u64;
+        if self.bytes - self.reported >= 4 << 20 {
+            self.reported = self.bytes;
+            if let Some(p) = self.progress {
+                p(self.bytes);
+            }
         }
     }
 
@@ -146,15 +176,16 @@ impl<R: BufRead> LineCountingReader<R> {
     }
 }
 
-impl<R: BufRead> Read for LineCountingReader<R> {
+impl<R: BufRead> Read for LineCountingReader<'_, R> {
     fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
         let n = self.inner.read(buf).inspect_err(|_| self.io_error = true)?;
         self.newlines += buf[..n].iter().filter(|&&b| b == b'\n').count();
+        self.advance(n);
         Ok(n)
     }
 }
 
-impl<R: BufRead> BufRead for LineCountingReader<R> {
+impl<R: BufRead> BufRead for LineCountingReader<'_, R> {
     fn fill_buf(&mut self) -> std::io::Result<&[u8]> {
         match self.inner.fill_buf() {
             Ok(b) => Ok(b),
@@ -172,6 +203,7 @@ impl<R: BufRead> BufRead for LineCountingReader<R> {
                 .filter(|&&c| c == b'\n')
                 .count();
         }
+        self.advance(amt);
         self.inner.consume(amt);
     }
 }

@@ -154,6 +154,7 @@ fn caster(name: &str) -> Result<LoadedMesh> {
         sha256: mesh_sha256(&mesh),
         mesh: Arc::new(mesh),
         model_origin: glam::DVec3::ZERO,
+        file: None,
     })
 }
 

@@ -176,7 +176,9 @@ fn run_checked(
         &ls.name,
         crate::experiment::models_cmd::spec_models(spec),
     )?;
-    let (scenes, _) = stage("load scenes", || Scenes::build(spec, &ls.path, scenes_path));
+    let (scenes, _) = stage("load scenes", || {
+        Scenes::build_within(spec, &ls.path, scenes_path, opts.supply.memory_limit)
+    });
     let scenes = scenes?;
     let kind = crate::experiment::kinds::of(&spec.render);
     if let Some((field, message)) = scenes.scenes.iter().find_map(|bs| kind.scene_problem(bs)) {

@@ -149,6 +149,22 @@ impl Runner<'_> {
                 })
             })
             .collect();
+        // Each mesh by its label and content hash (the field cache's key); a user's file with
+        // the path as the spec gives it, its bytes' sha256 and its counts.
+        let meshes: Vec<_> = self
+            .scenes
+            .meshes
+            .iter()
+            .map(|m| {
+                serde_json::json!({
+                    "label": m.label,
+                    "mesh_sha256": m.sha256,
+                    "vertices": m.mesh.vertex_count(),
+                    "triangles": m.mesh.triangle_count(),
+                    "file": m.file,
+                })
+            })
+            .collect();
         let plan = self.plan;
         let summary = serde_json::json!({
             "spec": ls.name,
@@ -176,6 +192,7 @@ impl Runner<'_> {
                 "needs_normal_field": plan.needs_normal_field,
             },
             "scenes": scene_info,
+            "meshes": meshes,
             "effective_spec": spec,
         });
         let p = out.join("run.json");
