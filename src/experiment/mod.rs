@@ -20,6 +20,7 @@ pub mod kinds;
 pub mod meta;
 pub mod metrics;
 pub mod outputs;
+pub mod paper;
 pub mod performance;
 pub mod plan;
 pub mod plot;
