@@ -10,8 +10,9 @@ mod common;
 
 use std::collections::HashMap;
 use std::path::Path;
-use visfield::experiment::outputs::{CellColumns, ErrorColumns, FieldColumns, Row, SweepRow};
-use visfield::experiment::outputs::{TimeColumns, TABLE_COLUMNS};
+use visfield::experiment::outputs::{
+    CellColumns, ErrorColumns, FieldColumns, Row, SweepRow, TimeColumns,
+};
 use visfield::experiment::paper::{paper_vs_ours, RunTables};
 use visfield::experiment::spec::{Backend, OursSource, PaperCell, PaperNumbers, Spec};
 use visfield::field::{Precision, Selection};
@@ -436,7 +437,6 @@ fn a_table_from_before_rays_cast_leaves_ours_rays_cast_empty() {
         pairs: &[],
     };
     assert_eq!(paper_vs_ours(&paper, &t)[0].ours_rays_cast, None);
-    assert!(TABLE_COLUMNS.contains(&"bake_s"));
 }
 
 fn error_of(text: &str) -> String {
@@ -487,4 +487,85 @@ fn a_paper_source_is_validated_naming_the_field_and_value() {
         r#"{ "label": "x", "ours": { "from": "elsewhere" } }"#,
     ));
     assert!(e.contains("elsewhere"), "{e}");
+}
+
+/// A real run of the tiny spec with paper cells of each source: the runner's file pairs the
+/// sharp cell with `raycast_sweep.csv`'s 4-ray cast, and rewriting it from the run's CSV
+/// files (what `experiment plots` does) gives the same bytes.
+#[test]
+fn a_run_writes_each_source_and_a_rewrite_from_its_csvs_is_byte_identical() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = with_paper(
+        r#"{ "label": "field", "ao_s": 2.0 },
+           { "label": "sharp", "raycast_s": 20.0,
+             "ours": { "from": "raycast_sweep", "rays_per_point": 4 } }"#,
+    );
+    let ls = common::loaded(dir.path(), &text);
+    let out = dir.path().join("out");
+    visfield::experiment::run::run(&ls, &common::options(out.clone())).unwrap();
+    let written = std::fs::read(out.join("paper_vs_ours.csv")).unwrap();
+    let pv = read(&out.join("paper_vs_ours.csv"));
+    let table = read(&out.join("table.csv"));
+    let sweep = read(&out.join("raycast_sweep.csv"));
+    let s4 = sweep
+        .iter()
+        .find(|s| s["rays_per_point"] == "4" && s["backend"] == "cpu")
+        .unwrap();
+    assert_eq!(pv[0]["cell"], table[0]["cell"]);
+    assert_eq!(pv[0]["ours_rays_cast"], table[0]["rays_cast"]);
+    assert_eq!(pv[1]["cell"], "raycast_sweep:tiny:cpu:4");
+    assert_eq!(pv[1]["ours_raycast_s"], s4["ao_s"]);
+    assert_eq!(pv[1]["ours_rms_image"], s4["rms_image"]);
+    // 16 rays per point in the table, 4 in the sweep: a quarter of its rays.
+    let rays: u64 = table[0]["rays_cast"].parse().unwrap();
+    assert_eq!(pv[1]["ours_rays_cast"], (rays / 4).to_string());
+    // Uncached (no cache in the test): the bake is the run's own.
+    assert_eq!(pv[0]["ours_bake_cached"], "false");
+    assert_eq!(pv[0]["ours_bake_s"], table[0]["bake_s"]);
+    std::fs::remove_file(out.join("paper_vs_ours.csv")).unwrap();
+    let paper = ls.spec.paper.as_ref().unwrap();
+    assert!(visfield::experiment::paper::rewrite(&out, paper).unwrap());
+    assert_eq!(
+        std::fs::read(out.join("paper_vs_ours.csv")).unwrap(),
+        written
+    );
+}
+
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let e = e.unwrap();
+        let dest = to.join(e.file_name());
+        if e.file_type().unwrap().is_dir() {
+            copy_dir(&e.path(), &dest);
+        } else {
+            std::fs::copy(e.path(), dest).unwrap();
+        }
+    }
+}
+
+/// `experiment plots --dir` on a copy of a committed run whose paper_vs_ours.csv is stale
+/// writes the committed file back, from the copy's CSVs and the spec's paper section.
+#[test]
+fn experiment_plots_rewrites_a_stale_paper_vs_ours_from_the_runs_csvs() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let committed = root.join("results/shadows2010_figure8");
+    let dir = tempfile::tempdir().unwrap();
+    let copy = dir.path().join("shadows2010_figure8");
+    copy_dir(&committed, &copy);
+    let stale = "label,cell\nGPU BVH,copied\n";
+    std::fs::write(copy.join("paper_vs_ours.csv"), stale).unwrap();
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_experiment"))
+        .args(["plots", "--dir"])
+        .arg(&copy)
+        .current_dir(root)
+        .env_remove("VISFIELD_EXPERIMENTS")
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("rewrote"));
+    assert_eq!(
+        std::fs::read(copy.join("paper_vs_ours.csv")).unwrap(),
+        std::fs::read(committed.join("paper_vs_ours.csv")).unwrap()
+    );
 }
