@@ -352,6 +352,67 @@ fn sponza(c: &mut Claims) {
     c.quotes("docs/results.md", &text, from);
 }
 
+/// 2008 Figure 8 and 2010 Figure 3: RMS and times per caster, the AO pass against ray casting.
+fn figure8_and_figure3(c: &mut Claims) {
+    let from = "results/figure8/table.csv";
+    let rows: Vec<Row> = read(from)
+        .into_iter()
+        .filter(|r| r["backend"] == "cpu")
+        .collect();
+    let scene = |s: &str| rows.iter().find(|r| r["scene"] == s).unwrap();
+    let three = ["tree", "bunny", "igea"].map(scene);
+    let text = format!(
+        "tree ({} triangles) {:.2}, bunny {:.2}, Igea ({}) {:.2} per image ({:.2} / {:.2} / {:.2} \
+         against the converged reference",
+        with_commas(f(three[0], "caster_triangles") as u64),
+        f(three[0], "rms_image"),
+        f(three[1], "rms_image"),
+        with_commas(f(three[2], "caster_triangles") as u64),
+        f(three[2], "rms_image"),
+        f(three[0], "rms_vs_truth"),
+        f(three[1], "rms_vs_truth"),
+        f(three[2], "rms_vs_truth"),
+    );
+    c.quotes("docs/results.md", &text, from);
+    c.quotes("README.md", &text, from);
+    let join = |col: &str, p: usize| three.map(|r| format!("{:.*}", p, f(r, col))).join(" / ");
+    let text = format!(
+        "our ray caster's {} s and Embree's {} s on the same rays",
+        join("raycast_s", 3),
+        join("embree_s", 3)
+    );
+    c.quotes("README.md", &text, from);
+    let gain = |col: &str| {
+        three
+            .map(|r| format!("{:.1}×", f(r, col) / f(r, "ao_s")))
+            .join(", ")
+    };
+    let text = format!(
+        "our ray caster's {} s ({}) and Embree's {} s ({})",
+        join("raycast_s", 3),
+        gain("raycast_s"),
+        join("embree_s", 3),
+        gain("embree_s")
+    );
+    c.quotes("docs/results.md", &text, from);
+    c.quotes("README.md", &format!("({} Embree)", gain("embree_s")), from);
+    let from = "results/ao2010_figure3/table.csv";
+    let rows: Vec<Row> = read(from)
+        .into_iter()
+        .filter(|r| r["backend"] == "cpu")
+        .collect();
+    let (lo, hi) = min_max(rows.iter().map(|r| f(r, "ao_s")));
+    let (glo, ghi) = min_max(rows.iter().map(|r| f(r, "raycast_s") / f(r, "ao_s")));
+    let rays = f(&rows[0], "receiver_points") * f(&rows[0], "rays_per_point");
+    let text = format!(
+        "The AO pass took {lo:.2}–{hi:.2} s through the fields against {:.2} s for ray casting the \
+         same {:.1} M rays ({glo:.1}–{ghi:.0}×",
+        f(&rows[0], "raycast_s"),
+        rays / 1e6
+    );
+    c.quotes("docs/results.md", &text, from);
+}
+
 fn with_commas(n: u64) -> String {
     let s = n.to_string();
     let mut out = String::new();
@@ -419,6 +480,7 @@ fn quoted_numbers_match_the_committed_csvs() {
     figure4(&mut c);
     figure9(&mut c);
     sponza(&mut c);
+    figure8_and_figure3(&mut c);
     performance(&mut c);
     assert!(
         c.missing.is_empty(),
