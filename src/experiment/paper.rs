@@ -159,7 +159,7 @@ fn ours(c: &PaperCell, t: &RunTables) -> Option<Ours> {
             })
         }
         OursSource::SumOfScenes { scenes } => {
-            let head = first(Some(&scenes[0]))?;
+            let head = first(Some(scenes.first()?))?;
             let rows: Vec<&Row> = scenes
                 .iter()
                 .map(|n| {
