@@ -5,11 +5,11 @@ use glam::{Quat, Vec3};
 use std::path::Path;
 use visfield::experiment::check::check_rows;
 use visfield::experiment::fields::requantize;
-use visfield::experiment::outputs::{paper_vs_ours, read_csv, Row, TABLE_COLUMNS};
+use visfield::experiment::outputs::{read_csv, Row, TABLE_COLUMNS};
 use visfield::experiment::plan::{Plan, PlanLimits, Step};
 use visfield::experiment::run::{run, LoadedSpec};
 use visfield::experiment::scenes::Scenes;
-use visfield::experiment::spec::{PaperCell, PaperNumbers, Spec, SpecError, Threshold};
+use visfield::experiment::spec::{Spec, SpecError, Threshold};
 use visfield::field::bake::{bake, BakeOptions};
 use visfield::field::{FieldParams, Precision};
 use visfield::geometry::procedural;
@@ -473,90 +473,6 @@ fn translated_spec_is_rebased_to_the_untranslated_scene() {
     };
     let back = far.scenes[0].camera_in_frame(&moved);
     assert!(back.eye.distance(cam.eye) < 2e-3 && back.target.distance(cam.target) < 2e-3);
-}
-
-#[test]
-fn paper_ratios_are_normalised_to_the_reference_cell() {
-    let row = |count: usize, bake: f64, ao: f64| Row {
-        positional_samples: count,
-        directional_res: 32,
-        layout: LayoutKind::Concentric,
-        precision: Precision::U8,
-        selection: visfield::field::Selection::Nearest,
-        backend: visfield::experiment::spec::Backend::Cpu,
-        adapter: String::new(),
-        bake_s: Some(bake),
-        ao_s: ao,
-        raycast_s: None,
-        rms_vertex: Some(1.0),
-        rms_image: Some(2.0),
-        field_bytes: 0,
-        scene: "s".into(),
-        sphere: SphereKind::Slater,
-        rays_per_point: 256,
-        receiver_points: 10,
-        caster_triangles: 5,
-        max_error_vertex: None,
-        max_error_image: None,
-        share_pixels_off_1: None,
-        bake_rays: 0,
-        bake_cached: false,
-        image: String::new(),
-        cell: format!("c{count}"),
-        ao_kernel_s: None,
-        raycast_kernel_s: None,
-        setup_s: None,
-        rms_vs_truth: None,
-        truth_stderr: None,
-        seeds: 1,
-        rms_vertex_sd: None,
-        rms_image_sd: None,
-        rms_vs_truth_sd: None,
-        raycast_rms_vs_truth: None,
-        truth_rays: None,
-        crease_points: 0,
-        rms_vs_truth_crease: None,
-        rms_vs_truth_interior: None,
-        occlusion_rms: None,
-        grain: None,
-        rays_cast: 0,
-        ao_mrays_s: None,
-        raycast_mrays_s: None,
-        normal_bits: None,
-        second_reference: None,
-        rms_image_vs_second: None,
-        embree_s: None,
-        embree_mrays_s: None,
-        embree_rms_vs_raycast: None,
-    };
-    let cell = |label: &str, count: usize, pre: f64| PaperCell {
-        label: label.into(),
-        positional_samples: Some(count),
-        preprocess_s: Some(pre),
-        ..PaperCell::default()
-    };
-    let paper = PaperNumbers {
-        source: "test".into(),
-        reference_cell: Some("small".into()),
-        cells: vec![
-            cell("big", 1090, 14.0),
-            cell("small", 290, 4.0),
-            cell("none", 4226, 1.0),
-        ],
-    };
-    let rows = [row(290, 2.0, 0.1), row(1090, 8.0, 0.3)];
-    let pv = paper_vs_ours(&paper, &rows, &[]);
-    // big: paper 14 / 4 = 3.5, ours 8 / 2 = 4; AO 0.3 / 0.1 = 3.
-    assert_eq!(pv[0].paper_preprocess_rel, Some(3.5));
-    assert_eq!(pv[0].ours_bake_rel, Some(4.0));
-    assert!((pv[0].ours_ao_rel.unwrap() - 3.0).abs() < 1e-12);
-    assert_eq!(
-        (pv[0].cell.as_str(), pv[0].ours_rms_image),
-        ("c1090", Some(2.0))
-    );
-    assert_eq!(pv[0].ours_rays_cast, Some(2560));
-    // No 4226 row: ours left empty.
-    assert_eq!((pv[2].cell.as_str(), pv[2].ours_bake_s), ("", None));
 }
 
 #[test]

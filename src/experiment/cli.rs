@@ -114,7 +114,9 @@ pub enum Command {
         #[command(flatten)]
         opts: RunArgs,
     },
-    /// Redraw the plots of finished runs from their CSV files and images.
+    /// Redraw the plots of finished runs from their CSV files and images, and rewrite their
+    /// paper_vs_ours.csv from table.csv, raycast_sweep.csv, pairs.csv and the spec's paper
+    /// section.
     Plots {
         /// Specs by name (default: every spec with results).
         names: Vec<String>,
@@ -427,11 +429,33 @@ fn plots(names: &[String], quick: bool, dir: Option<&Path>) -> Result<()> {
                 ""
             }
         );
+        let name = run["spec"]
+            .as_str()
+            .map_or_else(|| discover::name_of(&d), String::from);
+        if rewrite_paper_vs_ours(&d, &name)? {
+            println!("rewrote {}", d.join("paper_vs_ours.csv").display());
+        }
         super::figures::draw_all(&d, &title)?;
         own_plots(&d, run)?;
         println!("redrew the plots in {}", d.display());
     }
     Ok(())
+}
+
+/// Rewrites `dir/paper_vs_ours.csv` from the run's CSV files and the paper section of
+/// `experiments/NAME.json` as it is now (validated first), so that a corrected pairing needs no
+/// rerun. Folders of no spec, or of a spec without a paper section, are left alone.
+fn rewrite_paper_vs_ours(dir: &Path, name: &str) -> Result<bool> {
+    let Some(path) = discover::spec_paths()?
+        .into_iter()
+        .find(|p| discover::name_of(p) == name)
+    else {
+        return Ok(false);
+    };
+    match LoadedSpec::load(&path)?.spec.paper {
+        Some(paper) => super::paper::rewrite(dir, &paper),
+        None => Ok(false),
+    }
 }
 
 /// Adds the plots now in `dir` (its top-level PNGs) to the `files` its `run.json` lists, so that

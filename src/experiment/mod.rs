@@ -22,6 +22,7 @@ pub mod metrics;
 pub mod models_cmd;
 pub mod models_fetch;
 pub mod outputs;
+pub mod paper;
 pub mod performance;
 pub mod plan;
 pub mod plot;

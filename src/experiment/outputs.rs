@@ -7,10 +7,9 @@
 //!   against the converged reference;
 //! - `pairs.csv`: RMS between cells that differ only in precision ([`PairRow`]; the slides'
 //!   8 vs 16 bit);
-//! - `paper_vs_ours.csv`: the paper's numbers beside ours ([`PaperRow`]), with times as ratios
-//!   to a reference cell, since 2008 seconds are not a target.
+//! - `paper_vs_ours.csv`: the paper's numbers beside ours, written by [`super::paper`].
 
-use super::spec::{Backend, PaperCell, PaperNumbers};
+use super::spec::Backend;
 use super::{Error, Result};
 use crate::field::{Precision, Selection};
 use crate::sampling::{LayoutKind, SphereKind};
@@ -360,35 +359,6 @@ pub struct PairRow {
     pub rms_image: Option<f64>,
 }
 
-/// A paper cell beside ours. `*_rel` columns are ratios to the reference cell's value, the
-/// paper's to the paper's and ours to ours.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct PaperRow {
-    pub label: String,
-    /// Our cell (empty when no cell of this run matches).
-    pub cell: String,
-    pub paper_triangles: Option<u64>,
-    pub ours_triangles: Option<u64>,
-    pub paper_rays_cast: Option<u64>,
-    pub ours_rays_cast: Option<u64>,
-    pub paper_raycast_s: Option<f64>,
-    pub ours_raycast_s: Option<f64>,
-    pub paper_preprocess_s: Option<f64>,
-    pub ours_bake_s: Option<f64>,
-    pub paper_ao_s: Option<f64>,
-    pub ours_ao_s: Option<f64>,
-    pub paper_rms: Option<f64>,
-    pub ours_rms_image: Option<f64>,
-    pub ours_rms_vertex: Option<f64>,
-    pub paper_raycast_rel: Option<f64>,
-    pub ours_raycast_rel: Option<f64>,
-    pub paper_preprocess_rel: Option<f64>,
-    pub ours_bake_rel: Option<f64>,
-    pub paper_ao_rel: Option<f64>,
-    pub ours_ao_rel: Option<f64>,
-    pub note: String,
-}
-
 /// Writes rows as CSV (header from the struct), atomically.
 pub fn write_csv<T: Serialize>(path: &Path, rows: &[T]) -> Result<()> {
     let mut w = csv::Writer::from_writer(Vec::new());
@@ -408,83 +378,4 @@ pub fn read_csv<T: DeserializeOwned>(path: &Path) -> Result<Vec<T>> {
     r.deserialize()
         .collect::<std::result::Result<Vec<T>, _>>()
         .map_err(Error::csv(path))
-}
-
-fn matches_row(c: &PaperCell, r: &Row) -> bool {
-    c.scene.as_ref().is_none_or(|s| *s == r.scene)
-        && c.sphere.is_none_or(|s| s == r.sphere)
-        && c.positional_samples
-            .is_none_or(|n| n == r.positional_samples)
-        && c.directional_res.is_none_or(|n| n == r.directional_res)
-        && c.layout.is_none_or(|l| l == r.layout)
-        && c.precision.is_none_or(|p| p == r.precision)
-        && c.selection.is_none_or(|s| s == r.selection)
-}
-
-/// The paper's cells beside ours. A cell with `versus_precision` takes its RMS from `pairs`.
-pub fn paper_vs_ours(paper: &PaperNumbers, rows: &[Row], pairs: &[PairRow]) -> Vec<PaperRow> {
-    let find = |c: &PaperCell| rows.iter().find(|r| matches_row(c, r));
-    let ref_cell = paper
-        .reference_cell
-        .as_ref()
-        .and_then(|l| paper.cells.iter().find(|c| &c.label == l))
-        .or(paper.cells.first());
-    let ref_row = ref_cell.and_then(find);
-    let ratio = |a: Option<f64>, b: Option<f64>| match (a, b) {
-        (Some(a), Some(b)) if b > 0.0 => Some(a / b),
-        _ => None,
-    };
-    paper
-        .cells
-        .iter()
-        .map(|c| {
-            let r = find(c);
-            let (mut rms_image, mut rms_vertex) =
-                (r.and_then(|r| r.rms_image), r.and_then(|r| r.rms_vertex));
-            if let (Some(v), Some(r)) = (c.versus_precision, r) {
-                let pair = pairs.iter().find(|p| {
-                    p.scene == r.scene
-                        && p.sphere == r.sphere
-                        && p.positional_samples == r.positional_samples
-                        && p.directional_res == r.directional_res
-                        && p.layout == r.layout
-                        && p.selection == r.selection
-                        && p.backend == r.backend
-                        && ((p.precision_a, p.precision_b) == (r.precision, v)
-                            || (p.precision_a, p.precision_b) == (v, r.precision))
-                });
-                rms_image = pair.and_then(|p| p.rms_image);
-                rms_vertex = pair.and_then(|p| p.rms_vertex);
-            }
-            let rays = r.map(|r| r.receiver_points as u64 * r.rays_per_point as u64);
-            let rc = ref_cell;
-            PaperRow {
-                label: c.label.clone(),
-                cell: r.map_or(String::new(), |r| r.cell.clone()),
-                paper_triangles: c.triangles,
-                ours_triangles: r.map(|r| r.caster_triangles as u64),
-                paper_rays_cast: c.rays_cast,
-                ours_rays_cast: rays,
-                paper_raycast_s: c.raycast_s,
-                ours_raycast_s: r.and_then(|r| r.raycast_s),
-                paper_preprocess_s: c.preprocess_s,
-                ours_bake_s: r.and_then(|r| r.bake_s),
-                paper_ao_s: c.ao_s,
-                ours_ao_s: r.map(|r| r.ao_s),
-                paper_rms: c.rms,
-                ours_rms_image: rms_image,
-                ours_rms_vertex: rms_vertex,
-                paper_raycast_rel: ratio(c.raycast_s, rc.and_then(|c| c.raycast_s)),
-                ours_raycast_rel: ratio(
-                    r.and_then(|r| r.raycast_s),
-                    ref_row.and_then(|r| r.raycast_s),
-                ),
-                paper_preprocess_rel: ratio(c.preprocess_s, rc.and_then(|c| c.preprocess_s)),
-                ours_bake_rel: ratio(r.and_then(|r| r.bake_s), ref_row.and_then(|r| r.bake_s)),
-                paper_ao_rel: ratio(c.ao_s, rc.and_then(|c| c.ao_s)),
-                ours_ao_rel: ratio(r.map(|r| r.ao_s), ref_row.map(|r| r.ao_s)),
-                note: c.note.clone().unwrap_or_default(),
-            }
-        })
-        .collect()
 }

@@ -558,6 +558,10 @@ pub struct PaperCell {
     /// slides' 8 vs 16 bit), not against the reference.
     #[serde(default)]
     pub versus_precision: Option<Precision>,
+    /// Which of our measurements the cell pairs with, where the table's first matching row
+    /// is not it (default: that row).
+    #[serde(default)]
+    pub ours: OursSource,
     /// Triangles of the paper's model.
     #[serde(default)]
     pub triangles: Option<u64>,
@@ -579,6 +583,25 @@ pub struct PaperCell {
     /// Remarks (uncertain cells, machines).
     #[serde(default)]
     pub note: Option<String>,
+}
+
+/// Where a paper cell's `ours_*` values come from (see `experiment::paper`). Every source
+/// starts from the table's first row matching the cell's axes (its scene and backend).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "from", rename_all = "snake_case", deny_unknown_fields)]
+pub enum OursSource {
+    /// That row (`"ours": {"from": "table"}`, the default).
+    #[default]
+    Table,
+    /// The ray cast of `raycast_sweep.csv` at this ray count, on that row's scene and backend
+    /// (a paper's sharp, one-ray shadows against our soft ones):
+    /// `{"from": "raycast_sweep", "rays_per_point": 1}`.
+    RaycastSweep { rays_per_point: u32 },
+    /// The sum over these scenes of the row matching the cell's other axes, on the first
+    /// scene's backend (a paper's frame of one pass per caster, each caster a scene of ours):
+    /// `{"from": "sum_of_scenes", "scenes": ["bunny", "cow"]}`. Times, rays and triangles
+    /// add; no RMS (no one image holds them).
+    SumOfScenes { scenes: Vec<String> },
 }
 
 /// An RMS threshold for `experiment check`, over the cells matching its axes (all when unset).

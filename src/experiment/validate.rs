@@ -4,7 +4,8 @@
 //! parts it replaces prefixed by `quick.`.
 
 use super::spec::{
-    exact_sqrt, Backend, FieldAxes, MeshSource, SceneSpec, Spec, SpecError, Threshold,
+    exact_sqrt, Backend, FieldAxes, MeshSource, OursSource, PaperCell, SceneSpec, Spec, SpecError,
+    Threshold,
 };
 use crate::geometry::models::ModelRegistry;
 use crate::sampling::{HemisphereLayout, SphereKind, SpherePoints};
@@ -81,6 +82,11 @@ pub fn validate(spec: &Spec, file: &Path) -> Result<(), SpecError> {
     };
     let ctx = Validator { file };
     ctx.profile(spec, &full)?;
+    // The paper's cells pair with the full profile's scenes and sweep; a quick run that lacks
+    // one leaves the row's ours empty.
+    for (i, c) in spec.paper.iter().flat_map(|p| p.cells.iter().enumerate()) {
+        ctx.paper_source(spec, c, &format!("paper.cells[{i}]"), full.sweep)?;
+    }
     ctx.profile(&spec.quick(), &quick)?;
     if spec.reproduces.trim().is_empty() {
         return Err(ctx.err(
@@ -239,6 +245,65 @@ impl Validator<'_> {
             self.threshold(s, t, &format!("{}[{i}]", p.thresholds))?;
         }
         Ok(())
+    }
+
+    /// A paper cell's scene and `ours`: scenes the spec has, a ray count it sweeps.
+    fn paper_source(
+        &self,
+        s: &Spec,
+        c: &PaperCell,
+        path: &str,
+        sweep: &str,
+    ) -> Result<(), SpecError> {
+        let known = |n: &str| s.scenes.iter().any(|sc| sc.name == n);
+        if let Some(n) = &c.scene {
+            if !known(n) {
+                return Err(self.err(&format!("{path}.scene"), format!("no scene `{n}`")));
+            }
+        }
+        if c.versus_precision.is_some() && c.ours != OursSource::Table {
+            return Err(self.err(
+                &format!("{path}.versus_precision"),
+                "pairs two table cells; drop it or `ours`".into(),
+            ));
+        }
+        match &c.ours {
+            OursSource::Table => Ok(()),
+            OursSource::RaycastSweep { rays_per_point: k } => {
+                if s.reference.raycast_sweep.contains(k) {
+                    Ok(())
+                } else {
+                    Err(self.err(
+                        &format!("{path}.ours.rays_per_point"),
+                        format!("{k} rays: {sweep} is {:?}", s.reference.raycast_sweep),
+                    ))
+                }
+            }
+            OursSource::SumOfScenes { scenes } => {
+                if c.scene.is_some() {
+                    return Err(self.err(
+                        &format!("{path}.scene"),
+                        "a sum names its scenes in `ours.scenes`; drop `scene`".into(),
+                    ));
+                }
+                if scenes.len() < 2 {
+                    return Err(self.err(
+                        &format!("{path}.ours.scenes"),
+                        format!("{} scene(s): a sum needs at least two", scenes.len()),
+                    ));
+                }
+                for (j, n) in scenes.iter().enumerate() {
+                    let here = format!("{path}.ours.scenes[{j}]");
+                    if !known(n) {
+                        return Err(self.err(&here, format!("no scene `{n}`")));
+                    }
+                    if scenes[..j].contains(n) {
+                        return Err(self.err(&here, format!("`{n}` twice")));
+                    }
+                }
+                Ok(())
+            }
+        }
     }
 
     fn scenes(&self, scenes: &[SceneSpec], path: &str) -> Result<(), SpecError> {

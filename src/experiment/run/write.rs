@@ -110,7 +110,12 @@ impl Runner<'_> {
             outputs::write_csv(&out.join("pairs.csv"), &pairs)?;
         }
         if let Some(paper) = &spec.paper {
-            let pv = outputs::paper_vs_ours(paper, &rows, &pairs);
+            let t = crate::experiment::paper::RunTables {
+                rows: &rows,
+                sweep: &self.sweep,
+                pairs: &pairs,
+            };
+            let pv = crate::experiment::paper::paper_vs_ours(paper, &t);
             outputs::write_csv(&out.join("paper_vs_ours.csv"), &pv)?;
         }
         self.write_point_ao()?;

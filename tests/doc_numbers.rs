@@ -1,0 +1,502 @@
+//! A sample of the numbers README.md and docs/results.md quote, recomputed from the committed
+//! CSV files under results/ and looked for in the documents, so that a rerun which moves a
+//! number fails here until the text follows it. Each claim is the text as the document writes
+//! it (whitespace runs compared as one space), formatted from the files it names.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+type Row = HashMap<String, String>;
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn read(rel: &str) -> Vec<Row> {
+    let path = root().join(rel);
+    let mut r = csv::Reader::from_path(&path).unwrap_or_else(|e| panic!("{rel}: {e}"));
+    let head: Vec<String> = r.headers().unwrap().iter().map(String::from).collect();
+    r.records()
+        .map(|rec| {
+            let rec = rec.unwrap();
+            head.iter()
+                .cloned()
+                .zip(rec.iter().map(String::from))
+                .collect()
+        })
+        .collect()
+}
+
+fn f(r: &Row, col: &str) -> f64 {
+    r[col]
+        .parse()
+        .unwrap_or_else(|_| panic!("column {col}: `{}`", r[col]))
+}
+
+fn squash(s: &str) -> String {
+    s.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+/// `x` as the docs write small times per ray: "4.4·10⁻⁵".
+fn sci(x: f64) -> String {
+    let e = x.log10().floor() as i32;
+    let m = x / 10f64.powi(e);
+    let (m, e) = if format!("{m:.1}") == "10.0" {
+        (1.0, e + 1)
+    } else {
+        (m, e)
+    };
+    let sup: String =
+        e.to_string()
+            .chars()
+            .map(|c| match c {
+                '-' => '⁻',
+                d => ['⁰', '¹', '²', '³', '⁴', '⁵', '⁶', '⁷', '⁸', '⁹']
+                    [d.to_digit(10).unwrap() as usize],
+            })
+            .collect();
+    format!("{m:.1}·10{sup}")
+}
+
+fn min_max(v: impl IntoIterator<Item = f64>) -> (f64, f64) {
+    v.into_iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+            (a.min(x), b.max(x))
+        })
+}
+
+struct Claims {
+    docs: HashMap<&'static str, String>,
+    missing: Vec<String>,
+    count: usize,
+}
+
+impl Claims {
+    fn new() -> Claims {
+        let docs = ["README.md", "docs/results.md"]
+            .into_iter()
+            .map(|d| (d, squash(&std::fs::read_to_string(root().join(d)).unwrap())))
+            .collect();
+        Claims {
+            docs,
+            missing: Vec::new(),
+            count: 0,
+        }
+    }
+
+    /// `doc` must quote `text`, computed from `from`.
+    fn quotes(&mut self, doc: &'static str, text: &str, from: &str) {
+        self.count += 1;
+        if !self.docs[doc].contains(&squash(text)) {
+            self.missing
+                .push(format!("{doc} should say `{text}` ({from})"));
+        }
+    }
+}
+
+/// 2008 Figure 6: the bake ratios, the RMS table, and which fields came from the cache.
+fn figure6(c: &mut Claims) {
+    let from = "results/figure6/table.csv";
+    let rows: Vec<Row> = read(from)
+        .into_iter()
+        .filter(|r| r["backend"] == "cpu")
+        .collect();
+    let cell = |n: usize, d: u32| {
+        rows.iter()
+            .find(|r| {
+                r["positional_samples"] == n.to_string() && r["directional_res"] == d.to_string()
+            })
+            .unwrap_or_else(|| panic!("no {n} × {d}² row"))
+    };
+    let base = f(cell(290, 32), "bake_s");
+    let rel = |n, d| f(cell(n, d), "bake_s") / base;
+    let text = format!(
+        "{:.2}×, {:.2}×, {:.1}× along the first row",
+        rel(290, 64),
+        rel(290, 128),
+        rel(290, 256)
+    );
+    c.quotes("docs/results.md", &text, from);
+    let text = format!("{:.2}×, {:.2}× down to 4226", rel(1090, 32), rel(4226, 32));
+    c.quotes("docs/results.md", &text, from);
+    let text = format!("{:.1}× at 4226 × 256²", rel(4226, 256));
+    c.quotes("docs/results.md", &text, from);
+    c.quotes("README.md", &text, from);
+    c.quotes(
+        "docs/results.md",
+        &format!("Our smallest bake takes {base:.2} s"),
+        from,
+    );
+    let timed: Vec<&Row> = rows
+        .iter()
+        .filter(|r| r["bake_cached"] == "false")
+        .collect();
+    let text = match &timed[..] {
+        [one] => format!(
+            "every field but {} × {}² came from the cache",
+            one["positional_samples"], one["directional_res"]
+        ),
+        _ => format!("{} fields timed in the run", timed.len()),
+    };
+    c.quotes("docs/results.md", &text, from);
+    // The paper's ratios, from the spec's numbers as paper_vs_ours.csv holds them.
+    let pv_from = "results/figure6/paper_vs_ours.csv";
+    let pv = read(pv_from);
+    let paper = |label: &str| {
+        let r = pv.iter().find(|r| r["label"] == label).unwrap();
+        f(r, "paper_preprocess_rel")
+    };
+    let text = format!(
+        "(paper {:.1}×, {:.0}×, {:.0}×)",
+        paper("290x64"),
+        paper("290x128"),
+        paper("290x256")
+    );
+    c.quotes("docs/results.md", &text, pv_from);
+    let text = format!("(paper {:.1}×, {:.0}×)", paper("1090x32"), paper("4226x32"));
+    c.quotes("docs/results.md", &text, pv_from);
+    let text = format!("(paper {:.0}×)", paper("4226x256"));
+    c.quotes("docs/results.md", &text, pv_from);
+    // The RMS table, with the paper's in brackets.
+    for n in [290usize, 1090, 4226, 16642] {
+        let mut text = format!("| {n} |");
+        for d in [32u32, 64, 128, 256] {
+            let ours = f(cell(n, d), "rms_image");
+            let label = format!("{n}x{d}");
+            match pv.iter().find(|r| r["label"] == label) {
+                Some(p) => text.push_str(&format!(" {ours:.2} ({:.2}) |", f(p, "paper_rms"))),
+                None => text.push_str(&format!(" {ours:.2} |")),
+            }
+        }
+        c.quotes("docs/results.md", &text, from);
+        c.quotes("README.md", &text, from);
+    }
+}
+
+/// 2010 Figure 4: the field's time against rays, and ray casting's.
+fn figure4(c: &mut Claims) {
+    let from = "results/ao2010_figure4/field_sweep.csv";
+    let sweep: Vec<Row> = read(from)
+        .into_iter()
+        .filter(|r| r["backend"] == "cpu")
+        .collect();
+    let time = |n: u32, k: u32| {
+        let r = sweep
+            .iter()
+            .find(|r| {
+                r["positional_samples"] == n.to_string() && r["rays_per_point"] == k.to_string()
+            })
+            .unwrap();
+        f(r, "ao_s")
+    };
+    let maps = [1090, 4226, 16642];
+    let (lo, hi) = min_max(maps.map(|n| time(n, 256) / time(n, 16)));
+    let text = format!("{lo:.1}–{hi:.1}× for 16× the rays");
+    c.quotes("docs/results.md", &text, from);
+    let at = |k| maps.map(|n| format!("{:.2}", time(n, k))).join(" / ");
+    let text = format!("{} s at 256 rays", at(256));
+    c.quotes("docs/results.md", &text, from);
+    c.quotes(
+        "README.md",
+        &format!("field {} s at 256 rays", at(256)),
+        from,
+    );
+    let at3 = maps.map(|n| format!("{:.3}", time(n, 16))).join(" / ");
+    c.quotes("docs/results.md", &format!("{at3} s at 16"), from);
+    let rc_from = "results/ao2010_figure4/raycast_sweep.csv";
+    let rc = read(rc_from);
+    let ray = |k: u32| {
+        let r = rc
+            .iter()
+            .find(|r| r["backend"] == "cpu" && r["rays_per_point"] == k.to_string())
+            .unwrap();
+        f(r, "ao_s")
+    };
+    let text = format!(
+        "ray casting takes {:.2} s at 16 rays and {:.2} s at 256 ({:.1}× the 4226-map field",
+        ray(16),
+        ray(256),
+        ray(256) / time(4226, 256)
+    );
+    c.quotes("docs/results.md", &text, rc_from);
+    c.quotes(
+        "README.md",
+        &format!("ray casting {:.2} s |", ray(256)),
+        rc_from,
+    );
+}
+
+/// 2010 Figure 9: the speed range, and whose bounding sphere reaches the floor (y = 0).
+fn figure9(c: &mut Claims) {
+    let from = "results/reflections2010_figure9/table.csv";
+    let rows = read(from);
+    let view = |v: &str| {
+        rows.iter()
+            .filter(|r| r["scene"] == v && r["backend"] == "cpu")
+            .collect::<Vec<_>>()
+    };
+    let (a, b) = (view("view_a"), view("view_b"));
+    let (flo, fhi) = min_max(rows.iter().map(|r| f(r, "ao_s")));
+    let rc = |v: &[&Row]| f(v[0], "raycast_s");
+    let text = format!(
+        "Field {flo:.3}–{fhi:.3} s, ray casting {:.3} s (view_a) and {:.3} s (view_b)",
+        rc(&a),
+        rc(&b)
+    );
+    c.quotes("docs/results.md", &text, from);
+    let (mlo, mhi) = min_max(rows.iter().map(|r| f(r, "ao_mrays_s")));
+    let text = format!(
+        "same {:.2} and {:.2} M reflection rays ({mlo:.1}–{mhi:.1} against {:.1} and {:.1} Mrays/s)",
+        f(a[0], "rays_cast") / 1e6,
+        f(b[0], "rays_cast") / 1e6,
+        f(a[0], "raycast_mrays_s"),
+        f(b[0], "raycast_mrays_s"),
+    );
+    c.quotes("docs/results.md", &text, from);
+    let gain = |v: &[&Row]| min_max(v.iter().map(|r| f(r, "raycast_s") / f(r, "ao_s")));
+    let ((alo, ahi), (blo, bhi)) = (gain(&a), gain(&b));
+    let text = format!("{alo:.1}–{ahi:.1}× and {blo:.1}–{bhi:.1}×.");
+    c.quotes("docs/results.md", &text, from);
+    let (slo, shi) = min_max(
+        read("results/shadows2010_figure7/table.csv")
+            .iter()
+            .chain(&read("results/shadows2010_figure8/table.csv"))
+            .filter(|r| r["backend"] == "cpu")
+            .map(|r| f(r, "raycast_s") / f(r, "ao_s")),
+    );
+    let (rlo, rhi) = min_max(rows.iter().map(|r| f(r, "raycast_s") / f(r, "ao_s")));
+    let text = format!("({slo:.1}–{shi:.1}× and {rlo:.1}–{rhi:.1}× against");
+    c.quotes(
+        "README.md",
+        &text,
+        "results/shadows2010_figure7/, figure8/ and this table.csv",
+    );
+    // The casters' fitted spheres, from the spec the run copied.
+    let spec_from = "results/reflections2010_figure9/spec.json";
+    let spec: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(root().join(spec_from)).unwrap()).unwrap();
+    let fit = |model: &str| {
+        let i = spec["scenes"][0]["instances"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|i| i["mesh"]["model"] == model)
+            .unwrap();
+        let fit = &i["transform"]["fit"];
+        (
+            fit["center"][1].as_f64().unwrap(),
+            fit["radius"].as_f64().unwrap(),
+        )
+    };
+    let (by, br) = fit("stanford-bunny_39k");
+    let (ey, er) = fit("elephant");
+    assert!(
+        by - br < 0.0,
+        "the docs say the bunny's sphere cuts the floor"
+    );
+    assert!(
+        ey - er > 0.0,
+        "the docs say the elephant's sphere stays clear of the floor"
+    );
+    let text = format!("(radius {br} about a centre {by} above the floor");
+    c.quotes("docs/results.md", &text, spec_from);
+    let text = format!("(radius {er} about a centre {ey} above the floor)");
+    c.quotes("docs/results.md", &text, spec_from);
+}
+
+/// 2010 Figure 8 and Figure 6 (Sponza): the pairings of paper_vs_ours.csv.
+fn sponza(c: &mut Claims) {
+    let from = "results/shadows2010_figure8/paper_vs_ours.csv";
+    let pv = read(from);
+    let (field, sharp) = (&pv[0], &pv[1]);
+    let field_ms = f(field, "ours_ao_s") / f(field, "ours_rays_cast") * 1e3;
+    let sharp_ms = f(sharp, "ours_raycast_s") / f(sharp, "ours_rays_cast") * 1e3;
+    let paper_field = f(field, "paper_ao_s") * 0.7 / f(field, "paper_rays_cast") * 1e3;
+    // The paper's 591,930 sharp rays (its note): 70% of 48,047 ms.
+    let paper_sharp = f(sharp, "paper_raycast_s") * 0.7 / 591_930.0 * 1e3;
+    let text = format!(
+        "{} against {} ms per shadow ray, {:.0}×; paired so, ours are {} against {} ms, {:.1}×",
+        sci(paper_field),
+        sci(paper_sharp),
+        paper_sharp / paper_field,
+        sci(field_ms),
+        sci(sharp_ms),
+        sharp_ms / field_ms
+    );
+    c.quotes("docs/results.md", &text, from);
+    let text = format!(
+        "the field took {:.3} s for {} shadow rays",
+        f(field, "ours_ao_s"),
+        with_commas(f(field, "ours_rays_cast") as u64)
+    );
+    c.quotes("docs/results.md", &text, from);
+    let from = "results/ao2010_sponza/paper_vs_ours.csv";
+    let pv = read(from);
+    let (sum, one) = (&pv[0], &pv[1]);
+    let table = read("results/ao2010_sponza/table.csv");
+    let ao = |scene: &str| {
+        let r = table
+            .iter()
+            .find(|r| r["scene"] == scene && r["backend"] == "cpu")
+            .unwrap();
+        f(r, "ao_s")
+    };
+    let text = format!(
+        "{:.2} + {:.2} + {:.2} = {:.2} s, the same within the noise ({:.2}×;",
+        ao("bunny"),
+        ao("cow"),
+        ao("elephant"),
+        f(sum, "ours_ao_s"),
+        f(sum, "ours_ao_s") / f(one, "ours_ao_s")
+    );
+    c.quotes("docs/results.md", &text, from);
+}
+
+/// 2008 Figure 8 and 2010 Figure 3: RMS and times per caster, the AO pass against ray casting.
+fn figure8_and_figure3(c: &mut Claims) {
+    let from = "results/figure8/table.csv";
+    let rows: Vec<Row> = read(from)
+        .into_iter()
+        .filter(|r| r["backend"] == "cpu")
+        .collect();
+    let scene = |s: &str| rows.iter().find(|r| r["scene"] == s).unwrap();
+    let three = ["tree", "bunny", "igea"].map(scene);
+    let text = format!(
+        "tree ({} triangles) {:.2}, bunny {:.2}, Igea ({}) {:.2} per image ({:.2} / {:.2} / {:.2} \
+         against the converged reference",
+        with_commas(f(three[0], "caster_triangles") as u64),
+        f(three[0], "rms_image"),
+        f(three[1], "rms_image"),
+        with_commas(f(three[2], "caster_triangles") as u64),
+        f(three[2], "rms_image"),
+        f(three[0], "rms_vs_truth"),
+        f(three[1], "rms_vs_truth"),
+        f(three[2], "rms_vs_truth"),
+    );
+    c.quotes("docs/results.md", &text, from);
+    c.quotes("README.md", &text, from);
+    let join = |col: &str, p: usize| three.map(|r| format!("{:.*}", p, f(r, col))).join(" / ");
+    let text = format!(
+        "our ray caster's {} s and Embree's {} s on the same rays",
+        join("raycast_s", 3),
+        join("embree_s", 3)
+    );
+    c.quotes("README.md", &text, from);
+    let gain = |col: &str| {
+        three
+            .map(|r| format!("{:.1}×", f(r, col) / f(r, "ao_s")))
+            .join(", ")
+    };
+    let text = format!(
+        "our ray caster's {} s ({}) and Embree's {} s ({})",
+        join("raycast_s", 3),
+        gain("raycast_s"),
+        join("embree_s", 3),
+        gain("embree_s")
+    );
+    c.quotes("docs/results.md", &text, from);
+    c.quotes("README.md", &format!("({} Embree)", gain("embree_s")), from);
+    let from = "results/ao2010_figure3/table.csv";
+    let rows: Vec<Row> = read(from)
+        .into_iter()
+        .filter(|r| r["backend"] == "cpu")
+        .collect();
+    let (lo, hi) = min_max(rows.iter().map(|r| f(r, "ao_s")));
+    let (glo, ghi) = min_max(rows.iter().map(|r| f(r, "raycast_s") / f(r, "ao_s")));
+    let rays = f(&rows[0], "receiver_points") * f(&rows[0], "rays_per_point");
+    let text = format!(
+        "The AO pass took {lo:.2}–{hi:.2} s through the fields against {:.2} s for ray casting the \
+         same {:.1} M rays ({glo:.1}–{ghi:.0}×",
+        f(&rows[0], "raycast_s"),
+        rays / 1e6
+    );
+    c.quotes("docs/results.md", &text, from);
+}
+
+fn with_commas(n: u64) -> String {
+    let s = n.to_string();
+    let mut out = String::new();
+    for (i, ch) in s.chars().enumerate() {
+        if i > 0 && (s.len() - i).is_multiple_of(3) {
+            out.push(',');
+        }
+        out.push(ch);
+    }
+    out
+}
+
+/// The performance table and the field's gain over Embree.
+fn performance(c: &mut Claims) {
+    let from = "results/performance/table.csv";
+    let rows: Vec<Row> = read(from)
+        .into_iter()
+        .filter(|r| r["sweep"] == "triangles")
+        .collect();
+    let get = |caster: &str, backend: &str| {
+        rows.iter()
+            .find(|r| r["caster"] == caster && r["backend"] == backend)
+            .unwrap_or_else(|| panic!("no {caster} {backend}"))
+    };
+    let mut gains: Vec<(f64, f64)> = rows
+        .iter()
+        .filter(|r| r["backend"] == "field_nearest")
+        .map(|r| (f(r, "triangles"), f(r, "vs_embree")))
+        .collect();
+    gains.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let (slo, shi) = min_max(gains.iter().filter(|g| g.0 < 40_000.0).map(|g| g.1));
+    let top = &gains[gains.len() - 2..];
+    let (tlo, thi) = min_max(top.iter().map(|g| g.1));
+    let igea67 = f(get("igea_67k", "field_nearest"), "vs_embree");
+    let text = format!(
+        "gains {slo:.1}–{shi:.1}× on small casters and {tlo:.1}–{thi:.1}× on the two largest \
+         ({igea67:.1}× on the 67k-triangle Igea)"
+    );
+    c.quotes("README.md", &text, from);
+    for caster in [
+        "bunny_npm",
+        "stanford-bunny_39k",
+        "dragon",
+        "supershape",
+        "igea",
+    ] {
+        let field = get(caster, "field_nearest");
+        let text = format!(
+            "| {caster} ({}) | {:.1} | {:.1} | {:.1} | {:.1}× | {:.0} |",
+            with_commas(f(field, "triangles") as u64),
+            f(get(caster, "raycast"), "mrays_s"),
+            f(get(caster, "embree"), "mrays_s"),
+            f(field, "mrays_s"),
+            f(field, "vs_embree"),
+            f(get(caster, "floor_sphere_cull"), "mrays_s"),
+        );
+        c.quotes("README.md", &text, from);
+    }
+}
+
+#[test]
+fn quoted_numbers_match_the_committed_csvs() {
+    let mut c = Claims::new();
+    figure6(&mut c);
+    figure4(&mut c);
+    figure9(&mut c);
+    sponza(&mut c);
+    figure8_and_figure3(&mut c);
+    performance(&mut c);
+    assert!(
+        c.missing.is_empty(),
+        "{} of {} quoted numbers differ from results/:\n{}",
+        c.missing.len(),
+        c.count,
+        c.missing.join("\n")
+    );
+}
+
+#[test]
+fn the_formatting_helpers_write_what_the_docs_write() {
+    assert_eq!(sci(4.4e-5), "4.4·10⁻⁵");
+    assert_eq!(sci(0.0568), "5.7·10⁻²");
+    assert_eq!(sci(9.96e-5), "1.0·10⁻⁴");
+    assert_eq!(with_commas(6_667_488), "6,667,488");
+    assert_eq!(with_commas(999), "999");
+    assert_eq!(squash("a  b\n c"), "a b c");
+}
