@@ -107,8 +107,8 @@ fn far_end(i: usize, hit: Option<f32>, sphere: Option<(f32, f32)>) -> f32 {
         _ => t + 1e-3,
     };
     match (hit, sphere) {
-        (Some(t), _) if i % 3 != 0 => around(t),
-        (_, Some((t0, t1))) => around(if i % 2 == 0 { t0 } else { t1 }.max(0.0)),
+        (Some(t), _) if !i.is_multiple_of(3) => around(t),
+        (_, Some((t0, t1))) => around(if i.is_multiple_of(2) { t0 } else { t1 }.max(0.0)),
         _ => [0.0, 0.3, f32::INFINITY][i % 3],
     }
 }
@@ -152,11 +152,11 @@ fn compare(scene: &FieldScene, origins: &[Vec3], tally: &mut Tally) {
                 tally.hits += want[i] as usize;
                 if tmin == 0.0 && scene.hit_distance(origin, d, 0.0, f32::INFINITY).is_some() {
                     match i % 7 {
-                        0 if i % 3 != 0 => {
+                        0 if !i.is_multiple_of(3) => {
                             tally.at_hit += 1;
                             tally.at_hit_occluded += want[i] as usize;
                         }
-                        1 if i % 3 != 0 => tally.before_hit_clear += !want[i] as usize,
+                        1 if !i.is_multiple_of(3) => tally.before_hit_clear += !want[i] as usize,
                         _ => {}
                     }
                 }
