@@ -63,6 +63,11 @@ fn sphere_cull_answers_whether_the_segment_meets_the_sphere() {
     let mut out = [true; 4];
     cull.occluded_many(o, &dirs, 0.0, 10.0, &mut out);
     assert_eq!(out, [true, false, true, false]);
+    // Each ray its own far end: before, at and past the entry at 4 of the ray toward the centre.
+    for (far, want) in [(3.9, false), (4.0, true), (4.1, true)] {
+        cull.occluded_many_to(o, &dirs, 0.0, &[far, 10.0, 10.0, 10.0], &mut out);
+        assert_eq!(out, [want, false, true, false], "far end {far}");
+    }
     NoQuery.occluded_many(o, &dirs, 0.0, 10.0, &mut out);
     assert_eq!(out, [false; 4]);
 }

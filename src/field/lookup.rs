@@ -17,6 +17,7 @@
 
 use super::{Selection, VisibilityField};
 use crate::sampling::{HemisphereLayout, LayoutKind, OwnerCell, TexelCell};
+use crate::simd::Isa;
 use glam::{DVec3, Vec2, Vec3};
 
 /// Where a ray crosses a sphere: [`sphere_crossing`].
@@ -173,12 +174,13 @@ pub trait Reads: Copy + Default {
     /// The normalised distance D of these reads.
     fn read(&self, field: &VisibilityField) -> f32;
     /// `out[k] = Self::of(field, at[k].u, at[k].dir)` for a block of crossings, each
-    /// prefetched; implementations may order the work differently, never the answers.
+    /// prefetched; implementations may order the work differently (and use the eight-lane code
+    /// of `isa`), never the answers.
     ///
     /// # Panics
     /// If `at` and `out` differ in length.
     #[inline]
-    fn of_block(field: &VisibilityField, at: &[Crossed], out: &mut [Self]) {
+    fn of_block(_isa: Isa, field: &VisibilityField, at: &[Crossed], out: &mut [Self]) {
         assert_eq!(at.len(), out.len(), "of_block: at and out differ in length");
         for (c, o) in at.iter().zip(out.iter_mut()) {
             *o = Self::of(field, c.u, c.dir);
@@ -244,8 +246,8 @@ impl Reads for NearestRead {
     /// frame and the concentric texel are computed eight crossings per instruction
     /// ([`super::lanes::nearest_reads`]).
     #[inline]
-    fn of_block(field: &VisibilityField, at: &[Crossed], out: &mut [Self]) {
-        super::lanes::nearest_reads(super::lanes::Isa::detect(), field, at, out);
+    fn of_block(isa: Isa, field: &VisibilityField, at: &[Crossed], out: &mut [Self]) {
+        super::lanes::nearest_reads(isa, field, at, out);
     }
 }
 

@@ -182,6 +182,7 @@ impl FieldInstance {
     #[allow(clippy::too_many_arguments)]
     fn occluded_many(
         &self,
+        isa: Isa,
         origin: Vec3,
         dirs: &[Vec3],
         tmin: f32,
@@ -191,12 +192,10 @@ impl FieldInstance {
         out: &mut [bool],
     ) {
         match opts.selection {
-            Selection::Nearest => {
-                self.occluded_many_with::<NearestRead>(origin, dirs, tmin, tmax, opts, also, out)
-            }
-            Selection::Interpolated => {
-                self.occluded_many_with::<BlendReads>(origin, dirs, tmin, tmax, opts, also, out)
-            }
+            Selection::Nearest => self
+                .occluded_many_with::<NearestRead>(isa, origin, dirs, tmin, tmax, opts, also, out),
+            Selection::Interpolated => self
+                .occluded_many_with::<BlendReads>(isa, origin, dirs, tmin, tmax, opts, also, out),
         }
     }
 
@@ -204,6 +203,7 @@ impl FieldInstance {
     #[inline]
     fn occluded_many_with<R: Reads>(
         &self,
+        isa: Isa,
         origin: Vec3,
         dirs: &[Vec3],
         tmin: f32,
@@ -214,7 +214,6 @@ impl FieldInstance {
     ) {
         /// Crossings whose reads are staged together.
         const BLOCK: usize = 16;
-        let isa = Isa::detect();
         let meet = self.may_meet_from(origin);
         let tr = &self.transform;
         let field = &*self.field;
@@ -228,7 +227,7 @@ impl FieldInstance {
         let mut n = 0;
         let mut resolve =
             |n: usize, index: &[usize], lmaxs: &[f32], crossed: &[Crossed], out: &mut [bool]| {
-                R::of_block(field, &crossed[..n], &mut reads[..n]);
+                R::of_block(isa, field, &crossed[..n], &mut reads[..n]);
                 for k in 0..n {
                     let probe = crossed[k].with_reads(reads[k]);
                     out[index[k]] |= field.finish(&probe, lmin, lmaxs[k], opts).is_some();
@@ -320,10 +319,32 @@ impl FieldScene {
 }
 
 impl FieldScene {
+    /// [`Visibility::occluded_many_to`] with the eight-lane steps of `isa` ([`lanes`]): the same
+    /// bits on every instruction set (tested), so that tests can compare them.
+    ///
+    /// # Panics
+    /// If `dirs`, `tmaxs` and `out` differ in length.
+    pub fn occluded_many_to_on(
+        &self,
+        isa: Isa,
+        origin: Vec3,
+        dirs: &[Vec3],
+        tmin: f32,
+        tmaxs: &[f32],
+        out: &mut [bool],
+    ) {
+        assert!(
+            dirs.len() == out.len() && dirs.len() == tmaxs.len(),
+            "occluded_many_to: dirs, tmaxs and out differ in length"
+        );
+        self.occluded_from(isa, origin, dirs, tmin, |i| tmaxs[i], out);
+    }
+
     /// The batched queries from one origin, ray i ending at `tmax(i)` (see
     /// [`Visibility::occluded_many`]).
     fn occluded_from(
         &self,
+        isa: Isa,
         origin: Vec3,
         dirs: &[Vec3],
         tmin: f32,
@@ -336,7 +357,7 @@ impl FieldScene {
             let also = |i: usize, dir: Vec3| {
                 !several || inst.meets_segment(origin, dir, tmin, tmax(i)).is_some()
             };
-            inst.occluded_many(origin, dirs, tmin, tmax, &self.options, also, out);
+            inst.occluded_many(isa, origin, dirs, tmin, tmax, &self.options, also, out);
         }
     }
 }
@@ -363,7 +384,7 @@ impl Visibility for FieldScene {
             out.len(),
             "occluded_many: dirs and out differ in length"
         );
-        self.occluded_from(origin, dirs, tmin, |_| tmax, out);
+        self.occluded_from(Isa::detect(), origin, dirs, tmin, |_| tmax, out);
     }
 
     /// As [`Self::occluded_many`], each ray with its own far end (shadow rays).
@@ -375,11 +396,7 @@ impl Visibility for FieldScene {
         tmaxs: &[f32],
         out: &mut [bool],
     ) {
-        assert!(
-            dirs.len() == out.len() && dirs.len() == tmaxs.len(),
-            "occluded_many_to: dirs, tmaxs and out differ in length"
-        );
-        self.occluded_from(origin, dirs, tmin, |i| tmaxs[i], out);
+        self.occluded_many_to_on(Isa::detect(), origin, dirs, tmin, tmaxs, out);
     }
 
     /// As [`Self::hit_distance`], with the hit instance's normal field's normal.

@@ -118,6 +118,36 @@ impl Visibility for SphereCull<'_> {
             out.len(),
             "occluded_many: dirs and out differ in length"
         );
+        self.cull_and_cross(origin, dirs, tmin, |_| tmax, out);
+    }
+
+    /// As [`Self::occluded_many`], each ray with its own far end (shadow rays).
+    fn occluded_many_to(
+        &self,
+        origin: Vec3,
+        dirs: &[Vec3],
+        tmin: f32,
+        tmaxs: &[f32],
+        out: &mut [bool],
+    ) {
+        assert!(
+            dirs.len() == out.len() && dirs.len() == tmaxs.len(),
+            "occluded_many_to: dirs, tmaxs and out differ in length"
+        );
+        self.cull_and_cross(origin, dirs, tmin, |i| tmaxs[i], out);
+    }
+}
+
+impl SphereCull<'_> {
+    /// The batched floor from one origin, ray i ending at `tmax(i)`.
+    fn cull_and_cross(
+        &self,
+        origin: Vec3,
+        dirs: &[Vec3],
+        tmin: f32,
+        tmax: impl Fn(usize) -> f32,
+        out: &mut [bool],
+    ) {
         out.fill(false);
         let isa = Isa::detect();
         for inst in &self.0.instances {
@@ -132,7 +162,7 @@ impl Visibility for SphereCull<'_> {
                 out,
                 None,
                 |_, _| true,
-                |out, i, _, c| out[i] = c.t1 >= tmin && c.t0 <= tmax,
+                |out, i, _, c| out[i] = c.t1 >= tmin && c.t0 <= tmax(i),
             );
         }
     }

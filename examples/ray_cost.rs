@@ -1,0 +1,283 @@
+//! The 2010 paper's other rays on `ao_cost`'s scene and field (the bunny over the corner, the
+//! bunny's Slater 4226 × concentric 32² u8 field), for instruction counts under valgrind: shadow
+//! rays to spherical lights (`render::shadow::light_fraction`, one `occluded_many_to` call per
+//! receiver with a far end per ray), intra-object rays (vertex AO at the bunny's own vertices,
+//! every ray starting inside the caster's sphere) and reflection rays
+//! (`Visibility::surface_hit`, one ray at a time, as `render::reflect` casts them).
+//!
+//! `cargo run --release --example ray_cost -- KIND BACKEND [STRIDE]`
+//!
+//! - KIND: `shadow` (the corner's vertices, three lights of radius 0.3 over the open side of the
+//!   corner, 4 × 4 rays per light), `intra` (the bunny's vertices, 16 × 16 AO rays) or
+//!   `reflect` (the corner's vertices seen from an eye, a Phong lobe of exponent 50, 4 × 4
+//!   rays).
+//! - BACKEND: `field` (the batched field lookup, nearest), `per-ray` (the field one ray at a
+//!   time, `visibility::PerRay`), `raycast` (our ray caster), or the cost floors of
+//!   `visfield::experiment::performance::floor`: `none` (every ray free: building the rays and
+//!   the caller's loop) and `sphere` (the bounding-sphere cull and exact crossing alone).
+//! - STRIDE: use every STRIDE-th receiver vertex (default 1).
+//!
+//! The field is `ao_cost`'s (baked into `$TMPDIR/visfield-ao-cost/`); `reflect` also bakes the
+//! field's normal field once and keeps it there. The pass runs on one thread. Count only the
+//! pass with `valgrind --tool=callgrind --collect-atstart=no --toggle-collect='*ray_pass*'`.
+
+use glam::{Quat, Vec2, Vec3};
+use std::path::Path;
+use std::sync::atomic::{AtomicUsize, Ordering::Relaxed};
+use std::sync::Arc;
+use std::time::Instant;
+use visfield::field::bake::{bake_mesh_with_normals, BakeOptions};
+use visfield::field::cache::load_or_bake;
+use visfield::field::normals::NormalField;
+use visfield::field::scene::{FieldInstance, FieldScene};
+use visfield::field::{FieldParams, Precision};
+use visfield::geometry::procedural::over_corner;
+use visfield::geometry::{models, Scene};
+use visfield::render::ao::{ao_at_point, AoOptions};
+use visfield::render::receivers::Receivers;
+use visfield::render::reflect::{reflection_rays, shade, Gloss, ReflectOptions};
+use visfield::render::shadow::{light_fraction, ShadowOptions, ShadowScratch, SphereLight};
+use visfield::sampling::rays::RaySet;
+use visfield::sampling::{LayoutKind, SphereKind};
+use visfield::trace::Tracer;
+use visfield::visibility::{PerRay, SurfaceHit, Visibility};
+
+use visfield::experiment::performance::floor::{NoQuery, SphereCull};
+
+const MODEL: &str = "stanford-bunny_39k";
+
+fn usage() -> ! {
+    eprintln!(
+        "usage: ray_cost KIND(shadow|intra|reflect) BACKEND(field|per-ray|raycast|none|sphere) \
+         [STRIDE]"
+    );
+    std::process::exit(2)
+}
+
+#[derive(Clone, Copy, PartialEq)]
+enum Kind {
+    Shadow,
+    Intra,
+    Reflect,
+}
+
+/// Three lights over the corner's open side.
+fn lights() -> Vec<SphereLight> {
+    [
+        Vec3::new(1.8, 2.0, 1.2),
+        Vec3::new(1.2, 1.9, 2.0),
+        Vec3::new(2.2, 1.5, 2.2),
+    ]
+    .map(|center| SphereLight {
+        center,
+        radius: 0.3,
+        intensity: 1.0,
+    })
+    .to_vec()
+}
+
+/// One pass of `kind`'s rays at every point, on this thread (what callgrind's
+/// `--toggle-collect` names); returns the per-point values and the rays cast.
+#[inline(never)]
+fn ray_pass<V: Visibility + ?Sized>(
+    vis: &V,
+    kind: Kind,
+    p: &[Vec3],
+    n: &[Vec3],
+    rays: &RaySet,
+) -> (Vec<f32>, usize) {
+    let mut cast = 0;
+    let values = match kind {
+        Kind::Shadow => {
+            let opts = ShadowOptions {
+                offset: AoOptions::for_scene_radius(0.9).offset,
+                lights: lights(),
+            };
+            let mut sc = ShadowScratch::default();
+            (0..p.len())
+                .map(|i| {
+                    let counted = Counted(vis, AtomicUsize::new(0));
+                    let f = light_fraction(&counted, i as u32, p[i], n[i], rays, &opts, &mut sc);
+                    cast += counted.1.load(Relaxed);
+                    f
+                })
+                .collect()
+        }
+        Kind::Intra => {
+            let opts = AoOptions::for_scene_radius(0.9);
+            let prepared = rays.prepare();
+            let mut scratch = Vec::with_capacity(rays.len());
+            cast = p.len() * rays.len();
+            (0..p.len())
+                .map(|i| ao_at_point(vis, i as u32, p[i], n[i], &prepared, &opts, &mut scratch))
+                .collect()
+        }
+        Kind::Reflect => {
+            let opts = ReflectOptions {
+                offset: AoOptions::for_scene_radius(0.9).offset,
+                eye: Vec3::new(2.5, 1.6, 2.2),
+                gloss: Gloss::Phong { exponent: 50.0 },
+                lights: lights(),
+                albedo: 0.8,
+                sky: 0.2,
+            };
+            let (mut squares, mut dirs) = (Vec::<Vec2>::new(), Vec::<Vec3>::new());
+            (0..p.len())
+                .map(|i| {
+                    let o =
+                        reflection_rays(i as u32, p[i], n[i], rays, &opts, &mut squares, &mut dirs);
+                    cast += dirs.len();
+                    let sum: f64 = dirs
+                        .iter()
+                        .map(|&d| {
+                            shade(o, d, vis.surface_hit(o, d, 0.0, f32::INFINITY), &opts) as f64
+                        })
+                        .sum();
+                    (sum / dirs.len().max(1) as f64) as f32
+                })
+                .collect()
+        }
+    };
+    (values, cast)
+}
+
+/// `V` counting the rays of its batched shadow queries (one add per call).
+struct Counted<'a, V: ?Sized>(&'a V, AtomicUsize);
+
+impl<V: Visibility + ?Sized> Visibility for Counted<'_, V> {
+    fn occluded(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> bool {
+        self.0.occluded(origin, dir, tmin, tmax)
+    }
+
+    fn hit_distance(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<f32> {
+        self.0.hit_distance(origin, dir, tmin, tmax)
+    }
+
+    fn surface_hit(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<SurfaceHit> {
+        self.0.surface_hit(origin, dir, tmin, tmax)
+    }
+
+    fn occluded_many_to(
+        &self,
+        origin: Vec3,
+        dirs: &[Vec3],
+        tmin: f32,
+        tmaxs: &[f32],
+        out: &mut [bool],
+    ) {
+        self.1.fetch_add(dirs.len(), Relaxed);
+        self.0.occluded_many_to(origin, dirs, tmin, tmaxs, out)
+    }
+}
+
+/// The normal field of `field_params` for the bunny, baked once and kept beside `ao_cost`'s
+/// fields (raw: texel count, bits, then the packed pairs, little-endian).
+fn normals(dir: &Path, mesh: &visfield::geometry::Mesh, params: FieldParams) -> NormalField {
+    let path = dir.join(format!(
+        "{MODEL}-normals-{}x{}.bin",
+        params.count, params.res
+    ));
+    if let Ok(bytes) = std::fs::read(&path) {
+        let word = |k: usize| u64::from_le_bytes(bytes[8 * k..8 * k + 8].try_into().unwrap());
+        let (texels, bits) = (word(0) as usize, word(1) as u32);
+        let data = bytes[16..]
+            .chunks_exact(4)
+            .map(|c| {
+                [
+                    u16::from_le_bytes([c[0], c[1]]),
+                    u16::from_le_bytes([c[2], c[3]]),
+                ]
+            })
+            .collect();
+        return NormalField { texels, bits, data };
+    }
+    let (_, normals, _) =
+        bake_mesh_with_normals(mesh, params, 16, &BakeOptions::default()).expect("bake");
+    let mut bytes = Vec::with_capacity(16 + 4 * normals.data.len());
+    bytes.extend((normals.texels as u64).to_le_bytes());
+    bytes.extend((normals.bits as u64).to_le_bytes());
+    for [a, b] in &normals.data {
+        bytes.extend(a.to_le_bytes());
+        bytes.extend(b.to_le_bytes());
+    }
+    std::fs::write(&path, bytes).expect("write the normal field");
+    normals
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    if args.len() < 2 {
+        usage();
+    }
+    let kind = match args[0].as_str() {
+        "shadow" => Kind::Shadow,
+        "intra" => Kind::Intra,
+        "reflect" => Kind::Reflect,
+        _ => usage(),
+    };
+    let stride: usize = match args.get(2) {
+        Some(s) => s.parse().unwrap_or_else(|_| usage()),
+        None => 1,
+    };
+    let mesh = models::load_model(MODEL).unwrap_or_else(|e| {
+        eprintln!("{e}");
+        std::process::exit(1)
+    });
+    let scene = over_corner(mesh, Quat::IDENTITY);
+    let caster = &scene.instances[1];
+    // Shadow and reflection rays leave the corner; intra-object rays the bunny's surface.
+    let recv = if kind == Kind::Intra {
+        let mut own = caster.clone();
+        own.receiver = true;
+        Receivers::of(&Scene {
+            instances: vec![own],
+        })
+    } else {
+        Receivers::of(&scene)
+    };
+    let pick = |v: &[Vec3]| v.iter().copied().step_by(stride.max(1)).collect::<Vec<_>>();
+    let (points, normals_at) = (pick(&recv.points), pick(&recv.normals));
+    let rays = RaySet::new(if kind == Kind::Intra { 16 } else { 4 }, 1);
+
+    let params = FieldParams {
+        sphere: SphereKind::Slater,
+        count: 4226,
+        layout: LayoutKind::Concentric,
+        res: 32,
+        precision: Precision::U8,
+    };
+    let dir = std::env::temp_dir().join("visfield-ao-cost");
+    std::fs::create_dir_all(&dir).expect("cache folder");
+    let backend = args[1].as_str();
+    let fs = if matches!(backend, "field" | "per-ray" | "sphere") {
+        let (field, _) = load_or_bake(&dir, &caster.mesh, MODEL, params, &BakeOptions::default())
+            .expect("field");
+        let mut inst = FieldInstance::new(Arc::new(field), caster.transform);
+        if kind == Kind::Reflect {
+            inst = inst.with_normals(Arc::new(normals(&dir, &caster.mesh, params)));
+        }
+        Some(FieldScene {
+            instances: vec![inst],
+            options: Default::default(),
+        })
+    } else {
+        None
+    };
+    let tracer = (backend == "raycast").then(|| Tracer::new(&scene.caster_triangles()));
+    let t = Instant::now();
+    let (values, cast) = match (backend, &fs, &tracer) {
+        ("none", ..) => ray_pass(&NoQuery, kind, &points, &normals_at, &rays),
+        ("raycast", _, Some(tr)) => ray_pass(tr, kind, &points, &normals_at, &rays),
+        ("field", Some(fs), _) => ray_pass(fs, kind, &points, &normals_at, &rays),
+        ("per-ray", Some(fs), _) => ray_pass(&PerRay(fs), kind, &points, &normals_at, &rays),
+        ("sphere", Some(fs), _) => ray_pass(&SphereCull(fs), kind, &points, &normals_at, &rays),
+        _ => usage(),
+    };
+    let secs = t.elapsed().as_secs_f64();
+    let mean = values.iter().map(|&v| v as f64).sum::<f64>() / values.len().max(1) as f64;
+    println!(
+        "{} points, {cast} rays, mean {mean:.6}, {secs:.3} s, {:.2} Mrays/s",
+        points.len(),
+        cast as f64 / secs / 1e6
+    );
+}
