@@ -3,6 +3,8 @@
 //! number fails here until the text follows it. Each claim is the text as the document writes
 //! it (whitespace runs compared as one space), formatted from the files it names.
 
+mod common;
+
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -13,18 +15,7 @@ fn root() -> &'static Path {
 }
 
 fn read(rel: &str) -> Vec<Row> {
-    let path = root().join(rel);
-    let mut r = csv::Reader::from_path(&path).unwrap_or_else(|e| panic!("{rel}: {e}"));
-    let head: Vec<String> = r.headers().unwrap().iter().map(String::from).collect();
-    r.records()
-        .map(|rec| {
-            let rec = rec.unwrap();
-            head.iter()
-                .cloned()
-                .zip(rec.iter().map(String::from))
-                .collect()
-        })
-        .collect()
+    common::read_csv_maps(&root().join(rel))
 }
 
 fn f(r: &Row, col: &str) -> f64 {

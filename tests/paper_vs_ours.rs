@@ -21,17 +21,7 @@ use visfield::sampling::{LayoutKind, SphereKind};
 type Csv = Vec<HashMap<String, String>>;
 
 fn read(path: &Path) -> Csv {
-    let mut r = csv::Reader::from_path(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let head: Vec<String> = r.headers().unwrap().iter().map(String::from).collect();
-    r.records()
-        .map(|rec| {
-            let rec = rec.unwrap();
-            head.iter()
-                .cloned()
-                .zip(rec.iter().map(String::from))
-                .collect()
-        })
-        .collect()
+    common::read_csv_maps(path)
 }
 
 fn read_optional(path: &Path) -> Csv {

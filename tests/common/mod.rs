@@ -188,3 +188,18 @@ pub fn run_model_trials(trials: &[ModelTrial]) -> ! {
         .collect();
     libtest_mimic::run(&args, trials).exit()
 }
+
+/// A CSV file's rows as column → text maps (the committed results, read without their types).
+pub fn read_csv_maps(path: &Path) -> Vec<std::collections::HashMap<String, String>> {
+    let mut r = csv::Reader::from_path(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let head: Vec<String> = r.headers().unwrap().iter().map(String::from).collect();
+    r.records()
+        .map(|rec| {
+            let rec = rec.unwrap();
+            head.iter()
+                .cloned()
+                .zip(rec.iter().map(String::from))
+                .collect()
+        })
+        .collect()
+}
