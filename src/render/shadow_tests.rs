@@ -100,15 +100,9 @@ fn a_blocker_behind_the_light_does_not_shadow() {
     assert!(v.iter().all(|&x| x == 1.0), "{v:?}");
 }
 
-/// A half-plane at z = 5 over x < 0, its edge through the light's axis: the mirror x → −x maps
-/// the light's cone and the weight n·ω (n on the axis) onto themselves, so exactly half of the
-/// weighted light is hidden. A stratified k² estimate is off by at most the cells the edge
-/// crosses, about k of k² cells on either side: 2/k (the bound of the AO closed forms,
-/// `stability::hard`); the converged reference within 4 of its standard errors.
-#[test]
-fn a_half_plane_through_the_lights_axis_hides_half_of_it() {
-    let z = 5.0;
-    let tracer = Tracer::new(&[
+/// The half-plane x < 0 at height `z` (two triangles 50 on a side).
+fn half_plane(z: f32) -> Tracer {
+    Tracer::new(&[
         [
             Vec3::new(-50.0, -50.0, z),
             Vec3::new(0.0, -50.0, z),
@@ -119,7 +113,18 @@ fn a_half_plane_through_the_lights_axis_hides_half_of_it() {
             Vec3::new(0.0, 50.0, z),
             Vec3::new(-50.0, 50.0, z),
         ],
-    ]);
+    ])
+}
+
+/// A half-plane at z = 5 over x < 0, its edge through the light's axis: the mirror x → −x maps
+/// the light's cone and the weight n·ω (n on the axis) onto themselves, so exactly half of the
+/// weighted light is hidden. A stratified k² estimate is off by at most the cells the edge
+/// crosses, about k of k² cells on either side: 2/k (the bound of the AO closed forms,
+/// `stability::hard`); the converged reference within 4 of its standard errors.
+#[test]
+fn a_half_plane_through_the_lights_axis_hides_half_of_it() {
+    let z = 5.0;
+    let tracer = half_plane(z);
     // Points on the axis (x = 0 exactly, so the edge stays through the cone's axis).
     let p: Vec<Vec3> = (0..16)
         .map(|i| Vec3::new(0.0, 1e-4 * i as f32, 0.0))
@@ -347,18 +352,7 @@ fn the_far_end_is_the_near_root_without_cancellation() {
 #[test]
 fn a_point_light_casts_the_exact_hard_shadow_with_one_ray() {
     let z = 5.0;
-    let tracer = Tracer::new(&[
-        [
-            Vec3::new(-50.0, -50.0, z),
-            Vec3::new(0.0, -50.0, z),
-            Vec3::new(0.0, 50.0, z),
-        ],
-        [
-            Vec3::new(-50.0, -50.0, z),
-            Vec3::new(0.0, 50.0, z),
-            Vec3::new(-50.0, 50.0, z),
-        ],
-    ]);
+    let tracer = half_plane(z);
     let p: Vec<Vec3> = (1..=40)
         .map(|i| {
             let x = 0.01 * (i as f32 - 20.5);
