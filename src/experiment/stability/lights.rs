@@ -26,7 +26,7 @@
 //! - Mirror at grazing incidence (n·v from 1e-1 to 1e-7): the reflected direction within 4e-7
 //!   rad of the f64 mirror direction, and never dropped (n·r > 0).
 
-use super::StabilityRow;
+use super::{max2, MaxOf, StabilityRow};
 use crate::render::reflect::{reflection_rays, square_to_phong, Gloss, ReflectOptions};
 use crate::render::shadow::{shadow_at_points, unshadowed_light, ShadowOptions, SphereLight};
 use crate::sampling::rays::RaySet;
@@ -156,16 +156,12 @@ pub fn unoccluded() -> Vec<StabilityRow> {
         let o = opts(DVec3::new(0.0, 0.0, d), r);
         let s = (r as f32 as f64) / d;
         let v = shadow_at_points(&Nothing, &p, &n, &rays, &o);
-        frac = frac.max(
-            v.iter()
-                .map(|&x| (x as f64 - 1.0).abs())
-                .fold(0.0, f64::max),
-        );
+        frac = max2(frac, v.iter().map(|&x| (x as f64 - 1.0).abs()).max_of());
         let want = std::f64::consts::PI * s * s;
         let t = one_minus_cos(s) * 2.0 / K as f64 + 1e-5;
         for e in unshadowed_light(&p, &n, &rays, &o) {
             // Relative to the allowance, so that one row carries every size.
-            rel = rel.max((e / want - 1.0).abs() / t);
+            rel = max2(rel, (e / want - 1.0).abs() / t);
         }
         tol = 1.0;
     }
@@ -176,12 +172,12 @@ pub fn unoccluded() -> Vec<StabilityRow> {
     let pf = shadow_at_points(&Nothing, &p, &n, &rays, &o)
         .iter()
         .map(|&x| (x as f64 - 1.0).abs())
-        .fold(0.0, f64::max);
+        .max_of();
     vec![
         StabilityRow::new(
             case,
             "light fraction with nothing in the way, r/d = 0.5 … 1e-7, a sun (7e8 at 1.5e11) and a point light (|S − 1|)",
-            frac.max(pf),
+            max2(frac, pf),
             0.0,
         ),
         StabilityRow::new(
@@ -199,11 +195,13 @@ pub fn unoccluded() -> Vec<StabilityRow> {
     ]
 }
 
+/// The largest |v − want| of `values` (f32 light fractions).
+fn worst(values: &[f32], want: f64) -> f64 {
+    values.iter().map(|&x| (x as f64 - want).abs()).max_of()
+}
+
 fn max_rel(values: &[f64], want: f64) -> f64 {
-    values
-        .iter()
-        .map(|&v| (v / want - 1.0).abs())
-        .fold(0.0, f64::max)
+    values.iter().map(|&v| (v / want - 1.0).abs()).max_of()
 }
 
 /// A sphere light behind an exact sphere occluder: the caps' closed forms, and a point light's
@@ -228,12 +226,7 @@ pub fn behind_sphere() -> Vec<StabilityRow> {
         let want = 1.0 - (beta_s * beta_s) / (s_l * s_l);
         let v = shadow_at_points(&occ, &p, &n, &rays, &o);
         let t = 2.0 / K as f64 + 1e-5;
-        coax = coax.max(
-            v.iter()
-                .map(|&x| (x as f64 - want).abs())
-                .fold(0.0, f64::max)
-                / t,
-        );
+        coax = max2(coax, worst(&v, want) / t);
         coax_tol = 1.0;
         // Off axis: the occluder's cone of angular radius 0.7 α, its axis 0.9 α off the light's.
         let (beta, gamma) = (0.7 * alpha, 0.9 * alpha);
@@ -247,12 +240,7 @@ pub fn behind_sphere() -> Vec<StabilityRow> {
             1.0 - cap_cap(alpha_l, beta, gamma) / (2.0 * std::f64::consts::PI * one_minus_cos(s_l));
         let v = shadow_at_points(&occ, &p, &n, &rays, &o);
         let t = 2.0 / K as f64 + one_minus_cos(s) + 1e-5;
-        off = off.max(
-            v.iter()
-                .map(|&x| (x as f64 - want).abs())
-                .fold(0.0, f64::max)
-                / t,
-        );
+        off = max2(off, worst(&v, want) / t);
         off_tol = 1.0;
     }
     // A point light at (0, 0, 10) over a sphere of radius 1 at (0, 0, 5): receivers along x on
@@ -305,6 +293,37 @@ pub fn behind_sphere() -> Vec<StabilityRow> {
     ]
 }
 
+/// The lights of the grazing case, one per gap (1e-1, 1e-3 and 1e-6 of the radius) above the
+/// caster's bounding sphere `b`, each with its 200 receivers beside the sphere and their
+/// normals towards the light.
+pub(super) fn grazing_lights(
+    b: &crate::geometry::Sphere,
+) -> Vec<(ShadowOptions, Vec<Vec3>, Vec<Vec3>)> {
+    [1e-1f32, 1e-3, 1e-6]
+        .into_iter()
+        .map(|gap| {
+            let r = 0.5 * b.radius;
+            let center = b.center + Vec3::Z * (b.radius * (1.0 + gap) + r);
+            let o = ShadowOptions {
+                offset: 1e-4,
+                lights: vec![SphereLight {
+                    center,
+                    radius: r,
+                    intensity: 1.0,
+                }],
+            };
+            let p: Vec<Vec3> = (0..200)
+                .map(|i| {
+                    let x = 1.02 + 0.01 * i as f32;
+                    b.center + b.radius * Vec3::new(x, 0.1 * (i % 5) as f32, -0.5)
+                })
+                .collect();
+            let n: Vec<Vec3> = p.iter().map(|&q| (center - q).normalize()).collect();
+            (o, p, n)
+        })
+        .collect()
+}
+
 /// Lights grazing a caster's bounding sphere (gaps of 1e-1, 1e-3 and 1e-6 of its radius): a
 /// convex caster's field (a UV sphere, 1090 × 32² u8) answers the shadow rays, which pass the
 /// caster and end at the light just outside its bounding sphere, as ray casting does on the
@@ -328,29 +347,13 @@ pub fn grazing_caster_sphere() -> Vec<StabilityRow> {
     let rays = RaySet::new(8, 11);
     let (mut rms, mut max, mut shadowed) = (0.0f64, 0.0f64, 0usize);
     let mut total = 0usize;
-    for gap in [1e-1f32, 1e-3, 1e-6] {
-        let r = 0.5 * b.radius;
-        let center = b.center + Vec3::Z * (b.radius * (1.0 + gap) + r);
-        let o = ShadowOptions {
-            offset: 1e-4,
-            lights: vec![SphereLight {
-                center,
-                radius: r,
-                intensity: 1.0,
-            }],
-        };
-        let p: Vec<Vec3> = (0..200)
-            .map(|i| {
-                b.center + b.radius * Vec3::new(1.02 + 0.01 * i as f32, 0.1 * (i % 5) as f32, -0.5)
-            })
-            .collect();
-        let n: Vec<Vec3> = p.iter().map(|&q| (center - q).normalize()).collect();
+    for (o, p, n) in grazing_lights(&b) {
         let exact = shadow_at_points(&tracer, &p, &n, &rays, &o);
         let approx = shadow_at_points(&fs, &p, &n, &rays, &o);
         for (a, e) in approx.iter().zip(&exact) {
             let d = (*a as f64 - *e as f64).abs();
             rms += (255.0 * d).powi(2);
-            max = max.max(d);
+            max = max2(max, d);
             shadowed += (*e < 0.99) as usize;
             total += 1;
         }
@@ -387,15 +390,10 @@ pub fn below_surface() -> Vec<StabilityRow> {
     for r in [1.0, 1e-4, 0.0] {
         let o = opts(DVec3::new(0.0, 0.0, -10.0), r);
         let v = shadow_at_points(&blocker, &p, &n, &rays, &o);
-        dev = dev.max(
-            v.iter()
-                .map(|&x| (x as f64 - 1.0).abs())
-                .fold(0.0, f64::max),
-        );
-        light = light.max(
-            unshadowed_light(&p, &n, &rays, &o)
-                .into_iter()
-                .fold(0.0, f64::max),
+        dev = max2(dev, v.iter().map(|&x| (x as f64 - 1.0).abs()).max_of());
+        light = max2(
+            light,
+            unshadowed_light(&p, &n, &rays, &o).into_iter().max_of(),
         );
     }
     // Straddling: a light centred on the tangent plane, half its cone (11.5°) below it, and a
@@ -408,10 +406,7 @@ pub fn below_surface() -> Vec<StabilityRow> {
         radius: 1.2,
     };
     let v = shadow_at_points(&under, &p, &n, &rays, &o);
-    let straddle = v
-        .iter()
-        .map(|&x| (x as f64 - 1.0).abs())
-        .fold(0.0, f64::max);
+    let straddle = v.iter().map(|&x| (x as f64 - 1.0).abs()).max_of();
     let below = shadow_at_points(&under, &p, &[Vec3::X; 16], &rays, &o);
     let control = below.iter().map(|&x| x as f64).fold(1.0, f64::min);
     let half = unshadowed_light(&p, &n, &rays, &o);
@@ -514,7 +509,7 @@ pub fn mirror_grazing() -> Vec<StabilityRow> {
             let want = DVec3::new(v32.x, v32.y, -v32.z);
             total += 1;
             match dirs.first() {
-                Some(d) => angle = angle.max(d.as_dvec3().normalize().cross(want).length()),
+                Some(d) => angle = max2(angle, d.as_dvec3().normalize().cross(want).length()),
                 None => dropped += 1,
             }
         }

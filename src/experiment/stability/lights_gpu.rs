@@ -4,8 +4,9 @@
 //! `tests/small_lights.rs`, ignored without one).
 
 use super::lights::{at_origin, opts, SIZES};
-use super::StabilityRow;
-use crate::render::shadow::{shadow_at_points, ShadowOptions, SphereLight};
+use super::scene_ao::max_diff;
+use super::{max2, MaxOf, StabilityRow};
+use crate::render::shadow::shadow_at_points;
 use crate::sampling::rays::RaySet;
 use glam::{DVec3, Vec3};
 
@@ -47,14 +48,14 @@ pub fn gpu_rows(ctx: &crate::gpu::GpuContext) -> crate::experiment::Result<Vec<S
         );
         let t = GpuTracer::new(ctx, &cover).map_err(gpu)?;
         let (v, _) = t.shadows(&p, &n, &rays, &o).map_err(gpu)?;
-        covered = covered.max(v.iter().map(|&x| x as f64).fold(0.0, f64::max));
+        covered = max2(covered, v.iter().map(|&x| x as f64).max_of());
         // Partly: radius 0.6 α, 0.5 α off the axis; the point light's ray passes beside it.
         let off = Vec3::new((0.5 * s * d_o) as f32, 0.0, d_o as f32);
         let part = icosphere(4, (0.6 * s.max(1e-7) * d_o) as f32, off);
         let t = GpuTracer::new(ctx, &part).map_err(gpu)?;
         let (g, _) = t.shadows(&p, &n, &rays, &o).map_err(gpu)?;
         let c = shadow_at_points(&Tracer::new(&part), &p, &n, &rays, &o);
-        parity = parity.max(max_diff(&g, &c));
+        parity = max2(parity, max_diff(&g, &c));
     }
     // The grazing case's field on the GPU against the CPU's.
     let mesh = procedural::uv_sphere(1.0, 32, 64).expect("uv sphere");
@@ -67,26 +68,10 @@ pub fn gpu_rows(ctx: &crate::gpu::GpuContext) -> crate::experiment::Result<Vec<S
     };
     let kernel = FieldShadowKernel::new(ctx, &[inst], &FieldGpuOptions::default()).map_err(gpu)?;
     let mut field_parity = 0.0f64;
-    for gap in [1e-1f32, 1e-3, 1e-6] {
-        let r = 0.5 * b.radius;
-        let center = b.center + Vec3::Z * (b.radius * (1.0 + gap) + r);
-        let o = ShadowOptions {
-            offset: 1e-4,
-            lights: vec![SphereLight {
-                center,
-                radius: r,
-                intensity: 1.0,
-            }],
-        };
-        let pts: Vec<Vec3> = (0..200)
-            .map(|i| {
-                b.center + b.radius * Vec3::new(1.02 + 0.01 * i as f32, 0.1 * (i % 5) as f32, -0.5)
-            })
-            .collect();
-        let nrm: Vec<Vec3> = pts.iter().map(|&q| (center - q).normalize()).collect();
+    for (o, pts, nrm) in super::lights::grazing_lights(&b) {
         let (g, _) = kernel.light_fractions(&pts, &nrm, &rays, &o).map_err(gpu)?;
         let c = shadow_at_points(&fs, &pts, &nrm, &rays, &o);
-        field_parity = field_parity.max(max_diff(&g, &c));
+        field_parity = max2(field_parity, max_diff(&g, &c));
     }
     Ok(vec![
         StabilityRow::new(
@@ -108,11 +93,4 @@ pub fn gpu_rows(ctx: &crate::gpu::GpuContext) -> crate::experiment::Result<Vec<S
             two_rays,
         ),
     ])
-}
-
-fn max_diff(a: &[f32], b: &[f32]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| (*x as f64 - *y as f64).abs())
-        .fold(0.0, f64::max)
 }

@@ -176,6 +176,21 @@ pub fn max_of(values: impl IntoIterator<Item = f64>) -> f64 {
 }
 
 /// [`max_of`] for the tests: a NaN anywhere gives NaN.
+/// [`max_of`] as an iterator method: the largest value, NaN when any is.
+pub(super) trait MaxOf: Iterator<Item = f64> + Sized {
+    fn max_of(self) -> f64 {
+        max_of(self)
+    }
+}
+
+impl<I: Iterator<Item = f64>> MaxOf for I {}
+
+/// The larger of two errors, NaN when either is ([`max_of`]): an error that cannot be computed
+/// fails its case instead of vanishing into a running maximum.
+pub(super) fn max2(a: f64, b: f64) -> f64 {
+    max_of([a, b])
+}
+
 pub fn max_of_for_tests(values: &[f64]) -> f64 {
     max_of(values.iter().copied())
 }
