@@ -13,9 +13,18 @@ use visfield::experiment::fields::FieldSupply;
 use visfield::experiment::performance::{run, PerfRow};
 use visfield::geometry::models::{ModelError, ModelRegistry};
 
+/// The package root as cargo runs this test: the working directory it sets, not
+/// `env!("CARGO_MANIFEST_DIR")`, which names the checkout the binary was compiled in. CI builds
+/// these tests once in a bare clone and runs them again beside `../shared/models` without a
+/// rebuild (same sources, shared target folder); a child started in the compiled-in folder
+/// would look for the models beside the bare clone and miss them.
+fn crate_root() -> PathBuf {
+    std::env::current_dir().expect("the test's working directory")
+}
+
 /// The registered models that `experiment all --quick` reads: every spec's quick scenes.
 fn every_quick_spec_model() -> Vec<String> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments");
+    let dir = crate_root().join("experiments");
     let mut names: Vec<String> = Vec::new();
     let mut paths: Vec<PathBuf> = std::fs::read_dir(&dir)
         .unwrap()
@@ -119,7 +128,7 @@ fn all_dry_run_plans_every_spec_and_writes_nothing() {
     let o = Command::new(env!("CARGO_BIN_EXE_experiment"))
         .args(["all", "--quick", "--dry-run", "--out"])
         .arg(&out)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .current_dir(crate_root())
         .env_remove("VISFIELD_EXPERIMENTS")
         .output()
         .unwrap();
