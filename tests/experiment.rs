@@ -947,43 +947,50 @@ fn a_scene_state_over_the_memory_limit_is_refused_before_any_work() {
     assert!(run(&ls, &o).is_ok());
 }
 
-/// A spec listing the Embree ray caster: with the `embree` feature its CPU rows carry Embree's
-/// time on the reference's rays and its estimate's RMS against ours (the tiny scene's caster
-/// floats clear of the corner: no contact origin, so none); without it the run goes on with
-/// the columns empty, and `require_embree` refuses it naming the spec field.
+/// A spec listing the Embree method: with the `embree` feature it is a row of `methods.csv`,
+/// Embree's scene build as its precompute and its estimate on the reference's rays, measured
+/// against ours (the tiny scene's caster floats clear of the corner: no contact origin, so no
+/// disagreement); without it the run goes on without the row, and `require_embree` refuses it
+/// naming the spec field.
 #[test]
-fn embree_columns_or_a_skip_with_the_reason() {
+fn embree_is_a_method_row_or_a_skip_with_the_reason() {
+    use visfield::experiment::columns::read_csv as read_named;
     let dir = tempfile::tempdir().unwrap();
     let text = tiny(ONE_FIELD, "").replace(
         r#""reference": {"#,
-        r#""raycasters": ["embree"], "reference": {"#,
+        r#""methods": [{"method": "embree"}, {"method": "raycast"}], "reference": {"#,
     );
     let ls = loaded(dir.path(), &text);
     let report = run(&ls, &options(dir.path().join("out"))).unwrap();
     assert_eq!(report.rows.len(), 1);
-    let row = &report.rows[0];
+    let rows = read_named(&dir.path().join("out/methods.csv")).unwrap();
+    let methods: Vec<&str> = rows.iter().map(|r| r.get("method").unwrap()).collect();
+    // Our ray caster as a method is the reference ray for ray, its BVH build charged.
+    let ours = rows
+        .iter()
+        .find(|r| r.get("method") == Some("raycast"))
+        .unwrap();
+    assert_eq!(ours.number("rms_vs_raycast"), Some(0.0));
+    assert!(ours.number("precompute_s").unwrap() > 0.0);
+    assert!(ours.number("bytes").unwrap() > 2000.0 * 36.0, "{ours:?}");
     if cfg!(feature = "embree") {
-        let s = row.embree_s.expect("embree_s");
+        assert_eq!(methods, ["embree", "raycast"]);
+        let r = &rows[0];
+        let s = r.number("estimate_s").unwrap();
         assert!(s > 0.0, "{s}");
-        assert_eq!(
-            row.embree_mrays_s,
-            Some(row.rays_cast as f64 / s / 1e6),
-            "embree_mrays_s is rays_cast / embree_s"
-        );
-        assert_eq!(row.embree_rms_vs_raycast, Some(0.0));
+        let rays = r.number("rays_cast").unwrap();
+        assert_eq!(rays, report.rows[0].rays_cast as f64);
+        assert_eq!(r.number("mrays_s"), Some(rays / s / 1e6));
+        assert_eq!(r.number("rms_vs_raycast"), Some(0.0));
+        assert_eq!(r.get("rms_vertex"), ours.get("rms_vertex"));
     } else {
-        assert_eq!(row.embree_s, None);
-        assert_eq!(row.embree_mrays_s, None);
-        assert_eq!(row.embree_rms_vs_raycast, None);
+        assert_eq!(methods, ["raycast"]);
         let mut o = options(dir.path().join("out2"));
         o.require_embree = true;
         let e = run(&ls, &o).unwrap_err().chain();
         assert!(
-            e.contains("raycasters") && e.contains("--features embree"),
+            e.contains("methods \"embree\"") && e.contains("--features embree"),
             "{e}"
         );
     }
-    // The column is in the table either way.
-    let csv = std::fs::read_to_string(dir.path().join("out/table.csv")).unwrap();
-    assert!(csv.lines().next().unwrap().contains("embree_s"));
 }

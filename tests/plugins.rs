@@ -209,3 +209,208 @@ fn a_registered_kind_refuses_unknown_keys_bad_values_and_a_second_registration()
         "{e}"
     );
 }
+
+// A method added through the registry alone: "unoccluded" answers every ray as free, either
+// through the kind's own estimator (`"answer": "rays"`, a `Visibility` that never blocks) or
+// as a direct estimator of its own (`"answer": "direct"`, 1 at every point). One spec entry
+// with both on its axis gives two settings, each a row of `methods.csv`.
+
+mod toy_method {
+    use visfield::experiment::kinds::Kind;
+    use visfield::experiment::methods::{
+        read_as, Answer, Method, MethodContext, MethodEntry, MethodOptions, Prepared,
+    };
+    use visfield::experiment::spec::{Spec, SpecError};
+    use visfield::experiment::validate::Validator;
+    use visfield::render::estimator::{Estimator, Points};
+    use visfield::render::truth::{Truth, TruthOptions};
+    use visfield::sampling::rays::RaySet;
+    use visfield::visibility::{SurfaceHit, Visibility};
+
+    #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+    #[serde(deny_unknown_fields)]
+    pub struct UnoccludedOptions {
+        /// The axis: "rays", "direct".
+        answer: Vec<String>,
+    }
+
+    impl MethodOptions for UnoccludedOptions {
+        fn validate(&self, at: &str, _s: &Spec, v: &Validator) -> Result<(), SpecError> {
+            match self.answer.iter().find(|a| *a != "rays" && *a != "direct") {
+                Some(a) => Err(v.err(
+                    &format!("{at}.answer"),
+                    format!("\"{a}\" is not rays or direct"),
+                )),
+                None => Ok(()),
+            }
+        }
+
+        fn settings(&self) -> Vec<Box<dyn Method>> {
+            self.answer
+                .iter()
+                .map(|a| {
+                    Box::new(Unoccluded {
+                        direct: a == "direct",
+                    }) as Box<dyn Method>
+                })
+                .collect()
+        }
+    }
+
+    struct Unoccluded {
+        direct: bool,
+    }
+
+    struct Free;
+
+    impl Visibility for Free {
+        fn occluded(&self, _: glam::Vec3, _: glam::Vec3, _: f32, _: f32) -> bool {
+            false
+        }
+        fn hit_distance(&self, _: glam::Vec3, _: glam::Vec3, _: f32, _: f32) -> Option<f32> {
+            None
+        }
+        fn surface_hit(&self, _: glam::Vec3, _: glam::Vec3, _: f32, _: f32) -> Option<SurfaceHit> {
+            None
+        }
+    }
+
+    struct One;
+
+    impl Estimator for One {
+        fn name(&self) -> &'static str {
+            "one"
+        }
+        fn estimate(&self, _vis: &dyn Visibility, at: Points, _rays: &RaySet) -> Vec<f32> {
+            vec![1.0; at.len()]
+        }
+        fn converged(&self, _vis: &dyn Visibility, _at: Points, _t: &TruthOptions) -> Truth {
+            unreachable!("a method's estimator is never asked for the truth")
+        }
+        fn key(&self) -> serde_json::Map<String, serde_json::Value> {
+            serde_json::Map::new()
+        }
+    }
+
+    impl Method for Unoccluded {
+        fn name(&self) -> &'static str {
+            "unoccluded"
+        }
+        fn params(&self) -> Vec<(&'static str, String)> {
+            vec![("answer", if self.direct { "direct" } else { "rays" }.into())]
+        }
+        fn refuses(&self, kind: &dyn Kind) -> Option<String> {
+            (kind.name() == "reflections").then(|| "it has no surface to reflect".into())
+        }
+        fn prepare(&self, _ctx: &MethodContext) -> visfield::experiment::Result<Prepared> {
+            Ok(Prepared {
+                answer: if self.direct {
+                    Answer::Direct(Box::new(One))
+                } else {
+                    Answer::Rays(Box::new(Free))
+                },
+                bytes: Some(0),
+                cached: false,
+                columns: vec![("toy".into(), "yes".into())],
+            })
+        }
+    }
+
+    pub const ENTRY: MethodEntry = MethodEntry {
+        name: "unoccluded",
+        about: "a toy method: every ray is free",
+        read: read_as::<UnoccludedOptions>,
+    };
+
+    pub fn register_once() {
+        static ONCE: std::sync::Once = std::sync::Once::new();
+        ONCE.call_once(|| {
+            visfield::experiment::methods::register(ENTRY).expect("first registration")
+        });
+    }
+}
+
+fn with_methods(spec: &str, methods: &str) -> String {
+    spec.replace(
+        r#""reference": {"#,
+        &format!(r#""methods": {methods}, "reference": {{"#),
+    )
+}
+
+#[test]
+fn a_method_registered_at_run_time_gives_one_row_per_setting_measured_like_a_cell() {
+    use visfield::experiment::columns::{read_csv as read_named, NamedRow};
+    toy_method::register_once();
+    let both = r#"[{"method": "unoccluded", "answer": ["rays", "direct"]}]"#;
+    let dir = tempfile::tempdir().unwrap();
+    // Vertex AO answered as unoccluded: 1 at every point, through the rays and directly.
+    let ls = loaded(dir.path(), &with_methods(&tiny(ONE_FIELD, ""), both));
+    let out = dir.path().join("ao");
+    run(&ls, &options(out.clone())).unwrap();
+    let rows: Vec<NamedRow> = read_named(&out.join("methods.csv")).unwrap();
+    let settings: Vec<&str> = rows.iter().map(|r| r.get("setting").unwrap()).collect();
+    assert_eq!(settings, ["unoccluded-rays", "unoccluded-direct"]);
+    for r in &rows {
+        assert_eq!(r.get("scene"), Some("tiny"));
+        assert_eq!(r.get("toy"), Some("yes"));
+        assert_eq!(r.number("points"), Some(243.0));
+        assert_eq!(r.number("rays_cast"), Some(243.0 * 16.0));
+        // Its error against the same-ray reference is the reference's occlusion itself
+        // (255 · (1 − value) at every point), which the caster makes far from zero.
+        let (e, occ) = (
+            r.number("rms_vs_raycast").unwrap(),
+            r.number("occlusion_rms").unwrap(),
+        );
+        assert!(occ > 1.0, "{occ}");
+        assert!((e - occ).abs() <= 1e-9 * occ, "{e} vs {occ}");
+        assert!(r.number("rms_vs_truth").unwrap() > 1.0);
+        assert!(r.number("estimate_s").unwrap() > 0.0);
+    }
+    assert_eq!(rows[0].get("through"), Some("rays"));
+    assert_eq!(rows[1].get("through"), Some("direct"));
+    // Both answers give the same values, so the same errors.
+    assert_eq!(rows[0].get("rms_vertex"), rows[1].get("rms_vertex"));
+    // The toy kind through the toy method: the constant through a free visibility is the
+    // constant, as is the reference: no error at all.
+    register_once();
+    let spec = with_methods(&constant_spec(r#""level": 0.25"#), both);
+    let ls = loaded(dir.path(), &spec);
+    let out = dir.path().join("toy");
+    run(&ls, &options(out.clone())).unwrap();
+    let rows: Vec<NamedRow> = read_named(&out.join("methods.csv")).unwrap();
+    // The constant kind's direct answer is the method's own estimator (1), not the kind's.
+    assert_eq!(rows[0].number("rms_vs_raycast"), Some(0.0));
+    assert!((rows[1].number("rms_vs_raycast").unwrap() - 0.75 * 255.0).abs() < 1e-3);
+}
+
+#[test]
+fn a_registered_method_refuses_unknown_keys_bad_values_a_kind_and_a_repeat() {
+    toy_method::register_once();
+    let parse = |methods: &str| {
+        Spec::parse(
+            &with_methods(&tiny(ONE_FIELD, ""), methods),
+            Path::new("specs/m.json"),
+        )
+        .map_err(|e| e.to_string())
+    };
+    let e = parse(r#"[{"method": "unoccluded", "answer": ["rays"], "speed": 2}]"#).unwrap_err();
+    assert!(
+        e.contains("unknown field `speed`") && e.contains("unoccluded"),
+        "{e}"
+    );
+    let e = parse(r#"[{"method": "unoccluded", "answer": ["sideways"]}]"#).unwrap_err();
+    assert!(
+        e.contains("methods[0].answer") && e.contains("sideways"),
+        "{e}"
+    );
+    let e = parse(r#"[{"method": "unoccluded", "answer": ["rays", "rays"]}]"#).unwrap_err();
+    assert!(e.contains("methods[0]") && e.contains("twice"), "{e}");
+    let e = parse(r#"[{"method": "sdf_typo"}]"#).unwrap_err();
+    assert!(
+        e.contains("sdf_typo") && e.contains("\"unoccluded\""),
+        "{e}"
+    );
+    let e = parse(r#"[{"answer": ["rays"]}]"#).unwrap_err();
+    assert!(e.contains("method"), "{e}");
+    assert!(visfield::experiment::methods::register(toy_method::ENTRY).is_err());
+}

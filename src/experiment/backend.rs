@@ -100,6 +100,11 @@ pub struct CpuBackend {
 }
 
 impl CpuBackend {
+    /// The CPU model and thread count.
+    pub fn adapter(&self) -> String {
+        self.adapter.clone()
+    }
+
     pub fn new() -> CpuBackend {
         let meta = super::meta::RunMeta::collect(None);
         CpuBackend {

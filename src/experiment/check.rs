@@ -7,8 +7,11 @@
 //! committed `table.csv` (`results/quick/NAME` for `--quick`, `results/NAME` for a full check):
 //! two-sided, a value more than [`COMMITTED_TOLERANCE`] times the committed one or less than
 //! its inverse fails, so a doubled error fails and so does an error that drops to 0 (a silent
-//! fallback to ray casting, a field that reads the reference) ([`check_committed`]).
+//! fallback to ray casting, a field that reads the reference) ([`check_committed`]). The rows
+//! of the spec's other methods (`methods.csv`) are compared the same way, each by its scene
+//! and setting ([`check_committed_methods`]).
 
+use super::columns::NamedRow;
 use super::outputs::Row;
 use super::plan::Cell;
 use super::spec::Threshold;
@@ -120,7 +123,7 @@ pub fn check_rows(thresholds: &[Threshold], rows: &[Row]) -> Vec<Failure> {
 }
 
 /// The errors of a row that the committed run is compared on.
-fn compared(r: &Row) -> [(&'static str, Option<f64>); 3] {
+fn compared(r: &Row) -> Compared {
     [
         ("rms_vertex", r.rms_vertex),
         ("rms_image", r.rms_image),
@@ -133,16 +136,56 @@ fn compared(r: &Row) -> [(&'static str, Option<f64>); 3] {
 /// as does a value the run measured that the committed run lacks, or one it lost (NaN or
 /// missing where the committed run has one). A committed 0 admits only 0.
 pub fn check_committed(rows: &[Row], committed: &[Row]) -> Vec<Failure> {
+    let keyed = |rows: &[Row]| -> Vec<(String, String, Compared)> {
+        rows.iter()
+            .map(|r| (r.scene.clone(), r.cell.clone(), compared(r)))
+            .collect()
+    };
+    against_committed(&keyed(rows), &keyed(committed))
+}
+
+/// [`check_committed`] for the rows of `methods.csv`: each row against the committed row of
+/// the same scene and setting, on the same three errors (named `SCENE/SETTING`).
+pub fn check_committed_methods(rows: &[NamedRow], committed: &[NamedRow]) -> Vec<Failure> {
+    let keyed = |rows: &[NamedRow]| -> Vec<(String, String, Compared)> {
+        rows.iter()
+            .map(|r| {
+                let (scene, setting) =
+                    (r.get("scene").unwrap_or(""), r.get("setting").unwrap_or(""));
+                let metric = |m: &'static str| (m, r.number(m));
+                (
+                    scene.to_string(),
+                    format!("{scene}/{setting}"),
+                    [
+                        metric("rms_vertex"),
+                        metric("rms_image"),
+                        metric("rms_vs_truth"),
+                    ],
+                )
+            })
+            .collect()
+    };
+    against_committed(&keyed(rows), &keyed(committed))
+}
+
+/// The errors a row is compared on, by name.
+type Compared = [(&'static str, Option<f64>); 3];
+
+/// Each (scene, id, errors) against the committed one of the same scene and id.
+fn against_committed(
+    rows: &[(String, String, Compared)],
+    committed: &[(String, String, Compared)],
+) -> Vec<Failure> {
     let mut out = Vec::new();
-    for r in rows {
-        let c = committed
+    for (scene, id, ours) in rows {
+        let theirs = committed
             .iter()
-            .find(|c| c.scene == r.scene && c.cell == r.cell);
-        let theirs = c.map(compared);
-        for (i, (metric, value)) in compared(r).into_iter().enumerate() {
+            .find(|(s, i, _)| s == scene && i == id)
+            .map(|(_, _, t)| t);
+        for (i, &(metric, value)) in ours.iter().enumerate() {
             let base = theirs.and_then(|t| t[i].1).filter(|b| b.is_finite());
             let fail = |value: f64, rule| Failure {
-                cell: r.cell.clone(),
+                cell: id.clone(),
                 metric,
                 value,
                 rule,

@@ -364,6 +364,7 @@ fn check(
                     match super::outputs::read_csv(&committed) {
                         Ok(rows) => {
                             f.extend(super::check::check_committed(&report.rows, &rows));
+                            f.extend(committed_methods(&report.out, &committed)?);
                             format!(" and the committed {}", committed.display())
                         }
                         Err(e) => {
@@ -394,6 +395,27 @@ fn check(
         println!("FAIL {f}");
     }
     Ok(i32::from(!failed.is_empty()))
+}
+
+/// The run's `methods.csv` rows against the committed ones beside `committed_table` (the
+/// committed `table.csv`); a run without method rows compares nothing, and a run with them
+/// against a committed run without `methods.csv` fails each row as not committed.
+fn committed_methods(out: &Path, committed_table: &Path) -> Result<Vec<super::check::Failure>> {
+    use super::columns::read_csv;
+    let ours = out.join("methods.csv");
+    if !ours.is_file() {
+        return Ok(Vec::new());
+    }
+    let theirs = committed_table.with_file_name("methods.csv");
+    let committed = if theirs.is_file() {
+        read_csv(&theirs)?
+    } else {
+        Vec::new()
+    };
+    Ok(super::check::check_committed_methods(
+        &read_csv(&ours)?,
+        &committed,
+    ))
 }
 
 /// Whether two paths name the same file.

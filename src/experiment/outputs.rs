@@ -138,17 +138,6 @@ pub struct Row {
     /// reference's image, ray cast on the same points.
     #[serde(default)]
     pub rms_image_vs_second: Option<f64>,
-    /// Embree's ray-cast time on the same rays as `raycast_s` (CPU rows of a spec listing
-    /// `"raycasters": ["embree"]`, in a build with the `embree` feature).
-    #[serde(default)]
-    pub embree_s: Option<f64>,
-    /// `rays_cast` / `embree_s`, millions.
-    #[serde(default)]
-    pub embree_mrays_s: Option<f64>,
-    /// RMS over the points (0–255, unrounded) of Embree's estimate against our ray cast's on
-    /// the same rays: the two casters' disagreement (contact and edge rays).
-    #[serde(default)]
-    pub embree_rms_vs_raycast: Option<f64>,
 }
 
 /// The columns `table.csv` starts with, in order.
@@ -201,8 +190,6 @@ pub struct TimeColumns {
     pub ao_kernel_s: Option<f64>,
     pub raycast_kernel_s: Option<f64>,
     pub setup_s: Option<f64>,
-    /// Embree's ray-cast time on the same rays (CPU rows, when timed).
-    pub embree_s: Option<f64>,
 }
 
 /// A row's fields: their bytes and bakes.
@@ -233,8 +220,6 @@ pub struct ErrorColumns {
     pub grain: Option<f64>,
     pub second_reference: Option<String>,
     pub rms_image_vs_second: Option<f64>,
-    /// Embree's estimate against our ray cast's on the same rays (CPU rows, when timed).
-    pub embree_rms_vs_raycast: Option<f64>,
     /// The image, relative to the output folder (empty without an image).
     pub image: String,
 }
@@ -291,9 +276,6 @@ impl Row {
             normal_bits: c.normal_bits,
             second_reference: e.second_reference,
             rms_image_vs_second: e.rms_image_vs_second,
-            embree_s: t.embree_s,
-            embree_mrays_s: mrays_per_s(rays, t.embree_s),
-            embree_rms_vs_raycast: e.embree_rms_vs_raycast,
         }
     }
 }

@@ -181,6 +181,13 @@ pub enum Step {
         to: Precision,
         bytes: u64,
     },
+    /// A method's setting on a scene (`setting`: index into [`Plan::methods`]): its
+    /// precompute, then the kind through it on every seed.
+    Method {
+        scene: usize,
+        setting: usize,
+        rays: u64,
+    },
     /// Field-lookup AO of cell `cell` (index into [`Plan::cells`]).
     Lookup { cell: usize, rays: u64 },
     /// Drop these fields.
@@ -194,6 +201,8 @@ pub enum Step {
 #[derive(Clone, Debug)]
 pub struct Plan {
     pub cells: Vec<Cell>,
+    /// The ids of the spec's method settings ([`super::methods::settings_of`]), in order.
+    pub methods: Vec<String>,
     pub steps: Vec<Step>,
     /// Largest sum of live field bytes.
     pub peak_field_bytes: u64,
@@ -220,9 +229,21 @@ impl Plan {
         let cells = cells_of(spec);
         let render_k = square_root(spec.render.rays_per_point, "render.rays_per_point")?;
         let ref_k = square_root(spec.reference.rays_per_point, "reference.rays_per_point")?;
+        let methods: Vec<String> = super::methods::settings_of(spec)
+            .iter()
+            .map(|m| m.id())
+            .collect();
         let mut steps = Vec::new();
         for s in 0..scenes.scenes.len() {
             steps.extend(scene_steps(spec, scenes, kind.as_ref(), s, render_k, ref_k));
+            let rays = kind.max_points(&scenes.scenes[s])
+                * kind.rays_cast_per_point()
+                * spec.reference.seeds as u64;
+            steps.extend((0..methods.len()).map(|setting| Step::Method {
+                scene: s,
+                setting,
+                rays,
+            }));
         }
         let mut groups = GroupPlanner {
             cells: &cells,
@@ -248,6 +269,7 @@ impl Plan {
             needs_gpu: cells.iter().any(|c| c.backend == Backend::Gpu),
             needs_normal_field: kind.needs().normal_field,
             cells,
+            methods,
             steps,
             peak_field_bytes: peak,
             render_k,
@@ -333,6 +355,15 @@ impl Plan {
                 ),
                 0,
                 Some(*bytes),
+            ),
+            Step::Method {
+                scene,
+                setting,
+                rays,
+            } => (
+                format!("method {} on {}", self.methods[*setting], sc(*scene)),
+                *rays,
+                None,
             ),
             Step::Lookup { cell, rays } => {
                 let c = &self.cells[*cell];

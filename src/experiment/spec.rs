@@ -55,11 +55,11 @@ pub struct Spec {
     /// Where the AO is computed: "cpu" and/or "gpu".
     #[serde(default = "default_backends")]
     pub backends: Vec<Backend>,
-    /// Other ray casters timed on the CPU reference's rays, beside ours: `["embree"]` adds the
-    /// `embree_*` columns to the CPU rows (a build without the `embree` feature skips them,
-    /// saying so, unless the run requires them).
+    /// Other methods answering the kind on every scene, beside the field's cells and our ray
+    /// cast reference (`[{"method": "embree"}, …]`, see [`super::methods`]): each setting is a
+    /// row of `methods.csv`, measured as the field's cells are.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub raycasters: Vec<Raycaster>,
+    pub methods: Vec<super::methods::MethodSpec>,
     /// The ray-cast reference.
     pub reference: ReferenceSpec,
     /// The paper's own numbers for the cells reproduced.
@@ -94,14 +94,6 @@ impl Backend {
             Backend::Gpu => "gpu",
         }
     }
-}
-
-/// A second CPU ray caster, timed on the reference's rays beside ours.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Raycaster {
-    /// Intel Embree 3 (`trace::embree`, the `embree` cargo feature).
-    Embree,
 }
 
 /// A named scene.

@@ -197,6 +197,7 @@ impl Validator<'_> {
             ));
         }
         s.render.options.validate(&s.render, s, self)?;
+        self.methods(s, kind.as_ref())?;
         if let Some(b) = s.render.intra_bias {
             if !(0.0..1.0).contains(&b) {
                 return Err(self.err("render.intra_bias", format!("{b} is outside [0, 1)")));
@@ -248,6 +249,34 @@ impl Validator<'_> {
     }
 
     /// A paper cell's scene and `ours`: scenes the spec has, a ray count it sweeps.
+    /// Each `methods` entry's own options, then whether every setting answers the kind; a
+    /// setting listed twice is refused.
+    fn methods(&self, s: &Spec, kind: &dyn super::kinds::Kind) -> Result<(), SpecError> {
+        let mut seen: Vec<String> = Vec::new();
+        for (i, m) in s.methods.iter().enumerate() {
+            let at = format!("methods[{i}]");
+            m.options.validate(&at, s, self)?;
+            for setting in m.settings() {
+                if let Some(why) = setting.refuses(kind) {
+                    return Err(self.err(
+                        &at,
+                        format!(
+                            "\"{}\" cannot answer render \"{}\": {why}",
+                            setting.id(),
+                            kind.name()
+                        ),
+                    ));
+                }
+                let id = setting.id();
+                if seen.contains(&id) {
+                    return Err(self.err(&at, format!("setting \"{id}\" listed twice")));
+                }
+                seen.push(id);
+            }
+        }
+        Ok(())
+    }
+
     fn paper_source(
         &self,
         s: &Spec,

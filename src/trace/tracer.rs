@@ -166,6 +166,16 @@ impl Tracer {
         self.triangles.is_empty()
     }
 
+    /// Bytes of what a query reads: the CWBVH's nodes and primitive indices, the packed
+    /// triangles and their original indices (the vectors' lengths, not their capacities).
+    pub fn bytes(&self) -> u64 {
+        use std::mem::size_of_val;
+        (size_of_val(self.bvh.nodes.as_slice())
+            + size_of_val(self.bvh.primitive_indices.as_slice())
+            + size_of_val(self.triangles.as_slice())
+            + size_of_val(self.original_index.as_slice())) as u64
+    }
+
     /// The obvhs ray (scaled) and the watertight ray, or `None` when nothing can be hit.
     #[inline]
     fn prepare(

@@ -8,7 +8,7 @@
 //! [`crate::visibility::Visibility`] behind the same estimator. Stages shorter than
 //! `short_stage_s` are timed as the best of `repeats` runs.
 
-mod raycasters;
+mod methods;
 mod references;
 mod staging;
 mod state;
@@ -77,8 +77,8 @@ pub struct RunOptions {
     pub adapter: AdapterPreference,
     /// Run into an output folder that holds files no run wrote (they are kept).
     pub allow_nonempty_out: bool,
-    /// Fail, rather than skip the `embree_*` columns, where a spec lists the Embree ray caster
-    /// and this build has none (no `embree` feature).
+    /// Fail, rather than skip its rows, where a spec lists a method this build cannot run
+    /// (Embree without the `embree` feature).
     pub require_embree: bool,
 }
 
@@ -216,10 +216,10 @@ fn run_checked(
         out: staging::create(&opts.out)?,
         ..opts.clone()
     };
-    let embree = raycasters::embree_enabled(ls, spec, opts)?;
+    let method_runs = methods::runnable(ls, spec, opts)?;
     let rows = (|| {
         let mut runner = Runner::new(spec, &plan, &scenes, &staged)?;
-        runner.embree = embree;
+        runner.method_runs = method_runs;
         for step in &plan.steps {
             runner.step(step)?;
         }

@@ -51,9 +51,6 @@ pub(super) struct SceneState {
     pub(super) raycast_s: HashMap<(Backend, u32), f64>,
     /// Ray-cast kernel time from GPU timestamps per (backend, k), where there are any.
     pub(super) raycast_kernel_s: HashMap<(Backend, u32), f64>,
-    /// Embree on the reference's rays: its time (seconds) and its estimate's RMS (0–255)
-    /// against the reference's; `None` unless the run times Embree.
-    pub(super) embree: Option<(f64, f64)>,
 }
 
 impl SceneState {
@@ -95,7 +92,6 @@ impl SceneState {
             ref_image: None,
             raycast_s: HashMap::new(),
             raycast_kernel_s: HashMap::new(),
-            embree: None,
         }
     }
 

@@ -6,8 +6,10 @@ use super::references::{raycast_truth_errors, seed_errors, SeedErrors};
 use super::state::{mean_sd, CellResult, SceneState};
 use super::RunOptions;
 use crate::experiment::backend::{self, Casters, ComputeBackend, CpuBackend, Quantity};
+use crate::experiment::columns::NamedRow;
 use crate::experiment::fields::{derive, Supplied};
 use crate::experiment::kinds::Kind;
+use crate::experiment::methods::Method;
 use crate::experiment::metrics::{
     grain, image_errors, rms_u8, rms_unquantised, vertex_errors, ErrorStats,
 };
@@ -46,8 +48,11 @@ pub(super) struct Runner<'a> {
     pub(super) results: Vec<CellResult>,
     lookups: usize,
     done: usize,
-    /// Time Embree on the reference's rays (the spec lists it and the build has it).
-    pub(super) embree: bool,
+    /// The spec's method settings ([`crate::experiment::methods::settings_of`]), whether this
+    /// build runs each, and their rows.
+    pub(super) methods: Vec<Box<dyn Method>>,
+    pub(super) method_runs: Vec<bool>,
+    pub(super) method_rows: Vec<NamedRow>,
 }
 
 /// A cell's fields as the lookup reads them, and what their bakes cost.
@@ -97,7 +102,9 @@ impl<'a> Runner<'a> {
                 .filter(|s| matches!(s, Step::Lookup { .. }))
                 .count(),
             done: 0,
-            embree: false,
+            methods: crate::experiment::methods::settings_of(spec),
+            method_runs: Vec::new(),
+            method_rows: Vec::new(),
         })
     }
 
@@ -189,6 +196,7 @@ impl<'a> Runner<'a> {
                         .any(|(lm, lp)| lm == m && Geometry::of(lp) == *g)
                 });
             }
+            Step::Method { scene, setting, .. } => self.method(*scene, *setting)?,
             Step::Lookup { cell, .. } => self.lookup(*cell)?,
         }
         Ok(())
@@ -241,9 +249,6 @@ impl<'a> Runner<'a> {
             st.ref_image.as_ref().map(|_| 0.0),
         );
         let name = bs.name.clone();
-        if self.embree {
-            self.embree_reference(scene, k)?;
-        }
         self.seed_references(scene, k)?;
         let st = self.states[scene].as_ref().expect("scene state");
         let (t, t_sd) = mean_sd(&st.reference_vs_truth);
@@ -333,8 +338,6 @@ impl<'a> Runner<'a> {
             shaded.save_png(&p).map_err(Error::io(&p))?;
         }
         let be = self.backends[&c.backend].as_ref();
-        // Embree runs on the CPU: its columns go with the CPU rows.
-        let embree = st.embree.filter(|_| c.backend == Backend::Cpu);
         let row = Row::from_parts(
             self.cell_columns(&c, &id, st, be.adapter()),
             TimeColumns {
@@ -344,15 +347,10 @@ impl<'a> Runner<'a> {
                     .raycast_kernel_s
                     .get(&(c.backend, self.plan.render_k))
                     .copied(),
-                embree_s: embree.map(|e| e.0),
                 ..ev.times
             },
             fields.columns,
-            ErrorColumns {
-                image,
-                embree_rms_vs_raycast: embree.map(|e| e.1),
-                ..errors
-            },
+            ErrorColumns { image, ..errors },
         );
         self.rows.push((cell, row));
         self.field_sweep.extend(field_sweep);
@@ -479,7 +477,7 @@ impl<'a> Runner<'a> {
     /// Measure: the kind's metric columns against the same-ray reference (the first seed's
     /// largest errors and share off by one level; the RMS columns over every seed) and the
     /// errors against the converged reference.
-    fn measure(
+    pub(super) fn measure(
         &self,
         st: &SceneState,
         bs: &BuiltScene,
@@ -523,14 +521,13 @@ impl<'a> Runner<'a> {
                 (Some(a), Some(s), Some((_, mask))) => Some(rms_u8(&a.data, &s.data, Some(mask))),
                 _ => None,
             },
-            embree_rms_vs_raycast: None,
             image: String::new(),
         }
     }
 
     /// Write: the cell's image and its difference from the reference ×5; the image's path
     /// relative to the output folder (empty without an image).
-    fn write_images(
+    pub(super) fn write_images(
         &self,
         id: &str,
         img: Option<&(GrayImage, Vec<bool>)>,

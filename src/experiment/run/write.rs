@@ -109,6 +109,9 @@ impl Runner<'_> {
         if !pairs.is_empty() {
             outputs::write_csv(&out.join("pairs.csv"), &pairs)?;
         }
+        if !self.method_rows.is_empty() {
+            crate::experiment::columns::write_csv(&out.join("methods.csv"), &self.method_rows)?;
+        }
         if let Some(paper) = &spec.paper {
             let t = crate::experiment::paper::RunTables {
                 rows: &rows,
@@ -191,6 +194,7 @@ impl Runner<'_> {
             "cache_limit_bytes": opts.supply.cache_limit,
             "plan": {
                 "cells": plan.cells.len(),
+                "methods": plan.methods,
                 "bakes": plan.bakes(),
                 "peak_field_bytes": plan.peak_field_bytes,
                 "needs_gpu": plan.needs_gpu,

@@ -1,0 +1,275 @@
+//! Methods as plug-ins: *how* a render kind's values are answered on a scene's casters, beside
+//! the visibility field the spec's `fields` axes sweep and our ray caster, the reference every
+//! answer is measured against. A spec lists methods (`"methods": [{"method": "embree"}, …]`);
+//! each entry is read in two steps, as `render` is: `method` names a registry entry
+//! ([`MethodEntry`], [`BUILT_IN`], [`register`]), then that entry reads the remaining keys into
+//! its own options struct, unknown keys refused ([`MethodEntry::read`], [`MethodOptions`]).
+//!
+//! A method's options expand to its settings (the cross product of its parameter axes), each a
+//! [`Method`]: its precompute on a scene ([`Method::prepare`]: a BVH, a bake; timed by the
+//! runner, with its bytes), then an [`Answer`]: a [`Visibility`] that the kind's own estimator
+//! runs through on the reference's rays (a ray caster, a sphere tracer), or an estimator of
+//! its own on the kind's points (an estimator that casts no ray, as cone tracing or an AO
+//! field). The runner ([`super::run`]) gives every setting one row of `methods.csv` per scene:
+//! the precompute's time and bytes, the estimate's time and rays per second, and the same
+//! error columns as the field's rows, against the same same-ray reference and the same
+//! converged reference.
+//!
+//! The field's cells stay in `table.csv` (their axes are the papers'); every other method is a
+//! row of `methods.csv`. Methods run on the CPU backend.
+
+pub mod embree;
+pub mod raycast;
+
+use super::kinds::Kind;
+use super::scenes::BuiltScene;
+use super::spec::{Spec, SpecError};
+use super::validate::Validator;
+use super::Result;
+use crate::render::estimator::Estimator;
+use crate::visibility::Visibility;
+use glam::Vec3;
+use std::path::PathBuf;
+use std::sync::RwLock;
+
+/// What a method precomputes from and answers through, on one scene.
+pub struct MethodContext<'a> {
+    pub scene: &'a BuiltScene,
+    /// World triangles of every caster (the reference's).
+    pub triangles: &'a [[Vec3; 3]],
+    /// The kind's estimator on this scene.
+    pub estimator: &'a dyn Estimator,
+    /// The run's cache folder, for a method that caches its precompute (none: no cache).
+    pub cache: Option<PathBuf>,
+    /// The largest single allocation the run allows (bytes).
+    pub memory_limit: u64,
+}
+
+/// How a prepared method answers the kind.
+pub enum Answer {
+    /// The kind's estimator through this, on the reference's rays (ray casters, sphere
+    /// tracers): its values are comparable ray for ray with the reference's.
+    Rays(Box<dyn Visibility + Send>),
+    /// An estimator of the method's own on the kind's points (the rays are passed and may be
+    /// ignored: an AO field casts none).
+    Direct(Box<dyn Estimator + Send>),
+}
+
+/// A method prepared on one scene.
+pub struct Prepared {
+    pub answer: Answer,
+    /// Bytes of what it precomputed and reads (none where the method cannot say: Embree's
+    /// BVH is opaque).
+    pub bytes: Option<u64>,
+    /// The precompute came from a cache (its time is then the load's).
+    pub cached: bool,
+    /// Extra columns of the method's own, in order (name, value).
+    pub columns: Vec<(String, String)>,
+}
+
+/// One setting of a method: what answers a kind, with its parameters fixed.
+pub trait Method: Send + Sync {
+    /// Its name in specs and tables (`method`).
+    fn name(&self) -> &'static str;
+    /// Its parameters (name, value), in order: the row's parameter columns and its id.
+    fn params(&self) -> Vec<(&'static str, String)> {
+        Vec::new()
+    }
+    /// Why it cannot answer `kind` (refused before any work, naming both), or none.
+    fn refuses(&self, _kind: &dyn Kind) -> Option<String> {
+        None
+    }
+    /// Why this build cannot run it (a cargo feature it needs), or none: the runner skips it
+    /// with that reason, or fails where the run requires it.
+    fn unavailable(&self) -> Option<String> {
+        None
+    }
+    /// Its precompute on one scene (timed by the runner: the row's `precompute_s`).
+    fn prepare(&self, ctx: &MethodContext) -> Result<Prepared>;
+}
+
+impl dyn Method {
+    /// The setting's id: the name, then each parameter's value (`sdf-64-f16`).
+    pub fn id(&self) -> String {
+        let mut s = self.name().to_string();
+        for (_, v) in self.params() {
+            s.push('-');
+            s.push_str(&v);
+        }
+        s
+    }
+}
+
+/// A method's own options: the keys of its `methods` entry beside `method`.
+pub trait MethodOptions: MethodOptionsBase + std::fmt::Debug + Send + Sync {
+    /// What serde cannot check, each error naming the field under `at` (`methods[1]`).
+    fn validate(&self, at: &str, spec: &Spec, v: &Validator) -> std::result::Result<(), SpecError>;
+    /// Its settings: the cross product of its parameter axes, in order.
+    fn settings(&self) -> Vec<Box<dyn Method>>;
+}
+
+/// What every method's options do alike, given to any `Serialize + Clone` options type.
+pub trait MethodOptionsBase {
+    /// Its keys as JSON (written back into `spec.json`).
+    fn to_json(&self) -> serde_json::Map<String, serde_json::Value>;
+    /// A boxed copy.
+    fn clone_box(&self) -> Box<dyn MethodOptions>;
+}
+
+impl<T: MethodOptions + serde::Serialize + Clone + 'static> MethodOptionsBase for T {
+    fn to_json(&self) -> serde_json::Map<String, serde_json::Value> {
+        match serde_json::to_value(self) {
+            Ok(serde_json::Value::Object(m)) => m,
+            other => unreachable!("method options must serialise as an object, not {other:?}"),
+        }
+    }
+
+    fn clone_box(&self) -> Box<dyn MethodOptions> {
+        Box::new(self.clone())
+    }
+}
+
+/// A method in the registry.
+#[derive(Clone, Copy)]
+pub struct MethodEntry {
+    /// `method` in a spec's `methods`.
+    pub name: &'static str,
+    /// One line for `experiment list` and errors.
+    pub about: &'static str,
+    /// Reads the method's own keys (a JSON object without `method`), refusing a key it does
+    /// not read.
+    pub read:
+        fn(serde_json::Value) -> std::result::Result<Box<dyn MethodOptions>, serde_json::Error>,
+}
+
+/// [`MethodEntry::read`] for an options type that serde reads (with `deny_unknown_fields`).
+pub fn read_as<T>(
+    v: serde_json::Value,
+) -> std::result::Result<Box<dyn MethodOptions>, serde_json::Error>
+where
+    T: serde::de::DeserializeOwned + MethodOptions + 'static,
+{
+    Ok(Box::new(serde_json::from_value::<T>(v)?))
+}
+
+/// The methods of this build.
+pub const BUILT_IN: &[MethodEntry] = &[raycast::ENTRY, embree::ENTRY];
+
+/// Methods added at run time by [`register`].
+static REGISTERED: RwLock<Vec<MethodEntry>> = RwLock::new(Vec::new());
+
+/// Adds a method to the registry; refused when its name is taken.
+pub fn register(entry: MethodEntry) -> std::result::Result<(), String> {
+    let mut extra = REGISTERED.write().unwrap_or_else(|e| e.into_inner());
+    if lookup_in(&extra, entry.name).is_some() {
+        return Err(format!("a method \"{}\" exists already", entry.name));
+    }
+    extra.push(entry);
+    Ok(())
+}
+
+fn lookup_in(extra: &[MethodEntry], name: &str) -> Option<MethodEntry> {
+    BUILT_IN
+        .iter()
+        .chain(extra.iter())
+        .find(|e| e.name == name)
+        .copied()
+}
+
+/// The registered method named `name`.
+pub fn lookup(name: &str) -> Option<MethodEntry> {
+    let extra = REGISTERED.read().unwrap_or_else(|e| e.into_inner());
+    lookup_in(&extra, name)
+}
+
+/// Every registered method's name, built-in ones first.
+pub fn names() -> Vec<&'static str> {
+    let extra = REGISTERED.read().unwrap_or_else(|e| e.into_inner());
+    BUILT_IN
+        .iter()
+        .chain(extra.iter())
+        .map(|e| e.name)
+        .collect()
+}
+
+/// Every setting of a spec's `methods`, in order: each entry's settings in its own order.
+pub fn settings_of(spec: &Spec) -> Vec<Box<dyn Method>> {
+    spec.methods.iter().flat_map(|m| m.settings()).collect()
+}
+
+/// One entry of a spec's `methods`: the method's name and its own options.
+#[derive(Debug)]
+pub struct MethodSpec {
+    pub method: &'static str,
+    pub options: Box<dyn MethodOptions>,
+}
+
+impl MethodSpec {
+    /// Its settings ([`MethodOptions::settings`]).
+    pub fn settings(&self) -> Vec<Box<dyn Method>> {
+        self.options.settings()
+    }
+}
+
+impl Clone for MethodSpec {
+    fn clone(&self) -> MethodSpec {
+        MethodSpec {
+            method: self.method,
+            options: self.options.clone_box(),
+        }
+    }
+}
+
+impl PartialEq for MethodSpec {
+    fn eq(&self, other: &MethodSpec) -> bool {
+        self.method == other.method && self.options.to_json() == other.options.to_json()
+    }
+}
+
+impl serde::Serialize for MethodSpec {
+    fn serialize<S: serde::Serializer>(&self, ser: S) -> std::result::Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let own = self.options.to_json();
+        let mut m = ser.serialize_map(Some(1 + own.len()))?;
+        m.serialize_entry("method", self.method)?;
+        for (k, v) in &own {
+            m.serialize_entry(k, v)?;
+        }
+        m.end()
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for MethodSpec {
+    /// Two steps: `method`, then the rest by that method's plug-in.
+    fn deserialize<D: serde::Deserializer<'de>>(
+        de: D,
+    ) -> std::result::Result<MethodSpec, D::Error> {
+        use serde::de::Error;
+        let mut own = serde_json::Map::<String, serde_json::Value>::deserialize(de)?;
+        let name = match own.remove("method") {
+            Some(serde_json::Value::String(s)) => s,
+            Some(other) => {
+                return Err(D::Error::custom(format!(
+                    "`method`: expected a method's name, got {other}"
+                )))
+            }
+            None => return Err(D::Error::missing_field("method")),
+        };
+        let entry = lookup(&name).ok_or_else(|| {
+            D::Error::custom(format!(
+                "`method`: unknown method \"{name}\"; this build has {}",
+                names()
+                    .iter()
+                    .map(|n| format!("\"{n}\""))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ))
+        })?;
+        let options = (entry.read)(serde_json::Value::Object(own))
+            .map_err(|e| D::Error::custom(format!("\"{}\": {e}", entry.name)))?;
+        Ok(MethodSpec {
+            method: entry.name,
+            options,
+        })
+    }
+}

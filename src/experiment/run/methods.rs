@@ -1,0 +1,179 @@
+//! The spec's methods ([`crate::experiment::methods`]) on each scene: the precompute timed,
+//! then the kind through the method on every seed (the first timed), measured against the same
+//! same-ray reference and converged reference as the field's cells, one `methods.csv` row per
+//! scene and setting, built from named parts ([`crate::experiment::columns`]).
+
+use super::steps::Runner;
+use super::{Error, LoadedSpec, Result, RunOptions};
+use crate::experiment::columns::NamedRow;
+use crate::experiment::methods::{Answer, Method, MethodContext};
+use crate::experiment::metrics::rms_unquantised;
+use crate::experiment::outputs::ErrorColumns;
+use crate::experiment::progress::{stage, stage_adaptive};
+use crate::experiment::spec::Spec;
+use crate::render::estimator::Points;
+use crate::sampling::rays::RaySet;
+use crate::visibility::{SurfaceHit, Visibility};
+use glam::Vec3;
+
+/// The spec's method settings this run evaluates: those this build cannot run are skipped,
+/// saying why, or refused where `opts.require_embree` asks for every one.
+pub(super) fn runnable(ls: &LoadedSpec, spec: &Spec, opts: &RunOptions) -> Result<Vec<bool>> {
+    let settings = crate::experiment::methods::settings_of(spec);
+    let mut out = Vec::with_capacity(settings.len());
+    for m in &settings {
+        match m.unavailable() {
+            None => out.push(true),
+            Some(why) if opts.require_embree => {
+                return Err(Error::invalid(
+                    format!("{}: methods \"{}\"", ls.path.display(), m.name()),
+                    format!("{why}; --require-embree refuses to run without it"),
+                ))
+            }
+            Some(why) => {
+                println!(
+                    "SKIPPED method \"{}\" of {}: {why}; --require-embree fails instead",
+                    m.id(),
+                    ls.name
+                );
+                out.push(false);
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// The visibility a direct estimator is handed: it casts no ray, so any query is a bug of the
+/// method, reported as such.
+struct NoRays;
+
+impl Visibility for NoRays {
+    fn occluded(&self, _: Vec3, _: Vec3, _: f32, _: f32) -> bool {
+        unreachable!("a direct method's estimator cast a ray")
+    }
+
+    fn hit_distance(&self, _: Vec3, _: Vec3, _: f32, _: f32) -> Option<f32> {
+        unreachable!("a direct method's estimator cast a ray")
+    }
+
+    fn surface_hit(&self, _: Vec3, _: Vec3, _: f32, _: f32) -> Option<SurfaceHit> {
+        unreachable!("a direct method's estimator cast a ray")
+    }
+}
+
+impl Runner<'_> {
+    /// Setting `setting` of the spec's methods on scene `scene`: its precompute, its values on
+    /// every seed, its errors and images, its row.
+    pub(super) fn method(&mut self, scene: usize, setting: usize) -> Result<()> {
+        if !self.method_runs[setting] {
+            return Ok(());
+        }
+        self.scene(scene);
+        let m: &dyn Method = self.methods[setting].as_ref();
+        let bs = &self.scenes.scenes[scene];
+        let st = self.states[scene].as_ref().expect("scene state");
+        let id = format!("{}-{}", bs.name, m.id());
+        let ctx = MethodContext {
+            scene: bs,
+            triangles: &st.triangles,
+            estimator: st.estimator.as_ref(),
+            cache: self.opts.supply.cache.clone(),
+            memory_limit: self.opts.supply.memory_limit,
+        };
+        let context = |e: Error| e.context(format!("method {id}"));
+        if let Some(why) = m.refuses(self.kind.as_ref()) {
+            return Err(Error::invalid(
+                format!("methods \"{}\"", m.name()),
+                format!("cannot answer render \"{}\": {why}", self.kind.name()),
+            ));
+        }
+        let (prepared, precompute_s) = stage(&format!("{id}: precompute"), || m.prepare(&ctx));
+        let prepared = prepared.map_err(context)?;
+        let estimate = |at: Points, rays: &RaySet| match &prepared.answer {
+            Answer::Rays(v) => st.estimator.estimate(v.as_ref(), at, rays),
+            Answer::Direct(e) => e.estimate(&NoRays, at, rays),
+        };
+        let (short, reps) = (self.opts.short_stage_s, self.opts.repeats);
+        let k = self.plan.render_k;
+        let rays = RaySet::new(k, self.spec.reference.seed);
+        let (first, estimate_s, _) =
+            stage_adaptive(&format!("{id}: estimate"), short, reps, || {
+                Ok::<_, Error>(estimate(st.at(), &rays))
+            })?;
+        let mut values = vec![first];
+        for &sd in &self.seeds()[1..] {
+            values.push(estimate(st.at(), &RaySet::new(k, sd)));
+        }
+        let img = st.image(bs, &values[0]);
+        let errors = self.measure(st, bs, &values, img.as_ref().map(|(i, _)| i));
+        let image = self.write_images(&id, img.as_ref(), st)?;
+        if let Some(shaded) = st.shaded_image(bs, &values[0]) {
+            let p = self.opts.out.join(format!("images/{id}-shaded.png"));
+            shaded.save_png(&p).map_err(Error::io(&p))?;
+        }
+        let rays_cast = st.at.len() as u64 * self.kind.rays_cast_per_point();
+        let mut row = NamedRow::new();
+        // The cell: scene, method and its parameters, backend.
+        row.push("scene", &bs.name)
+            .push("method", m.name())
+            .push("setting", m.id());
+        for (name, value) in m.params() {
+            row.push(name, value);
+        }
+        row.push("backend", "cpu")
+            .push("adapter", self.cpu.adapter())
+            .push("rays_per_point", self.kind.rays_per_point())
+            .push("rays_cast", rays_cast)
+            .push("points", st.at.len())
+            .push("crease_points", st.at.crease_count())
+            .push("caster_triangles", bs.caster_triangles());
+        // The method: its precompute and what it keeps.
+        row.push(
+            "through",
+            match prepared.answer {
+                Answer::Rays(_) => "rays",
+                Answer::Direct(_) => "direct",
+            },
+        )
+        .push("precompute_s", precompute_s)
+        .push("precompute_cached", prepared.cached)
+        .push_opt("bytes", prepared.bytes);
+        for (name, value) in &prepared.columns {
+            row.push(name.clone(), value);
+        }
+        // The times.
+        row.push("estimate_s", estimate_s).push_opt(
+            "mrays_s",
+            (estimate_s > 0.0).then(|| rays_cast as f64 / estimate_s / 1e6),
+        );
+        // The metrics, the same as the field cells'.
+        push_errors(&mut row, &errors);
+        row.push("rms_vs_raycast", rms_unquantised(&values[0], &st.reference))
+            .push("image", image);
+        self.method_rows.push(row);
+        Ok(())
+    }
+}
+
+/// The error columns of a row, under the names of `table.csv` (0–255).
+fn push_errors(row: &mut NamedRow, e: &ErrorColumns) {
+    row.push("seeds", e.seeds)
+        .push_opt("rms_vertex", e.rms_vertex.map(|m| m.0))
+        .push_opt("rms_vertex_sd", e.rms_vertex.and_then(|m| m.1))
+        .push_opt("rms_image", e.rms_image.map(|m| m.0))
+        .push_opt("rms_image_sd", e.rms_image.and_then(|m| m.1))
+        .push_opt("max_error_vertex", e.max_error_vertex)
+        .push_opt("max_error_image", e.max_error_image)
+        .push_opt("share_pixels_off_1", e.share_pixels_off_1)
+        .push_opt("rms_vs_truth", e.rms_vs_truth.map(|m| m.0))
+        .push_opt("rms_vs_truth_sd", e.rms_vs_truth.and_then(|m| m.1))
+        .push_opt("rms_vs_truth_crease", e.rms_vs_truth_crease)
+        .push_opt("rms_vs_truth_interior", e.rms_vs_truth_interior)
+        .push_opt("truth_stderr", e.truth_stderr)
+        .push_opt("truth_rays", e.truth_rays)
+        .push_opt("raycast_rms_vs_truth", e.raycast_rms_vs_truth)
+        .push_opt("occlusion_rms", e.occlusion_rms)
+        .push_opt("grain", e.grain)
+        .push_opt("second_reference", e.second_reference.as_ref())
+        .push_opt("rms_image_vs_second", e.rms_image_vs_second);
+}
