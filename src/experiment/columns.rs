@@ -164,7 +164,7 @@ mod tests {
         assert_eq!(back[1].get("scene"), Some("q\"uote"));
         assert_eq!(back[1].number("z"), Some(3.0));
         let names: Vec<&str> = back[1].columns().map(|(n, _)| n).collect();
-        assert_eq!(names, ["scene", "x", "y", "z"]);
+        assert_eq!(names, ["scene", "z", "x", "y"]);
     }
 
     #[test]
