@@ -170,8 +170,8 @@ pub struct RunArgs {
     /// files are kept, never deleted.
     #[arg(long)]
     pub allow_nonempty_out: bool,
-    /// Fail where a spec lists the Embree ray caster ("raycasters": ["embree"]) and this build
-    /// has none (without it, such a run leaves out the embree_* columns and says why).
+    /// Fail where a spec lists a method this build cannot run (`{"method": "embree"}` without
+    /// the `embree` feature); without it, such a run leaves out that method's rows and says why.
     #[arg(long)]
     pub require_embree: bool,
 }
