@@ -273,6 +273,17 @@ fn list() -> Result<i32> {
             }
         }
     }
+    println!();
+    println!(
+        "render kinds (render.what): {}",
+        super::kinds::names().join(", ")
+    );
+    println!("methods (methods[].method):");
+    for name in super::methods::names() {
+        if let Some(e) = super::methods::lookup(name) {
+            println!("  {name:<12} {}", e.about);
+        }
+    }
     Ok(code)
 }
 
