@@ -6,12 +6,15 @@ use super::FrameRow;
 use crate::experiment::fields::FieldSupply;
 use crate::experiment::metrics::rms_unquantised;
 use crate::experiment::scenes::{mesh_sha256, LoadedMesh};
+use crate::experiment::truth_cache::{load_or_compute, TruthInputs};
 use crate::experiment::{Error, Result};
 use crate::field::lookup::LookupOptions;
 use crate::field::{FieldParams, Precision};
 use crate::geometry::procedural::{supershape, Supershape};
 use crate::geometry::{models, procedural, Mesh, Similarity};
 use crate::render::ao::{ao_at_points, AoOptions};
+use crate::render::estimator::{AoEstimator, Points};
+use crate::render::truth::TruthOptions;
 use crate::sampling::rays::RaySet;
 use crate::sampling::{LayoutKind, SphereKind};
 use glam::{Quat, Vec3};
@@ -42,6 +45,8 @@ pub struct Profile {
     /// Rays per point (k²).
     pub k: u32,
     pub field: (usize, u32, Precision),
+    /// The converged reference of every frame.
+    pub truth: TruthOptions,
 }
 
 impl Profile {
@@ -55,6 +60,13 @@ impl Profile {
                 plane_per_cell: 8,
                 k: 4,
                 field: (290, 16, Precision::U8),
+                truth: TruthOptions {
+                    target_stderr_255: 1.0,
+                    max_rays: 256,
+                    batches: 4,
+                    start_k: 4,
+                    seed: 7,
+                },
             }
         } else {
             Profile {
@@ -71,6 +83,13 @@ impl Profile {
                 plane_per_cell: 16,
                 k: 8,
                 field: (1090, 32, Precision::U8),
+                truth: TruthOptions {
+                    target_stderr_255: 0.5,
+                    max_rays: 1024,
+                    batches: 4,
+                    start_k: 8,
+                    seed: 7,
+                },
             }
         }
     }
@@ -88,6 +107,7 @@ impl Profile {
             "sphere_radius": RADIUS * CELL,
             "orbit_radius": ORBIT * CELL,
             "sphere_centre_height": HEIGHT * CELL,
+            "truth": self.truth,
         })
     }
 
@@ -278,8 +298,10 @@ impl Crowd {
         v
     }
 
-    /// Every frame, every method: its update, its query, its error against the world rebuild.
-    pub fn frames(&self, p: &Profile) -> Result<Vec<FrameRow>> {
+    /// Every frame, every method: its update, its query, its errors against the world rebuild
+    /// on the same rays and against the frame's converged reference (from the cache in
+    /// `cache` where it holds it: the key covers the frame's world triangles).
+    pub fn frames(&self, p: &Profile, cache: Option<&std::path::Path>) -> Result<Vec<FrameRow>> {
         let mut movers = self.movers();
         let tris: usize = self
             .casters
@@ -296,6 +318,7 @@ impl Crowd {
                 instances: &frame,
             };
             let mut reference: Option<Vec<f32>> = None;
+            let mut truth = None;
             for m in movers.iter_mut() {
                 let t = Instant::now();
                 m.update(&casters)?;
@@ -304,6 +327,23 @@ impl Crowd {
                 let ao = ao_at_points(m.vis(), &self.points, &self.normals, &self.rays, &self.opts);
                 let query_s = t.elapsed().as_secs_f64();
                 let reference = reference.get_or_insert_with(|| ao.clone());
+                if truth.is_none() {
+                    // The first method is the world rebuild: the frame's exact ray caster.
+                    let world = casters.world_triangles();
+                    let est = AoEstimator { opts: self.opts };
+                    let inputs = TruthInputs {
+                        estimator: &est,
+                        tracer: m.vis(),
+                        casters: &world,
+                        at: Points {
+                            points: &self.points,
+                            normals: &self.normals,
+                        },
+                    };
+                    let name = format!("crowd{}-f{f}", self.n);
+                    truth = Some(load_or_compute(cache, &name, &inputs, &p.truth)?.0);
+                }
+                let t = truth.as_ref().expect("the frame's truth");
                 let row = FrameRow {
                     sweep: "crowd",
                     casters: self.n,
@@ -316,14 +356,16 @@ impl Crowd {
                     rays,
                     mrays_s: rays as f64 / query_s.max(1e-12) / 1e6,
                     rms_vs_raycast: rms_unquantised(&ao, reference),
+                    rms_vs_truth: rms_unquantised(&ao, &t.ao),
+                    truth_stderr: t.rms_stderr_255(),
                     mean_ao: ao.iter().map(|&v| v as f64).sum::<f64>() / ao.len().max(1) as f64,
                     bytes: m.bytes(),
                     sphere_overlaps,
                     points_in_spheres,
                 };
                 println!(
-                    "dynamic crowd N={:<4} frame {f:<2} {:<15} update {:>9.4} s  query {:>8.4} s  RMS {:.3}",
-                    self.n, row.method, row.update_s, row.query_s, row.rms_vs_raycast
+                    "dynamic crowd N={:<4} frame {f:<2} {:<15} update {:>9.4} s  query {:>8.4} s  RMS {:.3} (vs truth {:.3})",
+                    self.n, row.method, row.update_s, row.query_s, row.rms_vs_raycast, row.rms_vs_truth
                 );
                 rows.push(row);
             }

@@ -16,7 +16,8 @@
 //!
 //! Each row is one (N, frame, method): `update_s` (what the motion costs), `query_s` (the AO
 //! pass, all threads), `frame_s` = both, Mrays/s, `rms_vs_raycast` (0–255, unquantised, against
-//! `world_rebuild` on the same rays), and the frame's overlap counts: caster pairs whose
+//! `world_rebuild` on the same rays), `rms_vs_truth` (against the frame's converged reference,
+//! cached by frame: its key covers the frame's world triangles), and the frame's overlap counts: caster pairs whose
 //! bounding spheres overlap and receiver points inside a caster's sphere (where the papers'
 //! non-penetrating assumption no longer holds). `frame_time.png` plots the mean frame time
 //! against N per method.
@@ -51,6 +52,10 @@ pub struct FrameRow {
     pub mrays_s: f64,
     /// RMS over the points (0–255, unquantised) against `world_rebuild` on the same rays.
     pub rms_vs_raycast: f64,
+    /// RMS over the points (0–255, unquantised) against the frame's converged reference.
+    pub rms_vs_truth: f64,
+    /// The converged reference's RMS standard error (0–255): the floor of `rms_vs_truth`.
+    pub truth_stderr: f64,
     /// Mean AO over the points (the answer's size, for reading the RMS).
     pub mean_ao: f64,
     /// Bytes the method keeps for the scene: the world BVH, or every mesh's field once.
@@ -70,7 +75,7 @@ pub fn run(out: &Path, quick: bool, supply: &FieldSupply) -> Result<Vec<FrameRow
     let mut rows = Vec::new();
     for &n in &profile.counts {
         let crowd = crowd::Crowd::new(&profile, n, supply)?;
-        rows.extend(crowd.frames(&profile)?);
+        rows.extend(crowd.frames(&profile, supply.cache.as_deref())?);
     }
     super::outputs::write_csv(&out.join("table.csv"), &rows)?;
     plot_frame_time(&out.join("frame_time.png"), &rows)?;
