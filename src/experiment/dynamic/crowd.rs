@@ -62,7 +62,7 @@ impl Profile {
                 field: (290, 16, Precision::U8),
                 truth: TruthOptions {
                     target_stderr_255: 1.0,
-                    max_rays: 256,
+                    max_rays: 1024,
                     batches: 4,
                     start_k: 4,
                     seed: 7,
