@@ -47,6 +47,8 @@ pub struct Profile {
     pub field: (usize, u32, Precision),
     /// The converged reference of every frame.
     pub truth: TruthOptions,
+    /// The approach sweep's gaps between the caster's sphere and the plane, in sphere radii.
+    pub gaps: Vec<f32>,
 }
 
 impl Profile {
@@ -67,6 +69,7 @@ impl Profile {
                     start_k: 4,
                     seed: 7,
                 },
+                gaps: vec![0.5, 0.0, -0.25, -0.5],
             }
         } else {
             Profile {
@@ -90,6 +93,9 @@ impl Profile {
                     start_k: 8,
                     seed: 7,
                 },
+                gaps: vec![
+                    1.0, 0.5, 0.25, 0.1, 0.05, 0.0, -0.05, -0.1, -0.2, -0.3, -0.4, -0.5,
+                ],
             }
         }
     }
@@ -108,6 +114,7 @@ impl Profile {
             "orbit_radius": ORBIT * CELL,
             "sphere_centre_height": HEIGHT * CELL,
             "truth": self.truth,
+            "approach_gaps_radii": self.gaps,
         })
     }
 
@@ -143,7 +150,12 @@ fn load(name: &str) -> Result<Mesh> {
 
 /// One crowd: its meshes, fields, receiver points and rays.
 pub struct Crowd {
+    /// `crowd` or `approach`.
+    sweep: &'static str,
     n: usize,
+    /// For the approach sweep: per frame, the gap between the caster's sphere and the plane in
+    /// sphere radii (negative: the sphere cuts the plane).
+    gaps: Option<Vec<f32>>,
     meshes: Vec<Arc<Mesh>>,
     fields: Vec<Arc<crate::field::VisibilityField>>,
     /// Per caster: its mesh, its scale, the mesh's bounding sphere centre (model space), its
@@ -237,7 +249,9 @@ impl Crowd {
             radius: 0.75 * width,
         };
         Ok(Crowd {
+            sweep: "crowd",
             n,
+            gaps: None,
             meshes,
             fields,
             casters,
@@ -246,6 +260,41 @@ impl Crowd {
             rays: RaySet::new(p.k, 1),
             opts: AoOptions::for_scene(bounds),
         })
+    }
+
+    /// The approach: one caster (the profile's first mesh) lowered onto the middle of a plane
+    /// 2 cells wide, frame by frame, its sphere's gap to the plane going through `gaps` (in
+    /// sphere radii; below 0 the sphere cuts the plane, and further down the mesh itself).
+    pub fn approach(p: &Profile, supply: &FieldSupply, gaps: Vec<f32>) -> Result<Crowd> {
+        let mut c = Crowd::new(p, 4, supply)?;
+        c.sweep = "approach";
+        c.n = 1;
+        c.casters.truncate(1);
+        c.casters[0].cell = Vec3::new(0.0, HEIGHT * CELL, 0.0);
+        c.gaps = Some(gaps);
+        Ok(c)
+    }
+
+    /// Frames of this scene: the profile's, or one per gap of the approach.
+    fn frame_count(&self, p: &Profile) -> usize {
+        self.gaps.as_ref().map_or(p.frames, Vec::len)
+    }
+
+    /// Every caster's (mesh, transform) at frame `f`.
+    fn frame(&self, p: &Profile, f: usize) -> Vec<(usize, Similarity)> {
+        match &self.gaps {
+            None => self.at(f as f32 * p.dt),
+            Some(gaps) => {
+                let c = &self.casters[0];
+                let r = RADIUS * CELL;
+                let pos = Vec3::new(c.cell.x, r + gaps[f] * r, c.cell.z);
+                let translation = pos - c.scale * c.centre;
+                vec![(
+                    c.mesh,
+                    Similarity::new(Quat::IDENTITY, translation, c.scale),
+                )]
+            }
+        }
     }
 
     /// Every caster's (mesh, transform) at time `t`: the sphere's centre on its orbit, the
@@ -310,9 +359,21 @@ impl Crowd {
             .sum();
         let rays = (self.points.len() * self.rays.len()) as u64;
         let mut rows = Vec::new();
-        for f in 0..p.frames {
-            let frame = self.at(f as f32 * p.dt);
+        for f in 0..self.frame_count(p) {
+            let frame = self.frame(p, f);
             let (sphere_overlaps, points_in_spheres) = self.overlaps(&frame);
+            let gap_radii = self.gaps.as_ref().map(|g| g[f] as f64);
+            // The lowest point of the moved meshes over the plane, in sphere radii (below 0 the
+            // mesh itself goes through the plane).
+            let mesh_clearance = self.gaps.as_ref().map(|_| {
+                let (m, t) = frame[0];
+                let low = self.meshes[m]
+                    .positions
+                    .iter()
+                    .map(|&v| t.to_world_point(v).y)
+                    .fold(f32::INFINITY, f32::min);
+                (low / (RADIUS * CELL)) as f64
+            });
             let casters = FrameCasters {
                 meshes: &self.meshes,
                 instances: &frame,
@@ -345,7 +406,9 @@ impl Crowd {
                 }
                 let t = truth.as_ref().expect("the frame's truth");
                 let row = FrameRow {
-                    sweep: "crowd",
+                    sweep: self.sweep,
+                    gap_radii,
+                    mesh_clearance,
                     casters: self.n,
                     caster_triangles: tris,
                     frame: f,
@@ -364,8 +427,8 @@ impl Crowd {
                     points_in_spheres,
                 };
                 println!(
-                    "dynamic crowd N={:<4} frame {f:<2} {:<15} update {:>9.4} s  query {:>8.4} s  RMS {:.3} (vs truth {:.3})",
-                    self.n, row.method, row.update_s, row.query_s, row.rms_vs_raycast, row.rms_vs_truth
+                    "dynamic {} N={:<4} frame {f:<2} {:<15} update {:>9.4} s  query {:>8.4} s  RMS {:.3} (vs truth {:.3})",
+                    self.sweep, self.n, row.method, row.update_s, row.query_s, row.rms_vs_raycast, row.rms_vs_truth
                 );
                 rows.push(row);
             }

@@ -21,6 +21,11 @@
 //! bounding spheres overlap and receiver points inside a caster's sphere (where the papers'
 //! non-penetrating assumption no longer holds). `frame_time.png` plots the mean frame time
 //! against N per method.
+//!
+//! The approach: one caster lowered onto the middle of the plane frame by frame, its bounding
+//! sphere's gap to the plane going from above it to cutting it (`gap_radii`, in sphere radii;
+//! `mesh_clearance`, the mesh's own lowest point): the error against the gap, where the
+//! papers' non-penetrating assumption stops holding (`error_vs_gap.png`).
 
 pub mod crowd;
 pub mod movers;
@@ -34,7 +39,14 @@ use std::path::Path;
 /// One method on one frame of one crowd.
 #[derive(Clone, Debug, Serialize)]
 pub struct FrameRow {
+    /// `crowd` (N moving casters) or `approach` (one caster lowered onto the plane).
     pub sweep: &'static str,
+    /// The approach: the gap between the caster's sphere and the plane, in sphere radii
+    /// (negative: the sphere cuts the plane).
+    pub gap_radii: Option<f64>,
+    /// The approach: the moved mesh's lowest point over the plane, in sphere radii (negative:
+    /// the mesh goes through it).
+    pub mesh_clearance: Option<f64>,
     /// Casters in the scene.
     pub casters: usize,
     pub caster_triangles: usize,
@@ -77,8 +89,16 @@ pub fn run(out: &Path, quick: bool, supply: &FieldSupply) -> Result<Vec<FrameRow
         let crowd = crowd::Crowd::new(&profile, n, supply)?;
         rows.extend(crowd.frames(&profile, supply.cache.as_deref())?);
     }
+    let approach = crowd::Crowd::approach(&profile, supply, profile.gaps.clone())?;
+    rows.extend(approach.frames(&profile, supply.cache.as_deref())?);
     super::outputs::write_csv(&out.join("table.csv"), &rows)?;
-    plot_frame_time(&out.join("frame_time.png"), &rows)?;
+    let crowd_rows: Vec<FrameRow> = rows
+        .iter()
+        .filter(|r| r.sweep == "crowd")
+        .cloned()
+        .collect();
+    plot_frame_time(&out.join("frame_time.png"), &crowd_rows)?;
+    plot_approach(&out.join("error_vs_gap.png"), &rows)?;
     let meta = super::meta::RunMeta::collect(None).timed();
     let summary = serde_json::json!({
         "experiment": "dynamic",
@@ -92,6 +112,48 @@ pub fn run(out: &Path, quick: bool, supply: &FieldSupply) -> Result<Vec<FrameRow
     let json = serde_json::to_string_pretty(&summary).expect("run summary serialises");
     crate::io::write_atomic(&p, json.as_bytes()).map_err(Error::io(&p))?;
     Ok(rows)
+}
+
+/// The approach: each method's error against the gap, on the same rays and against the truth.
+fn plot_approach(path: &Path, rows: &[FrameRow]) -> Result<()> {
+    let approach: Vec<&FrameRow> = rows.iter().filter(|r| r.sweep == "approach").collect();
+    let mut series = Vec::new();
+    for m in ["field"] {
+        let pick = |f: fn(&FrameRow) -> f64| -> Vec<(f64, f64)> {
+            approach
+                .iter()
+                .filter(|r| r.method == m)
+                .map(|r| (r.gap_radii.unwrap_or(f64::NAN), f(r)))
+                .collect()
+        };
+        series.push(Series {
+            label: format!("{m}: RMS against ray casting, same rays"),
+            points: pick(|r| r.rms_vs_raycast),
+            line: true,
+        });
+        series.push(Series {
+            label: format!("{m}: RMS against the converged reference"),
+            points: pick(|r| r.rms_vs_truth),
+            line: true,
+        });
+    }
+    series.push(Series {
+        label: "ray casting: RMS against the converged reference".into(),
+        points: approach
+            .iter()
+            .filter(|r| r.method == "world_rebuild")
+            .map(|r| (r.gap_radii.unwrap_or(f64::NAN), r.rms_vs_truth))
+            .collect(),
+        line: true,
+    });
+    let axes = Axes {
+        title: "a caster lowered onto the receiver: error against the gap".into(),
+        x_label: "gap between the caster's bounding sphere and the plane (sphere radii)".into(),
+        y_label: "RMS (0-255)".into(),
+        log_x: false,
+        log_y: false,
+    };
+    xy_plot(path, &axes, &series, &[])
 }
 
 /// Mean frame time against the caster count, one line per method.
