@@ -47,6 +47,8 @@ pub struct Profile {
     pub field: (usize, u32, Precision),
     /// The converged reference of every frame.
     pub truth: TruthOptions,
+    /// The crowd drawn as an animation (`crowd.png`, APNG).
+    pub animate: usize,
     /// The approach sweep's gaps between the caster's sphere and the plane, in sphere radii.
     pub gaps: Vec<f32>,
 }
@@ -70,6 +72,7 @@ impl Profile {
                     seed: 7,
                 },
                 gaps: vec![0.5, 0.0, -0.25, -0.5],
+                animate: 4,
             }
         } else {
             Profile {
@@ -96,6 +99,7 @@ impl Profile {
                 gaps: vec![
                     1.0, 0.5, 0.25, 0.1, 0.05, 0.0, -0.05, -0.1, -0.2, -0.3, -0.4, -0.5,
                 ],
+                animate: 16,
             }
         }
     }
@@ -163,6 +167,8 @@ pub struct Crowd {
     casters: Vec<CasterMotion>,
     points: Vec<Vec3>,
     normals: Vec<Vec3>,
+    /// The plane's vertices per side (the points are its `side × side` grid).
+    pub plane_side: usize,
     rays: RaySet,
     opts: AoOptions,
 }
@@ -242,8 +248,9 @@ impl Crowd {
                 }
             })
             .collect();
-        let plane = procedural::plane(width, side * p.plane_per_cell + 1)
-            .map_err(Error::geometry("dynamic: plane"))?;
+        let plane_side = side * p.plane_per_cell + 1;
+        let plane =
+            procedural::plane(width, plane_side).map_err(Error::geometry("dynamic: plane"))?;
         let bounds = crate::geometry::Sphere {
             center: Vec3::ZERO,
             radius: 0.75 * width,
@@ -257,6 +264,7 @@ impl Crowd {
             casters,
             points: plane.positions.clone(),
             normals: plane.normals.clone(),
+            plane_side,
             rays: RaySet::new(p.k, 1),
             opts: AoOptions::for_scene(bounds),
         })
@@ -350,7 +358,15 @@ impl Crowd {
     /// Every frame, every method: its update, its query, its errors against the world rebuild
     /// on the same rays and against the frame's converged reference (from the cache in
     /// `cache` where it holds it: the key covers the frame's world triangles).
-    pub fn frames(&self, p: &Profile, cache: Option<&std::path::Path>) -> Result<Vec<FrameRow>> {
+    /// With them, the frames of the animation: the approach's, and the crowd's of
+    /// `p.animate` casters (empty for the others).
+    pub fn frames(
+        &self,
+        p: &Profile,
+        cache: Option<&std::path::Path>,
+    ) -> Result<(Vec<FrameRow>, Vec<super::animation::Frame>)> {
+        let animated = self.sweep == "approach" || self.n == p.animate;
+        let mut pictures = Vec::new();
         let mut movers = self.movers();
         let tris: usize = self
             .casters
@@ -388,6 +404,12 @@ impl Crowd {
                 let ao = ao_at_points(m.vis(), &self.points, &self.normals, &self.rays, &self.opts);
                 let query_s = t.elapsed().as_secs_f64();
                 let reference = reference.get_or_insert_with(|| ao.clone());
+                if animated && m.name() == "field" {
+                    pictures.push(super::animation::Frame {
+                        reference: reference.clone(),
+                        field: ao.clone(),
+                    });
+                }
                 if truth.is_none() {
                     // The first method is the world rebuild: the frame's exact ray caster.
                     let world = casters.world_triangles();
@@ -433,6 +455,6 @@ impl Crowd {
                 rows.push(row);
             }
         }
-        Ok(rows)
+        Ok((rows, pictures))
     }
 }

@@ -26,7 +26,11 @@
 //! sphere's gap to the plane going from above it to cutting it (`gap_radii`, in sphere radii;
 //! `mesh_clearance`, the mesh's own lowest point): the error against the gap, where the
 //! papers' non-penetrating assumption stops holding (`error_vs_gap.png`).
+//!
+//! `crowd.png` and `approach.png` are animated PNGs of the plane seen from above, frame by frame:
+//! the ray-cast reference, the field and their difference ×5 ([`animation`]).
 
+pub mod animation;
 pub mod crowd;
 pub mod movers;
 
@@ -85,12 +89,22 @@ pub fn run(out: &Path, quick: bool, supply: &FieldSupply) -> Result<Vec<FrameRow
     super::models_cmd::require("dynamic", profile.registered())?;
     std::fs::create_dir_all(out).map_err(Error::io(out))?;
     let mut rows = Vec::new();
+    let cache = supply.cache.as_deref();
     for &n in &profile.counts {
         let crowd = crowd::Crowd::new(&profile, n, supply)?;
-        rows.extend(crowd.frames(&profile, supply.cache.as_deref())?);
+        let (r, pictures) = crowd.frames(&profile, cache)?;
+        rows.extend(r);
+        animation::write(&out.join("crowd.png"), &pictures, crowd.plane_side, 250)?;
     }
     let approach = crowd::Crowd::approach(&profile, supply, profile.gaps.clone())?;
-    rows.extend(approach.frames(&profile, supply.cache.as_deref())?);
+    let (r, pictures) = approach.frames(&profile, cache)?;
+    rows.extend(r);
+    animation::write(
+        &out.join("approach.png"),
+        &pictures,
+        approach.plane_side,
+        500,
+    )?;
     super::outputs::write_csv(&out.join("table.csv"), &rows)?;
     let crowd_rows: Vec<FrameRow> = rows
         .iter()
