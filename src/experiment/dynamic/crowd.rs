@@ -345,7 +345,10 @@ impl Crowd {
     /// The methods of this build.
     fn movers(&self) -> Vec<Box<dyn Mover>> {
         #[allow(unused_mut)]
-        let mut v: Vec<Box<dyn Mover>> = vec![Box::<WorldRebuild>::default()];
+        let mut v: Vec<Box<dyn Mover>> = vec![
+            Box::<WorldRebuild>::default(),
+            Box::new(super::movers::TwoLevelRebuild::new(&self.meshes)),
+        ];
         #[cfg(feature = "embree")]
         v.push(Box::<super::movers::EmbreeRebuild>::default());
         v.push(Box::new(super::movers::Fields::new(

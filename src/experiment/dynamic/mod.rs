@@ -9,6 +9,9 @@
 //! - `world_rebuild`: our ray caster with its world-space BVH over every caster's triangles
 //!   rebuilt (the triangles moved and the CWBVH built: `update_s`), the reference every other
 //!   method's same-ray error is measured against;
+//! - `two_level`: our ray caster in two levels ([`crate::trace::two_level`]): each mesh's BVH
+//!   built once in model space (before the frames, not timed per frame), the top level over
+//!   the instances rebuilt per frame (`update_s`), rays moved into each instance's space;
 //! - `embree_rebuild` (with `--features embree`): Embree's scene over the moved triangles built
 //!   and committed per frame;
 //! - `field`: the casters' fields (one per mesh, baked once, shared by its instances) placed by
@@ -55,7 +58,7 @@ pub struct FrameRow {
     pub casters: usize,
     pub caster_triangles: usize,
     pub frame: usize,
-    /// `world_rebuild`, `embree_rebuild`, `field`.
+    /// `world_rebuild`, `two_level`, `embree_rebuild`, `field`.
     pub method: &'static str,
     /// What the frame's motion costs the method (seconds): BVH rebuild, scene commit, the
     /// instance list.

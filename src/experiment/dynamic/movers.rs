@@ -99,6 +99,48 @@ impl Mover for EmbreeRebuild {
     }
 }
 
+/// Our ray caster in two levels: each mesh's BVH built once in model space (the crowd's
+/// precompute), the top level over the instances rebuilt every frame.
+pub struct TwoLevelRebuild {
+    pub tracer: crate::trace::two_level::TwoLevel,
+}
+
+impl TwoLevelRebuild {
+    pub fn new(meshes: &[Arc<Mesh>]) -> TwoLevelRebuild {
+        let model: Vec<Vec<[Vec3; 3]>> = meshes
+            .iter()
+            .map(|m| {
+                m.triangles
+                    .iter()
+                    .map(|t| t.map(|i| m.positions[i as usize]))
+                    .collect()
+            })
+            .collect();
+        TwoLevelRebuild {
+            tracer: crate::trace::two_level::TwoLevel::new(&model),
+        }
+    }
+}
+
+impl Mover for TwoLevelRebuild {
+    fn name(&self) -> &'static str {
+        "two_level"
+    }
+
+    fn update(&mut self, frame: &FrameCasters) -> crate::experiment::Result<()> {
+        self.tracer.update(frame.instances);
+        Ok(())
+    }
+
+    fn vis(&self) -> &dyn Visibility {
+        &self.tracer
+    }
+
+    fn bytes(&self) -> Option<u64> {
+        Some(self.tracer.bytes())
+    }
+}
+
 /// The casters' fields (one per mesh, shared by its instances) placed by the frame's
 /// transforms; nothing is rebuilt.
 pub struct Fields {
