@@ -65,8 +65,24 @@ fn list_names_the_specs_and_their_figures() {
         l.find("  ")
             .map(|i| i + l[i..].len() - l[i..].trim_start().len())
     };
-    let first = column(out.lines().next().unwrap());
-    assert!(out.lines().all(|l| column(l) == first), "{out}");
+    let specs: Vec<&str> = out.lines().take_while(|l| !l.is_empty()).collect();
+    let first = column(specs[0]);
+    assert!(specs.iter().all(|l| column(l) == first), "{out}");
+    // Then the registries: the kinds a spec's `render.what` may name, and the methods.
+    let kinds = out
+        .lines()
+        .find(|l| l.starts_with("render kinds"))
+        .expect(&out);
+    for k in ["vertex_ao", "image_ao", "shadows", "reflections"] {
+        assert!(kinds.contains(k), "{kinds}");
+    }
+    for m in ["raycast", "embree"] {
+        assert!(
+            out.lines()
+                .any(|l| l.trim_start().starts_with(&format!("{m} "))),
+            "{out}"
+        );
+    }
 }
 
 #[test]

@@ -994,3 +994,52 @@ fn embree_is_a_method_row_or_a_skip_with_the_reason() {
         );
     }
 }
+
+/// The errors split by population: a caster whose bounding sphere cuts the corner puts some
+/// receiver vertices inside it; the count is the corner's vertices inside that sphere, and the
+/// two parts' RMS against the truth make up the whole (a partition of the points).
+#[test]
+fn the_points_inside_a_caster_sphere_are_counted_and_their_error_split() {
+    let dir = tempfile::tempdir().unwrap();
+    // The tiny scene with its caster lowered so that its sphere (radius 0.35) cuts the floor.
+    let text = tiny(ONE_FIELD, "").replace("[0.5, 0.45, 0.5]", "[0.5, 0.3, 0.5]");
+    let ls = loaded(dir.path(), &text);
+    let report = run(&ls, &options(dir.path().join("out"))).unwrap();
+    let r = &report.rows[0];
+    // The corner of n = 9: its vertices on the floor (y = 0), the back wall (z = 0) and the
+    // side wall (x = 0) over the unit square; count those inside the sphere directly.
+    let scenes = Scenes::build(&ls.spec, &ls.path, "scenes").unwrap();
+    let bs = &scenes.scenes[0];
+    let (_, caster) = bs.scene.casters().next().unwrap();
+    let s = caster.world_bounding_sphere();
+    let inside = bs
+        .scene
+        .receivers()
+        .flat_map(|(_, inst)| {
+            inst.mesh
+                .positions
+                .iter()
+                .map(|&p| inst.transform.to_world_point(p))
+        })
+        .filter(|p| p.distance(s.center) < s.radius)
+        .count();
+    assert!(inside > 0);
+    assert_eq!(r.points_in_spheres, Some(inside));
+    let (all, a, b) = (
+        r.rms_vs_truth.unwrap(),
+        r.rms_vs_truth_in_spheres.unwrap(),
+        r.rms_vs_truth_outside_spheres.unwrap(),
+    );
+    let (n, k) = (r.receiver_points as f64, inside as f64);
+    // Mean over seeds of each part: the identity holds seed by seed, so within the spread.
+    let whole = ((a * a * k + b * b * (n - k)) / n).sqrt();
+    assert!((whole - all).abs() < 0.05 * all, "{whole} vs {all}");
+    assert!(r.rms_outside_spheres.unwrap() > 0.0);
+    // Lifted clear of the floor, no point is inside and the split is empty.
+    let ls = loaded(dir.path(), &tiny(ONE_FIELD, ""));
+    let report = run(&ls, &options(dir.path().join("out2"))).unwrap();
+    let r = &report.rows[0];
+    assert_eq!(r.points_in_spheres, Some(0));
+    assert_eq!(r.rms_vs_truth_in_spheres, None);
+    assert_eq!(r.rms_vs_truth_outside_spheres, r.rms_vs_truth);
+}

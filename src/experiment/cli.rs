@@ -67,6 +67,12 @@ pub enum Command {
         #[command(flatten)]
         opts: RunArgs,
     },
+    /// Rigid casters moving every frame: each method's frame time (the motion's update and the
+    /// query) and same-ray error against the caster count (`results/dynamic/`).
+    Dynamic {
+        #[command(flatten)]
+        opts: RunArgs,
+    },
     /// List the experiment specs and the figure or table each reproduces.
     List,
     /// Run a spec file from any path.
@@ -109,7 +115,7 @@ pub enum Command {
         opts: RunArgs,
     },
     /// Regenerate every result (results/NAME, or results/quick/NAME with --quick): every spec,
-    /// then quickstart, sampling, relief, stability and performance.
+    /// then quickstart, sampling, relief, stability, performance and dynamic.
     All {
         #[command(flatten)]
         opts: RunArgs,
@@ -271,6 +277,17 @@ fn list() -> Result<i32> {
                 println!("{:<width$}  INVALID: {e}", discover::name_of(&p));
                 code = 1;
             }
+        }
+    }
+    println!();
+    println!(
+        "render kinds (render.what): {}",
+        super::kinds::names().join(", ")
+    );
+    println!("methods (methods[].method):");
+    for name in super::methods::names() {
+        if let Some(e) = super::methods::lookup(name) {
+            println!("  {name:<12} {}", e.about);
         }
     }
     Ok(code)
@@ -585,6 +602,17 @@ pub fn run(cli: Cli) -> Result<i32> {
             }
             super::performance::run(&o.out, o.quick, &o.supply)?;
         }
+        Command::Dynamic { opts } => {
+            let o = opts.options("dynamic", None)?;
+            if o.dry_run {
+                println!(
+                    "dynamic: {}",
+                    super::dynamic::crowd::Profile::new(o.quick).describe()
+                );
+                return Ok(0);
+            }
+            super::dynamic::run(&o.out, o.quick, &o.supply)?;
+        }
         Command::Check {
             names,
             require_gpu,
@@ -599,7 +627,7 @@ pub fn run(cli: Cli) -> Result<i32> {
             if opts.dry_run {
                 // The command-made results have no plan to print: a dry run stops here.
                 println!(
-                    "dry run: quickstart, sampling, relief, stability and performance not run"
+                    "dry run: quickstart, sampling, relief, stability, performance and dynamic not run"
                 );
                 return Ok(0);
             }
@@ -612,6 +640,8 @@ pub fn run(cli: Cli) -> Result<i32> {
             super::stability::run(&root("stability"))?;
             let perf = opts.options("performance", opts.out.as_deref())?;
             super::performance::run(&perf.out, perf.quick, &perf.supply)?;
+            let dynamic = opts.options("dynamic", opts.out.as_deref())?;
+            super::dynamic::run(&dynamic.out, dynamic.quick, &dynamic.supply)?;
         }
         Command::Plots { names, quick, dir } => plots(&names, quick, dir.as_deref())?,
         Command::Named(args) => {

@@ -14,6 +14,7 @@ pub mod check;
 pub mod cli;
 pub mod columns;
 pub mod discover;
+pub mod dynamic;
 pub mod error;
 pub mod fields;
 pub mod figures;

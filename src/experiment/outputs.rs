@@ -107,6 +107,21 @@ pub struct Row {
     /// `rms_vs_truth` over the other points.
     #[serde(default)]
     pub rms_vs_truth_interior: Option<f64>,
+    /// AO points inside some caster's world bounding sphere (where the lookup starts inside a
+    /// sphere: the intra-object test, or a receiver the sphere cuts).
+    #[serde(default)]
+    pub points_in_spheres: Option<usize>,
+    /// `rms_vs_truth` over the points inside some caster's sphere (none when there are none).
+    #[serde(default)]
+    pub rms_vs_truth_in_spheres: Option<f64>,
+    /// `rms_vs_truth` over the points outside every caster's sphere.
+    #[serde(default)]
+    pub rms_vs_truth_outside_spheres: Option<f64>,
+    /// RMS over the points outside every caster's sphere (0–255, unquantised, first seed) of
+    /// the values against the same-ray reference: the error where the lookup is the papers'
+    /// inter-object case.
+    #[serde(default)]
+    pub rms_outside_spheres: Option<f64>,
     /// RMS over the points of the same-ray reference's occlusion, 255 · (1 − value): the
     /// signal the errors are measured against (a caster that shades little gives small errors
     /// whatever the method; `rms_vertex` or `rms_image` over this compares casters).
@@ -178,6 +193,7 @@ pub struct CellColumns {
     pub rays_cast: u64,
     pub receiver_points: usize,
     pub crease_points: usize,
+    pub points_in_spheres: usize,
     pub caster_triangles: usize,
 }
 
@@ -213,6 +229,9 @@ pub struct ErrorColumns {
     pub rms_vs_truth: Option<(f64, Option<f64>)>,
     pub rms_vs_truth_crease: Option<f64>,
     pub rms_vs_truth_interior: Option<f64>,
+    pub rms_vs_truth_in_spheres: Option<f64>,
+    pub rms_vs_truth_outside_spheres: Option<f64>,
+    pub rms_outside_spheres: Option<f64>,
     pub truth_stderr: Option<f64>,
     pub truth_rays: Option<u32>,
     pub raycast_rms_vs_truth: Option<f64>,
@@ -268,6 +287,10 @@ impl Row {
             crease_points: c.crease_points,
             rms_vs_truth_crease: e.rms_vs_truth_crease,
             rms_vs_truth_interior: e.rms_vs_truth_interior,
+            points_in_spheres: Some(c.points_in_spheres),
+            rms_vs_truth_in_spheres: e.rms_vs_truth_in_spheres,
+            rms_vs_truth_outside_spheres: e.rms_vs_truth_outside_spheres,
+            rms_outside_spheres: e.rms_outside_spheres,
             occlusion_rms: e.occlusion_rms,
             grain: e.grain,
             rays_cast: c.rays_cast,

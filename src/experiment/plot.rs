@@ -90,8 +90,8 @@ pub fn xy_plot(path: &Path, axes: &Axes, series: &[Series], hlines: &[HLine]) ->
                     .x_desc(axes.x_label.as_str())
                     .y_desc(axes.y_label.as_str())
                     .label_style(("sans-serif", 16))
-                    .x_label_formatter(&|v| tick(*v))
-                    .y_label_formatter(&|v| tick(*v))
+                    .x_label_formatter(&|v| tick(snap_zero(*v, x1 - x0)))
+                    .y_label_formatter(&|v| tick(snap_zero(*v, y1 - y0)))
                     .light_line_style(BLACK.mix(0.04))
                     .draw()
                     .map_err(Error::plot(path))?;
@@ -223,6 +223,16 @@ fn emptiest_corner(
 }
 
 /// A compact tick label: 3 significant digits, no float noise.
+/// `v` as 0 where it is 0 up to the rounding of a tick step on an axis spanning `span` (a
+/// linear axis through 0 otherwise labels it `-1.1e-16`).
+fn snap_zero(v: f64, span: f64) -> f64 {
+    if v.abs() <= 1e-9 * span.abs() {
+        0.0
+    } else {
+        v
+    }
+}
+
 fn tick(v: f64) -> String {
     if v == 0.0 {
         return "0".into();
@@ -313,6 +323,9 @@ mod tests {
         assert_eq!(tick(4000.0), "4000");
         assert_eq!(tick(0.0), "0");
         assert_eq!(tick(2.5e-5), "2.5e-5");
+        // A tick at 0 up to the step's rounding is 0; a small value on a small axis is not.
+        assert_eq!(tick(snap_zero(-1.1e-16, 1.0)), "0");
+        assert_eq!(tick(snap_zero(2.5e-5, 1e-4)), "2.5e-5");
     }
 
     #[test]

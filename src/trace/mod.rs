@@ -6,6 +6,7 @@ pub mod embree;
 #[cfg(feature = "embree")]
 mod embree_sys;
 mod tracer;
+pub mod two_level;
 pub mod watertight;
 
 #[cfg(test)]

@@ -126,6 +126,10 @@ impl Runner<'_> {
             .push("rays_cast", rays_cast)
             .push("points", st.at.len())
             .push("crease_points", st.at.crease_count())
+            .push(
+                "points_in_spheres",
+                st.in_spheres.iter().filter(|&&b| b).count(),
+            )
             .push("caster_triangles", bs.caster_triangles());
         // The method: its precompute and what it keeps.
         row.push(
@@ -169,6 +173,12 @@ fn push_errors(row: &mut NamedRow, e: &ErrorColumns) {
         .push_opt("rms_vs_truth_sd", e.rms_vs_truth.and_then(|m| m.1))
         .push_opt("rms_vs_truth_crease", e.rms_vs_truth_crease)
         .push_opt("rms_vs_truth_interior", e.rms_vs_truth_interior)
+        .push_opt("rms_vs_truth_in_spheres", e.rms_vs_truth_in_spheres)
+        .push_opt(
+            "rms_vs_truth_outside_spheres",
+            e.rms_vs_truth_outside_spheres,
+        )
+        .push_opt("rms_outside_spheres", e.rms_outside_spheres)
         .push_opt("truth_stderr", e.truth_stderr)
         .push_opt("truth_rays", e.truth_rays)
         .push_opt("raycast_rms_vs_truth", e.raycast_rms_vs_truth)

@@ -21,6 +21,9 @@ pub(super) struct SeedErrors {
     pub(super) truth: Option<(f64, Option<f64>)>,
     /// Mean over seeds of the RMS against the truth at crease and at interior points.
     pub(super) crease: Option<f64>,
+    /// The same over the points inside some caster's bounding sphere, and over the others.
+    pub(super) in_spheres: Option<f64>,
+    pub(super) outside_spheres: Option<f64>,
     pub(super) interior: Option<f64>,
 }
 
@@ -153,6 +156,7 @@ pub(super) fn seed_errors(
     first_image: Option<&GrayImage>,
 ) -> SeedErrors {
     let (mut v, mut im, mut t, mut c, mut i) = (vec![], vec![], vec![], vec![], vec![]);
+    let (mut ins, mut outs) = (vec![], vec![]);
     for (j, ao) in aos.iter().enumerate() {
         let (reference, ref_img) = if j == 0 {
             (&st.reference, st.ref_image.as_ref().map(|(r, _)| r))
@@ -179,6 +183,8 @@ pub(super) fn seed_errors(
             t.push(e.all);
             c.extend(e.crease);
             i.extend(e.interior);
+            ins.extend(e.in_spheres);
+            outs.extend(e.outside_spheres);
         }
     }
     let ms = |x: &[f64]| (!x.is_empty()).then(|| mean_sd(x));
@@ -188,5 +194,7 @@ pub(super) fn seed_errors(
         truth: ms(&t),
         crease: ms(&c).map(|m| m.0),
         interior: ms(&i).map(|m| m.0),
+        in_spheres: ms(&ins).map(|m| m.0),
+        outside_spheres: ms(&outs).map(|m| m.0),
     }
 }

@@ -51,6 +51,10 @@ pub(super) struct SceneState {
     pub(super) raycast_s: HashMap<(Backend, u32), f64>,
     /// Ray-cast kernel time from GPU timestamps per (backend, k), where there are any.
     pub(super) raycast_kernel_s: HashMap<(Backend, u32), f64>,
+    /// Per evaluation point: whether it lies inside some caster's world bounding sphere (where
+    /// a field's lookup starts inside the sphere: the intra-object test for the caster's own
+    /// points, the sphere-cutting case for a receiver's).
+    pub(super) in_spheres: Vec<bool>,
 }
 
 impl SceneState {
@@ -73,6 +77,17 @@ impl SceneState {
             }
         });
         let setup = kind.setup(bs, view.as_ref());
+        let spheres: Vec<crate::geometry::Sphere> = bs
+            .scene
+            .casters()
+            .map(|(_, inst)| inst.world_bounding_sphere())
+            .collect();
+        let in_spheres = setup
+            .points
+            .points
+            .iter()
+            .map(|&p| spheres.iter().any(|s| p.distance(s.center) < s.radius))
+            .collect();
         SceneState {
             at: setup.points,
             estimator: setup.estimator,
@@ -92,6 +107,7 @@ impl SceneState {
             ref_image: None,
             raycast_s: HashMap::new(),
             raycast_kernel_s: HashMap::new(),
+            in_spheres,
         }
     }
 
@@ -147,21 +163,25 @@ pub(super) struct TruthErrors {
     pub(super) all: f64,
     pub(super) crease: Option<f64>,
     pub(super) interior: Option<f64>,
+    /// Over the points inside some caster's bounding sphere, and over the others.
+    pub(super) in_spheres: Option<f64>,
+    pub(super) outside_spheres: Option<f64>,
 }
 
 impl SceneState {
     /// [`TruthErrors`] of `values`, `None` before the truth is known.
     pub(super) fn truth_errors(&self, values: &[f32]) -> Option<TruthErrors> {
         let t = self.truth.as_ref()?;
-        let crease = &self.at.crease;
-        let part = |want: bool| {
-            let e = rms_unquantised_where(values, &t.ao, |i| crease[i] == want);
+        let part = |mask: &[bool], want: bool| {
+            let e = rms_unquantised_where(values, &t.ao, |i| mask[i] == want);
             (!e.is_nan()).then_some(e)
         };
         Some(TruthErrors {
             all: rms_unquantised(values, &t.ao),
-            crease: part(true),
-            interior: part(false),
+            crease: part(&self.at.crease, true),
+            interior: part(&self.at.crease, false),
+            in_spheres: part(&self.in_spheres, true),
+            outside_spheres: part(&self.in_spheres, false),
         })
     }
 }

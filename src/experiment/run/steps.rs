@@ -504,6 +504,16 @@ impl<'a> Runner<'a> {
             rms_vs_truth: se.truth,
             rms_vs_truth_crease: se.crease,
             rms_vs_truth_interior: se.interior,
+            rms_vs_truth_in_spheres: se.in_spheres,
+            rms_vs_truth_outside_spheres: se.outside_spheres,
+            rms_outside_spheres: {
+                let e = crate::experiment::metrics::rms_unquantised_where(
+                    &values[0],
+                    &st.reference,
+                    |i| !st.in_spheres[i],
+                );
+                (!e.is_nan()).then_some(e)
+            },
             truth_stderr: st.truth.as_ref().map(|t| t.rms_stderr_255()),
             truth_rays: st.truth.as_ref().map(|t| t.rays_per_point),
             raycast_rms_vs_truth: (!st.reference_vs_truth.is_empty())
@@ -564,6 +574,7 @@ impl<'a> Runner<'a> {
             rays_cast: st.at.len() as u64 * self.kind.rays_cast_per_point(),
             receiver_points: st.at.len(),
             crease_points: st.at.crease_count(),
+            points_in_spheres: st.in_spheres.iter().filter(|&&b| b).count(),
             caster_triangles: bs.caster_triangles(),
         }
     }

@@ -1,0 +1,217 @@
+//! `experiment dynamic`: rigid casters moving every frame, the papers' premise ("dynamic scenes
+//! composed of rigid, non-penetrating objects", 2008 and 2010 abstracts), measured per frame
+//! with what motion costs each method (`results/dynamic/`).
+//!
+//! The crowd: N rigid casters (N = 1, 4, 16, … from the profile) over a receiver plane, one per
+//! cell of a √N × √N grid, each orbiting its cell's centre and tumbling about its own seeded
+//! axis, the meshes taken in turn from the profile's list. Every frame, every method answers
+//! vertex AO at the plane's vertices on the same seeded rays ([`crowd::Crowd`]):
+//! - `world_rebuild`: our ray caster with its world-space BVH over every caster's triangles
+//!   rebuilt (the triangles moved and the CWBVH built: `update_s`), the reference every other
+//!   method's same-ray error is measured against;
+//! - `two_level`: our ray caster in two levels ([`crate::trace::two_level`]): each mesh's BVH
+//!   built once in model space (before the frames, not timed per frame), the top level over
+//!   the instances rebuilt per frame (`update_s`), rays moved into each instance's space;
+//! - `embree_rebuild` (with `--features embree`): Embree's scene over the moved triangles built
+//!   and committed per frame;
+//! - `field`: the casters' fields (one per mesh, baked once, shared by its instances) placed by
+//!   the frame's transforms: nothing is rebuilt (`update_s` is making the instance list).
+//!
+//! Each row is one (N, frame, method): `update_s` (what the motion costs), `query_s` (the AO
+//! pass, all threads), `frame_s` = both, Mrays/s, `rms_vs_raycast` (0–255, unquantised, against
+//! `world_rebuild` on the same rays), `rms_vs_truth` (against the frame's converged reference,
+//! cached by frame: its key covers the frame's world triangles), and the frame's overlap counts: caster pairs whose
+//! bounding spheres overlap and receiver points inside a caster's sphere (where the papers'
+//! non-penetrating assumption no longer holds). `frame_time.png` plots the mean frame time
+//! against N per method.
+//!
+//! The approach: one caster lowered onto the middle of the plane frame by frame, its bounding
+//! sphere's gap to the plane going from above it to cutting it (`gap_radii`, in sphere radii;
+//! `mesh_clearance`, the mesh's own lowest point): the error against the gap, where the
+//! papers' non-penetrating assumption stops holding (`error_vs_gap.png`).
+//!
+//! `crowd.png` and `approach.png` are animated PNGs of the plane seen from above, frame by frame:
+//! the ray-cast reference, the field and their difference ×5 ([`animation`]).
+
+pub mod animation;
+pub mod crowd;
+pub mod movers;
+
+use super::fields::FieldSupply;
+use super::plot::{xy_plot, Axes, Series};
+use super::{Error, Result};
+use serde::Serialize;
+use std::path::Path;
+
+/// One method on one frame of one crowd.
+#[derive(Clone, Debug, Serialize)]
+pub struct FrameRow {
+    /// `crowd` (N moving casters) or `approach` (one caster lowered onto the plane).
+    pub sweep: &'static str,
+    /// The approach: the gap between the caster's sphere and the plane, in sphere radii
+    /// (negative: the sphere cuts the plane).
+    pub gap_radii: Option<f64>,
+    /// The approach: the moved mesh's lowest point over the plane, in sphere radii (negative:
+    /// the mesh goes through it).
+    pub mesh_clearance: Option<f64>,
+    /// Casters in the scene.
+    pub casters: usize,
+    pub caster_triangles: usize,
+    pub frame: usize,
+    /// `world_rebuild`, `two_level`, `embree_rebuild`, `field`.
+    pub method: &'static str,
+    /// What the frame's motion costs the method (seconds): BVH rebuild, scene commit, the
+    /// instance list.
+    pub update_s: f64,
+    /// The AO pass on the frame's rays (seconds, all threads).
+    pub query_s: f64,
+    pub frame_s: f64,
+    pub rays: u64,
+    /// rays / query_s, millions.
+    pub mrays_s: f64,
+    /// RMS over the points (0–255, unquantised) against `world_rebuild` on the same rays.
+    pub rms_vs_raycast: f64,
+    /// RMS over the points (0–255, unquantised) against the frame's converged reference.
+    pub rms_vs_truth: f64,
+    /// The converged reference's RMS standard error (0–255): the floor of `rms_vs_truth`.
+    pub truth_stderr: f64,
+    /// Mean AO over the points (the answer's size, for reading the RMS).
+    pub mean_ao: f64,
+    /// Bytes the method keeps for the scene: the world BVH, or every mesh's field once.
+    pub bytes: Option<u64>,
+    /// Caster pairs whose world bounding spheres overlap this frame.
+    pub sphere_overlaps: usize,
+    /// Receiver points inside some caster's world bounding sphere this frame.
+    pub points_in_spheres: usize,
+}
+
+/// Runs the crowd sweep into `out` (`table.csv`, `run.json`, `frame_time.png`).
+pub fn run(out: &Path, quick: bool, supply: &FieldSupply) -> Result<Vec<FrameRow>> {
+    super::progress::begin_run();
+    let profile = crowd::Profile::new(quick);
+    super::models_cmd::require("dynamic", profile.registered())?;
+    std::fs::create_dir_all(out).map_err(Error::io(out))?;
+    let mut rows = Vec::new();
+    let cache = supply.cache.as_deref();
+    for &n in &profile.counts {
+        let crowd = crowd::Crowd::new(&profile, n, supply)?;
+        let (r, pictures) = crowd.frames(&profile, cache)?;
+        rows.extend(r);
+        animation::write(&out.join("crowd.png"), &pictures, crowd.plane_side, 250)?;
+    }
+    let approach = crowd::Crowd::approach(&profile, supply, profile.gaps.clone())?;
+    let (r, pictures) = approach.frames(&profile, cache)?;
+    rows.extend(r);
+    animation::write(
+        &out.join("approach.png"),
+        &pictures,
+        approach.plane_side,
+        500,
+    )?;
+    super::outputs::write_csv(&out.join("table.csv"), &rows)?;
+    let crowd_rows: Vec<FrameRow> = rows
+        .iter()
+        .filter(|r| r.sweep == "crowd")
+        .cloned()
+        .collect();
+    plot_frame_time(&out.join("frame_time.png"), &crowd_rows)?;
+    plot_approach(&out.join("error_vs_gap.png"), &rows)?;
+    let meta = super::meta::RunMeta::collect(None).timed();
+    let summary = serde_json::json!({
+        "experiment": "dynamic",
+        "profile": if quick { "quick" } else { "full" },
+        "meta": meta,
+        "crowd": profile.describe(),
+        "field": crowd::field_label(&profile),
+        "rows": rows.len(),
+    });
+    let p = out.join("run.json");
+    let json = serde_json::to_string_pretty(&summary).expect("run summary serialises");
+    crate::io::write_atomic(&p, json.as_bytes()).map_err(Error::io(&p))?;
+    Ok(rows)
+}
+
+/// The approach: each method's error against the gap, on the same rays and against the truth.
+fn plot_approach(path: &Path, rows: &[FrameRow]) -> Result<()> {
+    let approach: Vec<&FrameRow> = rows.iter().filter(|r| r.sweep == "approach").collect();
+    let mut series = Vec::new();
+    for m in ["field"] {
+        let pick = |f: fn(&FrameRow) -> f64| -> Vec<(f64, f64)> {
+            approach
+                .iter()
+                .filter(|r| r.method == m)
+                .map(|r| (r.gap_radii.unwrap_or(f64::NAN), f(r)))
+                .collect()
+        };
+        series.push(Series {
+            label: format!("{m}: RMS against ray casting, same rays"),
+            points: pick(|r| r.rms_vs_raycast),
+            line: true,
+        });
+        series.push(Series {
+            label: format!("{m}: RMS against the converged reference"),
+            points: pick(|r| r.rms_vs_truth),
+            line: true,
+        });
+    }
+    series.push(Series {
+        label: "ray casting: RMS against the converged reference".into(),
+        points: approach
+            .iter()
+            .filter(|r| r.method == "world_rebuild")
+            .map(|r| (r.gap_radii.unwrap_or(f64::NAN), r.rms_vs_truth))
+            .collect(),
+        line: true,
+    });
+    let axes = Axes {
+        title: "a caster lowered onto the receiver: error against the gap".into(),
+        x_label: "gap between the caster's bounding sphere and the plane (sphere radii)".into(),
+        y_label: "RMS (0-255)".into(),
+        log_x: false,
+        log_y: false,
+    };
+    xy_plot(path, &axes, &series, &[])
+}
+
+/// Mean frame time against the caster count, one line per method.
+fn plot_frame_time(path: &Path, rows: &[FrameRow]) -> Result<()> {
+    let mut methods: Vec<&str> = rows.iter().map(|r| r.method).collect();
+    methods.dedup();
+    methods.sort_unstable();
+    methods.dedup();
+    let series: Vec<Series> = methods
+        .iter()
+        .map(|&m| {
+            let mut counts: Vec<usize> = rows
+                .iter()
+                .filter(|r| r.method == m)
+                .map(|r| r.casters)
+                .collect();
+            counts.dedup();
+            let points = counts
+                .iter()
+                .map(|&n| {
+                    let t: Vec<f64> = rows
+                        .iter()
+                        .filter(|r| r.method == m && r.casters == n)
+                        .map(|r| r.frame_s)
+                        .collect();
+                    (n as f64, t.iter().sum::<f64>() / t.len().max(1) as f64)
+                })
+                .collect();
+            Series {
+                label: m.to_string(),
+                points,
+                line: true,
+            }
+        })
+        .collect();
+    let axes = Axes {
+        title: "moving casters: frame time (update + vertex AO) against their count".into(),
+        x_label: "casters".into(),
+        y_label: "frame time (s), mean over frames".into(),
+        log_x: true,
+        log_y: true,
+    };
+    xy_plot(path, &axes, &series, &[])
+}

@@ -1,0 +1,187 @@
+//! The methods of a moving scene, each charged for what a frame's motion costs it
+//! ([`Mover::update`]) apart from the query on the frame's rays.
+
+use crate::field::lookup::LookupOptions;
+use crate::field::scene::{FieldInstance, FieldScene};
+use crate::field::VisibilityField;
+use crate::geometry::{Mesh, Similarity};
+use crate::trace::Tracer;
+use crate::visibility::Visibility;
+use glam::Vec3;
+use std::sync::Arc;
+
+/// One frame's casters: each instance's mesh and transform.
+pub struct FrameCasters<'a> {
+    pub meshes: &'a [Arc<Mesh>],
+    /// Per instance: its mesh (index into `meshes`) and its transform this frame.
+    pub instances: &'a [(usize, Similarity)],
+}
+
+impl FrameCasters<'_> {
+    /// Every instance's triangles moved to world space.
+    pub fn world_triangles(&self) -> Vec<[Vec3; 3]> {
+        let mut out = Vec::new();
+        for &(m, t) in self.instances {
+            let mesh = &self.meshes[m];
+            out.extend(
+                mesh.triangles
+                    .iter()
+                    .map(|tri| tri.map(|i| t.to_world_point(mesh.positions[i as usize]))),
+            );
+        }
+        out
+    }
+}
+
+/// A method answering visibility in a moving scene.
+pub trait Mover {
+    fn name(&self) -> &'static str;
+    /// Brings the method to this frame (timed apart as `update_s`).
+    fn update(&mut self, frame: &FrameCasters) -> crate::experiment::Result<()>;
+    /// The frame's visibility (after [`Self::update`]).
+    fn vis(&self) -> &dyn Visibility;
+    /// Bytes kept for the scene, where known.
+    fn bytes(&self) -> Option<u64>;
+}
+
+/// Our ray caster over the world triangles, its BVH rebuilt every frame.
+#[derive(Default)]
+pub struct WorldRebuild {
+    tracer: Option<Tracer>,
+}
+
+impl Mover for WorldRebuild {
+    fn name(&self) -> &'static str {
+        "world_rebuild"
+    }
+
+    fn update(&mut self, frame: &FrameCasters) -> crate::experiment::Result<()> {
+        self.tracer = Some(Tracer::new(&frame.world_triangles()));
+        Ok(())
+    }
+
+    fn vis(&self) -> &dyn Visibility {
+        self.tracer.as_ref().expect("updated before the query")
+    }
+
+    fn bytes(&self) -> Option<u64> {
+        self.tracer.as_ref().map(Tracer::bytes)
+    }
+}
+
+/// Embree's scene over the world triangles, built and committed every frame.
+#[cfg(feature = "embree")]
+#[derive(Default)]
+pub struct EmbreeRebuild {
+    tracer: Option<crate::trace::embree::EmbreeTracer>,
+}
+
+#[cfg(feature = "embree")]
+impl Mover for EmbreeRebuild {
+    fn name(&self) -> &'static str {
+        "embree_rebuild"
+    }
+
+    fn update(&mut self, frame: &FrameCasters) -> crate::experiment::Result<()> {
+        let t = crate::trace::embree::EmbreeTracer::new(&frame.world_triangles()).map_err(|e| {
+            crate::experiment::Error::invalid("dynamic: embree_rebuild", e.to_string())
+        })?;
+        self.tracer = Some(t);
+        Ok(())
+    }
+
+    fn vis(&self) -> &dyn Visibility {
+        self.tracer.as_ref().expect("updated before the query")
+    }
+
+    fn bytes(&self) -> Option<u64> {
+        None
+    }
+}
+
+/// Our ray caster in two levels: each mesh's BVH built once in model space (the crowd's
+/// precompute), the top level over the instances rebuilt every frame.
+pub struct TwoLevelRebuild {
+    pub tracer: crate::trace::two_level::TwoLevel,
+}
+
+impl TwoLevelRebuild {
+    pub fn new(meshes: &[Arc<Mesh>]) -> TwoLevelRebuild {
+        let model: Vec<Vec<[Vec3; 3]>> = meshes
+            .iter()
+            .map(|m| {
+                m.triangles
+                    .iter()
+                    .map(|t| t.map(|i| m.positions[i as usize]))
+                    .collect()
+            })
+            .collect();
+        TwoLevelRebuild {
+            tracer: crate::trace::two_level::TwoLevel::new(&model),
+        }
+    }
+}
+
+impl Mover for TwoLevelRebuild {
+    fn name(&self) -> &'static str {
+        "two_level"
+    }
+
+    fn update(&mut self, frame: &FrameCasters) -> crate::experiment::Result<()> {
+        self.tracer.update(frame.instances);
+        Ok(())
+    }
+
+    fn vis(&self) -> &dyn Visibility {
+        &self.tracer
+    }
+
+    fn bytes(&self) -> Option<u64> {
+        Some(self.tracer.bytes())
+    }
+}
+
+/// The casters' fields (one per mesh, shared by its instances) placed by the frame's
+/// transforms; nothing is rebuilt.
+pub struct Fields {
+    /// Per mesh, its field.
+    pub fields: Vec<Arc<VisibilityField>>,
+    pub options: LookupOptions,
+    pub scene: FieldScene,
+}
+
+impl Fields {
+    pub fn new(fields: Vec<Arc<VisibilityField>>, options: LookupOptions) -> Fields {
+        Fields {
+            fields,
+            options,
+            scene: FieldScene {
+                instances: Vec::new(),
+                options,
+            },
+        }
+    }
+}
+
+impl Mover for Fields {
+    fn name(&self) -> &'static str {
+        "field"
+    }
+
+    fn update(&mut self, frame: &FrameCasters) -> crate::experiment::Result<()> {
+        self.scene.instances = frame
+            .instances
+            .iter()
+            .map(|&(m, t)| FieldInstance::new(self.fields[m].clone(), t))
+            .collect();
+        Ok(())
+    }
+
+    fn vis(&self) -> &dyn Visibility {
+        &self.scene
+    }
+
+    fn bytes(&self) -> Option<u64> {
+        Some(self.fields.iter().map(|f| f.bytes()).sum())
+    }
+}

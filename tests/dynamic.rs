@@ -1,0 +1,85 @@
+//! `experiment dynamic --quick`: every method on every frame of every crowd, with exact row
+//! counts, the reference's own error exactly 0, the field's error two-sided, and the overlap
+//! counts the choreography guarantees (orbits that keep neighbours' spheres apart, spheres
+//! clear of the plane).
+
+use visfield::experiment::dynamic::{self, crowd::Profile, FrameRow};
+use visfield::experiment::fields::FieldSupply;
+
+#[test]
+fn the_quick_crowd_gives_every_method_every_frame_with_bounded_errors() {
+    let out = tempfile::tempdir().unwrap();
+    let supply = FieldSupply {
+        cache: None,
+        cache_limit: 0,
+        memory_limit: 1 << 30,
+    };
+    let rows: Vec<FrameRow> = dynamic::run(&out.path().join("dyn"), true, &supply).unwrap();
+    for f in ["table.csv", "run.json", "frame_time.png"] {
+        assert!(out.path().join("dyn").join(f).is_file(), "{f}");
+    }
+    let p = Profile::new(true);
+    let methods = if cfg!(feature = "embree") { 4 } else { 3 };
+    assert_eq!(
+        rows.len(),
+        (p.counts.len() * p.frames + p.gaps.len()) * methods
+    );
+    let (crowd, approach): (Vec<&FrameRow>, Vec<&FrameRow>) =
+        rows.iter().partition(|r| r.sweep == "crowd");
+    // The approach: no receiver point inside the sphere while it clears the plane, some once
+    // it cuts it, more the deeper it goes; the plane's vertices are the same every frame.
+    let mut last = 0;
+    for r in approach.iter().filter(|r| r.method == "world_rebuild") {
+        let g = r.gap_radii.unwrap();
+        assert!(r.mesh_clearance.unwrap() >= g - 1e-6, "{r:?}");
+        if g >= 0.0 {
+            assert_eq!(r.points_in_spheres, 0, "{r:?}");
+        } else {
+            assert!(r.points_in_spheres > last, "{r:?}");
+        }
+        last = r.points_in_spheres;
+    }
+    for r in &approach {
+        match r.method {
+            "world_rebuild" | "two_level" => assert_eq!(r.rms_vs_raycast, 0.0, "{r:?}"),
+            // Where the mesh goes through the plane, origins sit inside it or on its surface:
+            // the two casters may differ on a few contact rays, never by much.
+            "embree_rebuild" => assert!(r.rms_vs_raycast < 0.5, "{r:?}"),
+            _ => assert!(r.rms_vs_raycast > 0.5, "{r:?}"),
+        }
+    }
+    for r in crowd {
+        assert!(r.update_s >= 0.0 && r.query_s > 0.0, "{r:?}");
+        assert_eq!(r.frame_s, r.update_s + r.query_s);
+        assert_eq!(r.sphere_overlaps, 0, "{r:?}");
+        assert_eq!(r.points_in_spheres, 0, "{r:?}");
+        // Against the frame's converged reference: 16 rays per point leave a noise of the
+        // order of 255·sqrt(p(1 − p)/16) at partly occluded points, far above the truth's own.
+        assert!(r.truth_stderr > 0.0 && r.truth_stderr < 2.0, "{r:?}");
+        assert!(r.rms_vs_truth > 2.0 && r.rms_vs_truth < 60.0, "{r:?}");
+        match r.method {
+            "world_rebuild" | "two_level" => assert_eq!(r.rms_vs_raycast, 0.0, "{r:?}"),
+            // Embree against our tracer: the same scene, no contact origins (the spheres float
+            // clear of the plane), so the same answer on every ray.
+            "embree_rebuild" => assert_eq!(r.rms_vs_raycast, 0.0, "{r:?}"),
+            // 290 × 16² u8 maps: a real error, neither 0 nor the whole occlusion.
+            "field" => assert!(r.rms_vs_raycast > 1.0 && r.rms_vs_raycast < 30.0, "{r:?}"),
+            other => panic!("unexpected method {other}"),
+        }
+    }
+    // The frames move the casters: the answers differ between frames.
+    let ao: Vec<f64> = rows
+        .iter()
+        .filter(|r| r.method == "world_rebuild" && r.casters == 16)
+        .map(|r| r.mean_ao)
+        .collect();
+    assert!(ao.windows(2).any(|w| w[0] != w[1]), "{ao:?}");
+    // More casters occlude more of the plane.
+    let mean = |n: usize| {
+        rows.iter()
+            .find(|r| r.method == "world_rebuild" && r.casters == n)
+            .unwrap()
+            .mean_ao
+    };
+    assert!(mean(16) < mean(1), "{} vs {}", mean(16), mean(1));
+}
