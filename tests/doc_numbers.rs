@@ -528,6 +528,65 @@ fn figure3_population(c: &mut Claims) {
     c.quotes("docs/results.md", &text, from);
 }
 
+/// The moving crowd: per caster count, each method's mean frame time and the field's gains and
+/// errors, as README's table writes them.
+fn dynamic_table(rows: &[Row]) -> String {
+    let crowd: Vec<&Row> = rows.iter().filter(|r| r["sweep"] == "crowd").collect();
+    let mut counts: Vec<u64> = crowd.iter().map(|r| f(r, "casters") as u64).collect();
+    counts.dedup();
+    let mean = |n: u64, m: &str, col: &str| {
+        let v: Vec<f64> = crowd
+            .iter()
+            .filter(|r| f(r, "casters") as u64 == n && r["method"] == m)
+            .map(|r| f(r, col))
+            .collect();
+        (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+    };
+    let ms = |v: Option<f64>| v.map_or("–".to_string(), |s| format!("{:.1}", 1e3 * s));
+    let mut out = String::from(
+        "| casters (triangles) | world BVH rebuilt | two levels | Embree rebuilt | field | field's gain over Embree / world | field RMS same rays / vs truth (ray casting's) |\n|---|---|---|---|---|---|---|\n",
+    );
+    for n in counts {
+        let tris = crowd
+            .iter()
+            .find(|r| f(r, "casters") as u64 == n)
+            .map(|r| f(r, "caster_triangles") as u64)
+            .unwrap();
+        let field = mean(n, "field", "frame_s").unwrap();
+        let gain = |m: &str| {
+            mean(n, m, "frame_s").map_or("–".to_string(), |t| format!("{:.1}×", t / field))
+        };
+        out.push_str(&format!(
+            "| {n} ({}) | {} | {} | {} | {} | {} / {} | {:.2} / {:.2} ({:.2}) |\n",
+            with_commas(tris),
+            ms(mean(n, "world_rebuild", "frame_s")),
+            ms(mean(n, "two_level", "frame_s")),
+            ms(mean(n, "embree_rebuild", "frame_s")),
+            ms(Some(field)),
+            gain("embree_rebuild"),
+            gain("world_rebuild"),
+            mean(n, "field", "rms_vs_raycast").unwrap(),
+            mean(n, "field", "rms_vs_truth").unwrap(),
+            mean(n, "world_rebuild", "rms_vs_truth").unwrap(),
+        ));
+    }
+    out
+}
+
+fn dynamic(c: &mut Claims) {
+    let from = "results/dynamic/table.csv";
+    if !root().join(from).is_file() {
+        c.missing
+            .push(format!("{from} is missing: run `experiment dynamic`"));
+        return;
+    }
+    let text = dynamic_table(&read(from));
+    if std::env::var("VISFIELD_PRINT_DYNAMIC").is_ok() {
+        println!("{text}");
+    }
+    c.quotes("README.md", &text, from);
+}
+
 #[test]
 fn quoted_numbers_match_the_committed_csvs() {
     let mut c = Claims::new();
@@ -538,6 +597,7 @@ fn quoted_numbers_match_the_committed_csvs() {
     figure8_and_figure3(&mut c);
     figure3_population(&mut c);
     performance(&mut c);
+    dynamic(&mut c);
     assert!(
         c.missing.is_empty(),
         "{} of {} quoted numbers differ from results/:\n{}",
