@@ -176,6 +176,7 @@ impl Runner<'_> {
             "spec_file": crate::experiment::meta::portable_path(&ls.path),
             "reproduces": spec.reproduces,
             "profile": if opts.quick { "quick" } else { "full" },
+            "shard": opts.shard,
             "meta": meta,
             "render": self.kind.name(),
             "rays_per_point": spec.render.rays_per_point,
