@@ -1,7 +1,9 @@
 //! A sample of the numbers README.md and docs/results.md quote, recomputed from the committed
 //! CSV files under results/ and looked for in the documents, so that a rerun which moves a
 //! number fails here until the text follows it. Each claim is the text as the document writes
-//! it (whitespace runs compared as one space), formatted from the files it names.
+//! it (whitespace runs compared as one space), formatted from the files it names. With
+//! `VISFIELD_DUMP_CLAIMS=FILE` every claim is appended to FILE (document, tab, text): run once
+//! before and once after a rerun to get the old and the new text of each quoted number.
 
 mod common;
 
@@ -78,6 +80,15 @@ impl Claims {
     /// `doc` must quote `text`, computed from `from`.
     fn quotes(&mut self, doc: &'static str, text: &str, from: &str) {
         self.count += 1;
+        if let Ok(p) = std::env::var("VISFIELD_DUMP_CLAIMS") {
+            use std::io::Write;
+            let mut f = std::fs::OpenOptions::new()
+                .create(true)
+                .append(true)
+                .open(p)
+                .unwrap();
+            writeln!(f, "{doc}\t{}", squash(text)).unwrap();
+        }
         if !self.docs[doc].contains(&squash(text)) {
             self.missing
                 .push(format!("{doc} should say `{text}` ({from})"));
@@ -366,31 +377,40 @@ fn figure8_and_figure3(c: &mut Claims) {
     );
     c.quotes("docs/results.md", &text, from);
     c.quotes("README.md", &text, from);
+    // Embree is a method: its row of methods.csv per scene, on the same rays.
+    let methods = read("results/figure8/methods.csv");
+    let embree = |r: &Row| {
+        let m = methods
+            .iter()
+            .find(|m| m["scene"] == r["scene"] && m["method"] == "embree")
+            .expect("an Embree row per scene (run with --features embree)");
+        f(m, "estimate_s")
+    };
     let join = |col: &str, p: usize| three.map(|r| format!("{:.*}", p, f(r, col))).join(" / ");
+    let join_embree = three.map(|r| format!("{:.3}", embree(r))).join(" / ");
     let text = format!(
-        "our ray caster's {} s and Embree's {} s on the same rays",
+        "our ray caster's {} s and Embree's {join_embree} s on the same rays",
         join("raycast_s", 3),
-        join("embree_s", 3)
     );
     c.quotes("README.md", &text, from);
-    let gain = |col: &str| {
+    let gain = |t: &dyn Fn(&Row) -> f64| {
         three
-            .map(|r| format!("{:.1}×", f(r, col) / f(r, "ao_s")))
+            .map(|r| format!("{:.1}×", t(r) / f(r, "ao_s")))
             .join(", ")
     };
+    let raycast = |r: &Row| f(r, "raycast_s");
     let text = format!(
-        "our ray caster's {} s ({}) and Embree's {} s ({})",
+        "our ray caster's {} s ({}) and Embree's {join_embree} s ({})",
         join("raycast_s", 3),
-        gain("raycast_s"),
-        join("embree_s", 3),
-        gain("embree_s")
+        gain(&raycast),
+        gain(&embree)
     );
     c.quotes("docs/results.md", &text, from);
-    c.quotes("README.md", &format!("({} Embree)", gain("embree_s")), from);
+    c.quotes("README.md", &format!("({} Embree)", gain(&embree)), from);
     let from = "results/ao2010_figure3/table.csv";
     let rows: Vec<Row> = read(from)
         .into_iter()
-        .filter(|r| r["backend"] == "cpu")
+        .filter(|r| r["backend"] == "cpu" && r["scene"] == "bunny")
         .collect();
     let (lo, hi) = min_max(rows.iter().map(|r| f(r, "ao_s")));
     let (glo, ghi) = min_max(rows.iter().map(|r| f(r, "raycast_s") / f(r, "ao_s")));
@@ -464,6 +484,109 @@ fn performance(c: &mut Claims) {
     }
 }
 
+/// 2010 Figure 3 by population: the pixels inside the bunny's sphere, and the lifted bunny.
+fn figure3_population(c: &mut Claims) {
+    let from = "results/ao2010_figure3/table.csv";
+    let rows: Vec<Row> = read(from)
+        .into_iter()
+        .filter(|r| r["backend"] == "cpu")
+        .collect();
+    let cell = |scene: &str, n: u32, d: u32| {
+        rows.iter()
+            .find(|r| {
+                r["scene"] == scene
+                    && r["positional_samples"] == n.to_string()
+                    && r["directional_res"] == d.to_string()
+            })
+            .unwrap_or_else(|| panic!("no {scene} {n} × {d}² row"))
+    };
+    let a = cell("bunny", 1090, 32);
+    let (k, n) = (f(a, "points_in_spheres"), f(a, "receiver_points"));
+    let (fin, fout, all) = (
+        f(a, "rms_vs_truth_in_spheres"),
+        f(a, "rms_vs_truth_outside_spheres"),
+        f(a, "rms_vs_truth"),
+    );
+    let col = |s: &str| {
+        [1090, 4226, 16642]
+            .map(|m| format!("{:.2}", f(cell(s, m, 32), "rms_image")))
+            .join(" / ")
+    };
+    let text = format!(
+        "the {} receiver pixels inside the bunny's bounding sphere ({:.1}% of {}) have an RMS of \
+         {fin:.2} against the converged reference at 1090 × 32², the others {fout:.2}: they carry \
+         {:.0}% of the squared error. With the bunny lifted until its sphere clears the plane \
+         (scene `bunny_lifted`), the same-ray RMS of the 32² column is {} for 1090 / 4226 / \
+         16642 maps, against {} resting",
+        with_commas(k as u64),
+        100.0 * k / n,
+        with_commas(n as u64),
+        100.0 * fin * fin * k / (all * all * n),
+        col("bunny_lifted"),
+        col("bunny"),
+    );
+    c.quotes("docs/results.md", &text, from);
+}
+
+/// The moving crowd: per caster count, each method's mean frame time and the field's gains and
+/// errors, as README's table writes them.
+fn dynamic_table(rows: &[Row]) -> String {
+    let crowd: Vec<&Row> = rows.iter().filter(|r| r["sweep"] == "crowd").collect();
+    let mut counts: Vec<u64> = crowd.iter().map(|r| f(r, "casters") as u64).collect();
+    counts.dedup();
+    let mean = |n: u64, m: &str, col: &str| {
+        let v: Vec<f64> = crowd
+            .iter()
+            .filter(|r| f(r, "casters") as u64 == n && r["method"] == m)
+            .map(|r| f(r, col))
+            .collect();
+        (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+    };
+    let ms = |v: Option<f64>| v.map_or("–".to_string(), |s| format!("{:.1}", 1e3 * s));
+    let mut out = String::from(
+        "| casters (triangles) | world BVH rebuilt | two levels | Embree rebuilt | field | field's gain over Embree / world | field RMS same rays / vs truth (ray casting's) |\n|---|---|---|---|---|---|---|\n",
+    );
+    for n in counts {
+        let tris = crowd
+            .iter()
+            .find(|r| f(r, "casters") as u64 == n)
+            .map(|r| f(r, "caster_triangles") as u64)
+            .unwrap();
+        let field = mean(n, "field", "frame_s").unwrap();
+        let gain = |m: &str| {
+            mean(n, m, "frame_s").map_or("–".to_string(), |t| format!("{:.1}×", t / field))
+        };
+        out.push_str(&format!(
+            "| {n} ({}) | {} | {} | {} | {} | {} / {} | {:.2} / {:.2} ({:.2}) |\n",
+            with_commas(tris),
+            ms(mean(n, "world_rebuild", "frame_s")),
+            ms(mean(n, "two_level", "frame_s")),
+            ms(mean(n, "embree_rebuild", "frame_s")),
+            ms(Some(field)),
+            gain("embree_rebuild"),
+            gain("world_rebuild"),
+            mean(n, "field", "rms_vs_raycast").unwrap(),
+            mean(n, "field", "rms_vs_truth").unwrap(),
+            mean(n, "world_rebuild", "rms_vs_truth").unwrap(),
+        ));
+    }
+    out
+}
+
+fn dynamic(c: &mut Claims) {
+    let from = "results/dynamic/table.csv";
+    if !root().join(from).is_file() {
+        c.missing
+            .push(format!("{from} is missing: run `experiment dynamic`"));
+        return;
+    }
+    let text = dynamic_table(&read(from));
+    if std::env::var("VISFIELD_PRINT_DYNAMIC").is_ok() {
+        println!("{text}");
+    }
+    c.quotes("README.md", &text, from);
+}
+
 #[test]
 fn quoted_numbers_match_the_committed_csvs() {
     let mut c = Claims::new();
@@ -472,7 +595,9 @@ fn quoted_numbers_match_the_committed_csvs() {
     figure9(&mut c);
     sponza(&mut c);
     figure8_and_figure3(&mut c);
+    figure3_population(&mut c);
     performance(&mut c);
+    dynamic(&mut c);
     assert!(
         c.missing.is_empty(),
         "{} of {} quoted numbers differ from results/:\n{}",

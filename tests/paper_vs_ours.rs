@@ -282,6 +282,7 @@ fn cell_columns(scene: &str, count: usize, backend: Backend, rays: u64) -> CellC
         rays_cast: rays,
         receiver_points: 100,
         crease_points: 0,
+        points_in_spheres: 0,
         caster_triangles: 1000 * count / 290,
     }
 }

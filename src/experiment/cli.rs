@@ -133,6 +133,15 @@ pub enum Command {
         #[arg(long)]
         dir: Option<PathBuf>,
     },
+    /// Joins the folders of `--shard I/N` runs of one spec into the folder a single run
+    /// writes (refused when a shard is missing or doubled, or commits or specs differ).
+    Merge {
+        /// The merged results folder.
+        out: PathBuf,
+        /// The shards' results folders, all N of them, in any order.
+        #[arg(required = true)]
+        shards: Vec<PathBuf>,
+    },
     /// The real meshes of data/models.json: list, verify, fetch from their sources.
     Models {
         #[command(subcommand)]
@@ -180,6 +189,10 @@ pub struct RunArgs {
     /// the `embree` feature); without it, such a run leaves out that method's rows and says why.
     #[arg(long)]
     pub require_embree: bool,
+    /// Run shard I of N of the spec's cells (contiguous blocks in plan order; see
+    /// `experiment merge` to join the shards' folders).
+    #[arg(long, value_name = "I/N")]
+    pub shard: Option<String>,
 }
 
 /// Runs the spec experiments/NAME.json (see `experiment list`).
@@ -199,6 +212,11 @@ impl RunArgs {
         o.adapter = adapter_preference(self.adapter.as_deref());
         o.allow_nonempty_out = self.allow_nonempty_out;
         o.require_embree = self.require_embree;
+        o.shard = self
+            .shard
+            .as_deref()
+            .map(|v| super::shard::Shard::parse(v, "--shard"))
+            .transpose()?;
         o.supply = FieldSupply {
             cache: if self.no_cache {
                 None
@@ -644,6 +662,7 @@ pub fn run(cli: Cli) -> Result<i32> {
             super::dynamic::run(&dynamic.out, dynamic.quick, &dynamic.supply)?;
         }
         Command::Plots { names, quick, dir } => plots(&names, quick, dir.as_deref())?,
+        Command::Merge { out, shards } => super::merge::merge(&out, &shards)?,
         Command::Named(args) => {
             let name = args.first().cloned().unwrap_or_default();
             let parsed = NamedRun::try_parse_from(

@@ -225,8 +225,19 @@ impl Plan {
     /// (`scene_steps`), then per field geometry its bakes, lookups and releases
     /// (`GroupPlanner`).
     pub fn new(spec: &Spec, scenes: &Scenes, limits: PlanLimits) -> Result<Plan> {
+        Plan::new_shard(spec, scenes, limits, None)
+    }
+
+    /// [`Self::new`] for one shard's cells ([`super::shard`]); the per-scene steps only for
+    /// the scenes that hold one of them.
+    pub fn new_shard(
+        spec: &Spec,
+        scenes: &Scenes,
+        limits: PlanLimits,
+        shard: Option<super::shard::Shard>,
+    ) -> Result<Plan> {
         let kind = super::kinds::of(&spec.render);
-        let cells = cells_of(spec);
+        let cells = super::shard::select(cells_of(spec), shard);
         let render_k = square_root(spec.render.rays_per_point, "render.rays_per_point")?;
         let ref_k = square_root(spec.reference.rays_per_point, "reference.rays_per_point")?;
         let methods: Vec<String> = super::methods::settings_of(spec)
@@ -235,6 +246,9 @@ impl Plan {
             .collect();
         let mut steps = Vec::new();
         for s in 0..scenes.scenes.len() {
+            if shard.is_some() && !cells.iter().any(|c| c.scene == s) {
+                continue;
+            }
             steps.extend(scene_steps(spec, scenes, kind.as_ref(), s, render_k, ref_k));
             let rays = kind.max_points(&scenes.scenes[s])
                 * kind.rays_cast_per_point()

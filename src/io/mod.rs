@@ -15,9 +15,14 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     let file_name = path
         .file_name()
         .ok_or_else(|| std::io::Error::other(format!("{} has no file name", path.display())))?;
+    // Unique to this write: the host, a per-process counter (threads writing the same path)
+    // and the process id (processes, the owner test of `remove_stale_temporaries`).
+    static WRITES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    let n = WRITES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     let tmp = dir.join(format!(
-        ".{}.tmp-{}",
+        ".{}.{}-{n}.tmp-{}",
         file_name.to_string_lossy(),
+        host_tag(),
         std::process::id()
     ));
     let written = (|| {
@@ -55,11 +60,29 @@ pub fn remove_stale_temporaries(dir: &Path) -> usize {
         else {
             continue;
         };
-        if !process_alive(pid) && std::fs::remove_file(e.path()).is_ok() {
+        // A temporary of another host sharing this folder: its process id means nothing here.
+        let before = &name[..name.rfind(".tmp-").unwrap_or(0)];
+        let other_host = (before.rsplit_once('.'))
+            .and_then(|(_, t)| t.rsplit_once('-'))
+            .is_some_and(|(h, n)| n.parse::<u64>().is_ok() && h != host_tag());
+        if !other_host && !process_alive(pid) && std::fs::remove_file(e.path()).is_ok() {
             removed += 1;
         }
     }
     removed
+}
+
+/// This machine's host name as a file-name part (`[A-Za-z0-9_]` only; `host` if unknown).
+fn host_tag() -> String {
+    let name = std::fs::read_to_string("/proc/sys/kernel/hostname").unwrap_or_default();
+    let tag: String = (name.trim().chars())
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+        .collect();
+    if tag.is_empty() {
+        "host".into()
+    } else {
+        tag
+    }
 }
 
 /// Hex-encoded SHA-256 of `bytes`.
@@ -103,11 +126,16 @@ mod tests {
             .path()
             .join(format!(".other.vfield.tmp-{}", std::process::id()));
         let kept = dir.path().join("field.vfield");
-        for p in [&dead, &live, &kept] {
+        // A dead writer's temporary as written now (host-tagged), and one of another host,
+        // whose process id cannot be judged here.
+        let dead_tagged = dir.path().join(format!(".f.vfield.{}-3.tmp-0", host_tag()));
+        let other = dir.path().join(".f.vfield.elsewhere_x-3.tmp-0");
+        for p in [&dead, &live, &kept, &dead_tagged, &other] {
             std::fs::write(p, b"x").unwrap();
         }
-        assert_eq!(remove_stale_temporaries(dir.path()), 1);
+        assert_eq!(remove_stale_temporaries(dir.path()), 2);
         assert!(!dead.exists() && live.exists() && kept.exists());
+        assert!(!dead_tagged.exists() && other.exists());
     }
 
     #[test]

@@ -10,7 +10,7 @@
 
 mod methods;
 mod references;
-mod staging;
+pub(crate) mod staging;
 mod state;
 mod steps;
 mod write;
@@ -80,6 +80,8 @@ pub struct RunOptions {
     /// Fail, rather than skip its rows, where a spec lists a method this build cannot run
     /// (Embree without the `embree` feature).
     pub require_embree: bool,
+    /// Run only this shard's cells (`--shard I/N`, [`super::shard`]).
+    pub shard: Option<crate::experiment::shard::Shard>,
 }
 
 impl RunOptions {
@@ -99,6 +101,7 @@ impl RunOptions {
             adapter: AdapterPreference::from_env(),
             allow_nonempty_out: false,
             require_embree: false,
+            shard: None,
         }
     }
 }
@@ -194,7 +197,8 @@ fn run_checked(
     };
     crate::experiment::plan::check_scene_memory(spec, &scenes, limits)
         .context(|| ls.path.display().to_string())?;
-    let plan = Plan::new(spec, &scenes, limits).context(|| ls.path.display().to_string())?;
+    let plan = Plan::new_shard(spec, &scenes, limits, opts.shard)
+        .context(|| ls.path.display().to_string())?;
     let supply = &opts.supply;
     let plan_text = plan.describe(&ls.name, &scenes, &|m, p| {
         supply.state(&scenes.meshes[m], p)

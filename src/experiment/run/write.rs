@@ -98,6 +98,12 @@ impl Runner<'_> {
     pub(super) fn finish(mut self, ls: &LoadedSpec) -> Result<Vec<Row>> {
         self.rows.sort_by_key(|(c, _)| *c);
         self.results.sort_by_key(|r| r.cell);
+        // The sweep's rows in cell order too (they are made in step order), so that the
+        // shards of a run (`--shard`, contiguous in cell order) concatenate into it.
+        let ids: Vec<String> = (self.plan.cells.iter())
+            .map(|c| c.id(&self.scenes.scenes[c.scene].name))
+            .collect();
+        (self.field_sweep).sort_by_key(|r| ids.iter().position(|id| *id == r.cell));
         let rows: Vec<Row> = self.rows.iter().map(|(_, r)| r.clone()).collect();
         let pairs = self.pairs();
         let (spec, opts, out) = (self.spec, self.opts, &self.opts.out);
@@ -179,6 +185,7 @@ impl Runner<'_> {
             "spec_file": crate::experiment::meta::portable_path(&ls.path),
             "reproduces": spec.reproduces,
             "profile": if opts.quick { "quick" } else { "full" },
+            "shard": opts.shard,
             "meta": meta,
             "render": self.kind.name(),
             "rays_per_point": spec.render.rays_per_point,
