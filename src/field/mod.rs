@@ -20,6 +20,7 @@ pub mod lanes;
 pub mod lookup;
 pub mod normals;
 pub mod scene;
+pub mod sphere_bvh;
 pub mod storage;
 
 use crate::geometry::Sphere;

@@ -36,7 +36,7 @@ pub struct FieldInstance {
 /// Relative slack of [`FieldInstance::may_meet`]: ten times the f32 rounding (a few units of
 /// 6e-8 of the coordinates' magnitude) that separates its world-space test from the exact
 /// model-space one.
-const MAY_MEET_SLACK: f32 = 1e-5;
+pub(super) const MAY_MEET_SLACK: f32 = 1e-5;
 
 impl FieldInstance {
     pub fn new(field: Arc<VisibilityField>, transform: Similarity) -> Self {
@@ -166,7 +166,13 @@ impl FieldInstance {
 
     /// Whether the segment meets the world sphere (the f32 test that orders several instances).
     #[inline]
-    fn meets_segment(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<f32> {
+    pub(super) fn meets_segment(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        tmin: f32,
+        tmax: f32,
+    ) -> Option<f32> {
         let (t0, t1) = ray_sphere(origin, dir, self.world_center, self.world_radius)?;
         (t1 >= tmin && t0 <= tmax).then_some(t0)
     }
@@ -180,7 +186,7 @@ impl FieldInstance {
     /// ([`lanes`]); each block of crossings computes its texel addresses and prefetches them
     /// before any is read, so that the storage's cache misses overlap instead of adding up.
     #[allow(clippy::too_many_arguments)]
-    fn occluded_many(
+    pub(super) fn occluded_many(
         &self,
         isa: Isa,
         origin: Vec3,
@@ -276,21 +282,39 @@ impl FieldScene {
         dir: Vec3,
         tmin: f32,
         tmax: f32,
-        mut f: impl FnMut(f32, &FieldInstance) -> bool,
+        f: impl FnMut(f32, &FieldInstance) -> bool,
     ) {
         if let [only] = self.instances.as_slice() {
             // One instance: its own lookup does the exact sphere test, after a cheap rejection.
+            let mut f = f;
             if only.may_meet(origin, dir, tmin) {
                 f(tmin, only);
             }
             return;
         }
+        let all = |visit: &mut dyn FnMut(usize)| (0..self.instances.len()).for_each(visit);
+        self.for_each_of(all, origin, dir, tmin, tmax, f);
+    }
+
+    /// [`Self::for_each_candidate`] over the instances `candidates` names (each at most once;
+    /// with several instances, a superset of those whose spheres the segment meets gives the
+    /// same calls as all of them).
+    fn for_each_of(
+        &self,
+        candidates: impl FnOnce(&mut dyn FnMut(usize)),
+        origin: Vec3,
+        dir: Vec3,
+        tmin: f32,
+        tmax: f32,
+        mut f: impl FnMut(f32, &FieldInstance) -> bool,
+    ) {
         let mut stack = [(0.0f32, 0usize); 16];
         let mut heap = Vec::new();
         let mut n = 0;
-        for (i, inst) in self.instances.iter().enumerate() {
+        candidates(&mut |i| {
+            let inst = &self.instances[i];
             if !inst.may_meet(origin, dir, tmin) {
-                continue;
+                return;
             }
             if let Some(t0) = inst.meets_segment(origin, dir, tmin, tmax) {
                 if n < stack.len() {
@@ -303,7 +327,7 @@ impl FieldScene {
                 }
                 n += 1;
             }
-        }
+        });
         let order = if heap.is_empty() {
             &mut stack[..n]
         } else {
@@ -315,6 +339,26 @@ impl FieldScene {
                 return;
             }
         }
+    }
+
+    /// [`Visibility::occluded`] over the instances `candidates` names, with several instances
+    /// ([`Self::for_each_of`]).
+    pub(super) fn occluded_among(
+        &self,
+        candidates: impl FnOnce(&mut dyn FnMut(usize)),
+        origin: Vec3,
+        dir: Vec3,
+        tmin: f32,
+        tmax: f32,
+    ) -> bool {
+        let mut hit = false;
+        self.for_each_of(candidates, origin, dir, tmin, tmax, |_, inst| {
+            hit = inst
+                .hit_distance(origin, dir, tmin, tmax, &self.options)
+                .is_some();
+            !hit
+        });
+        hit
     }
 }
 
@@ -342,7 +386,7 @@ impl FieldScene {
 
     /// The batched queries from one origin, ray i ending at `tmax(i)` (see
     /// [`Visibility::occluded_many`]).
-    fn occluded_from(
+    pub(super) fn occluded_from(
         &self,
         isa: Isa,
         origin: Vec3,
@@ -442,19 +486,52 @@ impl FieldScene {
     ) -> Option<H> {
         let mut best: Option<H> = None;
         self.for_each_candidate(origin, dir, tmin, tmax, |t_entry, inst| {
-            let limit = best.as_ref().map_or(tmax, &t_of);
-            if best.is_some() && t_entry > limit {
-                return false;
-            }
-            if let Some(h) = hit(inst, limit) {
-                if best.is_none() || t_of(&h) < limit {
-                    best = Some(h);
-                }
-            }
-            true
+            nearer(&mut best, &t_of, &hit, t_entry, inst, tmax)
         });
         best
     }
+
+    /// [`Self::nearest`] over the instances `candidates` names, with several instances
+    /// ([`Self::for_each_of`]).
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn nearest_among<H: Copy>(
+        &self,
+        candidates: impl FnOnce(&mut dyn FnMut(usize)),
+        origin: Vec3,
+        dir: Vec3,
+        tmin: f32,
+        tmax: f32,
+        t_of: impl Fn(&H) -> f32,
+        hit: impl Fn(&FieldInstance, f32) -> Option<H>,
+    ) -> Option<H> {
+        let mut best: Option<H> = None;
+        self.for_each_of(candidates, origin, dir, tmin, tmax, |t_entry, inst| {
+            nearer(&mut best, &t_of, &hit, t_entry, inst, tmax)
+        });
+        best
+    }
+}
+
+/// One step of [`FieldScene::nearest`]: asks `inst` for a hit nearer than `best` (entered at
+/// `t_entry`); `false` once no later sphere can hold a nearer one.
+fn nearer<H: Copy>(
+    best: &mut Option<H>,
+    t_of: &impl Fn(&H) -> f32,
+    hit: &impl Fn(&FieldInstance, f32) -> Option<H>,
+    t_entry: f32,
+    inst: &FieldInstance,
+    tmax: f32,
+) -> bool {
+    let limit = best.as_ref().map_or(tmax, t_of);
+    if best.is_some() && t_entry > limit {
+        return false;
+    }
+    if let Some(h) = hit(inst, limit) {
+        if best.is_none() || t_of(&h) < limit {
+            *best = Some(h);
+        }
+    }
+    true
 }
 
 #[cfg(test)]

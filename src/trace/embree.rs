@@ -52,6 +52,138 @@ fn error_name(code: c_uint) -> &'static str {
     }
 }
 
+/// The device's pending error, if any, as an [`EmbreeError`] naming `what`.
+///
+/// # Safety
+/// `device` is a valid device.
+pub(super) unsafe fn device_error(
+    device: sys::RTCDevice,
+    what: &'static str,
+) -> Result<(), EmbreeError> {
+    match sys::rtcGetDeviceError(device) {
+        sys::RTC_ERROR_NONE => Ok(()),
+        code => Err(EmbreeError {
+            what,
+            code: error_name(code),
+        }),
+    }
+}
+
+/// A new Embree device with the default configuration.
+///
+/// # Safety
+/// The caller releases the device (`rtcReleaseDevice`) once.
+pub(super) unsafe fn new_device() -> Result<sys::RTCDevice, EmbreeError> {
+    let device = sys::rtcNewDevice(std::ptr::null());
+    if device.is_null() {
+        return Err(EmbreeError {
+            what: "rtcNewDevice",
+            code: error_name(sys::rtcGetDeviceError(std::ptr::null_mut())),
+        });
+    }
+    Ok(device)
+}
+
+/// Unit geometric normal of each triangle, `(v1-v0)×(v2-v0)` normalised as [`super::Tracer`]
+/// computes it (in Vec3A; its power-of-two scale cancels).
+pub(super) fn triangle_normals(triangles: &[[Vec3; 3]]) -> Vec<Vec3> {
+    triangles
+        .iter()
+        .map(|t| {
+            let [v0, v1, v2] = t.map(Vec3A::from);
+            Vec3::from((v1 - v0).cross(v2 - v0).normalize())
+        })
+        .collect()
+}
+
+/// A committed scene of one triangle geometry over `triangles` (three vertices per triangle,
+/// as given), robust, build quality high on the scene and the geometry.
+///
+/// # Safety
+/// `device` is a valid device; the caller releases the scene once.
+///
+/// # Panics
+/// If a vertex is not finite.
+pub(super) unsafe fn triangle_scene(
+    device: sys::RTCDevice,
+    triangles: &[[Vec3; 3]],
+) -> Result<sys::RTCScene, EmbreeError> {
+    assert!(
+        triangles.iter().flatten().all(|v| v.is_finite()),
+        "Embree: triangle vertices must be finite"
+    );
+    if triangles.len() > (u32::MAX / 3) as usize {
+        return Err(EmbreeError {
+            what: "rtcSetNewGeometryBuffer (more than u32::MAX / 3 triangles)",
+            code: "RTC_ERROR_INVALID_ARGUMENT",
+        });
+    }
+    let scene = sys::rtcNewScene(device);
+    if scene.is_null() {
+        return Err(EmbreeError {
+            what: "rtcNewScene",
+            code: error_name(sys::rtcGetDeviceError(device)),
+        });
+    }
+    let built = (|| {
+        sys::rtcSetSceneFlags(scene, sys::RTC_SCENE_FLAG_ROBUST);
+        sys::rtcSetSceneBuildQuality(scene, sys::RTC_BUILD_QUALITY_HIGH);
+        device_error(device, "rtcSetSceneFlags")?;
+        if !triangles.is_empty() {
+            let n = triangles.len();
+            let geom = sys::rtcNewGeometry(device, sys::RTC_GEOMETRY_TYPE_TRIANGLE);
+            device_error(device, "rtcNewGeometry")?;
+            sys::rtcSetGeometryBuildQuality(geom, sys::RTC_BUILD_QUALITY_HIGH);
+            let vb = sys::rtcSetNewGeometryBuffer(
+                geom,
+                sys::RTC_BUFFER_TYPE_VERTEX,
+                0,
+                sys::RTC_FORMAT_FLOAT3,
+                12,
+                3 * n,
+            ) as *mut f32;
+            let ib = sys::rtcSetNewGeometryBuffer(
+                geom,
+                sys::RTC_BUFFER_TYPE_INDEX,
+                0,
+                sys::RTC_FORMAT_UINT3,
+                12,
+                n,
+            ) as *mut u32;
+            if vb.is_null() || ib.is_null() {
+                sys::rtcReleaseGeometry(geom);
+                device_error(device, "rtcSetNewGeometryBuffer")?;
+                return Err(EmbreeError {
+                    what: "rtcSetNewGeometryBuffer",
+                    code: "RTC_ERROR_UNKNOWN",
+                });
+            }
+            // Written within the item counts Embree allocated the buffers with.
+            let verts = std::slice::from_raw_parts_mut(vb, 9 * n);
+            let index = std::slice::from_raw_parts_mut(ib, 3 * n);
+            for (i, tri) in triangles.iter().enumerate() {
+                for (k, v) in tri.iter().enumerate() {
+                    verts[9 * i + 3 * k..9 * i + 3 * k + 3].copy_from_slice(&v.to_array());
+                    index[3 * i + k] = (3 * i + k) as u32;
+                }
+            }
+            sys::rtcCommitGeometry(geom);
+            sys::rtcAttachGeometry(scene, geom);
+            sys::rtcReleaseGeometry(geom);
+            device_error(device, "rtcCommitGeometry")?;
+        }
+        sys::rtcCommitScene(scene);
+        device_error(device, "rtcCommitScene")
+    })();
+    match built {
+        Ok(()) => Ok(scene),
+        Err(e) => {
+            sys::rtcReleaseScene(scene);
+            Err(e)
+        }
+    }
+}
+
 /// How [`Visibility::occluded_many`] and [`Visibility::occluded_many_to`] cast their rays.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum EmbreeRays {
@@ -106,106 +238,23 @@ impl EmbreeTracer {
     /// # Panics
     /// If a vertex is not finite (as [`super::Tracer::new`]).
     pub fn new(triangles: &[[Vec3; 3]]) -> Result<EmbreeTracer, EmbreeError> {
-        assert!(
-            triangles.iter().flatten().all(|v| v.is_finite()),
-            "EmbreeTracer::new: triangle vertices must be finite"
-        );
-        if triangles.len() > (u32::MAX / 3) as usize {
-            return Err(EmbreeError {
-                what: "rtcSetNewGeometryBuffer (more than u32::MAX / 3 triangles)",
-                code: "RTC_ERROR_INVALID_ARGUMENT",
-            });
-        }
-        // SAFETY: every handle is checked before use; buffers are written within the item
-        // counts Embree allocated them with.
+        // SAFETY: `new_device` and `triangle_scene` check every handle; the scene and the
+        // device are released once, by `drop`.
         unsafe {
-            let device = sys::rtcNewDevice(std::ptr::null());
-            if device.is_null() {
-                return Err(EmbreeError {
-                    what: "rtcNewDevice",
-                    code: error_name(sys::rtcGetDeviceError(std::ptr::null_mut())),
-                });
-            }
-            let fail = |what: &'static str| -> Result<(), EmbreeError> {
-                match sys::rtcGetDeviceError(device) {
-                    sys::RTC_ERROR_NONE => Ok(()),
-                    code => Err(EmbreeError {
-                        what,
-                        code: error_name(code),
-                    }),
+            let device = new_device()?;
+            let scene = match triangle_scene(device, triangles) {
+                Ok(scene) => scene,
+                Err(e) => {
+                    sys::rtcReleaseDevice(device);
+                    return Err(e);
                 }
             };
-            let scene = sys::rtcNewScene(device);
-            if scene.is_null() {
-                let code = error_name(sys::rtcGetDeviceError(device));
-                sys::rtcReleaseDevice(device);
-                return Err(EmbreeError {
-                    what: "rtcNewScene",
-                    code,
-                });
-            }
-            // From here on, dropping `tracer` releases the scene and the device.
-            let tracer = EmbreeTracer {
+            Ok(EmbreeTracer {
                 device,
                 scene,
-                normals: triangles
-                    .iter()
-                    .map(|t| {
-                        // In Vec3A, as the tracer computes it (its power-of-two scale cancels).
-                        let [v0, v1, v2] = t.map(Vec3A::from);
-                        Vec3::from((v1 - v0).cross(v2 - v0).normalize())
-                    })
-                    .collect(),
+                normals: triangle_normals(triangles),
                 rays: Self::DEFAULT_RAYS,
-            };
-            sys::rtcSetSceneFlags(scene, sys::RTC_SCENE_FLAG_ROBUST);
-            sys::rtcSetSceneBuildQuality(scene, sys::RTC_BUILD_QUALITY_HIGH);
-            fail("rtcSetSceneFlags")?;
-            if !triangles.is_empty() {
-                let n = triangles.len();
-                let geom = sys::rtcNewGeometry(device, sys::RTC_GEOMETRY_TYPE_TRIANGLE);
-                fail("rtcNewGeometry")?;
-                sys::rtcSetGeometryBuildQuality(geom, sys::RTC_BUILD_QUALITY_HIGH);
-                let vb = sys::rtcSetNewGeometryBuffer(
-                    geom,
-                    sys::RTC_BUFFER_TYPE_VERTEX,
-                    0,
-                    sys::RTC_FORMAT_FLOAT3,
-                    12,
-                    3 * n,
-                ) as *mut f32;
-                let ib = sys::rtcSetNewGeometryBuffer(
-                    geom,
-                    sys::RTC_BUFFER_TYPE_INDEX,
-                    0,
-                    sys::RTC_FORMAT_UINT3,
-                    12,
-                    n,
-                ) as *mut u32;
-                if vb.is_null() || ib.is_null() {
-                    sys::rtcReleaseGeometry(geom);
-                    fail("rtcSetNewGeometryBuffer")?;
-                    return Err(EmbreeError {
-                        what: "rtcSetNewGeometryBuffer",
-                        code: "RTC_ERROR_UNKNOWN",
-                    });
-                }
-                let verts = std::slice::from_raw_parts_mut(vb, 9 * n);
-                let index = std::slice::from_raw_parts_mut(ib, 3 * n);
-                for (i, tri) in triangles.iter().enumerate() {
-                    for (k, v) in tri.iter().enumerate() {
-                        verts[9 * i + 3 * k..9 * i + 3 * k + 3].copy_from_slice(&v.to_array());
-                        index[3 * i + k] = (3 * i + k) as u32;
-                    }
-                }
-                sys::rtcCommitGeometry(geom);
-                sys::rtcAttachGeometry(scene, geom);
-                sys::rtcReleaseGeometry(geom);
-                fail("rtcCommitGeometry")?;
-            }
-            sys::rtcCommitScene(scene);
-            fail("rtcCommitScene")?;
-            Ok(tracer)
+            })
         }
     }
 
@@ -236,6 +285,61 @@ impl EmbreeTracer {
         self.normals.is_empty()
     }
 
+    /// Queries on the committed scene.
+    #[inline]
+    fn q(&self) -> Committed {
+        Committed {
+            scene: self.scene,
+            empty: self.normals.is_empty(),
+        }
+    }
+
+    /// Closest hit with `tmin <= t <= tmax`, as Embree's `rtcIntersect1` reports it; the
+    /// normal is the hit triangle's (as [`super::Tracer`] computes it, so equal bit for bit
+    /// where both hit the same triangle).
+    pub fn closest_hit(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<Hit> {
+        self.closest_hit_raw(origin, dir, tmin, tmax)
+            .map(|(hit, _)| hit)
+    }
+
+    /// [`Self::closest_hit`] and Embree's own unnormalised geometric normal `Ng`.
+    pub fn closest_hit_raw(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        tmin: f32,
+        tmax: f32,
+    ) -> Option<(Hit, Vec3)> {
+        let rh = self.q().intersect(origin, dir, tmin, tmax)?;
+        let triangle = rh.hit.primID;
+        Some((
+            Hit {
+                t: rh.ray.tfar,
+                triangle,
+                u: rh.hit.u,
+                v: rh.hit.v,
+                normal: self.normals[triangle as usize],
+            },
+            Vec3::new(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z),
+        ))
+    }
+
+    /// Whether any triangle is hit with `tmin <= t <= tmax` (`rtcOccluded1`).
+    pub fn any_hit(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> bool {
+        self.q().any_hit(origin, dir, tmin, tmax)
+    }
+}
+
+/// Ray queries on a committed Embree scene: a triangle scene ([`EmbreeTracer`]) or a scene of
+/// instances ([`super::embree_instances::EmbreeInstances`]).
+#[derive(Clone, Copy)]
+pub(super) struct Committed {
+    pub scene: sys::RTCScene,
+    /// Nothing to hit: every query misses without a call.
+    pub empty: bool,
+}
+
+impl Committed {
     /// Whether a query can hit anything (the checks [`super::Tracer`] makes).
     #[inline]
     fn live(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> bool {
@@ -244,7 +348,7 @@ impl EmbreeTracer {
             tmin.is_nan() || tmin >= 0.0,
             "tmin must be >= 0, got {tmin}"
         );
-        !(self.normals.is_empty() || tmin.is_nan() || tmax.is_nan() || tmin > tmax)
+        !(self.empty || tmin.is_nan() || tmax.is_nan() || tmin > tmax)
     }
 
     #[inline]
@@ -265,22 +369,14 @@ impl EmbreeTracer {
         }
     }
 
-    /// Closest hit with `tmin <= t <= tmax`, as Embree's `rtcIntersect1` reports it; the
-    /// normal is the hit triangle's (as [`super::Tracer`] computes it, so equal bit for bit
-    /// where both hit the same triangle).
-    pub fn closest_hit(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<Hit> {
-        self.closest_hit_raw(origin, dir, tmin, tmax)
-            .map(|(hit, _)| hit)
-    }
-
-    /// [`Self::closest_hit`] and Embree's own unnormalised geometric normal `Ng`.
-    pub fn closest_hit_raw(
+    /// `rtcIntersect1`'s closest hit with `tmin <= t <= tmax`, if any.
+    pub fn intersect(
         &self,
         origin: Vec3,
         dir: Vec3,
         tmin: f32,
         tmax: f32,
-    ) -> Option<(Hit, Vec3)> {
+    ) -> Option<sys::RTCRayHit> {
         if !self.live(origin, dir, tmin, tmax) {
             return None;
         }
@@ -295,23 +391,10 @@ impl EmbreeTracer {
         let mut ctx = sys::RTCIntersectContext::new(sys::RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT);
         // SAFETY: a committed scene, a valid context and ray-hit.
         unsafe { sys::rtcIntersect1(self.scene, &mut ctx, &mut rh) };
-        if rh.hit.geomID == sys::RTC_INVALID_GEOMETRY_ID {
-            return None;
-        }
-        let triangle = rh.hit.primID;
-        Some((
-            Hit {
-                t: rh.ray.tfar,
-                triangle,
-                u: rh.hit.u,
-                v: rh.hit.v,
-                normal: self.normals[triangle as usize],
-            },
-            Vec3::new(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z),
-        ))
+        (rh.hit.geomID != sys::RTC_INVALID_GEOMETRY_ID).then_some(rh)
     }
 
-    /// Whether any triangle is hit with `tmin <= t <= tmax` (`rtcOccluded1`).
+    /// Whether anything is hit with `tmin <= t <= tmax` (`rtcOccluded1`).
     pub fn any_hit(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> bool {
         if !self.live(origin, dir, tmin, tmax) {
             return false;
@@ -322,6 +405,27 @@ impl EmbreeTracer {
         unsafe { sys::rtcOccluded1(self.scene, &mut ctx, &mut ray) };
         // Embree marks an occluded ray by tfar = -inf.
         ray.tfar == f32::NEG_INFINITY
+    }
+
+    /// `out[i] = any_hit(origin, dirs[i], tmin, tmax(i))`, one call per ray or through 8-wide
+    /// packets as `rays` says.
+    pub fn any_hits(
+        &self,
+        rays: EmbreeRays,
+        origin: Vec3,
+        dirs: &[Vec3],
+        tmin: f32,
+        tmax: impl Fn(usize) -> f32,
+        out: &mut [bool],
+    ) {
+        match rays {
+            EmbreeRays::Single => {
+                for (i, (o, &d)) in out.iter_mut().zip(dirs).enumerate() {
+                    *o = self.any_hit(origin, d, tmin, tmax(i));
+                }
+            }
+            EmbreeRays::Packet8 => self.any_hits8(origin, dirs, tmin, tmax, out),
+        }
     }
 
     /// `out[i] = any_hit(origin, dirs[i], tmin, tmax(i))` through 8-wide packets.
@@ -396,14 +500,8 @@ impl Visibility for EmbreeTracer {
             out.len(),
             "occluded_many: dirs and out differ in length"
         );
-        match self.rays {
-            EmbreeRays::Single => {
-                for (o, &d) in out.iter_mut().zip(dirs) {
-                    *o = self.any_hit(origin, d, tmin, tmax);
-                }
-            }
-            EmbreeRays::Packet8 => self.any_hits8(origin, dirs, tmin, |_| tmax, out),
-        }
+        self.q()
+            .any_hits(self.rays, origin, dirs, tmin, |_| tmax, out);
     }
 
     fn occluded_many_to(
@@ -418,13 +516,7 @@ impl Visibility for EmbreeTracer {
             dirs.len() == out.len() && dirs.len() == tmaxs.len(),
             "occluded_many_to: dirs, tmaxs and out differ in length"
         );
-        match self.rays {
-            EmbreeRays::Single => {
-                for ((o, &d), &t) in out.iter_mut().zip(dirs).zip(tmaxs) {
-                    *o = self.any_hit(origin, d, tmin, t);
-                }
-            }
-            EmbreeRays::Packet8 => self.any_hits8(origin, dirs, tmin, |i| tmaxs[i], out),
-        }
+        self.q()
+            .any_hits(self.rays, origin, dirs, tmin, |i| tmaxs[i], out);
     }
 }

@@ -1,5 +1,5 @@
 //! Minimal FFI bindings to the system's Embree 3 (`libembree3`, Debian `libembree-dev`), only
-//! what [`super::embree::EmbreeTracer`] calls. Layouts follow the 3.13 headers
+//! what [`super::embree::EmbreeTracer`] and [`super::embree_instances::EmbreeInstances`] call. Layouts follow the 3.13 headers
 //! (`embree3/rtcore_*.h`) as Debian builds them: `RTC_MAX_INSTANCE_LEVEL_COUNT = 1`,
 //! `RTC_MIN_WIDTH = 0`, so the intersection context is `{flags, filter, instID[1]}`. Size and
 //! alignment assertions below pin every struct to its C twin.
@@ -23,11 +23,15 @@ pub type RTCScene = *mut c_void;
 pub type RTCGeometry = *mut c_void;
 
 pub const RTC_GEOMETRY_TYPE_TRIANGLE: c_uint = 0;
+pub const RTC_GEOMETRY_TYPE_INSTANCE: c_uint = 121;
 pub const RTC_BUFFER_TYPE_INDEX: c_uint = 0;
 pub const RTC_BUFFER_TYPE_VERTEX: c_uint = 1;
 pub const RTC_FORMAT_UINT3: c_uint = 0x5003;
 pub const RTC_FORMAT_FLOAT3: c_uint = 0x9003;
+pub const RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR: c_uint = 0x9234;
+pub const RTC_SCENE_FLAG_DYNAMIC: c_uint = 1 << 0;
 pub const RTC_SCENE_FLAG_ROBUST: c_uint = 1 << 2;
+pub const RTC_BUILD_QUALITY_LOW: c_uint = 0;
 pub const RTC_BUILD_QUALITY_HIGH: c_uint = 2;
 pub const RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT: c_uint = 0;
 pub const RTC_INTERSECT_CONTEXT_FLAG_COHERENT: c_uint = 1;
@@ -148,6 +152,13 @@ extern "C" {
         item_count: usize,
     ) -> *mut c_void;
     pub fn rtcCommitGeometry(geometry: RTCGeometry);
+    pub fn rtcSetGeometryInstancedScene(geometry: RTCGeometry, scene: RTCScene);
+    pub fn rtcSetGeometryTransform(
+        geometry: RTCGeometry,
+        time_step: c_uint,
+        format: c_uint,
+        xfm: *const c_void,
+    );
 
     pub fn rtcIntersect1(
         scene: RTCScene,

@@ -4,6 +4,8 @@
 #[cfg(feature = "embree")]
 pub mod embree;
 #[cfg(feature = "embree")]
+pub mod embree_instances;
+#[cfg(feature = "embree")]
 mod embree_sys;
 mod tracer;
 pub mod two_level;

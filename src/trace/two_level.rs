@@ -180,7 +180,7 @@ impl TwoLevel {
             let near = t0.min(t1).max_element().max(tmin);
             let far = t0.max(t1).min_element().min(tmax);
             // NaN (a zero direction component on a slab's plane) keeps the node.
-            !(near > far)
+            near.partial_cmp(&far) != Some(std::cmp::Ordering::Greater)
         };
         let mut stack = [0u32; 64];
         let mut top = 1;

@@ -343,19 +343,24 @@ impl Crowd {
     }
 
     /// The methods of this build.
-    fn movers(&self) -> Vec<Box<dyn Mover>> {
-        #[allow(unused_mut)]
+    fn movers(&self) -> Result<Vec<Box<dyn Mover>>> {
         let mut v: Vec<Box<dyn Mover>> = vec![
             Box::<WorldRebuild>::default(),
             Box::new(super::movers::TwoLevelRebuild::new(&self.meshes)),
         ];
         #[cfg(feature = "embree")]
-        v.push(Box::<super::movers::EmbreeRebuild>::default());
-        v.push(Box::new(super::movers::Fields::new(
-            self.fields.clone(),
-            LookupOptions::default(),
-        )));
-        v
+        {
+            v.push(Box::<super::movers::EmbreeRebuild>::default());
+            v.push(Box::new(super::movers::EmbreeInstanced::new(&self.meshes)?));
+        }
+        for sphere_bvh in [false, true] {
+            v.push(Box::new(super::movers::Fields::new(
+                self.fields.clone(),
+                LookupOptions::default(),
+                sphere_bvh,
+            )));
+        }
+        Ok(v)
     }
 
     /// Every frame, every method: its update, its query, its errors against the world rebuild
@@ -370,7 +375,7 @@ impl Crowd {
     ) -> Result<(Vec<FrameRow>, Vec<super::animation::Frame>)> {
         let animated = self.sweep == "approach" || self.n == p.animate;
         let mut pictures = Vec::new();
-        let mut movers = self.movers();
+        let mut movers = self.movers()?;
         let tris: usize = self
             .casters
             .iter()

@@ -135,7 +135,8 @@ pub fn run(out: &Path, quick: bool, supply: &FieldSupply) -> Result<Vec<FrameRow
 fn plot_approach(path: &Path, rows: &[FrameRow]) -> Result<()> {
     let approach: Vec<&FrameRow> = rows.iter().filter(|r| r.sweep == "approach").collect();
     let mut series = Vec::new();
-    for m in ["field"] {
+    {
+        let m = "field";
         let pick = |f: fn(&FrameRow) -> f64| -> Vec<(f64, f64)> {
             approach
                 .iter()

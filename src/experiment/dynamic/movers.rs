@@ -3,6 +3,7 @@
 
 use crate::field::lookup::LookupOptions;
 use crate::field::scene::{FieldInstance, FieldScene};
+use crate::field::sphere_bvh::SphereBvhScene;
 use crate::field::VisibilityField;
 use crate::geometry::{Mesh, Similarity};
 use crate::trace::Tracer;
@@ -99,6 +100,58 @@ impl Mover for EmbreeRebuild {
     }
 }
 
+/// Embree with instance geometries: each mesh's scene built once (the crowd's precompute), the
+/// transforms set and the top scene committed every frame.
+#[cfg(feature = "embree")]
+pub struct EmbreeInstanced {
+    pub tracer: crate::trace::embree_instances::EmbreeInstances,
+}
+
+#[cfg(feature = "embree")]
+impl EmbreeInstanced {
+    pub fn new(meshes: &[Arc<Mesh>]) -> crate::experiment::Result<EmbreeInstanced> {
+        let tracer = crate::trace::embree_instances::EmbreeInstances::new(&model_triangles(meshes))
+            .map_err(|e| {
+                crate::experiment::Error::invalid("dynamic: embree_instances", e.to_string())
+            })?;
+        Ok(EmbreeInstanced { tracer })
+    }
+}
+
+#[cfg(feature = "embree")]
+impl Mover for EmbreeInstanced {
+    fn name(&self) -> &'static str {
+        "embree_instances"
+    }
+
+    fn update(&mut self, frame: &FrameCasters) -> crate::experiment::Result<()> {
+        self.tracer.update(frame.instances).map_err(|e| {
+            crate::experiment::Error::invalid("dynamic: embree_instances", e.to_string())
+        })
+    }
+
+    fn vis(&self) -> &dyn Visibility {
+        &self.tracer
+    }
+
+    fn bytes(&self) -> Option<u64> {
+        None
+    }
+}
+
+/// Each mesh's triangles in model space.
+fn model_triangles(meshes: &[Arc<Mesh>]) -> Vec<Vec<[Vec3; 3]>> {
+    meshes
+        .iter()
+        .map(|m| {
+            m.triangles
+                .iter()
+                .map(|t| t.map(|i| m.positions[i as usize]))
+                .collect()
+        })
+        .collect()
+}
+
 /// Our ray caster in two levels: each mesh's BVH built once in model space (the crowd's
 /// precompute), the top level over the instances rebuilt every frame.
 pub struct TwoLevelRebuild {
@@ -107,17 +160,8 @@ pub struct TwoLevelRebuild {
 
 impl TwoLevelRebuild {
     pub fn new(meshes: &[Arc<Mesh>]) -> TwoLevelRebuild {
-        let model: Vec<Vec<[Vec3; 3]>> = meshes
-            .iter()
-            .map(|m| {
-                m.triangles
-                    .iter()
-                    .map(|t| t.map(|i| m.positions[i as usize]))
-                    .collect()
-            })
-            .collect();
         TwoLevelRebuild {
-            tracer: crate::trace::two_level::TwoLevel::new(&model),
+            tracer: crate::trace::two_level::TwoLevel::new(&model_triangles(meshes)),
         }
     }
 }
@@ -142,46 +186,70 @@ impl Mover for TwoLevelRebuild {
 }
 
 /// The casters' fields (one per mesh, shared by its instances) placed by the frame's
-/// transforms; nothing is rebuilt.
+/// transforms; nothing is rebuilt but, with `sphere_bvh`, the BVH over the instances' bounding
+/// spheres ([`SphereBvhScene`]; without it every ray tests every sphere, as 2008 Algorithm 2).
 pub struct Fields {
     /// Per mesh, its field.
     pub fields: Vec<Arc<VisibilityField>>,
-    pub options: LookupOptions,
-    pub scene: FieldScene,
+    pub sphere_bvh: bool,
+    pub scene: SphereBvhScene,
 }
 
 impl Fields {
-    pub fn new(fields: Vec<Arc<VisibilityField>>, options: LookupOptions) -> Fields {
+    pub fn new(
+        fields: Vec<Arc<VisibilityField>>,
+        options: LookupOptions,
+        sphere_bvh: bool,
+    ) -> Fields {
         Fields {
             fields,
-            options,
-            scene: FieldScene {
+            sphere_bvh,
+            scene: SphereBvhScene::new(FieldScene {
                 instances: Vec::new(),
                 options,
-            },
+            }),
         }
     }
 }
 
 impl Mover for Fields {
     fn name(&self) -> &'static str {
-        "field"
+        if self.sphere_bvh {
+            "field"
+        } else {
+            "field_every_sphere"
+        }
     }
 
     fn update(&mut self, frame: &FrameCasters) -> crate::experiment::Result<()> {
-        self.scene.instances = frame
-            .instances
-            .iter()
-            .map(|&(m, t)| FieldInstance::new(self.fields[m].clone(), t))
-            .collect();
+        let scene = FieldScene {
+            instances: frame
+                .instances
+                .iter()
+                .map(|&(m, t)| FieldInstance::new(self.fields[m].clone(), t))
+                .collect(),
+            options: self.scene.scene.options,
+        };
+        self.scene = if self.sphere_bvh {
+            SphereBvhScene::new(scene)
+        } else {
+            SphereBvhScene {
+                scene,
+                bvh: Default::default(),
+            }
+        };
         Ok(())
     }
 
     fn vis(&self) -> &dyn Visibility {
-        &self.scene
+        if self.sphere_bvh {
+            &self.scene
+        } else {
+            &self.scene.scene
+        }
     }
 
     fn bytes(&self) -> Option<u64> {
-        Some(self.fields.iter().map(|f| f.bytes()).sum())
+        Some(self.fields.iter().map(|f| f.bytes()).sum::<u64>() + self.scene.bvh.bytes())
     }
 }
