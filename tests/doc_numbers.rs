@@ -544,7 +544,7 @@ fn dynamic_table(rows: &[Row]) -> String {
     };
     let ms = |v: Option<f64>| v.map_or("–".to_string(), |s| format!("{:.1}", 1e3 * s));
     let mut out = String::from(
-        "| casters (triangles) | world BVH rebuilt | two levels | Embree rebuilt | field | field's gain over Embree / world | field RMS same rays / vs truth (ray casting's) |\n|---|---|---|---|---|---|---|\n",
+        "| casters (triangles) | world BVH rebuilt | two levels | Embree rebuilt | Embree instances | field, every sphere | field, sphere BVH | field's gain over Embree instances / Embree rebuilt / world | field RMS same rays / vs truth (ray casting's) |\n|---|---|---|---|---|---|---|---|---|\n",
     );
     for n in counts {
         let tris = crowd
@@ -557,12 +557,15 @@ fn dynamic_table(rows: &[Row]) -> String {
             mean(n, m, "frame_s").map_or("–".to_string(), |t| format!("{:.1}×", t / field))
         };
         out.push_str(&format!(
-            "| {n} ({}) | {} | {} | {} | {} | {} / {} | {:.2} / {:.2} ({:.2}) |\n",
+            "| {n} ({}) | {} | {} | {} | {} | {} | {} | {} / {} / {} | {:.2} / {:.2} ({:.2}) |\n",
             with_commas(tris),
             ms(mean(n, "world_rebuild", "frame_s")),
             ms(mean(n, "two_level", "frame_s")),
             ms(mean(n, "embree_rebuild", "frame_s")),
+            ms(mean(n, "embree_instances", "frame_s")),
+            ms(mean(n, "field_every_sphere", "frame_s")),
             ms(Some(field)),
+            gain("embree_instances"),
             gain("embree_rebuild"),
             gain("world_rebuild"),
             mean(n, "field", "rms_vs_raycast").unwrap(),

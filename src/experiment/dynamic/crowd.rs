@@ -342,8 +342,9 @@ impl Crowd {
         (pairs, inside)
     }
 
-    /// The methods of this build.
-    fn movers(&self) -> Result<Vec<Box<dyn Mover>>> {
+    /// The methods of this build, each with its precompute done (per-mesh BVHs or scenes,
+    /// the fields): the world rebuild first.
+    pub fn movers(&self) -> Result<Vec<Box<dyn Mover>>> {
         let mut v: Vec<Box<dyn Mover>> = vec![
             Box::<WorldRebuild>::default(),
             Box::new(super::movers::TwoLevelRebuild::new(&self.meshes)),
@@ -361,6 +362,23 @@ impl Crowd {
             )));
         }
         Ok(v)
+    }
+
+    /// What frame `f` costs `mover`: its update to the frame's transforms, then the vertex AO
+    /// of the receiver points (the values returned).
+    pub fn step(&self, p: &Profile, mover: &mut dyn Mover, f: usize) -> Result<Vec<f32>> {
+        let frame = self.frame(p, f % self.frame_count(p));
+        mover.update(&FrameCasters {
+            meshes: &self.meshes,
+            instances: &frame,
+        })?;
+        Ok(ao_at_points(
+            mover.vis(),
+            &self.points,
+            &self.normals,
+            &self.rays,
+            &self.opts,
+        ))
     }
 
     /// Every frame, every method: its update, its query, its errors against the world rebuild
