@@ -15,7 +15,7 @@
 //! nearest hit, does not depend on the order the instances are tried in. Tested against
 //! [`FieldScene`] on crowds in `tests/sphere_bvh.rs`.
 
-use super::lanes::{Isa, MayMeetFrom};
+use super::lanes::{self, Isa, MayMeetFrom};
 use super::scene::{FieldInstance, FieldScene, MAY_MEET_SLACK};
 use crate::visibility::{SurfaceHit, Visibility};
 use glam::Vec3;
@@ -240,69 +240,129 @@ impl SphereBvhScene {
             return;
         }
         out.fill(false);
-        let nodes = &self.bvh.nodes;
-        // Each pending node's rays: a range of `lists`; the node popped last holds the last
-        // range, so popping truncates `lists` to it and its children's ranges follow.
-        let mut lists: Vec<u32> = Vec::with_capacity(4 * dirs.len());
-        let mut stack: Vec<(u32, usize, usize)> = Vec::with_capacity(64);
-        let root = nodes[0].from(origin);
-        lists.extend((0..dirs.len() as u32).filter(|&i| root.test(dirs[i as usize], tmin)));
-        stack.push((0, 0, lists.len()));
-        let (mut sub_dirs, mut sub_map, mut sub_out) = (Vec::new(), Vec::new(), Vec::new());
-        while let Some((node, start, end)) = stack.pop() {
-            lists.truncate(end);
-            let n = nodes[node as usize];
-            if n.count == 0 {
-                for child in [n.first, n.first + 1] {
-                    let meet = nodes[child as usize].from(origin);
-                    let s = lists.len();
-                    for k in start..end {
-                        let i = lists[k] as usize;
-                        if !out[i] && meet.test(dirs[i], tmin) {
-                            lists.push(i as u32);
-                        }
-                    }
-                    if lists.len() > s {
-                        stack.push((child, s, lists.len()));
-                    }
-                }
-                continue;
-            }
-            for &j in &self.bvh.order[n.first as usize..(n.first + n.count) as usize] {
-                let inst = &self.scene.instances[j as usize];
-                sub_dirs.clear();
-                sub_map.clear();
-                for &i in &lists[start..end] {
-                    if !out[i as usize] {
-                        sub_dirs.push(dirs[i as usize]);
-                        sub_map.push(i);
-                    }
-                }
-                if sub_dirs.is_empty() {
-                    break;
-                }
-                sub_out.clear();
-                sub_out.resize(sub_dirs.len(), false);
-                let tmax_k = |k: usize| tmax(sub_map[k] as usize);
-                let also = |k: usize, dir: Vec3| {
-                    inst.meets_segment(origin, dir, tmin, tmax_k(k)).is_some()
-                };
-                inst.occluded_many(
-                    isa,
-                    origin,
-                    &sub_dirs,
-                    tmin,
-                    tmax_k,
-                    &self.scene.options,
-                    also,
-                    &mut sub_out,
+        SCRATCH.with(|levels| {
+            let mut levels = levels.borrow_mut();
+            let (root, rest) = levels.split_first_mut().expect("levels");
+            let all = root.filter(isa, &self.bvh.nodes[0].from(origin), dirs, None, tmin, out);
+            if all > 0 {
+                self.descend(
+                    isa, origin, tmin, &tmax, 0, &root.dirs, &root.map, rest, out,
                 );
-                for (k, &hit) in sub_out.iter().enumerate() {
-                    out[sub_map[k] as usize] |= hit;
+            }
+        });
+    }
+
+    /// The rays `dirs` (ray `map[k]` of the batch) have passed `node`'s test: the leaf's
+    /// instances run their batched lookup on those not yet occluded, an inner node hands each
+    /// child the rays that pass its test ([`lanes::cull`], eight rays at a time).
+    #[allow(clippy::too_many_arguments)]
+    fn descend(
+        &self,
+        isa: Isa,
+        origin: Vec3,
+        tmin: f32,
+        tmax: &impl Fn(usize) -> f32,
+        node: u32,
+        dirs: &[Vec3],
+        map: &[u32],
+        levels: &mut [Level],
+        out: &mut [bool],
+    ) {
+        let nodes = &self.bvh.nodes;
+        let n = nodes[node as usize];
+        let (this, rest) = levels
+            .split_first_mut()
+            .expect("a tree deeper than its scratch levels");
+        if n.count == 0 {
+            for child in [n.first, n.first + 1] {
+                let meet = nodes[child as usize].from(origin);
+                if this.filter(isa, &meet, dirs, Some(map), tmin, out) > 0 {
+                    self.descend(
+                        isa, origin, tmin, tmax, child, &this.dirs, &this.map, rest, out,
+                    );
                 }
+            }
+            return;
+        }
+        for &j in &self.bvh.order[n.first as usize..(n.first + n.count) as usize] {
+            let inst = &self.scene.instances[j as usize];
+            this.dirs.clear();
+            this.map.clear();
+            for (k, &i) in map.iter().enumerate() {
+                if !out[i as usize] {
+                    this.dirs.push(dirs[k]);
+                    this.map.push(i);
+                }
+            }
+            if this.dirs.is_empty() {
+                return;
+            }
+            this.hit.clear();
+            this.hit.resize(this.dirs.len(), false);
+            let sub = &this.map;
+            let tmax_k = |k: usize| tmax(sub[k] as usize);
+            let also =
+                |k: usize, dir: Vec3| inst.meets_segment(origin, dir, tmin, tmax_k(k)).is_some();
+            inst.occluded_many(
+                isa,
+                origin,
+                &this.dirs,
+                tmin,
+                tmax_k,
+                &self.scene.options,
+                also,
+                &mut this.hit,
+            );
+            for (k, &hit) in this.hit.iter().enumerate() {
+                out[sub[k] as usize] |= hit;
             }
         }
     }
+}
+
+/// One tree level's rays: their directions and their indices in the batch.
+#[derive(Default)]
+struct Level {
+    dirs: Vec<Vec3>,
+    map: Vec<u32>,
+    /// Per ray: already occluded (the cull's skip flags), then a leaf's lookup answers.
+    hit: Vec<bool>,
+    idx: Vec<u32>,
+}
+
+impl Level {
+    /// Keeps in `self` the rays of `dirs` (batch indices `map`, or `0..` when `None`) that are
+    /// not yet occluded in `out` and pass `meet`; returns their count.
+    fn filter(
+        &mut self,
+        isa: Isa,
+        meet: &MayMeetFrom,
+        dirs: &[Vec3],
+        map: Option<&[u32]>,
+        tmin: f32,
+        out: &[bool],
+    ) -> usize {
+        let at = |k: usize| map.map_or(k as u32, |m| m[k]);
+        self.hit.clear();
+        self.hit
+            .extend((0..dirs.len()).map(|k| out[at(k) as usize]));
+        self.idx.resize(dirs.len().max(self.idx.len()), 0);
+        let kept = lanes::cull(isa, meet, dirs, tmin, &self.hit, &mut self.idx);
+        self.dirs.clear();
+        self.map.clear();
+        for &k in &self.idx[..kept] {
+            self.dirs.push(dirs[k as usize]);
+            self.map.push(at(k as usize));
+        }
+        kept
+    }
+}
+
+thread_local! {
+    /// The batched traversal's buffers, one level per tree depth (a median-split tree over
+    /// fewer than 2⁶³ instances is shallower), kept between calls.
+    static SCRATCH: std::cell::RefCell<Vec<Level>> =
+        std::cell::RefCell::new((0..66).map(|_| Level::default()).collect());
 }
 
 impl Visibility for SphereBvhScene {
