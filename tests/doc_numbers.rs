@@ -267,11 +267,19 @@ fn figure9(c: &mut Claims) {
             .map(|r| f(r, "raycast_s") / f(r, "ao_s")),
     );
     let (rlo, rhi) = min_max(rows.iter().map(|r| f(r, "raycast_s") / f(r, "ao_s")));
-    let text = format!("({slo:.1}–{shi:.1}× and {rlo:.1}–{rhi:.1}× against");
+    let (alo, ahi) = min_max(
+        read("results/ao2010_figure3/table.csv")
+            .iter()
+            .filter(|r| r["backend"] == "cpu" && r["scene"] == "bunny")
+            .map(|r| f(r, "raycast_s") / f(r, "ao_s")),
+    );
+    let text = format!(
+        "({slo:.1}–{shi:.1}× and {rlo:.1}–{rhi:.1}× against {alo:.1}–{ahi:.0}× for Figure 3's AO pass"
+    );
     c.quotes(
         "README.md",
         &text,
-        "results/shadows2010_figure7/, figure8/ and this table.csv",
+        "results/shadows2010_figure7/, figure8/, ao2010_figure3/ and this table.csv",
     );
     // The casters' fitted spheres, from the spec the run copied.
     let spec_from = "results/reflections2010_figure9/spec.json";
@@ -326,12 +334,32 @@ fn sponza(c: &mut Claims) {
         sharp_ms / field_ms
     );
     c.quotes("docs/results.md", &text, from);
+    let rays = f(field, "ours_rays_cast");
     let text = format!(
-        "the field took {:.3} s for {} shadow rays",
+        "the field took {:.3} s for {} shadow rays ({} ms per ray) and ray casting {:.3} s on the \
+         same rays ({} ms): {:.1}× on the same rays",
         f(field, "ours_ao_s"),
-        with_commas(f(field, "ours_rays_cast") as u64)
+        with_commas(rays as u64),
+        sci(f(field, "ours_ao_s") / rays * 1e3),
+        f(field, "ours_raycast_s"),
+        sci(f(field, "ours_raycast_s") / rays * 1e3),
+        f(field, "ours_raycast_s") / f(field, "ours_ao_s"),
     );
     c.quotes("docs/results.md", &text, from);
+    let sweep = read("results/shadows2010_figure8/raycast_sweep.csv");
+    let one = sweep.iter().find(|r| r["rays_per_point"] == "1").unwrap();
+    let text = format!(
+        "Sharp shadows, one ray per light to its centre, took {:.3} s by ray casting ({} ms per \
+         ray, RMS {:.1} from the converged soft shadows)",
+        f(one, "ao_s"),
+        sci(sharp_ms),
+        f(one, "rms_vs_truth"),
+    );
+    c.quotes(
+        "docs/results.md",
+        &text,
+        "results/shadows2010_figure8/raycast_sweep.csv",
+    );
     let from = "results/ao2010_sponza/paper_vs_ours.csv";
     let pv = read(from);
     let (sum, one) = (&pv[0], &pv[1]);
@@ -343,6 +371,21 @@ fn sponza(c: &mut Claims) {
             .unwrap();
         f(r, "ao_s")
     };
+    let all = table
+        .iter()
+        .find(|r| r["scene"] == "all" && r["backend"] == "cpu")
+        .unwrap();
+    let px = f(all, "receiver_points");
+    let text = format!(
+        "the AO of {} receiver pixels took {:.2} s ({} pixels per second on 2 CPU threads; RMS \
+         {:.2} against ray casting, which took {:.2} s)",
+        with_commas(px as u64),
+        f(all, "ao_s"),
+        with_commas(((px / f(all, "ao_s") / 1e3).round() * 1e3) as u64),
+        f(all, "rms_image"),
+        f(all, "raycast_s"),
+    );
+    c.quotes("docs/results.md", &text, "results/ao2010_sponza/table.csv");
     let text = format!(
         "{:.2} + {:.2} + {:.2} = {:.2} s, the same within the noise ({:.2}×;",
         ao("bunny"),
@@ -422,6 +465,121 @@ fn figure8_and_figure3(c: &mut Claims) {
         rays / 1e6
     );
     c.quotes("docs/results.md", &text, from);
+}
+
+/// README's table of the 2010 headline figures: the "ours" column, cell by cell.
+fn headline_2010(c: &mut Claims) {
+    let cpu = |from: &str| -> Vec<Row> {
+        read(from)
+            .into_iter()
+            .filter(|r| r["backend"] == "cpu")
+            .collect()
+    };
+    let from = "results/ao2010_figure3/table.csv";
+    let rows: Vec<Row> = cpu(from)
+        .into_iter()
+        .filter(|r| r["scene"] == "bunny")
+        .collect();
+    let cell = |n: &str, res: &str| {
+        rows.iter()
+            .find(|r| r["positional_samples"] == n && r["directional_res"] == res)
+            .unwrap()
+    };
+    let (lo, hi) = min_max(rows.iter().map(|r| f(r, "ao_s")));
+    let text = format!(
+        "same-ray RMS {:.2} (1090 × 32²) … {:.2} (16642 × 128²); field {lo:.2}–{hi:.2} s vs ray \
+         casting {:.2} s on the same {:.1} M rays",
+        f(cell("1090", "32"), "rms_image"),
+        f(cell("16642", "128"), "rms_image"),
+        f(&rows[0], "raycast_s"),
+        f(&rows[0], "receiver_points") * f(&rows[0], "rays_per_point") / 1e6,
+    );
+    c.quotes("README.md", &text, from);
+    let from = "results/ao2010_figure4/table.csv";
+    let rows = cpu(from);
+    let at = |n: &str| {
+        rows.iter()
+            .find(|r| r["positional_samples"] == n && r["rays_per_point"] == "256")
+            .unwrap()
+    };
+    let text = format!(
+        "field {:.2} / {:.2} / {:.2} s at 256 rays for 1090 / 4226 / 16642 maps; ray casting {:.2} s",
+        f(at("1090"), "ao_s"),
+        f(at("4226"), "ao_s"),
+        f(at("16642"), "ao_s"),
+        f(at("1090"), "raycast_s"),
+    );
+    c.quotes("README.md", &text, from);
+    let from = "results/ao2010_models/table.csv";
+    let rows = cpu(from);
+    let (lo, hi) = min_max(rows.iter().map(|r| f(r, "ao_s")));
+    let (tlo, thi) = min_max(rows.iter().map(|r| f(r, "caster_triangles")));
+    let (rlo, rhi) = min_max(rows.iter().map(|r| f(r, "raycast_s")));
+    let text = format!(
+        "field {lo:.2}–{hi:.2} s for {:.0}k–{:.0}k triangles; ray casting {rlo:.1}–{rhi:.1} s",
+        tlo / 1e3,
+        thi / 1e3
+    );
+    c.quotes("README.md", &text, from);
+    let from = "results/ao2010_sponza/paper_vs_ours.csv";
+    let pv = read(from);
+    let text = format!(
+        "one pass {:.2} s; one pass per caster {:.2} s; RMS {:.2}",
+        f(&pv[1], "ours_ao_s"),
+        f(&pv[0], "ours_ao_s"),
+        f(&pv[1], "ours_rms_image"),
+    );
+    c.quotes("README.md", &text, from);
+    let from = "results/shadows2010_figure7/table.csv";
+    let (lo, hi) = min_max(cpu(from).iter().map(|r| f(r, "rms_image")));
+    c.quotes(
+        "README.md",
+        &format!("RMS {lo:.1}–{hi:.1}; ray casting wins"),
+        from,
+    );
+    let from = "results/shadows2010_figure8/paper_vs_ours.csv";
+    let pv = read(from);
+    let per_ray = |r: &Row, col: &str| f(r, col) / f(r, "ours_rays_cast") * 1e3;
+    let (field, rc) = (
+        per_ray(&pv[0], "ours_ao_s"),
+        per_ray(&pv[0], "ours_raycast_s"),
+    );
+    let text = format!(
+        "{} ms through the field vs {} by ray casting ({:.1}×)",
+        sci(field),
+        sci(rc),
+        rc / field
+    );
+    c.quotes("README.md", &text, from);
+    let from = "results/reflections2010_figure9/table.csv";
+    let rows = cpu(from);
+    let view =
+        |v: &str, col: &str| min_max(rows.iter().filter(|r| r["scene"] == v).map(|r| f(r, col)));
+    let ((alo, ahi), (blo, bhi)) = (view("view_a", "rms_image"), view("view_b", "rms_image"));
+    let (mlo, mhi) = min_max(rows.iter().map(|r| f(r, "rms_image_vs_second")));
+    let (slo, shi) = min_max(rows.iter().map(|r| f(r, "raycast_s") / f(r, "ao_s")));
+    // "8- and 16-bit normals alike": the same cell's RMS with either normal field.
+    for r8 in rows.iter().filter(|r| r["normal_bits"] == "8") {
+        let r16 = rows
+            .iter()
+            .find(|r| {
+                r["normal_bits"] == "16"
+                    && ["scene", "positional_samples", "directional_res"]
+                        .iter()
+                        .all(|k| r[*k] == r8[*k])
+            })
+            .unwrap();
+        assert!(
+            (f(r8, "rms_image") - f(r16, "rms_image")).abs() < 0.01,
+            "README says 8- and 16-bit normals give the same RMS"
+        );
+    }
+    let text = format!(
+        "RMS {alo:.1}–{ahi:.1} and {blo:.1}–{bhi:.1} (two views) against the glossy ray cast, \
+         {mlo:.1}–{mhi:.1} against the mirror; 8- and 16-bit normals alike; {slo:.1}–{shi:.1}× ray \
+         casting's speed"
+    );
+    c.quotes("README.md", &text, from);
 }
 
 fn with_commas(n: u64) -> String {
@@ -601,6 +759,7 @@ fn quoted_numbers_match_the_committed_csvs() {
     figure3_population(&mut c);
     performance(&mut c);
     dynamic(&mut c);
+    headline_2010(&mut c);
     assert!(
         c.missing.is_empty(),
         "{} of {} quoted numbers differ from results/:\n{}",
