@@ -741,10 +741,18 @@ fn dynamic(c: &mut Claims) {
             .push(format!("{from} is missing: run `experiment dynamic`"));
         return;
     }
-    let text = dynamic_table(&read(from));
+    let rows = read(from);
+    let text = dynamic_table(&rows);
     if std::env::var("VISFIELD_PRINT_DYNAMIC").is_ok() {
         println!("{text}");
     }
+    c.quotes("README.md", &text, from);
+    let (lo, hi) = min_max(
+        rows.iter()
+            .filter(|r| r["sweep"] == "crowd")
+            .map(|r| f(r, "rays")),
+    );
+    let text = format!("to N, from {} to {:.1} M", with_commas(lo as u64), hi / 1e6);
     c.quotes("README.md", &text, from);
 }
 

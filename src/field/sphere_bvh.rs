@@ -181,8 +181,8 @@ impl SphereBvh {
 /// for bit, with a ray's cost growing with the spheres near it rather than with all of them.
 #[derive(Clone, Debug, Default)]
 pub struct SphereBvhScene {
-    pub scene: FieldScene,
-    pub bvh: SphereBvh,
+    scene: FieldScene,
+    bvh: SphereBvh,
 }
 
 impl SphereBvhScene {
@@ -194,7 +194,17 @@ impl SphereBvhScene {
         }
     }
 
-    /// One query's candidates, through the tree (or the plain scene's loop for one instance).
+    /// The scene the tree is over.
+    pub fn scene(&self) -> &FieldScene {
+        &self.scene
+    }
+
+    /// The tree.
+    pub fn bvh(&self) -> &SphereBvh {
+        &self.bvh
+    }
+
+    /// One query's candidates: the instances at the leaves the ray reaches.
     fn candidates(
         &self,
         origin: Vec3,

@@ -407,9 +407,50 @@ impl Committed {
         ray.tfar == f32::NEG_INFINITY
     }
 
+    /// [`Visibility::occluded_many`] cast as `rays` says.
+    ///
+    /// # Panics
+    /// If `dirs` and `out` differ in length.
+    pub fn occluded_many(
+        &self,
+        rays: EmbreeRays,
+        origin: Vec3,
+        dirs: &[Vec3],
+        tmin: f32,
+        tmax: f32,
+        out: &mut [bool],
+    ) {
+        assert_eq!(
+            dirs.len(),
+            out.len(),
+            "occluded_many: dirs and out differ in length"
+        );
+        self.any_hits(rays, origin, dirs, tmin, |_| tmax, out);
+    }
+
+    /// [`Visibility::occluded_many_to`] cast as `rays` says.
+    ///
+    /// # Panics
+    /// If `dirs`, `tmaxs` and `out` differ in length.
+    pub fn occluded_many_to(
+        &self,
+        rays: EmbreeRays,
+        origin: Vec3,
+        dirs: &[Vec3],
+        tmin: f32,
+        tmaxs: &[f32],
+        out: &mut [bool],
+    ) {
+        assert!(
+            dirs.len() == out.len() && dirs.len() == tmaxs.len(),
+            "occluded_many_to: dirs, tmaxs and out differ in length"
+        );
+        self.any_hits(rays, origin, dirs, tmin, |i| tmaxs[i], out);
+    }
+
     /// `out[i] = any_hit(origin, dirs[i], tmin, tmax(i))`, one call per ray or through 8-wide
     /// packets as `rays` says.
-    pub fn any_hits(
+    fn any_hits(
         &self,
         rays: EmbreeRays,
         origin: Vec3,
@@ -495,13 +536,8 @@ impl Visibility for EmbreeTracer {
     }
 
     fn occluded_many(&self, origin: Vec3, dirs: &[Vec3], tmin: f32, tmax: f32, out: &mut [bool]) {
-        assert_eq!(
-            dirs.len(),
-            out.len(),
-            "occluded_many: dirs and out differ in length"
-        );
         self.q()
-            .any_hits(self.rays, origin, dirs, tmin, |_| tmax, out);
+            .occluded_many(self.rays, origin, dirs, tmin, tmax, out);
     }
 
     fn occluded_many_to(
@@ -512,11 +548,7 @@ impl Visibility for EmbreeTracer {
         tmaxs: &[f32],
         out: &mut [bool],
     ) {
-        assert!(
-            dirs.len() == out.len() && dirs.len() == tmaxs.len(),
-            "occluded_many_to: dirs, tmaxs and out differ in length"
-        );
         self.q()
-            .any_hits(self.rays, origin, dirs, tmin, |i| tmaxs[i], out);
+            .occluded_many_to(self.rays, origin, dirs, tmin, tmaxs, out);
     }
 }

@@ -213,13 +213,8 @@ impl Visibility for EmbreeInstances {
     }
 
     fn occluded_many(&self, origin: Vec3, dirs: &[Vec3], tmin: f32, tmax: f32, out: &mut [bool]) {
-        assert_eq!(
-            dirs.len(),
-            out.len(),
-            "occluded_many: dirs and out differ in length"
-        );
         self.q()
-            .any_hits(self.rays, origin, dirs, tmin, |_| tmax, out);
+            .occluded_many(self.rays, origin, dirs, tmin, tmax, out);
     }
 
     fn occluded_many_to(
@@ -230,11 +225,7 @@ impl Visibility for EmbreeInstances {
         tmaxs: &[f32],
         out: &mut [bool],
     ) {
-        assert!(
-            dirs.len() == out.len() && dirs.len() == tmaxs.len(),
-            "occluded_many_to: dirs, tmaxs and out differ in length"
-        );
         self.q()
-            .any_hits(self.rays, origin, dirs, tmin, |i| tmaxs[i], out);
+            .occluded_many_to(self.rays, origin, dirs, tmin, tmaxs, out);
     }
 }

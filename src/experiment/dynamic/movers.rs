@@ -191,8 +191,11 @@ impl Mover for TwoLevelRebuild {
 pub struct Fields {
     /// Per mesh, its field.
     pub fields: Vec<Arc<VisibilityField>>,
+    pub options: LookupOptions,
     pub sphere_bvh: bool,
-    pub scene: SphereBvhScene,
+    /// The frame's scene: without the tree, or with it.
+    plain: FieldScene,
+    tree: SphereBvhScene,
 }
 
 impl Fields {
@@ -203,11 +206,10 @@ impl Fields {
     ) -> Fields {
         Fields {
             fields,
+            options,
             sphere_bvh,
-            scene: SphereBvhScene::new(FieldScene {
-                instances: Vec::new(),
-                options,
-            }),
+            plain: FieldScene::default(),
+            tree: SphereBvhScene::default(),
         }
     }
 }
@@ -228,28 +230,25 @@ impl Mover for Fields {
                 .iter()
                 .map(|&(m, t)| FieldInstance::new(self.fields[m].clone(), t))
                 .collect(),
-            options: self.scene.scene.options,
+            options: self.options,
         };
-        self.scene = if self.sphere_bvh {
-            SphereBvhScene::new(scene)
+        if self.sphere_bvh {
+            self.tree = SphereBvhScene::new(scene);
         } else {
-            SphereBvhScene {
-                scene,
-                bvh: Default::default(),
-            }
-        };
+            self.plain = scene;
+        }
         Ok(())
     }
 
     fn vis(&self) -> &dyn Visibility {
         if self.sphere_bvh {
-            &self.scene
+            &self.tree
         } else {
-            &self.scene.scene
+            &self.plain
         }
     }
 
     fn bytes(&self) -> Option<u64> {
-        Some(self.fields.iter().map(|f| f.bytes()).sum::<u64>() + self.scene.bvh.bytes())
+        Some(self.fields.iter().map(|f| f.bytes()).sum::<u64>() + self.tree.bvh().bytes())
     }
 }
