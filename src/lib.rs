@@ -32,6 +32,7 @@ pub mod io;
 pub mod relief;
 pub mod render;
 pub mod sampling;
+pub mod sdf;
 pub mod simd;
 pub mod trace;
 pub mod visibility;

@@ -995,6 +995,43 @@ fn embree_is_a_method_row_or_a_skip_with_the_reason() {
     }
 }
 
+/// Mesh signed distance fields as a method: a row per resolution on the same rays, the volumes'
+/// bytes growing with it, a same-ray error that is neither 0 nor the whole occlusion, and a
+/// resolution refused by name before any work.
+#[test]
+fn sdf_is_a_method_with_a_row_per_resolution() {
+    use visfield::experiment::columns::read_csv as read_named;
+    let dir = tempfile::tempdir().unwrap();
+    let text = tiny(ONE_FIELD, "").replace(
+        r#""reference": {"#,
+        r#""methods": [{"method": "sdf", "res": [16, 48]}], "reference": {"#,
+    );
+    let ls = loaded(dir.path(), &text);
+    run(&ls, &options(dir.path().join("out"))).unwrap();
+    let rows = read_named(&dir.path().join("out/methods.csv")).unwrap();
+    let setting: Vec<&str> = rows.iter().map(|r| r.get("setting").unwrap()).collect();
+    assert_eq!(setting, ["sdf-16", "sdf-48"]);
+    let num = |r: usize, c: &str| rows[r].number(c).unwrap();
+    // Bytes: at most res³ f32 samples, and more at the finer resolution.
+    assert!(num(0, "bytes") <= 16f64.powi(3) * 4.0 && num(1, "bytes") > 8.0 * num(0, "bytes"));
+    for (r, s) in setting.iter().enumerate() {
+        let rms = num(r, "rms_vs_raycast");
+        assert!(rms > 0.01 && rms < 30.0, "{s}: {rms}");
+        assert!(num(r, "precompute_s") > 0.0);
+    }
+    let bad = tiny(ONE_FIELD, "").replace(
+        r#""reference": {"#,
+        r#""methods": [{"method": "sdf", "res": [4]}], "reference": {"#,
+    );
+    let path = dir.path().join("bad.json");
+    std::fs::write(&path, &bad).unwrap();
+    let e = LoadedSpec::load(&path).map(|_| ()).unwrap_err().to_string();
+    assert!(
+        e.contains("methods[0].res[0]") && e.contains("outside 8..=256"),
+        "{e}"
+    );
+}
+
 /// The errors split by population: a caster whose bounding sphere cuts the corner puts some
 /// receiver vertices inside it; the count is the corner's vertices inside that sphere, and the
 /// two parts' RMS against the truth make up the whole (a partition of the points).

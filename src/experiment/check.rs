@@ -36,7 +36,8 @@ pub enum Rule {
 pub struct Failure {
     /// The cell id.
     pub cell: String,
-    /// "rms_vertex", "rms_image" or "rms_vs_truth".
+    /// "rms_vertex", "rms_image" or "rms_vs_truth" (for `experiment dynamic`'s rows:
+    /// "rms_vs_raycast", "rms_vs_truth" or "mean_ao").
     pub metric: &'static str,
     pub value: f64,
     pub rule: Rule,
@@ -168,6 +169,61 @@ pub fn check_committed_methods(rows: &[NamedRow], committed: &[NamedRow]) -> Vec
     against_committed(&keyed(rows), &keyed(committed))
 }
 
+/// [`check_committed`] for the rows of `experiment dynamic`'s `table.csv`: each (sweep,
+/// casters, frame, gap, method) on its same-ray RMS, its RMS against the frame's converged
+/// reference and its mean AO, against the committed row with the same key (named
+/// `SWEEP/N=…/frame=…/METHOD`). Rows of methods the committed run has none of (Embree's, in a
+/// build with the `embree` feature against a run without it) are left out and counted in the
+/// second value returned.
+pub fn check_committed_dynamic(rows: &[NamedRow], committed: &[NamedRow]) -> (Vec<Failure>, usize) {
+    let has = |m: &str| committed.iter().any(|r| r.get("method") == Some(m));
+    let keyed = |rows: &[NamedRow]| -> Vec<(String, String, Compared)> {
+        rows.iter()
+            .map(|r| {
+                let g = |k: &str| r.get(k).unwrap_or("");
+                let gap = match g("gap_radii") {
+                    "" => String::new(),
+                    v => format!("/gap={v}"),
+                };
+                let metric = |m: &'static str| (m, r.number(m));
+                (
+                    g("sweep").to_string(),
+                    format!(
+                        "{}/N={}/frame={}{gap}/{}",
+                        g("sweep"),
+                        g("casters"),
+                        g("frame"),
+                        g("method")
+                    ),
+                    [
+                        metric("rms_vs_raycast"),
+                        metric("rms_vs_truth"),
+                        metric("mean_ao"),
+                    ],
+                )
+            })
+            .collect()
+    };
+    let (kept, left): (Vec<NamedRow>, Vec<NamedRow>) = rows
+        .iter()
+        .cloned()
+        .partition(|r| has(r.get("method").unwrap_or("")));
+    let (ours, theirs) = (keyed(&kept), keyed(committed));
+    let mut failures = against_committed(&ours, &theirs);
+    // A committed row the run lost (a method or a frame no longer run).
+    for (_, id, t) in &theirs {
+        if !ours.iter().any(|(_, i, _)| i == id) {
+            failures.push(Failure {
+                cell: id.clone(),
+                metric: t[0].0,
+                value: f64::NAN,
+                rule: Rule::Committed(t[0].1.unwrap_or(f64::NAN)),
+            });
+        }
+    }
+    (failures, left.len())
+}
+
 /// The errors a row is compared on, by name.
 type Compared = [(&'static str, Option<f64>); 3];
 
@@ -253,5 +309,58 @@ mod tests {
         assert_eq!(check_committed(&[lost], &committed).len(), 1);
         let f = check_committed(&[row("c", 1.0)], &committed);
         assert!(f.iter().all(|f| f.rule == Rule::NotCommitted) && f.len() == 2);
+    }
+
+    fn frame(method: &str, frame: usize, rms: f64) -> NamedRow {
+        let mut r = NamedRow::new();
+        r.push("sweep", "crowd")
+            .push("gap_radii", "")
+            .push("casters", 4)
+            .push("frame", frame)
+            .push("method", method)
+            .push("rms_vs_raycast", rms)
+            .push("rms_vs_truth", 5.0)
+            .push("mean_ao", 0.8);
+        r
+    }
+
+    #[test]
+    fn dynamic_rows_are_compared_by_frame_and_method() {
+        let committed = [
+            frame("world_rebuild", 0, 0.0),
+            frame("field", 0, 4.0),
+            frame("field", 1, 4.2),
+        ];
+        let (f, left) = check_committed_dynamic(&committed, &committed);
+        assert!(f.is_empty() && left == 0);
+        // A field error doubled on one frame fails, named by its key.
+        let (f, _) = check_committed_dynamic(
+            &[
+                frame("world_rebuild", 0, 0.0),
+                frame("field", 0, 8.0),
+                frame("field", 1, 4.2),
+            ],
+            &committed,
+        );
+        assert_eq!(f.len(), 1);
+        assert_eq!(
+            (f[0].cell.as_str(), f[0].metric),
+            ("crowd/N=4/frame=0/field", "rms_vs_raycast")
+        );
+        // The reference's own 0 admits only 0; a lost frame fails; a method the committed run
+        // has none of is left out and counted.
+        let (f, left) = check_committed_dynamic(
+            &[
+                frame("world_rebuild", 0, 0.1),
+                frame("field", 0, 4.0),
+                frame("embree_instances", 0, 0.0),
+            ],
+            &committed,
+        );
+        assert_eq!(left, 1);
+        assert_eq!(
+            f.iter().map(|f| f.cell.as_str()).collect::<Vec<_>>(),
+            ["crowd/N=4/frame=0/world_rebuild", "crowd/N=4/frame=1/field"]
+        );
     }
 }

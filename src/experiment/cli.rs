@@ -98,9 +98,11 @@ pub enum Command {
     },
     /// Run specs and fail, naming the cells, where an RMS passes its threshold or moves more
     /// than a factor 1.25 either way from the committed run (results/quick/NAME with --quick,
-    /// else results/NAME).
+    /// else results/NAME); with them `experiment dynamic`, each row's errors and mean AO against
+    /// the committed results/…/dynamic.
     Check {
-        /// Specs by name or path (default: every spec of experiments/ and the embedded quickstart).
+        /// Specs by name or path, or `dynamic` (default: every spec of experiments/, the
+        /// embedded quickstart and dynamic).
         names: Vec<String>,
         /// Fail when a spec's "gpu" rows cannot run for want of a Vulkan adapter (without it,
         /// check runs their CPU rows and names the GPU rows it skipped).
@@ -336,7 +338,7 @@ fn check(
         );
         specs.push((super::quickstart::spec(), true));
     } else {
-        for n in names {
+        for n in names.iter().filter(|n| n.as_str() != "dynamic") {
             specs.push(match n.as_str() {
                 "quickstart" => (super::quickstart::spec(), true),
                 _ => match discover::find(n) {
@@ -426,10 +428,51 @@ fn check(
             Err(e) => failed.push(format!("{name}: error: {e}")),
         }
     }
+    if names.is_empty() || names.iter().any(|n| n == "dynamic") {
+        match check_dynamic(args, &parent, &committed_root) {
+            Ok(f) => failed.extend(f),
+            Err(e) => failed.push(format!("dynamic: error: {e}")),
+        }
+    }
     for f in &failed {
         println!("FAIL {f}");
     }
     Ok(i32::from(!failed.is_empty()))
+}
+
+/// `experiment dynamic` run under `parent` and its rows checked against the committed run
+/// ([`super::check::check_committed_dynamic`]); the failures, named.
+fn check_dynamic(args: &RunArgs, parent: &Path, committed_root: &Path) -> Result<Vec<String>> {
+    let o = args.options("dynamic", Some(parent))?;
+    let t = std::time::Instant::now();
+    super::dynamic::run(&o.out, o.quick, &o.supply)?;
+    let committed = committed_root.join("dynamic").join("table.csv");
+    let theirs = match super::columns::read_csv(&committed) {
+        Ok(rows) => rows,
+        Err(e) => {
+            return Ok(vec![format!(
+                "dynamic: no committed run to compare with ({e}); regenerate it with \
+                 `experiment dynamic{}` and commit it",
+                if args.quick { " --quick" } else { "" }
+            )])
+        }
+    };
+    let ours = super::columns::read_csv(&o.out.join("table.csv"))?;
+    let (f, left) = super::check::check_committed_dynamic(&ours, &theirs);
+    if left > 0 {
+        println!(
+            "dynamic: {left} row(s) of methods the committed run lacks (Embree's, in a build \
+             with the `embree` feature) not compared"
+        );
+    }
+    println!(
+        "dynamic: {} row(s) and the committed {}, {} failure(s) ({:.1} s)",
+        ours.len(),
+        committed.display(),
+        f.len(),
+        t.elapsed().as_secs_f64()
+    );
+    Ok(f.into_iter().map(|f| format!("dynamic: {f}")).collect())
 }
 
 /// The run's `methods.csv` rows against the committed ones beside `committed_table` (the

@@ -20,6 +20,7 @@
 
 pub mod embree;
 pub mod raycast;
+pub mod sdf;
 
 use super::kinds::Kind;
 use super::scenes::BuiltScene;
@@ -153,7 +154,7 @@ where
 }
 
 /// The methods of this build.
-pub const BUILT_IN: &[MethodEntry] = &[raycast::ENTRY, embree::ENTRY];
+pub const BUILT_IN: &[MethodEntry] = &[raycast::ENTRY, embree::ENTRY, sdf::ENTRY];
 
 /// Methods added at run time by [`register`].
 static REGISTERED: RwLock<Vec<MethodEntry>> = RwLock::new(Vec::new());
