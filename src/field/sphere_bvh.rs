@@ -4,9 +4,9 @@
 //! The 2008 paper's Algorithm 2 loops over every occluder's bounding sphere per ray, and so does
 //! [`FieldScene`]; with a crowd of hundreds of moving casters that loop, not the lookups,
 //! dominates a frame. Deviation from the paper: a binary tree of bounding spheres over the
-//! instances, rebuilt whenever the instances move ([`SphereBvhScene::new`], linear in their
-//! number after a sort per level, no triangle touched), is traversed first; the instances at its
-//! leaves then run the same tests and lookups as in [`FieldScene`].
+//! instances, rebuilt whenever the instances move ([`SphereBvhScene::new`], O(N log N) in their
+//! number with a median split per level, no triangle touched), is traversed first; the
+//! instances at its leaves then run the same tests and lookups as in [`FieldScene`].
 //!
 //! Answers are bit-identical to [`FieldScene`]'s on every ray: a node's test is conservative
 //! (its reach covers each instance's [`FieldInstance::may_meet`] reach plus the distance

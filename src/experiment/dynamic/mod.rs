@@ -14,15 +14,21 @@
 //!   the instances rebuilt per frame (`update_s`), rays moved into each instance's space;
 //! - `embree_rebuild` (with `--features embree`): Embree's scene over the moved triangles built
 //!   and committed per frame;
-//! - `field`: the casters' fields (one per mesh, baked once, shared by its instances) placed by
-//!   the frame's transforms: nothing is rebuilt (`update_s` is making the instance list).
+//! - `embree_instances` (the same): Embree with instance geometries
+//!   (`trace::embree_instances`): one scene per mesh built once, the instances'
+//!   transforms set and the top scene committed per frame;
+//! - `field_every_sphere`: the casters' fields (one per mesh, baked once, shared by its
+//!   instances) placed by the frame's transforms, every ray testing every caster's sphere
+//!   (`update_s` is making the instance list);
+//! - `field`: the same with the BVH over the casters' bounding spheres
+//!   ([`crate::field::sphere_bvh`]) rebuilt per frame (in `update_s`); the same answers.
 //!
 //! Each row is one (N, frame, method): `update_s` (what the motion costs), `query_s` (the AO
 //! pass, all threads), `frame_s` = both, Mrays/s, `rms_vs_raycast` (0–255, unquantised, against
 //! `world_rebuild` on the same rays), `rms_vs_truth` (against the frame's converged reference,
-//! cached by frame: its key covers the frame's world triangles), and the frame's overlap counts: caster pairs whose
-//! bounding spheres overlap and receiver points inside a caster's sphere (where the papers'
-//! non-penetrating assumption no longer holds). `frame_time.png` plots the mean frame time
+//! cached by frame: its key covers the frame's world triangles), and the frame's overlap
+//! counts: caster pairs whose bounding spheres overlap and receiver points inside a caster's
+//! sphere (where the papers' non-penetrating assumption no longer holds). `frame_time.png` plots the mean frame time
 //! against N per method.
 //!
 //! The approach: one caster lowered onto the middle of the plane frame by frame, its bounding
@@ -58,7 +64,8 @@ pub struct FrameRow {
     pub casters: usize,
     pub caster_triangles: usize,
     pub frame: usize,
-    /// `world_rebuild`, `two_level`, `embree_rebuild`, `field`.
+    /// `world_rebuild`, `two_level`, `embree_rebuild`, `embree_instances`,
+    /// `field_every_sphere`, `field`.
     pub method: &'static str,
     /// What the frame's motion costs the method (seconds): BVH rebuild, scene commit, the
     /// instance list.
