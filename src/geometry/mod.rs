@@ -26,7 +26,7 @@ mod ply;
 pub mod procedural;
 pub mod rebase;
 
-pub use bounds::{minimal_bounding_sphere, Sphere};
+pub use bounds::{closest_point_on_triangle, minimal_bounding_sphere, Sphere};
 pub use instance::{Instance, Scene, Similarity};
 pub use mesh::{GeometryError, Mesh};
 pub use mesh_file::{MeshFileCounts, MeshFormat};

@@ -1,43 +1,11 @@
 //! Closest points on a triangle set: a median-split BVH of boxes over the triangles, searched
 //! nearest box first with pruning by the box distance, and the exact closest point on one
 //! triangle (C. Ericson, *Real-Time Collision Detection*, 2005, §5.1.5, `ClosestPtPointTriangle`,
-//! by Voronoi regions). The distance bake of [`super::DistanceVolume`] asks it once per grid
+//! by Voronoi regions, `geometry::closest_point_on_triangle`). The distance bake of [`super::DistanceVolume`] asks it once per grid
 //! point.
 
+use crate::geometry::closest_point_on_triangle;
 use glam::Vec3;
-
-/// The point of triangle `[a, b, c]` nearest `p` (Ericson §5.1.5).
-pub fn closest_on_triangle(p: Vec3, [a, b, c]: [Vec3; 3]) -> Vec3 {
-    let (ab, ac, ap) = (b - a, c - a, p - a);
-    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
-    if d1 <= 0.0 && d2 <= 0.0 {
-        return a;
-    }
-    let bp = p - b;
-    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
-    if d3 >= 0.0 && d4 <= d3 {
-        return b;
-    }
-    let vc = d1 * d4 - d3 * d2;
-    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        return a + ab * (d1 / (d1 - d3));
-    }
-    let cp = p - c;
-    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
-    if d6 >= 0.0 && d5 <= d6 {
-        return c;
-    }
-    let vb = d5 * d2 - d1 * d6;
-    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        return a + ac * (d2 / (d2 - d6));
-    }
-    let va = d3 * d6 - d5 * d4;
-    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
-    }
-    let denom = 1.0 / (va + vb + vc);
-    a + ab * (vb * denom) + ac * (vc * denom)
-}
 
 #[derive(Clone, Copy, Debug)]
 struct Node {
@@ -146,7 +114,7 @@ impl ClosestPoints {
             let n = self.nodes[i as usize];
             if n.count > 0 {
                 for t in &self.triangles[n.first as usize..(n.first + n.count) as usize] {
-                    let q = closest_on_triangle(p, *t);
+                    let q = closest_point_on_triangle(p, t);
                     let d2 = q.distance_squared(p);
                     if d2 < best.1 {
                         best = (q, d2);
@@ -178,29 +146,6 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_closest_point_is_in_each_voronoi_region() {
-        let t = [Vec3::ZERO, Vec3::X, Vec3::Y];
-        // Vertex, edge and face regions.
-        assert_eq!(
-            closest_on_triangle(Vec3::new(-1.0, -1.0, 0.5), t),
-            Vec3::ZERO
-        );
-        assert_eq!(closest_on_triangle(Vec3::new(2.0, -0.5, 0.0), t), Vec3::X);
-        assert_eq!(
-            closest_on_triangle(Vec3::new(0.5, -2.0, 1.0), t),
-            Vec3::new(0.5, 0.0, 0.0)
-        );
-        assert_eq!(
-            closest_on_triangle(Vec3::new(1.0, 1.0, 0.0), t),
-            Vec3::new(0.5, 0.5, 0.0)
-        );
-        assert_eq!(
-            closest_on_triangle(Vec3::new(0.25, 0.25, 3.0), t),
-            Vec3::new(0.25, 0.25, 0.0)
-        );
-    }
-
-    #[test]
     fn the_tree_finds_what_a_scan_finds() {
         let mesh = crate::geometry::procedural::uv_sphere(1.0, 12, 24).unwrap();
         let tris: Vec<[Vec3; 3]> = (0..mesh.triangle_count())
@@ -212,7 +157,7 @@ mod tests {
                 * (0.1 + (k % 30) as f32 * 0.1);
             let scan = tris
                 .iter()
-                .map(|&t| closest_on_triangle(p, t).distance_squared(p))
+                .map(|t| closest_point_on_triangle(p, t).distance_squared(p))
                 .fold(f32::INFINITY, f32::min);
             let (_, d2) = cp.nearest(p).unwrap();
             assert_eq!(d2, scan, "{p}");
