@@ -273,41 +273,36 @@ pub struct FieldScene {
     pub options: LookupOptions,
 }
 
+/// The instances a single-ray query considers: each named at most once. With several
+/// instances, a superset of those whose spheres the segment meets gives the same answers as
+/// all of them ([`FieldScene::for_each_of`] tests each named one's sphere).
+pub(super) type Candidates<'a> = &'a dyn Fn(&mut dyn FnMut(usize));
+
 impl FieldScene {
-    /// Calls `f` on the instances whose world spheres the segment meets, in order of entry
-    /// distance, until it returns `false`. No allocation for up to 16 instances.
-    fn for_each_candidate(
-        &self,
-        origin: Vec3,
-        dir: Vec3,
-        tmin: f32,
-        tmax: f32,
-        f: impl FnMut(f32, &FieldInstance) -> bool,
-    ) {
-        if let [only] = self.instances.as_slice() {
-            // One instance: its own lookup does the exact sphere test, after a cheap rejection.
-            let mut f = f;
-            if only.may_meet(origin, dir, tmin) {
-                f(tmin, only);
-            }
-            return;
-        }
-        let all = |visit: &mut dyn FnMut(usize)| (0..self.instances.len()).for_each(visit);
-        self.for_each_of(all, origin, dir, tmin, tmax, f);
+    /// Every instance, as [`Candidates`].
+    fn all(&self, visit: &mut dyn FnMut(usize)) {
+        (0..self.instances.len()).for_each(visit)
     }
 
-    /// [`Self::for_each_candidate`] over the instances `candidates` names (each at most once;
-    /// with several instances, a superset of those whose spheres the segment meets gives the
-    /// same calls as all of them).
+    /// Calls `f` on the instances of `candidates` whose world spheres the segment meets, in
+    /// order of entry distance, until it returns `false`. No allocation for up to 16
+    /// instances. A scene of one instance skips the sphere test: its own lookup does the exact
+    /// one, after a cheap rejection.
     fn for_each_of(
         &self,
-        candidates: impl FnOnce(&mut dyn FnMut(usize)),
+        candidates: Candidates,
         origin: Vec3,
         dir: Vec3,
         tmin: f32,
         tmax: f32,
         mut f: impl FnMut(f32, &FieldInstance) -> bool,
     ) {
+        if let [only] = self.instances.as_slice() {
+            if only.may_meet(origin, dir, tmin) {
+                f(tmin, only);
+            }
+            return;
+        }
         let mut stack = [(0.0f32, 0usize); 16];
         let mut heap = Vec::new();
         let mut n = 0;
@@ -341,11 +336,10 @@ impl FieldScene {
         }
     }
 
-    /// [`Visibility::occluded`] over the instances `candidates` names, with several instances
-    /// ([`Self::for_each_of`]).
+    /// [`Visibility::occluded`] over the instances `candidates` names.
     pub(super) fn occluded_among(
         &self,
-        candidates: impl FnOnce(&mut dyn FnMut(usize)),
+        candidates: Candidates,
         origin: Vec3,
         dir: Vec3,
         tmin: f32,
@@ -408,14 +402,7 @@ impl FieldScene {
 
 impl Visibility for FieldScene {
     fn occluded(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> bool {
-        let mut hit = false;
-        self.for_each_candidate(origin, dir, tmin, tmax, |_, inst| {
-            hit = inst
-                .hit_distance(origin, dir, tmin, tmax, &self.options)
-                .is_some();
-            !hit
-        });
-        hit
+        self.occluded_among(&|v| self.all(v), origin, dir, tmin, tmax)
     }
 
     /// Bit-identical to [`Self::occluded`] per ray: a ray is occluded when any instance that
@@ -448,7 +435,8 @@ impl Visibility for FieldScene {
     /// # Panics
     /// When an instance the ray reaches has no normal field.
     fn surface_hit(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<SurfaceHit> {
-        self.nearest(
+        self.nearest_among(
+            &|v| self.all(v),
             origin,
             dir,
             tmin,
@@ -459,7 +447,8 @@ impl Visibility for FieldScene {
     }
 
     fn hit_distance(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<f32> {
-        self.nearest(
+        self.nearest_among(
+            &|v| self.all(v),
             origin,
             dir,
             tmin,
@@ -471,32 +460,15 @@ impl Visibility for FieldScene {
 }
 
 impl FieldScene {
-    /// The nearest of the instances' hits on the segment, `hit(instance, limit)` answering for
-    /// one instance within [tmin, limit] and `t_of` giving a hit's distance. Spheres may overlap,
-    /// so a later entry can still hold a nearer surface: every instance is asked, each up to the
-    /// nearest hit so far, stopping once no remaining sphere starts before it.
-    fn nearest<H: Copy>(
-        &self,
-        origin: Vec3,
-        dir: Vec3,
-        tmin: f32,
-        tmax: f32,
-        t_of: impl Fn(&H) -> f32,
-        hit: impl Fn(&FieldInstance, f32) -> Option<H>,
-    ) -> Option<H> {
-        let mut best: Option<H> = None;
-        self.for_each_candidate(origin, dir, tmin, tmax, |t_entry, inst| {
-            nearer(&mut best, &t_of, &hit, t_entry, inst, tmax)
-        });
-        best
-    }
-
-    /// [`Self::nearest`] over the instances `candidates` names, with several instances
-    /// ([`Self::for_each_of`]).
+    /// The nearest hit on the segment over the instances `candidates` names,
+    /// `hit(instance, limit)` answering for one instance within [tmin, limit] and `t_of` giving
+    /// a hit's distance. Spheres may overlap, so a later entry can still hold a nearer surface:
+    /// every instance is asked, each up to the nearest hit so far, stopping once no remaining
+    /// sphere starts before it.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn nearest_among<H: Copy>(
         &self,
-        candidates: impl FnOnce(&mut dyn FnMut(usize)),
+        candidates: Candidates,
         origin: Vec3,
         dir: Vec3,
         tmin: f32,
@@ -506,32 +478,19 @@ impl FieldScene {
     ) -> Option<H> {
         let mut best: Option<H> = None;
         self.for_each_of(candidates, origin, dir, tmin, tmax, |t_entry, inst| {
-            nearer(&mut best, &t_of, &hit, t_entry, inst, tmax)
+            let limit = best.as_ref().map_or(tmax, &t_of);
+            if best.is_some() && t_entry > limit {
+                return false;
+            }
+            if let Some(h) = hit(inst, limit) {
+                if best.is_none() || t_of(&h) < limit {
+                    best = Some(h);
+                }
+            }
+            true
         });
         best
     }
-}
-
-/// One step of [`FieldScene::nearest`]: asks `inst` for a hit nearer than `best` (entered at
-/// `t_entry`); `false` once no later sphere can hold a nearer one.
-fn nearer<H: Copy>(
-    best: &mut Option<H>,
-    t_of: &impl Fn(&H) -> f32,
-    hit: &impl Fn(&FieldInstance, f32) -> Option<H>,
-    t_entry: f32,
-    inst: &FieldInstance,
-    tmax: f32,
-) -> bool {
-    let limit = best.as_ref().map_or(tmax, t_of);
-    if best.is_some() && t_entry > limit {
-        return false;
-    }
-    if let Some(h) = hit(inst, limit) {
-        if best.is_none() || t_of(&h) < limit {
-            *best = Some(h);
-        }
-    }
-    true
 }
 
 #[cfg(test)]

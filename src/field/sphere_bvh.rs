@@ -204,16 +204,6 @@ impl SphereBvhScene {
         &self.bvh
     }
 
-    /// One query's candidates: the instances at the leaves the ray reaches.
-    fn candidates(
-        &self,
-        origin: Vec3,
-        dir: Vec3,
-        tmin: f32,
-    ) -> impl FnOnce(&mut dyn FnMut(usize)) + '_ {
-        move |f| self.bvh.for_each_leaf_instance(origin, dir, tmin, f)
-    }
-
     /// [`FieldScene::occluded_many_to_on`] through the tree: the rays of a batch descend the
     /// tree together, each node keeping the rays that may meet it, and each leaf's instances
     /// run their batched lookup on those rays only.
@@ -377,11 +367,9 @@ thread_local! {
 
 impl Visibility for SphereBvhScene {
     fn occluded(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> bool {
-        if self.scene.instances.len() <= 1 {
-            return self.scene.occluded(origin, dir, tmin, tmax);
-        }
-        self.scene
-            .occluded_among(self.candidates(origin, dir, tmin), origin, dir, tmin, tmax)
+        let leaves =
+            |f: &mut dyn FnMut(usize)| self.bvh.for_each_leaf_instance(origin, dir, tmin, f);
+        self.scene.occluded_among(&leaves, origin, dir, tmin, tmax)
     }
 
     fn occluded_many(&self, origin: Vec3, dirs: &[Vec3], tmin: f32, tmax: f32, out: &mut [bool]) {
@@ -405,12 +393,11 @@ impl Visibility for SphereBvhScene {
     }
 
     fn hit_distance(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<f32> {
-        if self.scene.instances.len() <= 1 {
-            return self.scene.hit_distance(origin, dir, tmin, tmax);
-        }
+        let leaves =
+            |f: &mut dyn FnMut(usize)| self.bvh.for_each_leaf_instance(origin, dir, tmin, f);
         let opts = &self.scene.options;
         self.scene.nearest_among(
-            self.candidates(origin, dir, tmin),
+            &leaves,
             origin,
             dir,
             tmin,
@@ -421,12 +408,11 @@ impl Visibility for SphereBvhScene {
     }
 
     fn surface_hit(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<SurfaceHit> {
-        if self.scene.instances.len() <= 1 {
-            return self.scene.surface_hit(origin, dir, tmin, tmax);
-        }
+        let leaves =
+            |f: &mut dyn FnMut(usize)| self.bvh.for_each_leaf_instance(origin, dir, tmin, f);
         let opts = &self.scene.options;
         self.scene.nearest_among(
-            self.candidates(origin, dir, tmin),
+            &leaves,
             origin,
             dir,
             tmin,
