@@ -32,6 +32,7 @@ pub mod plan;
 pub mod plot;
 pub mod progress;
 pub mod quickstart;
+pub mod registry;
 pub mod relief;
 pub mod run;
 pub mod sampling_report;

@@ -27,6 +27,7 @@ pub mod shadows;
 pub mod vertex_ao;
 
 use super::backend_gpu::GpuQuantity;
+use super::registry::{Entry, Registry};
 use super::scenes::BuiltScene;
 use super::spec::{ImageSpec, RenderSpec, Spec, SpecError};
 use super::validate::Validator;
@@ -34,7 +35,6 @@ use crate::field::lookup::{IntraBias, LookupOptions};
 use crate::field::Selection;
 use crate::render::estimator::Estimator;
 use crate::render::points::{EvalPoints, GBuffer};
-use std::sync::RwLock;
 
 /// What a kind needs built before it can run.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -187,41 +187,28 @@ pub const BUILT_IN: &[KindEntry] = &[
     reflections::ENTRY,
 ];
 
-/// Kinds added at run time by [`register`] (a library user's own, or a test's).
-static REGISTERED: RwLock<Vec<KindEntry>> = RwLock::new(Vec::new());
+/// The registry: [`BUILT_IN`], then the kinds added at run time by [`register`].
+static REGISTRY: Registry<KindEntry> = Registry::new(BUILT_IN, "render kind");
 
-/// Adds a kind to the registry; refused when its name is taken.
-pub fn register(entry: KindEntry) -> Result<(), String> {
-    let mut extra = REGISTERED.write().unwrap_or_else(|e| e.into_inner());
-    if lookup_in(&extra, entry.name).is_some() {
-        return Err(format!("a render kind \"{}\" exists already", entry.name));
+impl Entry for KindEntry {
+    fn name(&self) -> &'static str {
+        self.name
     }
-    extra.push(entry);
-    Ok(())
 }
 
-fn lookup_in(extra: &[KindEntry], name: &str) -> Option<KindEntry> {
-    BUILT_IN
-        .iter()
-        .chain(extra.iter())
-        .find(|e| e.name == name)
-        .copied()
+/// Adds a kind to the registry; refused when its name is taken.
+pub fn register(entry: KindEntry) -> std::result::Result<(), String> {
+    REGISTRY.register(entry)
 }
 
 /// The registered kind named `name`.
 pub fn lookup(name: &str) -> Option<KindEntry> {
-    let extra = REGISTERED.read().unwrap_or_else(|e| e.into_inner());
-    lookup_in(&extra, name)
+    REGISTRY.lookup(name)
 }
 
 /// Every registered kind's name, built-in ones first.
 pub fn names() -> Vec<&'static str> {
-    let extra = REGISTERED.read().unwrap_or_else(|e| e.into_inner());
-    BUILT_IN
-        .iter()
-        .chain(extra.iter())
-        .map(|e| e.name)
-        .collect()
+    REGISTRY.names()
 }
 
 /// The kind of a spec's `render`.

@@ -23,6 +23,7 @@ pub mod raycast;
 pub mod sdf;
 
 use super::kinds::Kind;
+use super::registry::{Entry, Registry};
 use super::scenes::BuiltScene;
 use super::spec::{Spec, SpecError};
 use super::validate::Validator;
@@ -31,7 +32,6 @@ use crate::render::estimator::Estimator;
 use crate::visibility::Visibility;
 use glam::Vec3;
 use std::path::PathBuf;
-use std::sync::RwLock;
 
 /// What a method precomputes from and answers through, on one scene.
 pub struct MethodContext<'a> {
@@ -156,41 +156,28 @@ where
 /// The methods of this build.
 pub const BUILT_IN: &[MethodEntry] = &[raycast::ENTRY, embree::ENTRY, sdf::ENTRY];
 
-/// Methods added at run time by [`register`].
-static REGISTERED: RwLock<Vec<MethodEntry>> = RwLock::new(Vec::new());
+/// The registry: [`BUILT_IN`], then the methods added at run time by [`register`].
+static REGISTRY: Registry<MethodEntry> = Registry::new(BUILT_IN, "method");
+
+impl Entry for MethodEntry {
+    fn name(&self) -> &'static str {
+        self.name
+    }
+}
 
 /// Adds a method to the registry; refused when its name is taken.
 pub fn register(entry: MethodEntry) -> std::result::Result<(), String> {
-    let mut extra = REGISTERED.write().unwrap_or_else(|e| e.into_inner());
-    if lookup_in(&extra, entry.name).is_some() {
-        return Err(format!("a method \"{}\" exists already", entry.name));
-    }
-    extra.push(entry);
-    Ok(())
-}
-
-fn lookup_in(extra: &[MethodEntry], name: &str) -> Option<MethodEntry> {
-    BUILT_IN
-        .iter()
-        .chain(extra.iter())
-        .find(|e| e.name == name)
-        .copied()
+    REGISTRY.register(entry)
 }
 
 /// The registered method named `name`.
 pub fn lookup(name: &str) -> Option<MethodEntry> {
-    let extra = REGISTERED.read().unwrap_or_else(|e| e.into_inner());
-    lookup_in(&extra, name)
+    REGISTRY.lookup(name)
 }
 
 /// Every registered method's name, built-in ones first.
 pub fn names() -> Vec<&'static str> {
-    let extra = REGISTERED.read().unwrap_or_else(|e| e.into_inner());
-    BUILT_IN
-        .iter()
-        .chain(extra.iter())
-        .map(|e| e.name)
-        .collect()
+    REGISTRY.names()
 }
 
 /// Every setting of a spec's `methods`, in order: each entry's settings in its own order.

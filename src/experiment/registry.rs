@@ -1,0 +1,66 @@
+//! A registry of plug-ins (render kinds, methods): the entries built into this build, then
+//! those added at run time, looked up by name. [`super::kinds`] and [`super::methods`] each keep
+//! one.
+
+use std::sync::RwLock;
+
+/// What a registry holds: a copyable entry with a name.
+pub trait Entry: Copy + 'static {
+    fn name(&self) -> &'static str;
+}
+
+/// The built-in entries and those [`Registry::register`] added.
+pub struct Registry<E: Entry> {
+    built_in: &'static [E],
+    extra: RwLock<Vec<E>>,
+    /// What an entry is, for errors ("render kind", "method").
+    what: &'static str,
+}
+
+impl<E: Entry> Registry<E> {
+    pub const fn new(built_in: &'static [E], what: &'static str) -> Registry<E> {
+        Registry {
+            built_in,
+            extra: RwLock::new(Vec::new()),
+            what,
+        }
+    }
+
+    /// Adds an entry; refused when its name is taken.
+    pub fn register(&self, entry: E) -> Result<(), String> {
+        let mut extra = self.extra.write().unwrap_or_else(|e| e.into_inner());
+        if self.find(&extra, entry.name()).is_some() {
+            return Err(format!(
+                "a {} \"{}\" exists already",
+                self.what,
+                entry.name()
+            ));
+        }
+        extra.push(entry);
+        Ok(())
+    }
+
+    fn find(&self, extra: &[E], name: &str) -> Option<E> {
+        self.built_in
+            .iter()
+            .chain(extra.iter())
+            .find(|e| e.name() == name)
+            .copied()
+    }
+
+    /// The entry named `name`.
+    pub fn lookup(&self, name: &str) -> Option<E> {
+        let extra = self.extra.read().unwrap_or_else(|e| e.into_inner());
+        self.find(&extra, name)
+    }
+
+    /// Every entry's name, built-in ones first.
+    pub fn names(&self) -> Vec<&'static str> {
+        let extra = self.extra.read().unwrap_or_else(|e| e.into_inner());
+        self.built_in
+            .iter()
+            .chain(extra.iter())
+            .map(|e| e.name())
+            .collect()
+    }
+}
