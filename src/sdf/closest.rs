@@ -1,104 +1,45 @@
-//! Closest points on a triangle set: a median-split BVH of boxes over the triangles, searched
-//! nearest box first with pruning by the box distance, and the exact closest point on one
-//! triangle (C. Ericson, *Real-Time Collision Detection*, 2005, §5.1.5, `ClosestPtPointTriangle`,
-//! by Voronoi regions, `geometry::closest_point_on_triangle`). The distance bake of [`super::DistanceVolume`] asks it once per grid
-//! point.
+//! Closest points on a triangle set: a median-split BVH of boxes over the triangles
+//! (`trace::box_tree`), searched nearest box first with pruning by the box distance, and the
+//! exact closest point on one triangle (C. Ericson, *Real-Time Collision Detection*, 2005,
+//! §5.1.5, by Voronoi regions: `geometry::closest_point_on_triangle`). The distance bake of
+//! [`super::DistanceVolume`] asks it once per grid point.
 
 use crate::geometry::closest_point_on_triangle;
+use crate::trace::box_tree::{BoxNode, BoxTree};
 use glam::Vec3;
-
-#[derive(Clone, Copy, Debug)]
-struct Node {
-    lo: Vec3,
-    hi: Vec3,
-    /// A leaf's first triangle in `order`, or an inner node's first child (the second follows).
-    first: u32,
-    /// Triangles of a leaf; 0 for an inner node.
-    count: u32,
-}
 
 /// Triangles per leaf.
 const LEAF: usize = 4;
 
 /// The triangles under a BVH answering nearest-point queries.
 pub struct ClosestPoints {
+    /// The triangles in leaf order.
     triangles: Vec<[Vec3; 3]>,
-    nodes: Vec<Node>,
+    tree: BoxTree,
 }
 
 impl ClosestPoints {
-    /// Builds the tree (median splits of the centroids on the longest axis). An empty set
-    /// answers every query with `None`.
+    /// Builds the tree over the triangles' boxes ([`BoxTree`]). An empty set answers every
+    /// query with `None`.
     pub fn new(triangles: &[[Vec3; 3]]) -> ClosestPoints {
-        let mut order: Vec<u32> = (0..triangles.len() as u32).collect();
-        let centroid = |i: u32| {
-            let [a, b, c] = triangles[i as usize];
-            (a + b + c) / 3.0
-        };
-        let mut nodes = Vec::with_capacity(2 * triangles.len() / LEAF + 1);
-        if !triangles.is_empty() {
-            nodes.push(Node {
-                lo: Vec3::ZERO,
-                hi: Vec3::ZERO,
-                first: 0,
-                count: 0,
-            });
-            // (node, start, end) still to build.
-            let mut todo = vec![(0usize, 0usize, triangles.len())];
-            while let Some((node, start, end)) = todo.pop() {
-                let (lo, hi) = order[start..end].iter().fold(
-                    (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-                    |(lo, hi), &i| {
-                        let t = triangles[i as usize];
-                        (
-                            lo.min(t[0].min(t[1]).min(t[2])),
-                            hi.max(t[0].max(t[1]).max(t[2])),
-                        )
-                    },
-                );
-                if end - start <= LEAF {
-                    nodes[node] = Node {
-                        lo,
-                        hi,
-                        first: start as u32,
-                        count: (end - start) as u32,
-                    };
-                    continue;
-                }
-                let (clo, chi) = order[start..end].iter().fold(
-                    (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-                    |(lo, hi), &i| (lo.min(centroid(i)), hi.max(centroid(i))),
-                );
-                let axis = (chi - clo).max_position();
-                let mid = (start + end) / 2;
-                order[start..end].select_nth_unstable_by(mid - start, |&a, &b| {
-                    centroid(a)[axis].total_cmp(&centroid(b)[axis])
-                });
-                let first = nodes.len();
-                nodes.push(nodes[node]);
-                nodes.push(nodes[node]);
-                nodes[node] = Node {
-                    lo,
-                    hi,
-                    first: first as u32,
-                    count: 0,
-                };
-                todo.push((first, start, mid));
-                todo.push((first + 1, mid, end));
-            }
-        }
+        let boxes: Vec<(Vec3, Vec3)> = triangles
+            .iter()
+            .map(|t| (t[0].min(t[1]).min(t[2]), t[0].max(t[1]).max(t[2])))
+            .collect();
+        let tree = BoxTree::new(&boxes, LEAF);
         ClosestPoints {
-            triangles: order.iter().map(|&i| triangles[i as usize]).collect(),
-            nodes,
+            triangles: tree.order.iter().map(|&i| triangles[i as usize]).collect(),
+            tree,
         }
     }
 
     /// The nearest point of any triangle to `p` and its squared distance.
     pub fn nearest(&self, p: Vec3) -> Option<(Vec3, f32)> {
-        if self.nodes.is_empty() {
+        let nodes = &self.tree.nodes;
+        if nodes.is_empty() {
             return None;
         }
-        let box_d2 = |n: &Node| {
+        let box_d2 = |n: &BoxNode| {
             let d = (n.lo - p).max(p - n.hi).max(Vec3::ZERO);
             d.length_squared()
         };
@@ -111,9 +52,9 @@ impl ClosestPoints {
             if d2 >= best.1 {
                 continue;
             }
-            let n = self.nodes[i as usize];
-            if n.count > 0 {
-                for t in &self.triangles[n.first as usize..(n.first + n.count) as usize] {
+            let n = nodes[i as usize];
+            if let Some(items) = n.items() {
+                for t in &self.triangles[items] {
                     let q = closest_point_on_triangle(p, t);
                     let d2 = q.distance_squared(p);
                     if d2 < best.1 {
@@ -123,11 +64,8 @@ impl ClosestPoints {
                 continue;
             }
             // The nearer child last, so that it is searched first.
-            let (a, b) = (n.first, n.first + 1);
-            let (da, db) = (
-                box_d2(&self.nodes[a as usize]),
-                box_d2(&self.nodes[b as usize]),
-            );
+            let [a, b] = n.children();
+            let (da, db) = (box_d2(&nodes[a as usize]), box_d2(&nodes[b as usize]));
             let (near, far) = if da <= db {
                 ((a, da), (b, db))
             } else {

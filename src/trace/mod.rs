@@ -1,6 +1,7 @@
 //! The ray-cast reference: an obvhs CWBVH over world-space triangles with watertight
 //! ray–triangle tests (Woop, Benthin, Wald, "Watertight Ray/Triangle Intersection", JCGT 2013).
 
+pub mod box_tree;
 #[cfg(feature = "embree")]
 pub mod embree;
 #[cfg(feature = "embree")]

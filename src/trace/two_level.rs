@@ -9,22 +9,12 @@
 //! the triangles (f32): the same hits and misses away from edges and grazing rays, distances
 //! within a few ulps of the world's (tested on moving scenes in `tests/two_level.rs`).
 
+use super::box_tree::{BoxNode, BoxTree};
 use super::Tracer;
 use crate::geometry::Similarity;
 use crate::visibility::{SurfaceHit, Visibility};
 use glam::Vec3;
 use std::sync::Arc;
-
-/// One node of the top level: a box over its instances; a leaf holds `count` instances from
-/// `first` in [`TwoLevel::order`], an inner node its two children (`first`, `first + 1`).
-#[derive(Clone, Copy, Debug)]
-struct Node {
-    lo: Vec3,
-    hi: Vec3,
-    first: u32,
-    /// Instances of a leaf; 0 for an inner node.
-    count: u32,
-}
 
 /// Instances of meshes, each with its own model-space BVH, under a top level over their world
 /// boxes.
@@ -35,9 +25,8 @@ pub struct TwoLevel {
     bounds: Vec<(Vec3, f32)>,
     /// Per instance: its mesh and transform.
     instances: Vec<(usize, Similarity)>,
-    /// Instance indices in top-level order.
-    order: Vec<u32>,
-    nodes: Vec<Node>,
+    /// The top level over the instances' world boxes.
+    top: BoxTree,
 }
 
 /// Instances per top-level leaf.
@@ -66,13 +55,12 @@ impl TwoLevel {
             meshes: meshes.iter().map(|t| Arc::new(Tracer::new(t))).collect(),
             bounds,
             instances: Vec::new(),
-            order: Vec::new(),
-            nodes: Vec::new(),
+            top: BoxTree::default(),
         }
     }
 
     /// Places the instances (mesh index, transform) for this frame and rebuilds the top level
-    /// over their world boxes (median splits on the longest axis).
+    /// over their world boxes ([`BoxTree`]).
     ///
     /// # Panics
     /// If an instance names a mesh that does not exist.
@@ -89,74 +77,12 @@ impl TwoLevel {
                 (wc - Vec3::splat(wr), wc + Vec3::splat(wr))
             })
             .collect();
-        self.order = (0..boxes.len() as u32).collect();
-        self.nodes.clear();
-        if boxes.is_empty() {
-            return;
-        }
-        self.nodes.push(Node {
-            lo: Vec3::ZERO,
-            hi: Vec3::ZERO,
-            first: 0,
-            count: 0,
-        });
-        let n = boxes.len();
-        self.build(0, 0, n, &boxes);
-    }
-
-    fn build(&mut self, node: usize, start: usize, end: usize, boxes: &[(Vec3, Vec3)]) {
-        let (lo, hi) = self.order[start..end].iter().fold(
-            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-            |(lo, hi), &i| (lo.min(boxes[i as usize].0), hi.max(boxes[i as usize].1)),
-        );
-        if end - start <= LEAF {
-            self.nodes[node] = Node {
-                lo,
-                hi,
-                first: start as u32,
-                count: (end - start) as u32,
-            };
-            return;
-        }
-        let ext = hi - lo;
-        let axis = if ext.x >= ext.y && ext.x >= ext.z {
-            0
-        } else if ext.y >= ext.z {
-            1
-        } else {
-            2
-        };
-        let mid = (start + end) / 2;
-        let centre = |i: u32| {
-            let (a, b) = boxes[i as usize];
-            (a + b)[axis]
-        };
-        self.order[start..end]
-            .select_nth_unstable_by(mid - start, |&a, &b| centre(a).total_cmp(&centre(b)));
-        let left = self.nodes.len();
-        let empty = Node {
-            lo: Vec3::ZERO,
-            hi: Vec3::ZERO,
-            first: 0,
-            count: 0,
-        };
-        self.nodes.push(empty);
-        self.nodes.push(empty);
-        self.nodes[node] = Node {
-            lo,
-            hi,
-            first: left as u32,
-            count: 0,
-        };
-        self.build(left, start, mid, boxes);
-        self.build(left + 1, mid, end, boxes);
+        self.top = BoxTree::new(&boxes, LEAF);
     }
 
     /// Bytes of the top level and of every mesh's tracer.
     pub fn bytes(&self) -> u64 {
-        let top = std::mem::size_of_val(self.nodes.as_slice())
-            + std::mem::size_of_val(self.order.as_slice());
-        top as u64 + self.meshes.iter().map(|t| t.bytes()).sum::<u64>()
+        self.top.bytes() + self.meshes.iter().map(|t| t.bytes()).sum::<u64>()
     }
 
     /// Calls `f(instance)` for each instance whose top-level box the segment meets, in no
@@ -170,11 +96,11 @@ impl TwoLevel {
         mut tmax: f32,
         mut f: impl FnMut(usize, f32) -> Option<f32>,
     ) {
-        if self.nodes.is_empty() {
+        if self.top.nodes.is_empty() {
             return;
         }
         let inv = d.recip();
-        let meets = |n: &Node, tmax: f32| {
+        let meets = |n: &BoxNode, tmax: f32| {
             let t0 = (n.lo - o) * inv;
             let t1 = (n.hi - o) * inv;
             let near = t0.min(t1).max_element().max(tmin);
@@ -186,17 +112,16 @@ impl TwoLevel {
         let mut top = 1;
         while top > 0 {
             top -= 1;
-            let n = self.nodes[stack[top] as usize];
+            let n = self.top.nodes[stack[top] as usize];
             if !meets(&n, tmax) {
                 continue;
             }
-            if n.count == 0 {
-                stack[top] = n.first;
-                stack[top + 1] = n.first + 1;
+            let Some(items) = n.items() else {
+                [stack[top], stack[top + 1]] = n.children();
                 top += 2;
                 continue;
-            }
-            for &i in &self.order[n.first as usize..(n.first + n.count) as usize] {
+            };
+            for &i in &self.top.order[items] {
                 match f(i as usize, tmax) {
                     Some(t) => tmax = t,
                     None => return,
