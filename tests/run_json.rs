@@ -24,49 +24,93 @@ fn strings(v: &serde_json::Value, at: &str, out: &mut Vec<(String, String)>) {
     }
 }
 
+/// Runs `spec` into `out` with `cache` and returns its `run.json`.
+fn run(
+    spec: &std::path::Path,
+    out: &std::path::Path,
+    cache: &std::path::Path,
+) -> serde_json::Value {
+    let o = Command::new(env!("CARGO_BIN_EXE_experiment"))
+        .arg("run")
+        .arg(spec)
+        .arg("--quick")
+        .arg("--out")
+        .arg(out)
+        .arg(format!("--cache={}", cache.display()))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    serde_json::from_slice(&std::fs::read(out.join("run.json")).unwrap()).unwrap()
+}
+
+/// Fails naming the JSON path of any string of `run` that holds an absolute path.
+fn assert_no_absolute_path(run: &serde_json::Value, what: &str) {
+    let mut all = Vec::new();
+    strings(run, "", &mut all);
+    let root = env!("CARGO_MANIFEST_DIR");
+    for (at, s) in &all {
+        assert!(
+            !s.starts_with('/') && !s.contains(" /") && !s.contains("=/"),
+            "{what} {at}: {s}"
+        );
+        assert!(!s.contains(root), "{what} {at}: {s}");
+    }
+}
+
 #[test]
 fn a_runs_run_json_holds_no_absolute_path_and_its_wall_times() {
     let dir = tempfile::tempdir().unwrap();
     let spec = dir.path().join("tiny.json");
     std::fs::write(&spec, common::tiny(common::ONE_FIELD, "")).unwrap();
-    let (out, cache) = (dir.path().join("out"), dir.path().join("cache"));
-    let o = Command::new(env!("CARGO_BIN_EXE_experiment"))
-        .arg("run")
-        .arg(&spec)
-        .arg("--quick")
-        .arg("--out")
-        .arg(&out)
-        .arg(format!("--cache={}", cache.display()))
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let run: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("run.json")).unwrap()).unwrap();
-    let mut all = Vec::new();
-    strings(&run, "", &mut all);
-    let root = env!("CARGO_MANIFEST_DIR");
-    for (at, s) in &all {
-        assert!(
-            !s.starts_with('/') && !s.contains(" /") && !s.contains("=/"),
-            "{at}: {s}"
-        );
-        assert!(!s.contains(root), "{at}: {s}");
-    }
+    let cache = dir.path().join("cache");
+    let run1 = run(&spec, &dir.path().join("out"), &cache);
+    assert_no_absolute_path(&run1, "first run");
+    // A second run reads the field and the converged reference from the cache, and names the
+    // cache file it read the reference from, relative to the crate.
+    let run2 = run(&spec, &dir.path().join("out2"), &cache);
+    assert_no_absolute_path(&run2, "second run");
+    let source = run2["scenes"][0]["truth"]["source"].as_str().unwrap();
+    assert!(
+        source.starts_with("cache ..") && source.ends_with(".vtruth"),
+        "{source}"
+    );
     // The folders are still named, relative to the crate.
-    let cache_rec = run["cache"].as_str().unwrap();
+    let cache_rec = run1["cache"].as_str().unwrap();
     assert!(
         cache_rec.ends_with("/cache") && cache_rec.starts_with(".."),
         "{cache_rec}"
     );
-    let command = run["meta"]["command"].as_str().unwrap();
+    let command = run1["meta"]["command"].as_str().unwrap();
     assert!(command.starts_with("experiment run "), "{command}");
     // The run's wall time and each stage's: the stages are timed inside the run.
-    let wall = run["meta"]["wall_s"].as_f64().unwrap();
-    let stages = run["meta"]["stages"].as_array().unwrap();
+    let wall = run1["meta"]["wall_s"].as_f64().unwrap();
+    let stages = run1["meta"]["stages"].as_array().unwrap();
     assert!(
         stages.iter().any(|s| s["stage"] == "load scenes"),
         "{stages:?}"
     );
     let sum: f64 = stages.iter().map(|s| s["wall_s"].as_f64().unwrap()).sum();
     assert!(wall > 0.0 && sum > 0.0 && sum <= wall, "{sum} of {wall}");
+}
+
+/// Every committed `run.json` under `results/` names no machine's folders.
+#[test]
+fn committed_run_jsons_hold_no_absolute_path() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("results");
+    let mut stack = vec![root];
+    let mut seen = 0;
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else if p.file_name().is_some_and(|n| n == "run.json") {
+                let v: serde_json::Value =
+                    serde_json::from_slice(&std::fs::read(&p).unwrap()).unwrap();
+                assert_no_absolute_path(&v, &p.display().to_string());
+                seen += 1;
+            }
+        }
+    }
+    assert!(seen >= 20, "only {seen} run.json files under results/");
 }

@@ -1,6 +1,6 @@
 //! `--shard I/N` and `experiment merge`: a two-scene spec of procedural meshes (no model file)
 //! run whole and as three concurrent shards (sharing one field cache) merges into the single
-//! run's folder, every non-time value equal; merges of inconsistent shard sets are refused
+//! run's folder, every non-time value equal (`pairs.csv`'s 8- against 16-bit pairs too); merges of inconsistent shard sets are refused
 //! naming the folder; bad `--shard` values are refused naming the flag and the value.
 
 use std::path::{Path, PathBuf};
@@ -8,7 +8,7 @@ use std::process::{Command, Output};
 
 const SPEC: &str = r#"{
   "reproduces": "test: shards and merge",
-  "description": "Two small scenes, two field sizes each: four cells, cut 1 + 1 + 2 by three shards, so the first scene's cells are split over shards 1 and 2.",
+  "description": "Two small scenes, two field sizes each in two precisions: eight cells in four field groups (one bake and its 16-bit twin each), cut 2 + 4 + 2 by three shards (blocks of 2, 3, 3 positions, each group going whole to the shard of its first cell), so the first scene's cells are split over shards 1 and 2.",
   "scenes": [
     {"name": "shape", "instances": [
       {"mesh": {"corner": {"n": 9}}, "receiver": true},
@@ -19,7 +19,7 @@ const SPEC: &str = r#"{
       {"mesh": {"supershape": {"triangles": 1000}}, "caster": true, "transform": {"fit": {"center": [0.5, 0.3, 0.5], "radius": 0.25}}}
     ]}
   ],
-  "fields": [{"counts": [290, 1090], "resolutions": [16]}],
+  "fields": [{"counts": [290, 1090], "resolutions": [16], "precisions": ["u8", "u16"]}],
   "render": {"what": "vertex_ao", "rays_per_point": 64, "image": {"width": 48, "height": 48}},
   "backends": ["cpu"],
   "reference": {"rays_per_point": 64, "seed": 1, "seeds": 2, "truth": {"max_rays": 1024}, "raycast_sweep": [16, 64], "field_rays_sweep": [16, 64]},
@@ -111,12 +111,14 @@ fn run_all(root: &Path) -> (PathBuf, Vec<PathBuf>) {
 fn three_concurrent_shards_merge_into_the_single_run() {
     let tmp = tempfile::tempdir().unwrap();
     let (whole, shards) = run_all(tmp.path());
-    // Cells in contiguous blocks: 1, 1 and 2 of the 4 (2 scenes × 2 field sizes).
-    let cells: Vec<usize> = shards
-        .iter()
-        .map(|d| read_csv(&d.join("table.csv")).1.len())
-        .collect();
-    assert_eq!(cells, vec![1, 1, 2]);
+    // Field groups whole, in contiguous blocks: 2, 4 and 2 of the 8 cells (2 scenes × 2 field
+    // sizes × 2 precisions), and each shard's pairs those of its groups: 1, 2 and 1.
+    let count = |d: &PathBuf, f: &str| read_csv(&d.join(f)).1.len();
+    let cells: Vec<usize> = shards.iter().map(|d| count(d, "table.csv")).collect();
+    assert_eq!(cells, vec![2, 4, 2]);
+    let pairs: Vec<usize> = shards.iter().map(|d| count(d, "pairs.csv")).collect();
+    assert_eq!(pairs, vec![1, 2, 1]);
+    assert_eq!(count(&whole, "pairs.csv"), 4);
     let merged = tmp.path().join("merged");
     let dirs: Vec<&str> = [2, 0, 1]
         .iter()
@@ -156,7 +158,7 @@ fn three_concurrent_shards_merge_into_the_single_run() {
     let run: serde_json::Value =
         serde_json::from_slice(&std::fs::read(merged.join("run.json")).unwrap()).unwrap();
     assert!(run.get("shard").is_none());
-    assert_eq!(run["plan"]["cells"], 4);
+    assert_eq!(run["plan"]["cells"], 8);
     let listed = run["shards"].as_array().unwrap();
     let order: Vec<&str> = listed
         .iter()
@@ -225,12 +227,13 @@ fn bad_shard_values_are_refused_naming_the_flag_and_the_value() {
             "{t}"
         );
     }
-    // A good value plans only the shard's cells: 2 of 4 in shard 3/3, of the second scene only.
+    // A good value plans only the shard's cells: 2 of 8 in shard 3/3 (one field group and its
+    // 16-bit twin, derived from the one bake), of the second scene only.
     let o = experiment(&["run", spec.to_str().unwrap(), "--dry-run", "--shard", "3/3"])
         .output()
         .unwrap();
     let t = ok(o, "dry run of 3/3");
-    assert!(t.contains("2 cell(s), 2 bake(s)"), "{t}");
+    assert!(t.contains("2 cell(s), 1 bake(s)"), "{t}");
     assert!(
         t.contains("ray-cast reference low") && !t.contains("ray-cast reference shape"),
         "{t}"

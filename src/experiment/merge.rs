@@ -6,8 +6,12 @@
 //! `spec.json` (or profile) that differs from the first shard's. Then, into a staging folder
 //! published only when whole ([`super::run::staging`]):
 //!
-//! - a CSV with a `cell` column (`table.csv`, `field_sweep.csv`): the shards' rows in shard
-//!   order, which is the single run's plan order, since shards are contiguous blocks of it;
+//! - a CSV with a `cell` column (`table.csv`, `field_sweep.csv`): the shards' rows in the
+//!   single run's plan order (the spec profile's cells, [`super::plan::cells_of`]; a cell's
+//!   rows in their shard's order);
+//! - `pairs.csv`: every shard's pairs (a pair's two cells share a field group, so one shard
+//!   measured it: [`super::shard`]), in the single run's order of their cells (`cell_a`,
+//!   `cell_b`);
 //! - a per-point CSV (`ao_SCENE.csv`): the columns every shard writes (the points, the
 //!   references) from the first shard holding it, then each shard's cell columns in order;
 //! - any other CSV (`raycast_sweep.csv`: per scene): a scene's rows from the first shard that
@@ -134,10 +138,16 @@ fn write_table(path: &Path, (header, rows): &Table) -> Result<()> {
 }
 
 /// Joins one CSV file present in `parts` (shard order) by the rules of the module docs.
-fn join_csv(name: &str, parts: &[(&Path, Table)]) -> Result<Table> {
+/// Joins one CSV of every shard; `ids`: the single run's cell ids in plan order.
+fn join_csv(name: &str, parts: &[(&Path, Table)], ids: &[String]) -> Result<Table> {
     let (header, _) = &parts[0].1;
     let col = |h: &[String], c: &str| h.iter().position(|x| x == c);
-    if col(header, "cell").is_some() {
+    // Rows keyed by cells: every shard's, in plan order of their cells.
+    let keys: Vec<usize> = ["cell", "cell_a", "cell_b"]
+        .iter()
+        .filter_map(|c| col(header, c))
+        .collect();
+    if !keys.is_empty() {
         let mut rows = Vec::new();
         for (dir, (h, r)) in parts {
             if h != header {
@@ -148,6 +158,10 @@ fn join_csv(name: &str, parts: &[(&Path, Table)]) -> Result<Table> {
             }
             rows.extend(r.iter().cloned());
         }
+        // By the cells' plan positions (past every cell when unknown); stable, so a cell's rows
+        // keep their shard's order.
+        let at = |id: &str| ids.iter().position(|x| x == id).unwrap_or(ids.len());
+        rows.sort_by_key(|r| keys.iter().map(|&k| at(&r[k])).collect::<Vec<_>>());
         return Ok((header.clone(), rows));
     }
     if name.starts_with("ao_") {
@@ -236,6 +250,13 @@ pub fn merge(out: &Path, dirs: &[PathBuf]) -> Result<()> {
 }
 
 fn write(staged: &Path, shards: &[ShardDir]) -> Result<()> {
+    // The single run's cells in plan order, from the spec as run and its profile.
+    let ls = super::run::LoadedSpec::load(&shards[0].dir.join("spec.json"))?;
+    let spec = ls.spec.profile(shards[0].run["profile"] == "quick");
+    let ids: Vec<String> = super::plan::cells_of(&spec)
+        .iter()
+        .map(|c| c.id(&spec.scenes[c.scene].name))
+        .collect();
     // Every file of every shard, by relative path, in shard order.
     let mut by_name: BTreeMap<PathBuf, Vec<&Path>> = BTreeMap::new();
     for s in shards {
@@ -257,7 +278,7 @@ fn write(staged: &Path, shards: &[ShardDir]) -> Result<()> {
                 .iter()
                 .map(|d| Ok((*d, read_table(&d.join(rel))?)))
                 .collect::<Result<Vec<_>>>()?;
-            write_table(&to, &join_csv(&name, &parts)?)?;
+            write_table(&to, &join_csv(&name, &parts, &ids)?)?;
         } else if !top || name == "spec.json" {
             // Images (a scene's from the first shard holding it) and the spec.
             let from = dirs[0].join(rel);
@@ -290,8 +311,6 @@ fn write(staged: &Path, shards: &[ShardDir]) -> Result<()> {
     let p = staged.join("run.json");
     let text = serde_json::to_string_pretty(&run).expect("run.json serialises");
     crate::io::write_atomic(&p, text.as_bytes()).map_err(Error::io(&p))?;
-    let spec_path = staged.join("spec.json");
-    let ls = super::run::LoadedSpec::load(&spec_path)?;
     if let Some(paper) = &ls.spec.paper {
         super::paper::rewrite(staged, paper)?;
     }

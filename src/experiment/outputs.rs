@@ -362,6 +362,12 @@ pub struct PairRow {
     pub precision_b: Precision,
     pub rms_vertex: Option<f64>,
     pub rms_image: Option<f64>,
+    /// The two cells' ids (`table.csv`'s `cell`), precision `a`'s first; empty in tables
+    /// written before the column.
+    #[serde(default)]
+    pub cell_a: String,
+    #[serde(default)]
+    pub cell_b: String,
 }
 
 /// Writes rows as CSV (header from the struct), atomically.

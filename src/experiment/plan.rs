@@ -237,7 +237,7 @@ impl Plan {
         shard: Option<super::shard::Shard>,
     ) -> Result<Plan> {
         let kind = super::kinds::of(&spec.render);
-        let cells = super::shard::select(cells_of(spec), shard);
+        let cells = super::shard::select(cells_of(spec), shard, |c| (c.scene, c.geometry()));
         let render_k = square_root(spec.render.rays_per_point, "render.rays_per_point")?;
         let ref_k = square_root(spec.reference.rays_per_point, "reference.rays_per_point")?;
         let methods: Vec<String> = super::methods::settings_of(spec)

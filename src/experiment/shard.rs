@@ -2,12 +2,16 @@
 //! several machines (or processes) at once.
 //!
 //! The assignment: the spec profile's cells in plan order ([`super::plan::cells_of`]: scenes ×
-//! field settings × backends, duplicates dropped) are cut into `N` contiguous blocks of
-//! `⌊n/N⌋` or `⌈n/N⌉` cells; shard `I` (1-based) takes the `I`-th block, cells
-//! `⌊(I−1)·n/N⌋ .. ⌊I·n/N⌋`. It depends only on the spec and the profile, never on the thread
-//! count or the machine, and every cell lies in exactly one shard (some shards are empty when
-//! `N > n`). Contiguous blocks keep a field group's cells (and a scene's) together where they
-//! can, so few bakes and references are repeated across shards.
+//! field settings × backends, duplicates dropped) are cut into `N` contiguous blocks, positions
+//! `⌊(I−1)·n/N⌋ .. ⌊I·n/N⌋` for shard `I` (1-based); then each field group (a scene's cells
+//! that read one bake: the same scene and field geometry, every precision, selection, backend
+//! and normal-field precision) goes whole to the shard whose block holds its first cell
+//! ([`Shard::select_groups`]). So no bake is repeated across shards, and every pair of
+//! `pairs.csv` (cells that differ only in precision, always in one group) is measured in one
+//! shard. It depends only on the spec and the profile, never on the thread count or the
+//! machine, and every cell lies in exactly one shard (some shards are empty when `N` exceeds
+//! the groups). Where a group's cells are contiguous in plan order (one `fields` entry holds
+//! them all), shards stay contiguous blocks of it.
 //!
 //! A shard plans only its cells: the planner bakes the fields those cells read and nothing
 //! else. The per-scene steps (the ray-cast reference, its sweep, the converged reference) run
@@ -58,13 +62,17 @@ impl Shard {
         at(self.index - 1)..at(self.index)
     }
 
-    /// Keeps this shard's share of `cells` (in plan order).
-    pub fn select<T>(&self, cells: Vec<T>) -> Vec<T> {
+    /// Keeps this shard's share of `cells` (in plan order), a group at a time: a group (the
+    /// cells with one `group` key) goes whole to the shard whose block of positions
+    /// ([`Self::range`]) holds its first cell. The cells keep their plan order.
+    pub fn select_groups<T, K: PartialEq>(&self, cells: Vec<T>, group: impl Fn(&T) -> K) -> Vec<T> {
         let r = self.range(cells.len());
+        let keys: Vec<K> = cells.iter().map(&group).collect();
+        let first = |i: usize| keys.iter().position(|k| *k == keys[i]).expect("own key");
         cells
             .into_iter()
             .enumerate()
-            .filter(|(i, _)| r.contains(i))
+            .filter(|(i, _)| r.contains(&first(*i)))
             .map(|(_, c)| c)
             .collect()
     }
@@ -75,10 +83,15 @@ impl Shard {
     }
 }
 
-/// `cells` unchanged without a shard, else the shard's share.
-pub fn select<T>(cells: Vec<T>, shard: Option<Shard>) -> Vec<T> {
+/// `cells` unchanged without a shard, else the shard's share, a `group` at a time
+/// ([`Shard::select_groups`]).
+pub fn select<T, K: PartialEq>(
+    cells: Vec<T>,
+    shard: Option<Shard>,
+    group: impl Fn(&T) -> K,
+) -> Vec<T> {
     match shard {
-        Some(s) => s.select(cells),
+        Some(s) => s.select_groups(cells, group),
         None => cells,
     }
 }
@@ -94,7 +107,7 @@ mod tests {
                 let cells: Vec<usize> = (0..n).collect();
                 let mut joined = Vec::new();
                 for index in 1..=count {
-                    let share = Shard { index, count }.select(cells.clone());
+                    let share = Shard { index, count }.select_groups(cells.clone(), |c| *c);
                     // Block sizes differ by at most one.
                     assert!(share.len() == n / count || share.len() == n.div_ceil(count));
                     joined.extend(share);
@@ -109,7 +122,53 @@ mod tests {
         // 10 cells in 3 shards: ⌊10k/3⌋ = 0, 3, 6, 10.
         let s = |index| Shard { index, count: 3 }.range(10);
         assert_eq!((s(1), s(2), s(3)), (0..3, 3..6, 6..10));
-        assert_eq!(select(vec![1, 2, 3], None), vec![1, 2, 3]);
+        assert_eq!(select(vec![1, 2, 3], None, |c| *c), vec![1, 2, 3]);
+    }
+
+    #[test]
+    fn groups_go_whole_to_the_shard_of_their_first_cell() {
+        // Groups of 1–4 cells, contiguous or interleaved, over 1–9 shards.
+        let layouts: [&[u8]; 5] = [
+            b"aabbbccccd",
+            b"abababcc",
+            b"aaaaaaa",
+            b"abcdefgh",
+            b"abcabcddda",
+        ];
+        for keys in layouts {
+            let cells: Vec<(usize, u8)> = keys.iter().copied().enumerate().collect();
+            for count in 1..10usize {
+                let mut joined = Vec::new();
+                let mut owner = std::collections::HashMap::new();
+                for index in 1..=count {
+                    let sh = Shard { index, count };
+                    let share = sh.select_groups(cells.clone(), |c| c.1);
+                    // Plan order kept within a shard.
+                    assert!(share.windows(2).all(|w| w[0].0 < w[1].0));
+                    for c in &share {
+                        // A group lies in one shard, the one whose block holds its first cell.
+                        assert_eq!(*owner.entry(c.1).or_insert(index), index, "{keys:?}");
+                        let first = keys.iter().position(|k| *k == c.1).unwrap();
+                        assert!(sh.range(cells.len()).contains(&first));
+                    }
+                    joined.extend(share);
+                }
+                joined.sort();
+                assert_eq!(joined, cells, "{keys:?}, N = {count}");
+            }
+        }
+        // Contiguous groups: "aabbbccccd" in 3 blocks 0..3, 3..6, 6..10 → a, b | c | d.
+        let cells: Vec<(usize, u8)> = b"aabbbccccd".iter().copied().enumerate().collect();
+        let share = |index| {
+            Shard { index, count: 3 }
+                .select_groups(cells.clone(), |c| c.1)
+                .iter()
+                .map(|c| c.0)
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(share(1), vec![0, 1, 2, 3, 4]);
+        assert_eq!(share(2), vec![5, 6, 7, 8]);
+        assert_eq!(share(3), vec![9]);
     }
 
     #[test]

@@ -5,6 +5,7 @@ use super::state::{mean_sd, SceneState};
 use super::steps::Runner;
 use crate::experiment::backend::{Casters, ComputeBackend};
 use crate::experiment::kinds::Kind;
+use crate::experiment::meta::portable_path;
 use crate::experiment::metrics::{rms_u8, rms_unquantised};
 use crate::experiment::progress::stage;
 use crate::experiment::truth_cache::{load_or_compute, TruthInputs, TruthOutcome};
@@ -64,7 +65,7 @@ impl Runner<'_> {
         });
         let (truth, outcome) = res?;
         let source = match &outcome {
-            TruthOutcome::Hit(p) => format!("cache {}", p.display()),
+            TruthOutcome::Hit(p) => format!("cache {}", portable_path(p)),
             TruthOutcome::Computed { rejected, .. } => {
                 if let Some(r) = rejected {
                     eprintln!("  truth cache file rejected ({r}); recomputed");

@@ -32,8 +32,9 @@ impl Runner<'_> {
                     }
                     _ => None,
                 };
+                let scene = &self.scenes.scenes[ca.scene].name;
                 out.push(PairRow {
-                    scene: self.scenes.scenes[ca.scene].name.clone(),
+                    scene: scene.clone(),
                     sphere: ca.params.sphere,
                     positional_samples: ca.params.count,
                     directional_res: ca.params.res,
@@ -44,6 +45,8 @@ impl Runner<'_> {
                     precision_b: cb.params.precision,
                     rms_vertex: vertex.then(|| rms_unquantised(&a.values, &b.values)),
                     rms_image,
+                    cell_a: ca.id(scene),
+                    cell_b: cb.id(scene),
                 });
             }
         }
