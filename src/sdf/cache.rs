@@ -164,8 +164,7 @@ pub fn load(path: &Path, key: &CacheKey) -> Result<DistanceVolume, CacheError> {
     }
     let lo = Vec3::from_array(header.lo);
     let max = DistanceVolume::MAX_RES;
-    if !lo.is_finite()
-        || !(header.voxel.is_finite() && header.voxel > 0.0)
+    if !(lo.is_finite() && header.voxel.is_finite() && header.voxel > 0.0)
         || header.dims.iter().any(|&n| !(2..=max).contains(&n))
     {
         return Err(corrupt(format!(

@@ -29,6 +29,13 @@
 //! step may exceed the true distance by 2⁻¹¹ of itself. Both are far below the hit threshold
 //! (a quarter voxel by default), so a trace cannot step through a surface that f32 would hit
 //! unless it grazes it within that overshoot.
+//!
+//! What it does to cone tracing (`super::cone`): a cone's step visibility is d / (t tan θ);
+//! past the band a u8 read is M however far the surface is, so wherever the cone's radius
+//! t tan θ exceeds M the step reads at most M / (t tan θ) < 1: cones darken away from the
+//! surfaces, the more the finer the volume (M is four voxel diagonals). Not conservative for
+//! AO, and stated as such: the engines trace far occlusion through a coarser representation
+//! (UE5's global distance field) rather than a mesh's u8 band.
 
 use half::f16;
 use serde::{Deserialize, Serialize};
@@ -185,7 +192,7 @@ impl Samples {
     /// Samples at `precision` from their stored bytes (a volume of voxel side `voxel`); none
     /// when the length is not a whole number of samples or an f32 sample is not finite.
     pub fn from_bytes(bytes: &[u8], precision: Precision, voxel: f32) -> Option<Samples> {
-        if bytes.len() % precision.bytes_per_sample() != 0 {
+        if !bytes.len().is_multiple_of(precision.bytes_per_sample()) {
             return None;
         }
         Some(match precision {

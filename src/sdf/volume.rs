@@ -166,8 +166,11 @@ impl DistanceVolume {
     }
 
     /// The trilinear interpolation of the samples at `p` (read through `at`), clamped to the
-    /// grid; outside it, the distance to the grid's box is added (a lower bound of the distance
-    /// to anything inside).
+    /// grid; outside it, the distance to the grid's box is added to the read at the nearest
+    /// point of the box (the engines' rule, UE's `DistanceToClamped`): at least the distance to
+    /// the box and at least the true distance less the read's error there (the triangle
+    /// inequality through that point), but it may exceed the true distance, by less than the
+    /// read on the box. Sphere tracing clips rays to the box and never reads there; cones do.
     #[inline]
     fn trilinear(&self, p: Vec3, at: impl Fn(usize) -> f32) -> f32 {
         let q = p.clamp(self.lo, self.hi());
@@ -189,7 +192,7 @@ impl DistanceVolume {
     }
 
     /// The read distance at `p`: the trilinear interpolation of the decoded samples, clamped to
-    /// the grid, plus the distance to the grid's box outside it.
+    /// the grid, plus the distance to the grid's box outside it (see [`Self::trilinear`]).
     pub fn sample(&self, p: Vec3) -> f32 {
         match &self.samples {
             Samples::F32(v) => self.trilinear(p, |i| v[i]),
