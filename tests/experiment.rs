@@ -1010,7 +1010,7 @@ fn sdf_is_a_method_with_a_row_per_resolution() {
     run(&ls, &options(dir.path().join("out"))).unwrap();
     let rows = read_named(&dir.path().join("out/methods.csv")).unwrap();
     let setting: Vec<&str> = rows.iter().map(|r| r.get("setting").unwrap()).collect();
-    assert_eq!(setting, ["sdf-16", "sdf-48"]);
+    assert_eq!(setting, ["sdf-16-f32-trace", "sdf-48-f32-trace"]);
     let num = |r: usize, c: &str| rows[r].number(c).unwrap();
     // Bytes: at most res³ f32 samples, and more at the finer resolution.
     assert!(num(0, "bytes") <= 16f64.powi(3) * 4.0 && num(1, "bytes") > 8.0 * num(0, "bytes"));

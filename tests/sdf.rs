@@ -1,14 +1,16 @@
 //! Mesh signed distance fields (`sdf`) against closed forms: the baked distances of a sphere
 //! and a box at every grid sample, their signs, the interpolated distance between samples,
-//! sphere tracing against the analytic sphere (placed by a transform, too), and AO rays
-//! against our ray caster on the same convex caster. The bounds are derived in each test.
+//! sphere tracing against the analytic sphere (placed by a transform, too), AO rays against
+//! our ray caster on the same convex caster, and the f16 and u8 volumes against the f32 one
+//! (reads and traces). The bounds are derived in each test.
 
 use glam::{Quat, Vec3};
 use std::sync::Arc;
 use visfield::geometry::procedural::uv_sphere;
 use visfield::geometry::{Mesh, Similarity};
 use visfield::sampling::rays::seeded_sphere_direction;
-use visfield::sdf::{DistanceVolume, SdfInstance, SdfScene, SdfTrace};
+use visfield::sdf::storage::band;
+use visfield::sdf::{DistanceVolume, Precision, SdfInstance, SdfScene, SdfTrace};
 use visfield::trace::Tracer;
 use visfield::visibility::Visibility;
 
@@ -27,16 +29,7 @@ fn sphere() -> Vec<[Vec3; 3]> {
 
 fn grid_points(v: &DistanceVolume) -> impl Iterator<Item = (Vec3, f32)> + '_ {
     let [nx, ny, nz] = v.dims;
-    (0..nx * ny * nz).map(move |n| {
-        let p = v.lo
-            + v.voxel
-                * Vec3::new(
-                    (n % nx) as f32,
-                    (n / nx % ny) as f32,
-                    (n / (nx * ny)) as f32,
-                );
-        (p, v.dist[n])
-    })
+    (0..nx * ny * nz).map(move |n| (v.position(n), v.value(n)))
 }
 
 #[test]
@@ -231,4 +224,103 @@ fn bad_bakes_are_refused() {
     assert!(DistanceVolume::bake(&sphere(), 16, 8).is_err());
     let nan = [[Vec3::NAN, Vec3::X, Vec3::Y]];
     assert!(DistanceVolume::bake(&nan, 16, 2).is_err());
+}
+
+/// f16 and u8 reads against the f32 ones at the same points, within the quantisation's bounds
+/// (`sdf::storage`): a trilinear read is a convex combination of its eight decoded samples, so
+/// it keeps their bound. f16: 2⁻¹¹ of the largest sample (the read plus the cell's spread, at
+/// most √3 voxels for a 1-Lipschitz distance) plus 2⁻²⁵ voxel. u8: M / 255 where the eight
+/// samples lie in the band (the read at least √3 voxels inside it), and M where all of them lie
+/// past it (the code 255 reads M exactly; outside the grid both reads add the distance to it).
+#[test]
+fn quantised_volumes_read_within_their_bounds() {
+    let v32 = DistanceVolume::bake(&sphere(), 32, 2).unwrap();
+    let (v16, v8) = (
+        v32.with_precision(Precision::F16),
+        v32.with_precision(Precision::U8),
+    );
+    let n = v32.dims.iter().product::<usize>() as u64;
+    assert_eq!((v32.bytes(), v16.bytes(), v8.bytes()), (4 * n, 2 * n, n));
+    assert_eq!(v8.precision(), Precision::U8);
+    let (h, m) = (v32.voxel, band(v32.voxel));
+    let (mut worst16, mut worst8, mut capped) = (0.0f32, 0.0f32, 0);
+    // Points filling the grid's box (the R3 low-discrepancy sequence), and a band past it.
+    let (lo, size) = (
+        v32.lo - Vec3::splat(0.2),
+        v32.hi() - v32.lo + Vec3::splat(0.4),
+    );
+    for k in 0..40_000u64 {
+        let u = (k as f64 * glam::DVec3::new(0.819_172_5, 0.671_043_6, 0.549_700_5)).fract_gl();
+        let p = lo + size * u.as_vec3();
+        let (r32, r16, r8) = (v32.sample(p), v16.sample(p), v8.sample(p));
+        let rounding = 1e-6 * (1.0 + r32.abs());
+        let b16 = 2f32.powi(-11) * (r32.abs() + 3f32.sqrt() * h) + 2f32.powi(-25) * h;
+        assert!(
+            (r16 - r32).abs() <= b16 + rounding,
+            "f16 at {p}: {r16} against {r32}"
+        );
+        worst16 = worst16.max((r16 - r32).abs() / b16);
+        // Outside the grid both reads add the distance to its box to the read on its face.
+        let out = p.distance(p.clamp(v32.lo, v32.hi()));
+        if (r32 - out).abs() <= m - 3f32.sqrt() * h {
+            assert!((r8 - r32).abs() <= m / 255.0 + rounding, "u8 at {p}");
+            worst8 = worst8.max((r8 - r32).abs() / (m / 255.0));
+        } else if r32 - out >= m + 3f32.sqrt() * h {
+            assert!((r8 - out - m).abs() <= rounding, "u8 at {p}: past the band");
+            capped += 1;
+        }
+    }
+    // Two-sided: the errors reach a good part of their bounds, and the cap is met.
+    assert!(worst8 > 0.5 && worst16 > 0.05, "{worst8} {worst16}");
+    assert!(capped > 1000, "{capped}");
+    // Re-encoding an encoded volume changes nothing.
+    assert_eq!(v8.with_precision(Precision::U8), v8);
+}
+
+#[test]
+fn quantised_volumes_sphere_trace_within_their_bound() {
+    // As the f32 test, the read error grown by the quantisation's: a hit reads below the
+    // threshold, so the true distance there is below it plus the read error; u8's far reads
+    // are capped at the band, so its steps are short but never past the true distance by
+    // more than the read error.
+    let v32 = DistanceVolume::bake(&sphere(), 48, 2).unwrap();
+    let trace = SdfTrace::default();
+    for precision in [Precision::F16, Precision::U8] {
+        let v = Arc::new(v32.with_precision(precision));
+        let quant = match precision {
+            Precision::U8 => band(v.voxel) / 255.0,
+            _ => 2f32.powi(-11) * 3.0 * v.voxel,
+        };
+        let scene = SdfScene {
+            instances: vec![SdfInstance {
+                volume: v.clone(),
+                transform: Similarity::default(),
+            }],
+            trace,
+        };
+        let err = 3f32.sqrt() * v.voxel + SAGITTA + quant;
+        let bound = 2f32.sqrt() * (trace.hit_voxels * v.voxel + err);
+        let mut hits = 0;
+        for k in 0..2000u64 {
+            let o = 3.0 * seeded_sphere_direction(k, 7);
+            let target = 0.6 * seeded_sphere_direction(k, 8);
+            let d = (target - o).normalize();
+            let b = (-o).dot(d);
+            let miss2 = o.length_squared() - b * b;
+            if miss2.sqrt() < 0.7 {
+                let t = b - (1.0 - miss2).sqrt();
+                let got = scene
+                    .hit_distance(o, d, 0.0, f32::INFINITY)
+                    .unwrap_or_else(|| panic!("{precision:?}: ray {k} missed"));
+                assert!((got - t).abs() < bound, "{precision:?}: {got} against {t}");
+                let n = scene.surface_hit(o, d, 0.0, f32::INFINITY).unwrap().normal;
+                assert!(
+                    n.dot((o + t * d).normalize()) > 0.99,
+                    "{precision:?}: normal {n}"
+                );
+                hits += 1;
+            }
+        }
+        assert!(hits > 500, "{precision:?}: {hits}");
+    }
 }
