@@ -25,10 +25,11 @@
 
 mod per_pixel;
 
-use super::outputs::{read_csv, FieldSweepRow, Row, SweepRow};
+use super::outputs::{read_csv, FieldSweepRow, SweepRow};
 use super::plan::selection_name;
 use super::plot::{image_grid, xy_plot, Axes, HLine, Series};
 use super::spec::Backend;
+use super::table::Row;
 use super::{Error, Result};
 use crate::render::image::GrayImage;
 use std::path::Path;
@@ -172,7 +173,7 @@ pub fn draw_all(out: &Path, title: &str) -> Result<()> {
             });
             s.push(Series {
                 label: format!("field lookup{on}"),
-                points: pick(&rs, |r| Some(r.ao_s)),
+                points: pick(&rs, |r| Some(r.estimate_s)),
                 line: false,
             });
         }
@@ -205,10 +206,10 @@ fn pareto_same_rays(
         );
         let Some(y) = m(r) else { continue };
         match series.iter_mut().find(|s| s.label == label) {
-            Some(s) => s.points.push((r.ao_s, y)),
+            Some(s) => s.points.push((r.estimate_s, y)),
             None => series.push(Series {
                 label,
-                points: vec![(r.ao_s, y)],
+                points: vec![(r.estimate_s, y)],
                 line: false,
             }),
         }
@@ -255,20 +256,20 @@ fn pareto_vs_truth(
                 k => format!("field {k}"),
             };
             match series.iter_mut().find(|s| s.label == label) {
-                Some(s) => s.points.push((r.ao_s, y)),
+                Some(s) => s.points.push((r.estimate_s, y)),
                 None => series.push(Series {
                     label,
-                    points: vec![(r.ao_s, y)],
+                    points: vec![(r.estimate_s, y)],
                     line: false,
                 }),
             }
             continue;
         }
-        let mut pts: Vec<(f64, f64)> = vec![(r.ao_s, y)];
+        let mut pts: Vec<(f64, f64)> = vec![(r.estimate_s, y)];
         let mut counts = vec![r.rays_per_point];
         for f in more {
             if f.rays_per_point != r.rays_per_point {
-                pts.extend(f.rms_vs_truth.map(|y| (f.ao_s, y)));
+                pts.extend(f.rms_vs_truth.map(|y| (f.estimate_s, y)));
                 counts.push(f.rays_per_point);
             }
         }
@@ -346,7 +347,7 @@ fn raycast_series(sweep: &[SweepRow], y: impl Fn(&SweepRow) -> Option<f64>) -> V
                 label: format!("ray cast {sc}{on} ({} rays)", counts.join("/")),
                 points: these
                     .iter()
-                    .filter_map(|s| y(s).map(|v| (s.ao_s, v)))
+                    .filter_map(|s| y(s).map(|v| (s.raycast_s, v)))
                     .collect(),
                 line: true,
             });
@@ -465,7 +466,7 @@ fn grids(
                     .max_by_key(|s| s.rays_per_point);
                 let mut cap = vec![format!("{sc}: ray cast (reference)")];
                 if let Some(s) = rc {
-                    cap.push(format!("{} rays, {:.3} s", s.rays_per_point, s.ao_s));
+                    cap.push(format!("{} rays, {:.3} s", s.rays_per_point, s.raycast_s));
                 }
                 cells.push((reference, cap));
                 diffs.push((blank.clone(), vec![format!("{sc}: differences × 5")]));
@@ -498,7 +499,7 @@ fn grids(
                     load_png(&out.join(&r.image))?,
                     vec![
                         name.clone(),
-                        format!("bake {bake}, lookup {:.3} s", r.ao_s),
+                        format!("bake {bake}, lookup {:.3} s", r.estimate_s),
                         format!(
                             "RMS {rms}, {:.1} MiB",
                             r.field_bytes as f64 / (1u64 << 20) as f64

@@ -9,9 +9,10 @@
 //!   series per scene and other varying axis, when the rows have it.
 
 use super::{distinct_backends, key};
-use crate::experiment::outputs::{FieldSweepRow, Row, SweepRow};
+use crate::experiment::outputs::{FieldSweepRow, SweepRow};
 use crate::experiment::plot::{xy_plot, Axes, Series};
 use crate::experiment::spec::Backend;
+use crate::experiment::table::Row;
 use crate::experiment::Result;
 use std::path::Path;
 
@@ -42,7 +43,7 @@ pub fn time_vs_rays(
         let mut pts: Vec<(f64, f64)> = field_sweep
             .iter()
             .filter(|f| f.cell == r.cell && f.backend == r.backend)
-            .map(|f| (f.rays_per_point as f64, 1e3 * f.ao_s))
+            .map(|f| (f.rays_per_point as f64, 1e3 * f.estimate_s))
             .collect();
         if pts.is_empty() {
             continue;
@@ -72,7 +73,7 @@ pub fn time_vs_rays(
             let mut pts: Vec<(f64, f64)> = sweep
                 .iter()
                 .filter(|s| s.backend == b && s.scene == sc)
-                .map(|s| (s.rays_per_point as f64, 1e3 * s.ao_s))
+                .map(|s| (s.rays_per_point as f64, 1e3 * s.raycast_s))
                 .collect();
             pts.sort_by(|a, b| a.0.total_cmp(&b.0));
             let scene = if scenes_differ(rows) {

@@ -10,7 +10,7 @@ use crate::experiment::metrics::{rms_u8, rms_unquantised};
 use crate::experiment::progress::stage;
 use crate::experiment::truth_cache::{load_or_compute, TruthInputs, TruthOutcome};
 use crate::experiment::Result;
-use crate::render::image::GrayImage;
+use crate::render::image::Image;
 use crate::render::truth::TruthOptions;
 use crate::sampling::rays::RaySet;
 
@@ -154,7 +154,7 @@ pub(super) fn seed_errors(
     st: &SceneState,
     bs: &crate::experiment::scenes::BuiltScene,
     aos: &[Vec<f32>],
-    first_image: Option<&GrayImage>,
+    first_image: Option<&Image>,
 ) -> SeedErrors {
     let (mut v, mut im, mut t, mut c, mut i) = (vec![], vec![], vec![], vec![], vec![]);
     let (mut ins, mut outs) = (vec![], vec![]);
