@@ -313,8 +313,8 @@ mod tests {
         let back = image::open(&p).unwrap();
         assert_eq!(back.color(), image::ColorType::Rgb8);
         for (i, px) in back.to_rgb8().pixels().enumerate() {
-            for c in 0..3 {
-                assert_eq!(px.0[c], GrayImage::to_u8(planes[c].data[i]));
+            for (c, plane) in planes.iter().enumerate() {
+                assert_eq!(px.0[c], GrayImage::to_u8(plane.data[i]));
             }
         }
         let e = dir.path().join("rgb.exr");
