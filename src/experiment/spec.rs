@@ -299,9 +299,6 @@ pub struct RenderSpec {
     pub options: Box<dyn super::kinds::KindOptions>,
 }
 
-/// The keys of `render` that every kind reads; the others are the kind's own.
-pub const RENDER_COMMON_KEYS: [&str; 4] = ["what", "rays_per_point", "image", "intra_bias"];
-
 impl Clone for RenderSpec {
     fn clone(&self) -> RenderSpec {
         RenderSpec {
