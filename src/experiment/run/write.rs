@@ -1,5 +1,5 @@
-//! The end of a run: the pair table, the CSV files, the per-point AO, `run.json`, the spec copy
-//! and the plots.
+//! The end of a run: the pair table, the CSV files, the per-point values, `run.json`, the spec
+//! copy and the plots.
 
 use super::steps::Runner;
 use super::LoadedSpec;
@@ -56,7 +56,7 @@ impl Runner<'_> {
 
     /// Per-point values of every scene whose kind has per-vertex columns: the reference and
     /// each cell, one column each (one per channel, `NAME_cC`, for a kind with channels).
-    fn write_point_ao(&self) -> Result<()> {
+    fn write_point_values(&self) -> Result<()> {
         if !self.kind.columns().vertex {
             return Ok(());
         }
@@ -144,7 +144,7 @@ impl Runner<'_> {
             let pv = crate::experiment::paper::paper_vs_ours(paper, &t);
             outputs::write_csv(&out.join("paper_vs_ours.csv"), &pv)?;
         }
-        self.write_point_ao()?;
+        self.write_point_values()?;
         let mut meta = crate::experiment::meta::RunMeta::collect(Some(&ls.text)).timed();
         meta.gpu_adapter = self.backends.get(&Backend::Gpu).map(|be| be.adapter());
         let scene_info: Vec<_> = self
@@ -164,7 +164,7 @@ impl Runner<'_> {
                 serde_json::json!({
                     "name": bs.name,
                     "instances": bs.scene.instances.len(),
-                    "ao_points": st.as_ref().map(|st| st.at.len()),
+                    "points": st.as_ref().map(|st| st.at.len()),
                     "caster_triangles": bs.caster_triangles(),
                     "ray_offset": st.as_ref().map(|st| st.offset),
                     "crease_points": st.as_ref().map(|st| st.at.crease_count()),
