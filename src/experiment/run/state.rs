@@ -173,8 +173,8 @@ impl SceneState {
         self.image(bs, &shaded).map(|(img, _)| img)
     }
 
-    /// Whether the point of value `i` (of [`Self::channels`] per point) is marked in `mask`
-    /// (one flag per point).
+    /// The point value `i` belongs to ([`Self::channels`] values per point): the index into
+    /// the per-point flags (`crease`, `in_spheres`).
     pub(super) fn point_of(&self, i: usize) -> usize {
         i / self.channels
     }
