@@ -118,7 +118,8 @@ fn quantity(q: Quantity<'_>) -> Result<&dyn GpuQuantity> {
         ))
         .into());
     }
-    q.gpu.ok_or_else(|| GpuError::Unsupported(format!("no GPU kernel computes \"{name}\"")).into())
+    q.gpu
+        .ok_or_else(|| GpuError::Unsupported(format!("no GPU kernel computes \"{name}\"")).into())
 }
 
 /// Ray casting on the GPU tracer, the entry of the estimator's quantity.

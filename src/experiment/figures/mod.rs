@@ -2,18 +2,18 @@
 //! redraws them without recomputing anything):
 //!
 //! - `images.png`: the figure's image grid with its numbers under each image, as in the paper
-//!   (bake time, AO time, RMS); the reference image opens each scene's first row; images wider
+//!   (bake time, the estimate's time, RMS); the reference image opens each scene's first row; images wider
 //!   than 256 pixels are shown reduced by an integer factor (box filter);
 //! - `differences.png`: the same grid of |field − reference| × 5 images;
 //! - `rms_vs_positional.png`: RMS against positional samples, one series per directional
 //!   resolution (and per other axis the spec varies);
-//! - `pareto.png`: RMS against AO time for every field setting (and, with `field_sweep.csv`,
+//! - `pareto.png`: RMS against the estimate's time for every field setting (and, with `field_sweep.csv`,
 //!   each field at more rays per point) and for ray casting at several ray counts, so that at
 //!   equal time one sees which wins. When the run has a converged reference, every method's RMS
 //!   is `rms_vs_truth` (per point, against the converged reference, log scale) and the
 //!   reference's own noise floor is drawn as a dashed line; otherwise the same-ray RMS;
-//! - `times.png` (several scenes): ray-cast, bake and AO time against caster triangles (2008
-//!   Figure 8), ray-cast and AO time once per backend;
+//! - `times.png` (several scenes): ray-cast, bake and estimate time against caster triangles
+//!   (2008 Figure 8), ray-cast and estimate time once per backend;
 //! - `time_vs_rays.png` and `grain_vs_positional.png`: the 2010 per-pixel figures' plots (see
 //!   [`per_pixel`]).
 //!
@@ -224,8 +224,8 @@ fn pareto_same_rays(
     series.extend(raycast_series(sweep, sm));
     let rays = rows[0].rays_per_point;
     let axes = Axes {
-        title: format!("{title}: error against AO time"),
-        x_label: format!("AO time, s (field: {rays} rays/point)"),
+        title: format!("{title}: error against the estimate's time"),
+        x_label: format!("estimate time, s (field: {rays} rays/point)"),
         y_label: m_label.into(),
         log_x: true,
         log_y: false,
@@ -306,8 +306,8 @@ fn pareto_vs_truth(
         .into_iter()
         .collect();
     let axes = Axes {
-        title: format!("{title}: error against AO time, vs the converged reference"),
-        x_label: "AO time, s".into(),
+        title: format!("{title}: error against the estimate's time, vs the converged reference"),
+        x_label: "estimate time, s".into(),
         y_label: "RMS per point vs converged reference (0–255)".into(),
         log_x: true,
         log_y: true,

@@ -1,6 +1,6 @@
 //! The plots of the 2010 paper's per-pixel figures, drawn when a run has what they need:
 //!
-//! - `time_vs_rays.png` (Figure 4): AO time against rays per point, one series per field cell
+//! - `time_vs_rays.png` (Figure 4): the estimate's time against rays per point, one series per field cell
 //!   and backend (from `field_sweep.csv`) and one per ray-casting backend (from
 //!   `raycast_sweep.csv`), when the field sweep has at least two ray counts. The paper's claim
 //!   is that the field's time is flat in the map count and linear in the rays;
@@ -89,9 +89,9 @@ pub fn time_vs_rays(
         }
     }
     let axes = Axes {
-        title: format!("{title}: AO time against rays per point"),
+        title: format!("{title}: estimate time against rays per point"),
         x_label: "rays per point".into(),
-        y_label: "AO time, ms (log)".into(),
+        y_label: "estimate time, ms (log)".into(),
         log_x: false,
         log_y: true,
     };
