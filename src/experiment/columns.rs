@@ -3,7 +3,9 @@
 //! kind's metrics) contributing its own named columns, so a method with its own parameters or
 //! a kind with its own metrics adds columns without a struct field. The header is the ordered
 //! union of the rows' names (a row without a column leaves it empty), and names say what they
-//! hold for every kind (`estimate_s`, `rms_vs_truth`), not for AO.
+//! hold for every kind (`estimate_s`, `rms_vs_truth`), not for AO. `table.csv` is written the
+//! same way ([`super::table`]): its standard columns in the order of its one column list
+//! ([`write_csv_with`]), a kind's own columns after them.
 
 use super::{Error, Result};
 use std::fmt::Display;
