@@ -82,7 +82,7 @@ fn gpu_ao(c: &mut Criterion) {
             group.bench_function(id, |b| {
                 b.iter_custom(|iters| {
                     (0..iters)
-                        .map(|_| kernel_or_wall(&kernel.vertex_ao(p, n, &rays, &opts).unwrap().1))
+                        .map(|_| kernel_or_wall(&kernel.ao(p, n, &rays, &opts).unwrap().1))
                         .sum()
                 })
             });

@@ -109,11 +109,9 @@ fn main() {
         rays.len()
     );
     let cpu_field = ao_at_points(&fs, p, n, &rays, &opts);
-    let (gf, _) = kernel.vertex_ao(p, n, &rays, &opts).expect("field kernel");
-    let (gd, _) = direct.vertex_ao(p, n, &rays, &opts).expect("direct kernel");
-    let (gu, _) = untabled
-        .vertex_ao(p, n, &rays, &opts)
-        .expect("untabled kernel");
+    let (gf, _) = kernel.ao(p, n, &rays, &opts).expect("field kernel");
+    let (gd, _) = direct.ao(p, n, &rays, &opts).expect("direct kernel");
+    let (gu, _) = untabled.ao(p, n, &rays, &opts).expect("untabled kernel");
     println!(
         "max |queued - direct| {:e}; max |tables - no tables| {:e}",
         max_diff(&gf, &gd),
@@ -133,12 +131,12 @@ fn main() {
     };
     let mut s: [Vec<f64>; 6] = Default::default();
     for _ in 0..rounds {
-        s[0].push(kern(&kernel.vertex_ao(p, n, &rays, &opts).unwrap().1));
+        s[0].push(kern(&kernel.ao(p, n, &rays, &opts).unwrap().1));
         s[1].push(kern(&gtracer.ao(p, n, &rays, &opts).unwrap().1));
         s[2].push(wall(&|| drop(ao_at_points(&fs, p, n, &rays, &opts))));
         s[3].push(wall(&|| drop(ao_at_points(&tracer, p, n, &rays, &opts))));
-        s[4].push(kern(&direct.vertex_ao(p, n, &rays, &opts).unwrap().1));
-        s[5].push(kern(&untabled.vertex_ao(p, n, &rays, &opts).unwrap().1));
+        s[4].push(kern(&direct.ao(p, n, &rays, &opts).unwrap().1));
+        s[5].push(kern(&untabled.ao(p, n, &rays, &opts).unwrap().1));
         std::thread::sleep(Duration::from_millis(50));
     }
     let m: Vec<f64> = s.iter().map(|v| median(v.clone())).collect();

@@ -20,10 +20,27 @@ fn read(rel: &str) -> Vec<Row> {
     common::read_csv_maps(&root().join(rel))
 }
 
+/// The columns named otherwise in tables written before the names said what they hold for
+/// every kind: (the name now, the name then).
+const FORMER: [(&str, &str); 5] = [
+    ("estimate_s", "ao_s"),
+    ("raycast_s", "ao_s"),
+    ("estimate_mrays_s", "ao_mrays_s"),
+    ("ours_estimate_s", "ours_ao_s"),
+    ("paper_estimate_s", "paper_ao_s"),
+];
+
+/// Column `col` of `r` as a number; in a table written before, under its name then.
 fn f(r: &Row, col: &str) -> f64 {
-    r[col]
-        .parse()
-        .unwrap_or_else(|_| panic!("column {col}: `{}`", r[col]))
+    let was = FORMER
+        .iter()
+        .find(|(now, _)| *now == col)
+        .map(|(_, was)| *was);
+    let v = r
+        .get(col)
+        .or_else(|| was.and_then(|w| r.get(w)))
+        .unwrap_or_else(|| panic!("no column {col}"));
+    v.parse().unwrap_or_else(|_| panic!("column {col}: `{v}`"))
 }
 
 fn squash(s: &str) -> String {
@@ -189,7 +206,7 @@ fn figure4(c: &mut Claims) {
                 r["positional_samples"] == n.to_string() && r["rays_per_point"] == k.to_string()
             })
             .unwrap();
-        f(r, "ao_s")
+        f(r, "estimate_s")
     };
     let maps = [1090, 4226, 16642];
     let (lo, hi) = min_max(maps.map(|n| time(n, 256) / time(n, 16)));
@@ -212,7 +229,7 @@ fn figure4(c: &mut Claims) {
             .iter()
             .find(|r| r["backend"] == "cpu" && r["rays_per_point"] == k.to_string())
             .unwrap();
-        f(r, "ao_s")
+        f(r, "raycast_s")
     };
     let text = format!(
         "ray casting takes {:.2} s at 16 rays and {:.2} s at 256 ({:.1}× the 4226-map field",
@@ -238,7 +255,7 @@ fn figure9(c: &mut Claims) {
             .collect::<Vec<_>>()
     };
     let (a, b) = (view("view_a"), view("view_b"));
-    let (flo, fhi) = min_max(rows.iter().map(|r| f(r, "ao_s")));
+    let (flo, fhi) = min_max(rows.iter().map(|r| f(r, "estimate_s")));
     let rc = |v: &[&Row]| f(v[0], "raycast_s");
     let text = format!(
         "Field {flo:.3}–{fhi:.3} s, ray casting {:.3} s (view_a) and {:.3} s (view_b)",
@@ -246,7 +263,7 @@ fn figure9(c: &mut Claims) {
         rc(&b)
     );
     c.quotes("docs/results.md", &text, from);
-    let (mlo, mhi) = min_max(rows.iter().map(|r| f(r, "ao_mrays_s")));
+    let (mlo, mhi) = min_max(rows.iter().map(|r| f(r, "estimate_mrays_s")));
     let text = format!(
         "same {:.2} and {:.2} M reflection rays ({mlo:.1}–{mhi:.1} against {:.1} and {:.1} Mrays/s)",
         f(a[0], "rays_cast") / 1e6,
@@ -255,7 +272,7 @@ fn figure9(c: &mut Claims) {
         f(b[0], "raycast_mrays_s"),
     );
     c.quotes("docs/results.md", &text, from);
-    let gain = |v: &[&Row]| min_max(v.iter().map(|r| f(r, "raycast_s") / f(r, "ao_s")));
+    let gain = |v: &[&Row]| min_max(v.iter().map(|r| f(r, "raycast_s") / f(r, "estimate_s")));
     let ((alo, ahi), (blo, bhi)) = (gain(&a), gain(&b));
     let text = format!("{alo:.1}–{ahi:.1}× and {blo:.1}–{bhi:.1}×.");
     c.quotes("docs/results.md", &text, from);
@@ -264,14 +281,14 @@ fn figure9(c: &mut Claims) {
             .iter()
             .chain(&read("results/shadows2010_figure8/table.csv"))
             .filter(|r| r["backend"] == "cpu")
-            .map(|r| f(r, "raycast_s") / f(r, "ao_s")),
+            .map(|r| f(r, "raycast_s") / f(r, "estimate_s")),
     );
-    let (rlo, rhi) = min_max(rows.iter().map(|r| f(r, "raycast_s") / f(r, "ao_s")));
+    let (rlo, rhi) = min_max(rows.iter().map(|r| f(r, "raycast_s") / f(r, "estimate_s")));
     let (alo, ahi) = min_max(
         read("results/ao2010_figure3/table.csv")
             .iter()
             .filter(|r| r["backend"] == "cpu" && r["scene"] == "bunny")
-            .map(|r| f(r, "raycast_s") / f(r, "ao_s")),
+            .map(|r| f(r, "raycast_s") / f(r, "estimate_s")),
     );
     let text = format!(
         "({slo:.1}–{shi:.1}× and {rlo:.1}–{rhi:.1}× against {alo:.1}–{ahi:.0}× for Figure 3's AO pass"
@@ -319,9 +336,9 @@ fn sponza(c: &mut Claims) {
     let from = "results/shadows2010_figure8/paper_vs_ours.csv";
     let pv = read(from);
     let (field, sharp) = (&pv[0], &pv[1]);
-    let field_ms = f(field, "ours_ao_s") / f(field, "ours_rays_cast") * 1e3;
+    let field_ms = f(field, "ours_estimate_s") / f(field, "ours_rays_cast") * 1e3;
     let sharp_ms = f(sharp, "ours_raycast_s") / f(sharp, "ours_rays_cast") * 1e3;
-    let paper_field = f(field, "paper_ao_s") * 0.7 / f(field, "paper_rays_cast") * 1e3;
+    let paper_field = f(field, "paper_estimate_s") * 0.7 / f(field, "paper_rays_cast") * 1e3;
     // The paper's 591,930 sharp rays (its note): 70% of 48,047 ms.
     let paper_sharp = f(sharp, "paper_raycast_s") * 0.7 / 591_930.0 * 1e3;
     let text = format!(
@@ -338,12 +355,12 @@ fn sponza(c: &mut Claims) {
     let text = format!(
         "the field took {:.3} s for {} shadow rays ({} ms per ray) and ray casting {:.3} s on the \
          same rays ({} ms): {:.1}× on the same rays",
-        f(field, "ours_ao_s"),
+        f(field, "ours_estimate_s"),
         with_commas(rays as u64),
-        sci(f(field, "ours_ao_s") / rays * 1e3),
+        sci(f(field, "ours_estimate_s") / rays * 1e3),
         f(field, "ours_raycast_s"),
         sci(f(field, "ours_raycast_s") / rays * 1e3),
-        f(field, "ours_raycast_s") / f(field, "ours_ao_s"),
+        f(field, "ours_raycast_s") / f(field, "ours_estimate_s"),
     );
     c.quotes("docs/results.md", &text, from);
     let sweep = read("results/shadows2010_figure8/raycast_sweep.csv");
@@ -351,7 +368,7 @@ fn sponza(c: &mut Claims) {
     let text = format!(
         "Sharp shadows, one ray per light to its centre, took {:.3} s by ray casting ({} ms per \
          ray, RMS {:.1} from the converged soft shadows)",
-        f(one, "ao_s"),
+        f(one, "raycast_s"),
         sci(sharp_ms),
         f(one, "rms_vs_truth"),
     );
@@ -369,7 +386,7 @@ fn sponza(c: &mut Claims) {
             .iter()
             .find(|r| r["scene"] == scene && r["backend"] == "cpu")
             .unwrap();
-        f(r, "ao_s")
+        f(r, "estimate_s")
     };
     let all = table
         .iter()
@@ -380,8 +397,8 @@ fn sponza(c: &mut Claims) {
         "the AO of {} receiver pixels took {:.2} s ({} pixels per second on 2 CPU threads; RMS \
          {:.2} against ray casting, which took {:.2} s)",
         with_commas(px as u64),
-        f(all, "ao_s"),
-        with_commas(((px / f(all, "ao_s") / 1e3).round() * 1e3) as u64),
+        f(all, "estimate_s"),
+        with_commas(((px / f(all, "estimate_s") / 1e3).round() * 1e3) as u64),
         f(all, "rms_image"),
         f(all, "raycast_s"),
     );
@@ -391,8 +408,8 @@ fn sponza(c: &mut Claims) {
         ao("bunny"),
         ao("cow"),
         ao("elephant"),
-        f(sum, "ours_ao_s"),
-        f(sum, "ours_ao_s") / f(one, "ours_ao_s")
+        f(sum, "ours_estimate_s"),
+        f(sum, "ours_estimate_s") / f(one, "ours_estimate_s")
     );
     c.quotes("docs/results.md", &text, from);
 }
@@ -438,7 +455,7 @@ fn figure8_and_figure3(c: &mut Claims) {
     c.quotes("README.md", &text, from);
     let gain = |t: &dyn Fn(&Row) -> f64| {
         three
-            .map(|r| format!("{:.1}×", t(r) / f(r, "ao_s")))
+            .map(|r| format!("{:.1}×", t(r) / f(r, "estimate_s")))
             .join(", ")
     };
     let raycast = |r: &Row| f(r, "raycast_s");
@@ -455,8 +472,8 @@ fn figure8_and_figure3(c: &mut Claims) {
         .into_iter()
         .filter(|r| r["backend"] == "cpu" && r["scene"] == "bunny")
         .collect();
-    let (lo, hi) = min_max(rows.iter().map(|r| f(r, "ao_s")));
-    let (glo, ghi) = min_max(rows.iter().map(|r| f(r, "raycast_s") / f(r, "ao_s")));
+    let (lo, hi) = min_max(rows.iter().map(|r| f(r, "estimate_s")));
+    let (glo, ghi) = min_max(rows.iter().map(|r| f(r, "raycast_s") / f(r, "estimate_s")));
     let rays = f(&rows[0], "receiver_points") * f(&rows[0], "rays_per_point");
     let text = format!(
         "The AO pass took {lo:.2}–{hi:.2} s through the fields against {:.2} s for ray casting the \
@@ -485,7 +502,7 @@ fn headline_2010(c: &mut Claims) {
             .find(|r| r["positional_samples"] == n && r["directional_res"] == res)
             .unwrap()
     };
-    let (lo, hi) = min_max(rows.iter().map(|r| f(r, "ao_s")));
+    let (lo, hi) = min_max(rows.iter().map(|r| f(r, "estimate_s")));
     let text = format!(
         "same-ray RMS {:.2} (1090 × 32²) … {:.2} (16642 × 128²); field {lo:.2}–{hi:.2} s vs ray \
          casting {:.2} s on the same {:.1} M rays",
@@ -504,15 +521,15 @@ fn headline_2010(c: &mut Claims) {
     };
     let text = format!(
         "field {:.2} / {:.2} / {:.2} s at 256 rays for 1090 / 4226 / 16642 maps; ray casting {:.2} s",
-        f(at("1090"), "ao_s"),
-        f(at("4226"), "ao_s"),
-        f(at("16642"), "ao_s"),
+        f(at("1090"), "estimate_s"),
+        f(at("4226"), "estimate_s"),
+        f(at("16642"), "estimate_s"),
         f(at("1090"), "raycast_s"),
     );
     c.quotes("README.md", &text, from);
     let from = "results/ao2010_models/table.csv";
     let rows = cpu(from);
-    let (lo, hi) = min_max(rows.iter().map(|r| f(r, "ao_s")));
+    let (lo, hi) = min_max(rows.iter().map(|r| f(r, "estimate_s")));
     let (tlo, thi) = min_max(rows.iter().map(|r| f(r, "caster_triangles")));
     let (rlo, rhi) = min_max(rows.iter().map(|r| f(r, "raycast_s")));
     let text = format!(
@@ -525,8 +542,8 @@ fn headline_2010(c: &mut Claims) {
     let pv = read(from);
     let text = format!(
         "one pass {:.2} s; one pass per caster {:.2} s; RMS {:.2}",
-        f(&pv[1], "ours_ao_s"),
-        f(&pv[0], "ours_ao_s"),
+        f(&pv[1], "ours_estimate_s"),
+        f(&pv[0], "ours_estimate_s"),
         f(&pv[1], "ours_rms_image"),
     );
     c.quotes("README.md", &text, from);
@@ -541,7 +558,7 @@ fn headline_2010(c: &mut Claims) {
     let pv = read(from);
     let per_ray = |r: &Row, col: &str| f(r, col) / f(r, "ours_rays_cast") * 1e3;
     let (field, rc) = (
-        per_ray(&pv[0], "ours_ao_s"),
+        per_ray(&pv[0], "ours_estimate_s"),
         per_ray(&pv[0], "ours_raycast_s"),
     );
     let text = format!(
@@ -557,7 +574,7 @@ fn headline_2010(c: &mut Claims) {
         |v: &str, col: &str| min_max(rows.iter().filter(|r| r["scene"] == v).map(|r| f(r, col)));
     let ((alo, ahi), (blo, bhi)) = (view("view_a", "rms_image"), view("view_b", "rms_image"));
     let (mlo, mhi) = min_max(rows.iter().map(|r| f(r, "rms_image_vs_second")));
-    let (slo, shi) = min_max(rows.iter().map(|r| f(r, "raycast_s") / f(r, "ao_s")));
+    let (slo, shi) = min_max(rows.iter().map(|r| f(r, "raycast_s") / f(r, "estimate_s")));
     // "8- and 16-bit normals alike": the same cell's RMS with either normal field.
     for r8 in rows.iter().filter(|r| r["normal_bits"] == "8") {
         let r16 = rows

@@ -347,7 +347,7 @@ fn ao_pair(
     };
     let cpu = ao_at_points(&scene, p, n, rays, &opts);
     kernel.lookup = lookup;
-    let (gpu, timing) = kernel.vertex_ao(p, n, rays, &opts).expect("gpu ao");
+    let (gpu, timing) = kernel.ao(p, n, rays, &opts).expect("gpu ao");
     (gpu, cpu, timing)
 }
 
@@ -490,7 +490,7 @@ fn image_space_field_ao_matches_the_cpu_for_every_precision() {
                 cpu_ao.len()
             );
             kernel.lookup = lookup;
-            let (gpu_ao, _) = kernel.vertex_ao(&p, &n, &rays, &opts).expect("gpu ao");
+            let (gpu_ao, _) = kernel.ao(&p, &n, &rays, &opts).expect("gpu ao");
             let image = |ao: &[f32]| {
                 let mut img = GrayImage::new(w, h, 1.0);
                 for (&i, &a) in px.iter().zip(ao) {
@@ -591,7 +591,7 @@ fn windows_tiles_and_mixed_fields_give_the_cpu_answer() {
         };
         let kernel = FieldAoKernel::new(ctx, &instances, &opts).unwrap();
         assert_eq!(kernel.storage_windows(), Some(10));
-        let (gpu, _) = kernel.vertex_ao(&p, &n, &rays, &ao_opts).unwrap();
+        let (gpu, _) = kernel.ao(&p, &n, &rays, &ao_opts).unwrap();
         let q = parity(&gpu, &cpu);
         eprintln!(
             "mixed fields {selection:?}: max |Δ| {:.2}/255, {} over 1/255, RMS {:.4}/255",
@@ -626,7 +626,7 @@ fn windows_tiles_and_mixed_fields_give_the_cpu_answer() {
         options: LookupOptions::default(),
     };
     let cpu = ao_at_points(&scene, &p, &n, &rays, &ao_opts);
-    let (gpu, _) = kernel.vertex_ao(&p, &n, &rays, &ao_opts).unwrap();
+    let (gpu, _) = kernel.ao(&p, &n, &rays, &ao_opts).unwrap();
     let q = parity(&gpu, &cpu);
     if q.over_one_step > 0 || q.rms_unquantised > 0.5 {
         let path = dump_ao("tiled", &gpu, &cpu);
@@ -664,17 +664,15 @@ fn unsupported_inputs_are_refused_not_approximated() {
     };
     let opts = AoOptions::for_scene_radius(1.0);
     assert!(matches!(
-        kernel.vertex_ao(&[Vec3::ZERO], &[Vec3::Y], &jittered, &opts),
+        kernel.ao(&[Vec3::ZERO], &[Vec3::Y], &jittered, &opts),
         Err(GpuError::Unsupported(_))
     ));
     assert!(matches!(
-        kernel.vertex_ao(&[Vec3::ZERO], &[], &RaySet::new(4, 1), &opts),
+        kernel.ao(&[Vec3::ZERO], &[], &RaySet::new(4, 1), &opts),
         Err(GpuError::Invalid(_))
     ));
     // No points: an empty answer, not an error.
-    let (ao, _) = kernel
-        .vertex_ao(&[], &[], &RaySet::new(4, 1), &opts)
-        .unwrap();
+    let (ao, _) = kernel.ao(&[], &[], &RaySet::new(4, 1), &opts).unwrap();
     assert!(ao.is_empty());
 }
 
@@ -827,7 +825,7 @@ fn gpu_ray_cast_ao_matches_the_cpu_and_serves_as_field_reference() {
     let caster_tracer = GpuTracer::new(ctx, &caster_tris).unwrap();
     let (reference, _) = caster_tracer.ao(&p, &n, &rays, &opts).unwrap();
     let kernel = FieldAoKernel::new(ctx, &[inst], &FieldGpuOptions::default()).unwrap();
-    let (lookup, _) = kernel.vertex_ao(&p, &n, &rays, &opts).unwrap();
+    let (lookup, _) = kernel.ao(&p, &n, &rays, &opts).unwrap();
     let corner_count = p.iter().filter(|q| q.min_element() == 0.0).count();
     let e = parity(&lookup, &reference);
     let ec = parity(&lookup[..corner_count], &reference[..corner_count]);
@@ -939,7 +937,7 @@ fn ray_queue_and_per_invocation_kernels_agree() {
                 ..Default::default()
             };
             let kernel = FieldAoKernel::new(ctx, std::slice::from_ref(&inst), &gpu_opts).unwrap();
-            kernel.vertex_ao(&p, &n, &rays, &opts).unwrap().0
+            kernel.ao(&p, &n, &rays, &opts).unwrap().0
         };
         let (queued, direct) = (run(true), run(false));
         assert_occlusion_is_nontrivial(&direct);
@@ -1136,7 +1134,7 @@ fn cpu_and_gpu_backends_give_one_row_each_with_the_adapter_named() {
     assert!(plan.contains("GPU device: yes"), "{plan}");
     o.dry_run = false;
     let report = visfield::experiment::run::run(&ls, &o).unwrap();
-    let rows: Vec<visfield::experiment::outputs::Row> =
+    let rows: Vec<visfield::experiment::table::Row> =
         visfield::experiment::outputs::read_csv(&dir.path().join("out/table.csv")).unwrap();
     assert_eq!(rows, report.rows);
     assert_eq!(rows.len(), 2, "one cell on two backends");
@@ -1156,12 +1154,12 @@ fn cpu_and_gpu_backends_give_one_row_each_with_the_adapter_named() {
         assert!((c - g).abs() <= 0.5, "cpu {c} gpu {g}");
     }
     // Wall times everywhere; kernel times and setup only on the GPU row.
-    assert!(gpu.ao_s > 0.0 && gpu.raycast_s.unwrap() > 0.0);
-    assert_eq!(gpu.ao_kernel_s.is_some(), timestamps);
+    assert!(gpu.estimate_s > 0.0 && gpu.raycast_s.unwrap() > 0.0);
+    assert_eq!(gpu.estimate_kernel_s.is_some(), timestamps);
     assert_eq!(gpu.raycast_kernel_s.is_some(), timestamps);
     assert!(gpu.setup_s.unwrap() > 0.0);
     assert_eq!(
-        (cpu.ao_kernel_s, cpu.raycast_kernel_s, cpu.setup_s),
+        (cpu.estimate_kernel_s, cpu.raycast_kernel_s, cpu.setup_s),
         (None, None, None)
     );
     // Field rows' pictures are 8-bit PNG only; the ray-cast reference alone keeps an EXR.

@@ -564,13 +564,17 @@ fn a_reflections_run_on_cpu_and_gpu_gives_matching_rows() {
         eprintln!(
             "reflections run, {bits}-bit normals: same-ray RMS cpu {c:.4} gpu {g:.4} (0–255); \
              vs truth cpu {:?} gpu {:?}; field time cpu {:.4} s, gpu {:.4} s (kernel {:?})",
-            cpu.rms_vs_truth, gpu.rms_vs_truth, cpu.ao_s, gpu.ao_s, gpu.ao_kernel_s
+            cpu.rms_vs_truth,
+            gpu.rms_vs_truth,
+            cpu.estimate_s,
+            gpu.estimate_s,
+            gpu.estimate_kernel_s
         );
         assert!(c > 0.0 && (c - g).abs() <= 0.5, "cpu {c} gpu {g}");
         let (ct, gt) = (cpu.rms_vs_truth.unwrap(), gpu.rms_vs_truth.unwrap());
         assert!((ct - gt).abs() <= 0.5, "vs truth: cpu {ct} gpu {gt}");
         assert!(gpu.setup_s.unwrap() > 0.0);
-        assert_eq!(gpu.ao_kernel_s.is_some(), ctx.has_timestamps());
+        assert_eq!(gpu.estimate_kernel_s.is_some(), ctx.has_timestamps());
     }
 }
 

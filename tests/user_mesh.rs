@@ -216,7 +216,7 @@ fn the_cache_keys_on_content_a_renamed_file_reuses_its_field_an_edited_one_bakes
     let m = test_mesh(dir.path());
     std::fs::write(dir.path().join("a.obj"), obj_text(&m)).unwrap();
     let bake_cached = |out: &Path| {
-        let rows: Vec<visfield::experiment::outputs::Row> =
+        let rows: Vec<visfield::experiment::table::Row> =
             visfield::experiment::outputs::read_csv(&out.join("table.csv")).unwrap();
         rows[0].bake_cached
     };
@@ -312,7 +312,7 @@ fn try_writes_table_images_plots_and_a_spec_that_reruns() {
             v.ends_with(&format!("{:.1} MiB", r.field_bytes as f64 / 1048576.0)),
             "{v}"
         );
-        let speed = r.raycast_s.unwrap() / r.ao_s;
+        let speed = r.raycast_s.unwrap() / r.estimate_s;
         let word = if speed >= 1.0 { "faster" } else { "slower" };
         assert!(v.contains(&format!("× {word} than ray casting")), "{v}");
     }

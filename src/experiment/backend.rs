@@ -51,7 +51,7 @@ impl<'a> Quantity<'a> {
 /// One evaluation.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Estimate {
-    /// The estimate per point, in [0, 1].
+    /// The estimate: the estimator's channels per point (point-major), each in [0, 1].
     pub values: Vec<f32>,
     /// Kernel time from GPU timestamps (seconds); `None` on the CPU or where the adapter has
     /// no timestamp queries.

@@ -107,11 +107,19 @@ pub fn traced(r: std::result::Result<(Vec<f32>, GpuTiming), GpuError>) -> Result
     Ok(out(values, t))
 }
 
-/// The GPU quantity of an estimator, or the refusal naming it.
+/// The GPU quantity of an estimator, or the refusal naming it: one without kernels, or one
+/// with channels (the kernels give one value per point).
 fn quantity(q: Quantity<'_>) -> Result<&dyn GpuQuantity> {
-    q.gpu.ok_or_else(|| {
-        GpuError::Unsupported(format!("no GPU kernel computes \"{}\"", q.estimator.name())).into()
-    })
+    let name = q.estimator.name();
+    let channels = q.estimator.channels();
+    if channels != 1 {
+        return Err(GpuError::Unsupported(format!(
+            "\"{name}\" has {channels} values per point; the GPU kernels give one"
+        ))
+        .into());
+    }
+    q.gpu
+        .ok_or_else(|| GpuError::Unsupported(format!("no GPU kernel computes \"{name}\"")).into())
 }
 
 /// Ray casting on the GPU tracer, the entry of the estimator's quantity.

@@ -12,9 +12,9 @@
 //! and setting ([`check_committed_methods`]).
 
 use super::columns::NamedRow;
-use super::outputs::Row;
 use super::plan::Cell;
 use super::spec::Threshold;
+use super::table::Row;
 use crate::field::FieldParams;
 
 /// How far a cell's error may move from the committed run's, as a factor either way.

@@ -3,7 +3,9 @@
 //! kind's metrics) contributing its own named columns, so a method with its own parameters or
 //! a kind with its own metrics adds columns without a struct field. The header is the ordered
 //! union of the rows' names (a row without a column leaves it empty), and names say what they
-//! hold for every kind (`estimate_s`, `rms_vs_truth`), not for AO.
+//! hold for every kind (`estimate_s`, `rms_vs_truth`), not for AO. `table.csv` is written the
+//! same way ([`super::table`]): its standard columns in the order of its one column list
+//! ([`write_csv_with`]), a kind's own columns after them.
 
 use super::{Error, Result};
 use std::fmt::Display;
@@ -85,7 +87,18 @@ pub fn header(rows: &[NamedRow]) -> Vec<String> {
 
 /// Writes rows as CSV under their [`header`], atomically.
 pub fn write_csv(path: &Path, rows: &[NamedRow]) -> Result<()> {
-    let names = header(rows);
+    write_csv_with(path, &[], rows)
+}
+
+/// [`write_csv`] under the header `first` (in order), then the rows' other names (the
+/// header alone when there is no row).
+pub fn write_csv_with(path: &Path, first: &[&str], rows: &[NamedRow]) -> Result<()> {
+    let mut names: Vec<String> = first.iter().map(|n| n.to_string()).collect();
+    for n in header(rows) {
+        if !names.contains(&n) {
+            names.push(n);
+        }
+    }
     let mut w = csv::Writer::from_writer(Vec::new());
     w.write_record(&names).map_err(Error::csv(path))?;
     for r in rows {
@@ -97,6 +110,30 @@ pub fn write_csv(path: &Path, rows: &[NamedRow]) -> Result<()> {
         source: e.into_error(),
     })?;
     crate::io::write_atomic(path, &bytes).map_err(Error::io(path))
+}
+
+/// The named columns of a value serde writes as one CSV record (a struct of plain fields),
+/// each written as the CSV serialiser writes it: so a table of such rows has the bytes
+/// [`crate::experiment::outputs::write_csv`] gives it.
+///
+/// # Panics
+/// If `v` does not serialise as one record (a nested map or sequence): a bug of the type.
+pub fn of_serialized<T: serde::Serialize>(v: &T) -> NamedRow {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    w.serialize(v).expect("a row of plain fields serialises");
+    let bytes = w.into_inner().expect("writing to memory cannot fail");
+    let mut r = csv::Reader::from_reader(&bytes[..]);
+    let names = r.headers().expect("the header just written").clone();
+    let rec = r
+        .records()
+        .next()
+        .expect("one record")
+        .expect("the record just written");
+    let mut out = NamedRow::new();
+    for (n, v) in names.iter().zip(rec.iter()) {
+        out.push(n, v);
+    }
+    out
 }
 
 /// Reads rows written by [`write_csv`] (every column of the header, empty cells kept).

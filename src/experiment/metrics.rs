@@ -10,21 +10,48 @@
 //!   to 0..=255), over the pixels that show a receiver. This is the papers' RMS ("compared to the
 //!   Reference image"): their images show vertex AO interpolated across triangles, so the
 //!   per-pixel figure weighs vertices by their screen area and includes the 8-bit rounding.
+//!
+//! A kind with channels (several values per point, [`crate::render::estimator::Estimator::channels`])
+//! is measured over every value: an RMS over points is over points × channels, an RMS over
+//! pixels over the masked pixels × the image's channels (a mask has one flag per pixel, the
+//! values `values.len() / mask.len()` per pixel), so one channel is the scalar figure, bit for
+//! bit.
 
 use crate::render::image::GrayImage;
 
 /// RMS difference on the 0–255 scale after rounding both sides to 8-bit levels (images as
-/// written to PNG: the papers' figure), over the values where `mask` is true (all when `None`).
-/// NaN when no value is selected.
+/// written to PNG: the papers' figure), over the pixels where `mask` is true (all when `None`),
+/// every channel of a pixel (`a.len() / mask.len()` values per pixel). NaN when no value is
+/// selected.
 ///
 /// # Panics
-/// If the lengths differ.
+/// If the lengths differ, or are not a multiple of the mask's.
 pub fn rms_u8(a: &[f32], b: &[f32], mask: Option<&[bool]>) -> f64 {
     assert_eq!(a.len(), b.len(), "rms_u8: lengths differ");
+    let c = per_pixel(a.len(), mask);
     let d = (0..a.len())
-        .filter(|&i| mask.is_none_or(|m| m[i]))
+        .filter(|&i| mask.is_none_or(|m| m[i / c]))
         .map(|i| GrayImage::to_u8(a[i]) as f64 - GrayImage::to_u8(b[i]) as f64);
     rms_of(d)
+}
+
+/// Values per pixel of `n` values under `mask` (1 without a mask or a value).
+///
+/// # Panics
+/// If `n` is not a multiple of the mask's length (values without pixels included).
+fn per_pixel(n: usize, mask: Option<&[bool]>) -> usize {
+    match mask {
+        None => 1,
+        Some(_) if n == 0 => 1,
+        Some(m) => {
+            assert!(
+                !m.is_empty() && n.is_multiple_of(m.len()),
+                "{n} values on {} pixels",
+                m.len()
+            );
+            n / m.len()
+        }
+    }
 }
 
 /// RMS difference on the 0–255 scale of unrounded values (per-point AO), over the indices
@@ -55,10 +82,10 @@ fn rms_of(d: impl Iterator<Item = f64>) -> f64 {
     }
 }
 
-/// Graininess of the error of image `a` against image `b` (row-major, `width` pixels a row):
-/// the RMS on the 0–255 scale, unquantised, of the error's high-pass, the error at a pixel
-/// minus the mean error over its 3×3 neighbourhood, over the pixels whose whole neighbourhood
-/// is in `mask`. An error that varies smoothly over the image (a bias, a soft blotch wider than
+/// Graininess of the error of image `a` against image `b` (row-major, `width` pixels a row,
+/// `a.len() / mask.len()` channels a pixel): the RMS on the 0–255 scale, unquantised, of the
+/// error's high-pass, the error at a pixel minus the mean error over its 3×3 neighbourhood
+/// (channel by channel), over the pixels whose whole neighbourhood is in `mask`. An error that varies smoothly over the image (a bias, a soft blotch wider than
 /// a few pixels) adds nothing; independent per-pixel noise of standard deviation σ gives
 /// σ·√(8/9) ≈ 0.94σ; a ±d checkerboard gives 8d/9. This is the "grainy" look the 2010 paper
 /// reports for intra-object AO with few maps, as a number. NaN when no pixel qualifies.
@@ -67,11 +94,16 @@ fn rms_of(d: impl Iterator<Item = f64>) -> f64 {
 /// If the lengths differ or are not a multiple of `width`.
 pub fn grain(a: &[f32], b: &[f32], mask: &[bool], width: usize) -> f64 {
     assert!(
-        a.len() == b.len() && a.len() == mask.len() && width > 0 && a.len().is_multiple_of(width),
+        a.len() == b.len() && width > 0 && mask.len().is_multiple_of(width),
         "grain: sizes differ"
     );
-    let height = a.len() / width;
-    let e = |x: usize, y: usize| a[y * width + x] as f64 - b[y * width + x] as f64;
+    let c = per_pixel(a.len(), Some(mask));
+    assert_eq!(a.len(), c * mask.len(), "grain: sizes differ");
+    let height = mask.len() / width;
+    let e = |x: usize, y: usize, k: usize| {
+        let i = (y * width + x) * c + k;
+        a[i] as f64 - b[i] as f64
+    };
     let mut d = Vec::new();
     for y in 1..height.saturating_sub(1) {
         for x in 1..width.saturating_sub(1) {
@@ -79,12 +111,14 @@ pub fn grain(a: &[f32], b: &[f32], mask: &[bool], width: usize) -> f64 {
             if !inside {
                 continue;
             }
-            let mean = (y - 1..=y + 1)
-                .flat_map(|yy| (x - 1..=x + 1).map(move |xx| (xx, yy)))
-                .map(|(xx, yy)| e(xx, yy))
-                .sum::<f64>()
-                / 9.0;
-            d.push(255.0 * (e(x, y) - mean));
+            for k in 0..c {
+                let mean = (y - 1..=y + 1)
+                    .flat_map(|yy| (x - 1..=x + 1).map(move |xx| (xx, yy)))
+                    .map(|(xx, yy)| e(xx, yy, k))
+                    .sum::<f64>()
+                    / 9.0;
+                d.push(255.0 * (e(x, y, k) - mean));
+            }
         }
     }
     rms_of(d.into_iter())
@@ -121,17 +155,16 @@ pub fn vertex_errors(ao: &[f32], reference: &[f32]) -> ErrorStats {
     }
 }
 
-/// Errors between two images as 8-bit values, over the pixels where `mask` is true.
+/// Errors between two images as 8-bit values, over the pixels where `mask` is true (every
+/// channel of a pixel; `share_off_1` is a share of those values).
 ///
 /// # Panics
-/// If the lengths differ.
+/// If the lengths differ, or are not a multiple of the mask's.
 pub fn image_errors(a: &[f32], b: &[f32], mask: &[bool]) -> ErrorStats {
-    assert!(
-        a.len() == b.len() && a.len() == mask.len(),
-        "image_errors: sizes differ"
-    );
+    assert!(a.len() == b.len(), "image_errors: sizes differ");
+    let c = per_pixel(a.len(), Some(mask));
     let (mut max, mut off, mut n) = (0.0f64, 0usize, 0usize);
-    for i in (0..a.len()).filter(|&i| mask[i]) {
+    for i in (0..a.len()).filter(|&i| mask[i / c]) {
         let e = (GrayImage::to_u8(a[i]) as f64 - GrayImage::to_u8(b[i]) as f64).abs();
         max = max.max(e);
         off += (e > 1.0) as usize;
@@ -219,5 +252,32 @@ mod tests {
         // Values within the same 8-bit level do not count.
         let e = image_errors(&[l(3.0) + 1e-4], &[l(3.0)], &[true]);
         assert_eq!((e.rms, e.max, e.share_off_1), (0.0, 0.0, 0.0));
+    }
+
+    #[test]
+    fn channels_are_measured_over_every_value_of_a_masked_pixel() {
+        // Two pixels of three channels, the second masked out. Levels of a: 10, 12, 0 | 255 ×3;
+        // of b: 10, 10, 1 | 0 ×3. Over the first pixel's three values: differences 0, 2, 1.
+        let l = |v: f32| v / 255.0;
+        let a = [l(10.0), l(12.0), l(0.0), 1.0, 1.0, 1.0];
+        let b = [l(10.0), l(10.0), l(1.0), 0.0, 0.0, 0.0];
+        let mask = [true, false];
+        assert!((rms_u8(&a, &b, Some(&mask)) - (5.0f64 / 3.0).sqrt()).abs() < 1e-12);
+        let e = image_errors(&a, &b, &mask);
+        assert_eq!(e.max, 2.0);
+        assert!((e.share_off_1 - 1.0 / 3.0).abs() < 1e-12);
+        // Grain channel by channel: a checkerboard in one channel of three gives the
+        // one-channel figure over a third of the values, ×√(1/3).
+        let (w, h) = (6usize, 5usize);
+        let d = 4.0f32 / 255.0;
+        let check: Vec<f32> = (0..w * h)
+            .map(|i| 0.5 + if (i % w + i / w) % 2 == 0 { d } else { -d })
+            .collect();
+        let flat = vec![0.5f32; w * h];
+        let all = vec![true; w * h];
+        let one = grain(&check, &flat, &all, w);
+        let three: Vec<f32> = check.iter().flat_map(|&v| [0.5, v, 0.5]).collect();
+        let g = grain(&three, &vec![0.5; 3 * w * h], &all, w);
+        assert!((g - one / 3.0f64.sqrt()).abs() < 1e-9, "{g} vs {one}");
     }
 }

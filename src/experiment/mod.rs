@@ -4,7 +4,7 @@
 //! estimator) → built scenes ([`scenes`]) → a [`plan`] of steps (each field baked once, the
 //! reference once per scene and ray set, fields released as soon as their cells are done) → the
 //! runner ([`run`]) with fields from the cache or the bake ([`fields`]) on a backend
-//! ([`backend`]) → metrics ([`metrics`]), tables ([`outputs`]), plots ([`figures`]) and
+//! ([`backend`]) → metrics ([`metrics`]), tables ([`table`], [`outputs`], [`columns`]), plots ([`figures`]) and
 //! thresholds ([`check`]). Every failure is an [`Error`] naming what it was about. `experiment sampling` measures the sampling patterns alone
 //! ([`sampling_report`]).
 
@@ -41,6 +41,7 @@ pub mod shard;
 pub mod spec;
 pub mod spec_mesh;
 pub mod stability;
+pub mod table;
 pub mod truth_cache;
 pub mod try_mesh;
 pub mod user_mesh;

@@ -12,8 +12,9 @@
 //! which). The runner writes the file at the end of a run and `experiment plots` rewrites it
 //! from a finished run's CSV files ([`rewrite`]), with this same code.
 
-use super::outputs::{read_csv, write_csv, PairRow, Row, SweepRow};
+use super::outputs::{read_csv, write_csv, PairRow, SweepRow};
 use super::spec::{OursSource, PaperCell, PaperNumbers};
+use super::table::Row;
 use super::Result;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -36,8 +37,12 @@ pub struct PaperRow {
     pub ours_bake_s: Option<f64>,
     /// Some field of ours came from the cache: its bake was not timed in this run.
     pub ours_bake_cached: Option<bool>,
-    pub paper_ao_s: Option<f64>,
-    pub ours_ao_s: Option<f64>,
+    /// The paper's time of the estimate through the field (AO, shadows or reflections), and
+    /// ours (`table.csv`'s `estimate_s`); named `paper_ao_s`, `ours_ao_s` before.
+    #[serde(alias = "paper_ao_s")]
+    pub paper_estimate_s: Option<f64>,
+    #[serde(alias = "ours_ao_s")]
+    pub ours_estimate_s: Option<f64>,
     pub paper_rms: Option<f64>,
     pub ours_rms_image: Option<f64>,
     pub ours_rms_vertex: Option<f64>,
@@ -45,8 +50,10 @@ pub struct PaperRow {
     pub ours_raycast_rel: Option<f64>,
     pub paper_preprocess_rel: Option<f64>,
     pub ours_bake_rel: Option<f64>,
-    pub paper_ao_rel: Option<f64>,
-    pub ours_ao_rel: Option<f64>,
+    #[serde(alias = "paper_ao_rel")]
+    pub paper_estimate_rel: Option<f64>,
+    #[serde(alias = "ours_ao_rel")]
+    pub ours_estimate_rel: Option<f64>,
     pub note: String,
 }
 
@@ -59,7 +66,7 @@ struct Ours {
     raycast_s: Option<f64>,
     bake_s: Option<f64>,
     bake_cached: Option<bool>,
-    ao_s: Option<f64>,
+    estimate_s: Option<f64>,
     rms_image: Option<f64>,
     rms_vertex: Option<f64>,
 }
@@ -101,7 +108,7 @@ fn from_row(r: &Row) -> Ours {
         raycast_s: r.raycast_s,
         bake_s: bake_of(r),
         bake_cached: Some(r.bake_cached),
-        ao_s: Some(r.ao_s),
+        estimate_s: Some(r.estimate_s),
         rms_image: r.rms_image,
         rms_vertex: r.rms_vertex,
     }
@@ -152,7 +159,7 @@ fn ours(c: &PaperCell, t: &RunTables) -> Option<Ours> {
                 cell: format!("raycast_sweep:{}:{}:{k}", s.scene, s.backend.name()),
                 triangles: Some(r.caster_triangles as u64),
                 rays_cast: rays,
-                raycast_s: Some(s.ao_s),
+                raycast_s: Some(s.raycast_s),
                 rms_image: s.rms_image,
                 rms_vertex: s.rms_vertex,
                 ..Ours::default()
@@ -181,7 +188,7 @@ fn ours(c: &PaperCell, t: &RunTables) -> Option<Ours> {
                 raycast_s: sum_f(&|r| r.raycast_s),
                 bake_s: sum_f(&bake_of),
                 bake_cached: Some(rows.iter().any(|r| r.bake_cached)),
-                ao_s: sum_f(&|r| Some(r.ao_s)),
+                estimate_s: sum_f(&|r| Some(r.estimate_s)),
                 rms_image: None,
                 rms_vertex: None,
             })
@@ -222,8 +229,8 @@ pub fn paper_vs_ours(paper: &PaperNumbers, t: &RunTables) -> Vec<PaperRow> {
                 paper_preprocess_s: c.preprocess_s,
                 ours_bake_s: o.bake_s,
                 ours_bake_cached: o.bake_cached,
-                paper_ao_s: c.ao_s,
-                ours_ao_s: o.ao_s,
+                paper_estimate_s: c.estimate_s,
+                ours_estimate_s: o.estimate_s,
                 paper_rms: c.rms,
                 ours_rms_image: o.rms_image,
                 ours_rms_vertex: o.rms_vertex,
@@ -231,8 +238,8 @@ pub fn paper_vs_ours(paper: &PaperNumbers, t: &RunTables) -> Vec<PaperRow> {
                 ours_raycast_rel: ratio(o.raycast_s, ro.raycast_s),
                 paper_preprocess_rel: paper_rel(|c| c.preprocess_s, c),
                 ours_bake_rel: ratio(o.bake_s, ro.bake_s),
-                paper_ao_rel: paper_rel(|c| c.ao_s, c),
-                ours_ao_rel: ratio(o.ao_s, ro.ao_s),
+                paper_estimate_rel: paper_rel(|c| c.estimate_s, c),
+                ours_estimate_rel: ratio(o.estimate_s, ro.estimate_s),
                 note: c.note.clone().unwrap_or_default(),
             }
         })

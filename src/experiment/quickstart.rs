@@ -51,8 +51,8 @@ pub fn run(out: &Path) -> Result<()> {
     );
     println!(
         "  field-lookup AO (same rays):     {:>8.3} s  ({}× faster)",
-        r.ao_s,
-        opt(r.raycast_s.map(|s| s / r.ao_s.max(1e-12)))
+        r.estimate_s,
+        opt(r.raycast_s.map(|s| s / r.estimate_s.max(1e-12)))
     );
     println!(
         "  RMS vs the same-ray ray cast (0–255): per vertex {}, per image pixel {}",

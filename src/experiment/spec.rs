@@ -299,9 +299,6 @@ pub struct RenderSpec {
     pub options: Box<dyn super::kinds::KindOptions>,
 }
 
-/// The keys of `render` that every kind reads; the others are the kind's own.
-pub const RENDER_COMMON_KEYS: [&str; 4] = ["what", "rays_per_point", "image", "intra_bias"];
-
 impl Clone for RenderSpec {
     fn clone(&self) -> RenderSpec {
         RenderSpec {
@@ -566,9 +563,10 @@ pub struct PaperCell {
     /// The paper's preprocessing (bake) time, seconds.
     #[serde(default)]
     pub preprocess_s: Option<f64>,
-    /// The paper's AO time through the field, seconds.
-    #[serde(default)]
-    pub ao_s: Option<f64>,
+    /// The paper's time of the estimate through the field (AO, shadows or reflections),
+    /// seconds (`ao_s` is read as this).
+    #[serde(default, alias = "ao_s")]
+    pub estimate_s: Option<f64>,
     /// The paper's RMS (0–255, on images).
     #[serde(default)]
     pub rms: Option<f64>,

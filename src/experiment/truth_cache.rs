@@ -10,9 +10,15 @@
 //! magic    8 bytes  "VTRUTHCA"
 //! version  u32 LE   FORMAT_VERSION
 //! hlen     u32 LE   length of the JSON header
-//! header   hlen bytes of JSON (TruthHeader: key, rays, rounds, payload length and sha256)
-//! payload  AO then standard error per point, f32 little-endian
+//! header   hlen bytes of JSON (TruthHeader: key, points, channels, rays, rounds, payload
+//!          length and sha256)
+//! payload  the values then their standard errors, points × channels each (point-major),
+//!          f32 little-endian
 //! ```
+//!
+//! A scalar estimator's file is the layout of files written before channels existed (a header
+//! without `channels` reads as one), and its key is theirs: only an estimator with more than
+//! one channel adds its count to the key, so cached scalar references stay valid.
 //!
 //! Files are written atomically; a truncated, corrupt or stale file is reported and recomputed.
 
@@ -34,12 +40,23 @@ pub const FORMAT_VERSION: u32 = 2;
 struct TruthHeader {
     key: String,
     points: u64,
+    /// Values per point (absent in files of scalar estimators written before: one).
+    #[serde(default = "one", skip_serializing_if = "is_one")]
+    channels: u64,
     rays_per_point: u32,
     k: u32,
     batches: u32,
     rounds: Vec<(u32, f64)>,
     payload_len: u64,
     payload_sha256: String,
+}
+
+fn one() -> u64 {
+    1
+}
+
+fn is_one(c: &u64) -> bool {
+    *c == 1
 }
 
 /// What a converged reference is computed from.
@@ -61,6 +78,10 @@ pub fn truth_key(inputs: &TruthInputs, t: &TruthOptions) -> String {
     bytes.extend_from_slice(bytemuck::cast_slice(inputs.at.normals));
     bytes.extend_from_slice(bytemuck::cast_slice(inputs.casters));
     let mut meta = inputs.estimator.key();
+    let channels = inputs.estimator.channels();
+    if channels != 1 {
+        meta.insert("channels".into(), serde_json::json!(channels));
+    }
     meta.insert("truth".into(), serde_json::json!(t));
     meta.insert(
         "code".into(),
@@ -77,11 +98,12 @@ pub fn truth_path(dir: &Path, scene: &str, key: &str) -> PathBuf {
 
 /// Writes `truth` under `key`, atomically.
 pub fn save(path: &Path, key: &str, truth: &Truth) -> Result<()> {
-    let mut payload: Vec<u8> = bytemuck::cast_slice(&truth.ao).to_vec();
+    let mut payload: Vec<u8> = bytemuck::cast_slice(&truth.values).to_vec();
     payload.extend_from_slice(bytemuck::cast_slice(&truth.stderr));
     let header = TruthHeader {
         key: key.to_string(),
-        points: truth.ao.len() as u64,
+        points: truth.points() as u64,
+        channels: truth.channels as u64,
         rays_per_point: truth.rays_per_point,
         k: truth.k,
         batches: truth.batches,
@@ -128,17 +150,23 @@ pub fn load(path: &Path, key: &str) -> std::result::Result<Truth, CacheError> {
         return Err(stale("the key differs".into()));
     }
     let payload = &bytes[end..];
-    if payload.len() as u64 != h.payload_len || h.payload_len != h.points * 8 {
+    let values = h
+        .points
+        .checked_mul(h.channels)
+        .filter(|&v| h.channels > 0 && v.checked_mul(8) == Some(h.payload_len))
+        .ok_or_else(|| bad("the payload's length is not points × channels × 8"))?;
+    if payload.len() as u64 != h.payload_len {
         return Err(bad("truncated payload"));
     }
     if crate::io::sha256_hex(payload) != h.payload_sha256 {
         return Err(bad("payload checksum mismatch"));
     }
-    let n = h.points as usize;
+    let n = values as usize;
     let floats: Vec<f32> = bytemuck::pod_collect_to_vec(payload);
     Ok(Truth {
-        ao: floats[..n].to_vec(),
+        values: floats[..n].to_vec(),
         stderr: floats[n..].to_vec(),
+        channels: h.channels as usize,
         rays_per_point: h.rays_per_point,
         k: h.k,
         batches: h.batches,
@@ -170,10 +198,13 @@ pub fn load_or_compute(
     let mut rejected = None;
     if let Some(p) = path.as_ref().filter(|p| p.exists()) {
         match load(p, &key) {
-            Ok(truth) if truth.ao.len() == inputs.at.len() => {
+            Ok(truth)
+                if truth.points() == inputs.at.len()
+                    && truth.channels == inputs.estimator.channels() =>
+            {
                 return Ok((truth, TruthOutcome::Hit(p.clone())))
             }
-            Ok(_) => rejected = Some(format!("{}: wrong point count", p.display())),
+            Ok(_) => rejected = Some(format!("{}: wrong point or channel count", p.display())),
             Err(e) => rejected = Some(e.to_string()),
         }
     }
@@ -193,8 +224,9 @@ mod tests {
 
     fn sample() -> Truth {
         Truth {
-            ao: vec![0.5, 1.0, 0.25],
+            values: vec![0.5, 1.0, 0.25],
             stderr: vec![0.001, 0.0, 0.002],
+            channels: 1,
             rays_per_point: 1024,
             k: 16,
             batches: 4,
@@ -219,5 +251,34 @@ mod tests {
         assert!(err(&p, "abc").contains("truncated"));
         std::fs::write(&p, b"nonsense").unwrap();
         assert!(err(&p, "abc").contains("magic"));
+    }
+
+    #[test]
+    fn channels_round_trip_and_a_scalar_header_stays_as_before() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("t.vtruth");
+        // Two points of three channels.
+        let rgb = Truth {
+            values: vec![0.1, 0.2, 0.3, 0.4, 0.5, 0.6],
+            stderr: vec![0.0, 0.001, 0.002, 0.003, 0.004, 0.005],
+            channels: 3,
+            ..sample()
+        };
+        save(&p, "k", &rgb).unwrap();
+        assert_eq!(load(&p, "k").unwrap(), rgb);
+        let header = |p: &Path| {
+            let b = std::fs::read(p).unwrap();
+            let hlen = u32::from_le_bytes(b[12..16].try_into().unwrap()) as usize;
+            String::from_utf8(b[16..16 + hlen].to_vec()).unwrap()
+        };
+        assert!(
+            header(&p).contains("\"points\":2,\"channels\":3"),
+            "{}",
+            header(&p)
+        );
+        // A scalar truth writes the header of the files before channels (no `channels`).
+        save(&p, "k", &sample()).unwrap();
+        assert!(!header(&p).contains("channels"), "{}", header(&p));
+        assert_eq!(load(&p, "k").unwrap().channels, 1);
     }
 }

@@ -9,9 +9,10 @@
 //! relative to the output folder: `experiment run OUT/spec.json --out OUT` reruns it, edited or
 //! not. The verdict per field size ([`verdicts`]) is read back from the run's `table.csv`.
 
-use super::outputs::{read_csv, Row};
+use super::outputs::read_csv;
 use super::run::{self, LoadedSpec, RunOptions, RunReport};
 use super::spec::Spec;
+use super::table::Row;
 use super::{Error, Result};
 use crate::geometry::MeshFormat;
 use serde_json::json;
@@ -191,10 +192,10 @@ pub fn verdicts(rows: &[Row], embree_s: Option<f64>) -> Vec<String> {
                 r.precision.name()
             );
             if let Some(rc) = r.raycast_s {
-                line.push_str(&format!(", {}", ratio(rc, r.ao_s, "ray casting")));
+                line.push_str(&format!(", {}", ratio(rc, r.estimate_s, "ray casting")));
             }
             if let Some(e) = embree_s {
-                line.push_str(&format!(", {}", ratio(e, r.ao_s, "Embree")));
+                line.push_str(&format!(", {}", ratio(e, r.estimate_s, "Embree")));
             }
             let mib = r.field_bytes as f64 / (1u64 << 20) as f64;
             line.push_str(&format!(", {mib:.1} MiB"));

@@ -146,7 +146,7 @@ impl<'a> FieldAoKernel<'a> {
     /// AO at every point (point `i` uses the directions of point index `i` of `rays`), as
     /// [`crate::render::ao::ao_at_points`] computes it over a [`crate::field::scene::FieldScene`] of
     /// the same instances and lookup options.
-    pub fn vertex_ao(
+    pub fn ao(
         &self,
         points: &[Vec3],
         normals: &[Vec3],

@@ -236,7 +236,7 @@ impl<'a> GpuTracer<'a> {
 
     /// Vertex AO by ray casting with the same rays as [`crate::render::ao::ao_at_points`].
     /// A point's rays are spread over several invocations, as in
-    /// [`super::FieldAoKernel::vertex_ao`].
+    /// [`super::FieldAoKernel::ao`].
     pub fn ao(
         &self,
         points: &[Vec3],

@@ -147,7 +147,7 @@ fn linear_falloff_under_a_plane_matches_the_closed_form() {
             ..Default::default()
         };
         let truth = crate::render::truth::converged_ao(&tracer, &points, &normals, &opts, &t);
-        let mean = truth.ao.iter().map(|&a| a as f64).sum::<f64>() / n as f64;
+        let mean = truth.values.iter().map(|&a| a as f64).sum::<f64>() / n as f64;
         // The mean of 50 points: its standard error is the RMS stderr / √50.
         let se = truth.rms_stderr_255() / 255.0 / (n as f64).sqrt();
         assert!(

@@ -7,7 +7,8 @@
 //! - its evaluation points ([`super::points::EvalPoints`]: the receivers' vertices, or the receiver pixels of a
 //!   G-buffer, [`super::points`]);
 //! - an [`Estimator`]: per point, a value in \[0, 1\] from `k²` seeded rays
-//!   ([`Estimator::estimate`]), and the same quantity converged ([`Estimator::converged`],
+//!   ([`Estimator::estimate`]), or several (its [`Estimator::channels`]: an RGB, a direction
+//!   mapped into \[0, 1\]³), and the same quantity converged ([`Estimator::converged`],
 //!   the reference every `_vs_truth` error is measured against);
 //! - the cache key of everything beside the points and rays that determines its values
 //!   ([`Estimator::key`]).
@@ -46,12 +47,21 @@ pub trait Estimator: Sync {
     /// Short name for tables and messages ("ao").
     fn name(&self) -> &'static str;
 
+    /// Values per point, each in \[0, 1\]: 1 for a scalar quantity (AO, a light fraction, a
+    /// reflected radiance), more for one with channels. [`Self::estimate`] and
+    /// [`Self::converged`] give this many values per point, point-major: point `i`'s channel
+    /// `c` at `i * channels + c`.
+    fn channels(&self) -> usize {
+        1
+    }
+
     /// The estimate at every point from the `k²` rays of `rays` (point `i` uses the directions
-    /// of point index `i`). Deterministic: the same inputs give the same bits on any thread
-    /// count.
+    /// of point index `i`), [`Self::channels`] values per point. Deterministic: the same
+    /// inputs give the same bits on any thread count.
     fn estimate(&self, vis: &dyn Visibility, at: Points, rays: &RaySet) -> Vec<f32>;
 
-    /// The converged estimate (see [`super::truth`]).
+    /// The converged estimate (see [`super::truth`]; [`super::truth::converged_channels`] for
+    /// more than one channel).
     fn converged(&self, vis: &dyn Visibility, at: Points, t: &TruthOptions) -> Truth;
 
     /// Everything beside the points, the casters and the rays that determines the values, as

@@ -11,7 +11,7 @@
 use super::ao::instance_epsilon;
 use super::contact::separate_contacts_each;
 use super::estimator::Points;
-use super::image::GrayImage;
+use super::image::{GrayImage, Image, ImageChannels};
 use super::primary::{shade_vertex_ao, PixelHit};
 use super::receivers::Receivers;
 use crate::geometry::Scene;
@@ -148,6 +148,45 @@ impl EvalPoints {
             Support::Vertices(r) => Some(r),
             Support::Pixels(_) => None,
         }
+    }
+
+    /// The image of `values` (`channels` per point, point-major) seen through `gbuf`, showing
+    /// the channels `show` picks (grey, or red, green and blue: each a plane made as
+    /// [`Self::image`] makes it), and the mask of the pixels that show a value. One channel
+    /// shown as grey is [`Self::image`] of the values.
+    ///
+    /// # Panics
+    /// If `values` is not `channels` per point or `show` picks a channel past `channels`.
+    pub fn values_image(
+        &self,
+        scene: &Scene,
+        gbuf: &GBuffer,
+        values: &[f32],
+        channels: usize,
+        show: ImageChannels,
+    ) -> (Image, Vec<bool>) {
+        assert_eq!(
+            values.len(),
+            self.len() * channels,
+            "image: {channels} values per point"
+        );
+        assert!(show.shown().iter().all(|&c| c < channels));
+        if channels == 1 {
+            let (img, mask) = self.image(scene, gbuf, values);
+            return (img.into(), mask);
+        }
+        let mut mask = Vec::new();
+        let planes = show
+            .shown()
+            .iter()
+            .map(|&c| {
+                let plane: Vec<f32> = values.iter().skip(c).step_by(channels).copied().collect();
+                let (img, m) = self.image(scene, gbuf, &plane);
+                mask = m;
+                img
+            })
+            .collect();
+        (Image::interleave(planes), mask)
     }
 
     /// The image of `values` (one per point) seen through `gbuf`, and the mask of the pixels

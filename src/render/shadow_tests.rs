@@ -49,7 +49,7 @@ fn truth(vis: &dyn Visibility, p: &[Vec3], n: &[Vec3], opts: &ShadowOptions) -> 
         &t,
     );
     let se = tr.rms_stderr_255() / 255.0;
-    (tr.ao, se)
+    (tr.values, se)
 }
 
 #[test]

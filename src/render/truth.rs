@@ -18,6 +18,11 @@
 //!
 //! The visibility is the same as the render's ([`AoOptions`]: the same origin offset, the same AO
 //! radius), so the truth differs from a render only in its rays.
+//!
+//! Any estimator converges the same way ([`converged`]); one with several values per point
+//! ([`super::estimator::Estimator::channels`]: an RGB, a direction) has a mean and a standard
+//! error per point and channel ([`converged_channels`]), and the criterion is the RMS of the
+//! standard error over every point and channel.
 
 use super::ao::{ao_at_points, AoOptions};
 use crate::sampling::rays::{mix64, RaySet};
@@ -56,10 +61,13 @@ impl Default for TruthOptions {
 /// A converged reference.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Truth {
-    /// The value per point (AO, or the estimator's quantity), the mean of the batches.
-    pub ao: Vec<f32>,
-    /// Standard error of `ao` per point (0–1 scale).
+    /// The values per point (AO, or the estimator's quantity), the means of the batches:
+    /// `channels` per point, point-major (point i's channel c at `i * channels + c`).
+    pub values: Vec<f32>,
+    /// Standard error of each of `values` (0–1 scale).
     pub stderr: Vec<f32>,
+    /// Values per point (1: a scalar quantity).
+    pub channels: usize,
     /// Rays per point of the final round (batches × k²).
     pub rays_per_point: u32,
     /// Cells per side of the final round's sets.
@@ -71,12 +79,17 @@ pub struct Truth {
 }
 
 impl Truth {
-    /// RMS over points of the per-point standard error, on the 0–255 scale.
+    /// The number of points.
+    pub fn points(&self) -> usize {
+        self.values.len() / self.channels.max(1)
+    }
+
+    /// RMS over points (and channels) of the standard error, on the 0–255 scale.
     pub fn rms_stderr_255(&self) -> f64 {
         rms_stderr_255(&self.stderr)
     }
 
-    /// Largest per-point standard error, on the 0–255 scale.
+    /// Largest standard error of a point (or channel), on the 0–255 scale.
     pub fn max_stderr_255(&self) -> f64 {
         self.stderr.iter().fold(0.0f64, |m, &s| m.max(s as f64)) * 255.0
     }
@@ -97,8 +110,8 @@ fn batch_seed(seed: u64, k: u32, b: u32) -> u64 {
     mix64(seed ^ mix64(((k as u64) << 32) | b as u64))
 }
 
-/// One round: `batches` independent jittered k² sets per point, each estimated by `estimate`;
-/// (mean, stderr) per point.
+/// One round: `batches` independent jittered k² sets per point, each estimated by `estimate`
+/// (`n` values: points × channels); (mean, stderr) per value.
 fn round(
     n: usize,
     t: &TruthOptions,
@@ -117,7 +130,7 @@ fn round(
             assert_eq!(
                 r.len(),
                 n,
-                "converged: the estimate has one value per point"
+                "converged: the estimate has one value per point and channel"
             );
             r
         })
@@ -164,19 +177,38 @@ pub fn converged_ao<V: Visibility + ?Sized>(
 /// # Panics
 /// If `t.batches < 2`, `t.start_k == 0`, or `estimate` returns other than `n` values.
 pub fn converged(n: usize, t: &TruthOptions, estimate: impl Fn(&RaySet) -> Vec<f32>) -> Truth {
+    converged_channels(n, 1, t, estimate)
+}
+
+/// [`converged`] for an estimate of `channels` values per point (point-major, each in
+/// \[0, 1\]): a mean and a standard error per point and channel, the stopping rule on their
+/// RMS over all of them. One channel is [`converged`], bit for bit.
+///
+/// # Panics
+/// If `t.batches < 2`, `t.start_k == 0`, `channels == 0`, or `estimate` returns other than
+/// `n × channels` values.
+pub fn converged_channels(
+    n: usize,
+    channels: usize,
+    t: &TruthOptions,
+    estimate: impl Fn(&RaySet) -> Vec<f32>,
+) -> Truth {
+    assert!(channels > 0, "converged: needs at least one channel");
+    let n_values = n * channels;
     assert!(t.batches >= 2, "converged: needs at least 2 batches");
     assert!(t.start_k > 0, "converged: start_k must be positive");
     let rays = |k: u32| t.batches as u64 * k as u64 * k as u64;
     let mut k = t.start_k;
     let mut rounds = Vec::new();
     loop {
-        let (ao, stderr) = round(n, t, k, &estimate);
+        let (values, stderr) = round(n_values, t, k, &estimate);
         let rms = rms_stderr_255(&stderr);
         rounds.push((rays(k) as u32, rms));
         if rms <= t.target_stderr_255 || rays(2 * k) > t.max_rays as u64 {
             return Truth {
-                ao,
+                values,
                 stderr,
+                channels,
                 rays_per_point: rays(k) as u32,
                 k,
                 batches: t.batches,
@@ -223,7 +255,7 @@ mod tests {
         // error wrong by a factor 1.6 either way fails).
         let rms_err = 255.0
             * (truth
-                .ao
+                .values
                 .iter()
                 .map(|&a| (a as f64 - exact).powi(2))
                 .sum::<f64>()
@@ -256,7 +288,7 @@ mod tests {
             &AoOptions::for_scene_radius(10.0),
             &TruthOptions::default(),
         );
-        assert!(truth.ao.iter().all(|&a| a == 1.0));
+        assert!(truth.values.iter().all(|&a| a == 1.0));
         assert_eq!(truth.rms_stderr_255(), 0.0);
         assert_eq!((truth.rounds.len(), truth.rays_per_point), (1, 256));
     }
@@ -282,5 +314,56 @@ mod tests {
         assert_eq!(truth.rays_per_point, 4096);
         assert_eq!(truth.rounds.len(), 3);
         assert!(!truth.converged(&t));
+    }
+
+    #[test]
+    fn channels_converge_point_major_and_one_channel_is_the_scalar_path() {
+        // Three channels per point from the AO under a ceiling: v, 1 − v and 0.5. With a target
+        // of 0 both runs stop at the cap after the same rounds, so channel 0 is the scalar
+        // truth bit for bit, channel 1 its complement with the same standard errors, channel 2
+        // exact with none.
+        let tracer = Tracer::new(&square(50.0, 0.5));
+        let n = 30;
+        let points: Vec<Vec3> = (0..n)
+            .map(|i| Vec3::new(0.05 * i as f32, 0.0, 0.0))
+            .collect();
+        let normals = vec![Vec3::Z; n];
+        let opts = AoOptions {
+            max_distance: Some(1.0),
+            offset: 1e-5,
+            falloff: Falloff::Step,
+        };
+        let t = TruthOptions {
+            target_stderr_255: 0.0,
+            max_rays: 1100,
+            ..TruthOptions::default()
+        };
+        let ao = |rays: &RaySet| ao_at_points(&tracer, &points, &normals, rays, &opts);
+        let scalar = converged(n, &t, ao);
+        let three = converged_channels(n, 3, &t, |rays| {
+            ao(rays)
+                .into_iter()
+                .flat_map(|v| [v, 1.0 - v, 0.5])
+                .collect()
+        });
+        assert_eq!((three.channels, three.points()), (3, n));
+        assert_eq!(three.rays_per_point, scalar.rays_per_point);
+        for i in 0..n {
+            let (v, e) = (
+                &three.values[3 * i..3 * i + 3],
+                &three.stderr[3 * i..3 * i + 3],
+            );
+            assert_eq!((v[0], e[0]), (scalar.values[i], scalar.stderr[i]));
+            assert!((v[1] - (1.0 - scalar.values[i])).abs() < 1e-6, "{v:?}");
+            assert!((e[1] - e[0]).abs() <= 1e-6 * e[0].max(1e-3), "{e:?}");
+            assert_eq!((v[2], e[2]), (0.5, 0.0));
+        }
+        // The criterion is over every value: two channels of the scalar's errors and one of
+        // none give √(2/3) of its RMS.
+        let want = scalar.rms_stderr_255() * (2.0f64 / 3.0).sqrt();
+        let got = three.rounds.last().unwrap().1;
+        assert!((got - want).abs() < 1e-4 * want, "{got} vs {want}");
+        // One channel through `converged_channels` is `converged`.
+        assert_eq!(converged_channels(n, 1, &t, ao), scalar);
     }
 }

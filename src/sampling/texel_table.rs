@@ -209,12 +209,4 @@ impl TexelTable {
     pub fn bytes(&self) -> usize {
         self.texel.len() * std::mem::size_of::<u16>()
     }
-
-    /// The share of table cells that are certified (0 for an empty table).
-    pub fn certified_share(&self) -> f64 {
-        if self.texel.is_empty() {
-            return 0.0;
-        }
-        self.texel.iter().filter(|&&t| t != MIXED).count() as f64 / self.texel.len() as f64
-    }
 }

@@ -46,9 +46,6 @@ pub fn concentric_disk_to_square(p: Vec2) -> Vec2 {
     Vec2::new(0.5 * (a + 1.0), 0.5 * (b + 1.0))
 }
 
-/// Density of [`square_to_concentric_disk`] with respect to disk area: 1/π.
-pub const CONCENTRIC_DISK_PDF: f32 = 1.0 / PI;
-
 /// Malley's method: disk → hemisphere by vertical projection, z = sqrt(1 − x² − y²).
 /// Uniform points on the disk become cosine-distributed directions.
 #[inline]
@@ -82,12 +79,6 @@ pub fn cosine_hemisphere_to_square(d: Vec3) -> Vec2 {
     concentric_disk_to_square(hemisphere_to_disk(d))
 }
 
-/// Density of [`square_to_cosine_hemisphere`] per unit solid angle: cos θ / π.
-#[inline]
-pub fn cosine_hemisphere_pdf(d: Vec3) -> f32 {
-    d.z.max(0.0) / PI
-}
-
 /// Polar map, square → hemisphere uniform in the angles: θ = u.y · π/2 (from the pole),
 /// φ = u.x · 2π.
 #[inline]
@@ -110,14 +101,6 @@ pub fn polar_hemisphere_to_square(d: Vec3) -> Vec2 {
     Vec2::new(if x >= 1.0 { 0.0 } else { x }, theta / FRAC_PI_2)
 }
 
-/// Density of [`square_to_polar_hemisphere`] per unit solid angle: 1 / (π² sin θ)
-/// (infinite at the pole).
-#[inline]
-pub fn polar_hemisphere_pdf(d: Vec3) -> f32 {
-    let sin_theta = (1.0 - d.z * d.z).max(0.0).sqrt();
-    1.0 / (PI * PI * sin_theta)
-}
-
 /// Square → uniform sphere (Archimedes' hat-box: z uniform in [−1, 1], φ = 2π u.x).
 #[inline]
 pub fn square_to_uniform_sphere(u: Vec2) -> Vec3 {
@@ -138,9 +121,6 @@ pub fn uniform_sphere_to_square(d: Vec3) -> Vec2 {
     Vec2::new(if x >= 1.0 { 0.0 } else { x }, (1.0 - d.z) * 0.5)
 }
 
-/// Density of [`square_to_uniform_sphere`] per unit solid angle: 1 / 4π.
-pub const UNIFORM_SPHERE_PDF: f32 = 1.0 / (4.0 * PI);
-
 /// Square → uniform hemisphere `z >= 0` (z uniform in [0, 1], φ = 2π u.x).
 #[inline]
 pub fn square_to_uniform_hemisphere(u: Vec2) -> Vec3 {
@@ -156,9 +136,6 @@ pub fn uniform_hemisphere_to_square(d: Vec3) -> Vec2 {
     let u = uniform_sphere_to_square(d);
     Vec2::new(u.x, (1.0 - d.z.max(0.0)).min(1.0))
 }
-
-/// Density of [`square_to_uniform_hemisphere`] per unit solid angle: 1 / 2π.
-pub const UNIFORM_HEMISPHERE_PDF: f32 = 1.0 / (2.0 * PI);
 
 #[cfg(test)]
 mod tests {

@@ -34,11 +34,9 @@ pub const RTC_SCENE_FLAG_ROBUST: c_uint = 1 << 2;
 pub const RTC_BUILD_QUALITY_LOW: c_uint = 0;
 pub const RTC_BUILD_QUALITY_HIGH: c_uint = 2;
 pub const RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT: c_uint = 0;
-pub const RTC_INTERSECT_CONTEXT_FLAG_COHERENT: c_uint = 1;
 pub const RTC_INVALID_GEOMETRY_ID: c_uint = u32::MAX;
 pub const RTC_ERROR_NONE: c_uint = 0;
 pub const RTC_DEVICE_PROPERTY_VERSION: c_uint = 0;
-pub const RTC_DEVICE_PROPERTY_NATIVE_RAY8_SUPPORTED: c_uint = 33;
 
 /// `struct RTCIntersectContext` (3.13, one instance level, no min width).
 #[repr(C)]
@@ -122,16 +120,12 @@ pub struct RTCRay8 {
 #[derive(Clone, Copy, Default)]
 pub struct Valid8(pub [c_int; 8]);
 
-pub type RTCErrorFunction =
-    Option<unsafe extern "C" fn(user: *mut c_void, code: c_uint, message: *const c_char)>;
-
 #[link(name = "embree3")]
 extern "C" {
     pub fn rtcNewDevice(config: *const c_char) -> RTCDevice;
     pub fn rtcReleaseDevice(device: RTCDevice);
     pub fn rtcGetDeviceError(device: RTCDevice) -> c_uint;
     pub fn rtcGetDeviceProperty(device: RTCDevice, prop: c_uint) -> isize;
-    pub fn rtcSetDeviceErrorFunction(device: RTCDevice, f: RTCErrorFunction, user: *mut c_void);
 
     pub fn rtcNewScene(device: RTCDevice) -> RTCScene;
     pub fn rtcReleaseScene(scene: RTCScene);

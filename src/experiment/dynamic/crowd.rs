@@ -467,7 +467,7 @@ impl Crowd {
                     rays,
                     mrays_s: rays as f64 / query_s.max(1e-12) / 1e6,
                     rms_vs_raycast: rms_unquantised(&ao, reference),
-                    rms_vs_truth: rms_unquantised(&ao, &t.ao),
+                    rms_vs_truth: rms_unquantised(&ao, &t.values),
                     truth_stderr: t.rms_stderr_255(),
                     mean_ao: ao.iter().map(|&v| v as f64).sum::<f64>() / ao.len().max(1) as f64,
                     bytes: m.bytes(),

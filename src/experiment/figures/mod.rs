@@ -2,18 +2,18 @@
 //! redraws them without recomputing anything):
 //!
 //! - `images.png`: the figure's image grid with its numbers under each image, as in the paper
-//!   (bake time, AO time, RMS); the reference image opens each scene's first row; images wider
+//!   (bake time, the estimate's time, RMS); the reference image opens each scene's first row; images wider
 //!   than 256 pixels are shown reduced by an integer factor (box filter);
 //! - `differences.png`: the same grid of |field − reference| × 5 images;
 //! - `rms_vs_positional.png`: RMS against positional samples, one series per directional
 //!   resolution (and per other axis the spec varies);
-//! - `pareto.png`: RMS against AO time for every field setting (and, with `field_sweep.csv`,
+//! - `pareto.png`: RMS against the estimate's time for every field setting (and, with `field_sweep.csv`,
 //!   each field at more rays per point) and for ray casting at several ray counts, so that at
 //!   equal time one sees which wins. When the run has a converged reference, every method's RMS
 //!   is `rms_vs_truth` (per point, against the converged reference, log scale) and the
 //!   reference's own noise floor is drawn as a dashed line; otherwise the same-ray RMS;
-//! - `times.png` (several scenes): ray-cast, bake and AO time against caster triangles (2008
-//!   Figure 8), ray-cast and AO time once per backend;
+//! - `times.png` (several scenes): ray-cast, bake and estimate time against caster triangles
+//!   (2008 Figure 8), ray-cast and estimate time once per backend;
 //! - `time_vs_rays.png` and `grain_vs_positional.png`: the 2010 per-pixel figures' plots (see
 //!   [`per_pixel`]).
 //!
@@ -25,10 +25,11 @@
 
 mod per_pixel;
 
-use super::outputs::{read_csv, FieldSweepRow, Row, SweepRow};
+use super::outputs::{read_csv, FieldSweepRow, SweepRow};
 use super::plan::selection_name;
 use super::plot::{image_grid, xy_plot, Axes, HLine, Series};
 use super::spec::Backend;
+use super::table::Row;
 use super::{Error, Result};
 use crate::render::image::GrayImage;
 use std::path::Path;
@@ -172,7 +173,7 @@ pub fn draw_all(out: &Path, title: &str) -> Result<()> {
             });
             s.push(Series {
                 label: format!("field lookup{on}"),
-                points: pick(&rs, |r| Some(r.ao_s)),
+                points: pick(&rs, |r| Some(r.estimate_s)),
                 line: false,
             });
         }
@@ -205,10 +206,10 @@ fn pareto_same_rays(
         );
         let Some(y) = m(r) else { continue };
         match series.iter_mut().find(|s| s.label == label) {
-            Some(s) => s.points.push((r.ao_s, y)),
+            Some(s) => s.points.push((r.estimate_s, y)),
             None => series.push(Series {
                 label,
-                points: vec![(r.ao_s, y)],
+                points: vec![(r.estimate_s, y)],
                 line: false,
             }),
         }
@@ -223,8 +224,8 @@ fn pareto_same_rays(
     series.extend(raycast_series(sweep, sm));
     let rays = rows[0].rays_per_point;
     let axes = Axes {
-        title: format!("{title}: error against AO time"),
-        x_label: format!("AO time, s (field: {rays} rays/point)"),
+        title: format!("{title}: error against the estimate's time"),
+        x_label: format!("estimate time, s (field: {rays} rays/point)"),
         y_label: m_label.into(),
         log_x: true,
         log_y: false,
@@ -255,20 +256,20 @@ fn pareto_vs_truth(
                 k => format!("field {k}"),
             };
             match series.iter_mut().find(|s| s.label == label) {
-                Some(s) => s.points.push((r.ao_s, y)),
+                Some(s) => s.points.push((r.estimate_s, y)),
                 None => series.push(Series {
                     label,
-                    points: vec![(r.ao_s, y)],
+                    points: vec![(r.estimate_s, y)],
                     line: false,
                 }),
             }
             continue;
         }
-        let mut pts: Vec<(f64, f64)> = vec![(r.ao_s, y)];
+        let mut pts: Vec<(f64, f64)> = vec![(r.estimate_s, y)];
         let mut counts = vec![r.rays_per_point];
         for f in more {
             if f.rays_per_point != r.rays_per_point {
-                pts.extend(f.rms_vs_truth.map(|y| (f.ao_s, y)));
+                pts.extend(f.rms_vs_truth.map(|y| (f.estimate_s, y)));
                 counts.push(f.rays_per_point);
             }
         }
@@ -305,8 +306,8 @@ fn pareto_vs_truth(
         .into_iter()
         .collect();
     let axes = Axes {
-        title: format!("{title}: error against AO time, vs the converged reference"),
-        x_label: "AO time, s".into(),
+        title: format!("{title}: error against the estimate's time, vs the converged reference"),
+        x_label: "estimate time, s".into(),
         y_label: "RMS per point vs converged reference (0–255)".into(),
         log_x: true,
         log_y: true,
@@ -346,7 +347,7 @@ fn raycast_series(sweep: &[SweepRow], y: impl Fn(&SweepRow) -> Option<f64>) -> V
                 label: format!("ray cast {sc}{on} ({} rays)", counts.join("/")),
                 points: these
                     .iter()
-                    .filter_map(|s| y(s).map(|v| (s.ao_s, v)))
+                    .filter_map(|s| y(s).map(|v| (s.raycast_s, v)))
                     .collect(),
                 line: true,
             });
@@ -465,7 +466,7 @@ fn grids(
                     .max_by_key(|s| s.rays_per_point);
                 let mut cap = vec![format!("{sc}: ray cast (reference)")];
                 if let Some(s) = rc {
-                    cap.push(format!("{} rays, {:.3} s", s.rays_per_point, s.ao_s));
+                    cap.push(format!("{} rays, {:.3} s", s.rays_per_point, s.raycast_s));
                 }
                 cells.push((reference, cap));
                 diffs.push((blank.clone(), vec![format!("{sc}: differences × 5")]));
@@ -498,7 +499,7 @@ fn grids(
                     load_png(&out.join(&r.image))?,
                     vec![
                         name.clone(),
-                        format!("bake {bake}, lookup {:.3} s", r.ao_s),
+                        format!("bake {bake}, lookup {:.3} s", r.estimate_s),
                         format!(
                             "RMS {rms}, {:.1} MiB",
                             r.field_bytes as f64 / (1u64 << 20) as f64

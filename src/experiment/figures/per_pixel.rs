@@ -1,6 +1,6 @@
 //! The plots of the 2010 paper's per-pixel figures, drawn when a run has what they need:
 //!
-//! - `time_vs_rays.png` (Figure 4): AO time against rays per point, one series per field cell
+//! - `time_vs_rays.png` (Figure 4): the estimate's time against rays per point, one series per field cell
 //!   and backend (from `field_sweep.csv`) and one per ray-casting backend (from
 //!   `raycast_sweep.csv`), when the field sweep has at least two ray counts. The paper's claim
 //!   is that the field's time is flat in the map count and linear in the rays;
@@ -9,9 +9,10 @@
 //!   series per scene and other varying axis, when the rows have it.
 
 use super::{distinct_backends, key};
-use crate::experiment::outputs::{FieldSweepRow, Row, SweepRow};
+use crate::experiment::outputs::{FieldSweepRow, SweepRow};
 use crate::experiment::plot::{xy_plot, Axes, Series};
 use crate::experiment::spec::Backend;
+use crate::experiment::table::Row;
 use crate::experiment::Result;
 use std::path::Path;
 
@@ -42,7 +43,7 @@ pub fn time_vs_rays(
         let mut pts: Vec<(f64, f64)> = field_sweep
             .iter()
             .filter(|f| f.cell == r.cell && f.backend == r.backend)
-            .map(|f| (f.rays_per_point as f64, 1e3 * f.ao_s))
+            .map(|f| (f.rays_per_point as f64, 1e3 * f.estimate_s))
             .collect();
         if pts.is_empty() {
             continue;
@@ -72,7 +73,7 @@ pub fn time_vs_rays(
             let mut pts: Vec<(f64, f64)> = sweep
                 .iter()
                 .filter(|s| s.backend == b && s.scene == sc)
-                .map(|s| (s.rays_per_point as f64, 1e3 * s.ao_s))
+                .map(|s| (s.rays_per_point as f64, 1e3 * s.raycast_s))
                 .collect();
             pts.sort_by(|a, b| a.0.total_cmp(&b.0));
             let scene = if scenes_differ(rows) {
@@ -88,9 +89,9 @@ pub fn time_vs_rays(
         }
     }
     let axes = Axes {
-        title: format!("{title}: AO time against rays per point"),
+        title: format!("{title}: estimate time against rays per point"),
         x_label: "rays per point".into(),
-        y_label: "AO time, ms (log)".into(),
+        y_label: "estimate time, ms (log)".into(),
         log_x: false,
         log_y: true,
     };

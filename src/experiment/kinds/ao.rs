@@ -94,7 +94,7 @@ impl GpuQuantity for AoGpu {
         Ok(Box::new(KernelEval {
             kernel: FieldAoKernel::new(ctx, &fields.instances, opts)?,
             opts: self.0,
-            run: |k, at, rays, o| k.vertex_ao(at.points, at.normals, rays, o),
+            run: |k, at, rays, o| k.ao(at.points, at.normals, rays, o),
             setup: FieldAoKernel::setup_time,
         }))
     }

@@ -11,14 +11,17 @@
 //! - what it needs of a scene ([`Needs`]: a view with its G-buffer, normal fields);
 //! - its evaluation points, its [`Estimator`] and, where one exists, its GPU kernels
 //!   ([`Kind::setup`] → [`Setup`], with [`Setup::gpu`]);
-//! - the metric columns it fills ([`Columns`]).
+//! - the metric columns it fills ([`Columns`]) and its own ([`Kind::own_metrics`]);
+//! - how its values show as an image ([`Kind::image_channels`]).
 //!
 //! Everything else (the same-ray reference, the seeds, the converged reference and its cache,
 //! the sweeps, the images, the tables) is the runner's, the same for every kind.
 //! ARCHITECTURE.md lists the files that add a kind.
 //!
-//! Values per point are one scalar in \[0, 1\] (the images, the 0–255 RMS and the tables assume
-//! it); a kind with channels (RGB, a bent normal) cannot be added yet.
+//! Values per point are one scalar in \[0, 1\], or several for an estimator with channels
+//! ([`crate::render::estimator::Estimator::channels`]: an RGB, a direction mapped into
+//! \[0, 1\]³): the converged reference, the 0–255 RMS (over every channel) and the images
+//! (grey or RGB) follow its count.
 
 pub mod ao;
 pub mod image_ao;
@@ -34,7 +37,9 @@ use super::validate::Validator;
 use crate::field::lookup::{IntraBias, LookupOptions};
 use crate::field::Selection;
 use crate::render::estimator::Estimator;
+use crate::render::image::ImageChannels;
 use crate::render::points::{EvalPoints, GBuffer};
+use crate::render::truth::Truth;
 
 /// What a kind needs built before it can run.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -121,6 +126,25 @@ pub trait Kind: Sync {
     /// The normal field precisions (bits per component) the cells sweep, for a kind that reads
     /// normal fields ([`Needs::normal_field`]); empty for the others.
     fn normal_bits(&self) -> Vec<u32> {
+        Vec::new()
+    }
+    /// How its values show as an image, `channels` being its estimator's values per point:
+    /// grey for one, red, green and blue for three ([`ImageChannels::default_for`]). A kind
+    /// of another count that renders an image must choose (none: a bug of the kind, reported
+    /// when its scene is set up).
+    fn image_channels(&self, channels: usize) -> Option<ImageChannels> {
+        ImageChannels::default_for(channels)
+    }
+    /// Its own metric columns of one evaluation (name, value), written after the standard
+    /// ones of `table.csv` and `methods.csv`: `values` the first seed's, `reference` the
+    /// same-ray reference's, `truth` the converged reference where there is one (each
+    /// [`Estimator::channels`] values per point). None by default.
+    fn own_metrics(
+        &self,
+        _values: &[f32],
+        _reference: &[f32],
+        _truth: Option<&Truth>,
+    ) -> Vec<(String, f64)> {
         Vec::new()
     }
 }

@@ -8,9 +8,9 @@ use super::{Error, LoadedSpec, Result, RunOptions};
 use crate::experiment::columns::NamedRow;
 use crate::experiment::methods::{Answer, Method, MethodContext};
 use crate::experiment::metrics::rms_unquantised;
-use crate::experiment::outputs::ErrorColumns;
 use crate::experiment::progress::{stage, stage_adaptive};
 use crate::experiment::spec::Spec;
+use crate::experiment::table::ErrorColumns;
 use crate::render::estimator::Points;
 use crate::sampling::rays::RaySet;
 use crate::visibility::{SurfaceHit, Visibility};
@@ -89,6 +89,20 @@ impl Runner<'_> {
         }
         let (prepared, precompute_s) = stage(&format!("{id}: precompute"), || m.prepare(&ctx));
         let prepared = prepared.map_err(context)?;
+        if let Answer::Direct(e) = &prepared.answer {
+            if e.channels() != st.channels {
+                return Err(Error::invalid(
+                    format!("methods \"{}\"", m.name()),
+                    format!(
+                        "its estimator \"{}\" gives {} values per point, render \"{}\" {}",
+                        e.name(),
+                        e.channels(),
+                        self.kind.name(),
+                        st.channels
+                    ),
+                ));
+            }
+        }
         let estimate = |at: Points, rays: &RaySet| match &prepared.answer {
             Answer::Rays(v) => st.estimator.estimate(v.as_ref(), at, rays),
             Answer::Direct(e) => e.estimate(&NoRays, at, rays),
@@ -147,13 +161,17 @@ impl Runner<'_> {
         }
         // The times.
         row.push("estimate_s", estimate_s).push_opt(
-            "mrays_s",
+            "estimate_mrays_s",
             (estimate_s > 0.0).then(|| rays_cast as f64 / estimate_s / 1e6),
         );
         // The metrics, the same as the field cells'.
         push_errors(&mut row, &errors);
         row.push("rms_vs_raycast", rms_unquantised(&values[0], &st.reference))
             .push("image", image);
+        // The kind's own metrics, as in `table.csv`.
+        for (name, v) in self.own_metrics(st, &values[0]) {
+            row.push(name, v);
+        }
         self.method_rows.push(row);
         Ok(())
     }
@@ -182,7 +200,7 @@ fn push_errors(row: &mut NamedRow, e: &ErrorColumns) {
         .push_opt("truth_stderr", e.truth_stderr)
         .push_opt("truth_rays", e.truth_rays)
         .push_opt("raycast_rms_vs_truth", e.raycast_rms_vs_truth)
-        .push_opt("occlusion_rms", e.occlusion_rms)
+        .push_opt("signal_rms", e.signal_rms)
         .push_opt("grain", e.grain)
         .push_opt("second_reference", e.second_reference.as_ref())
         .push_opt("rms_image_vs_second", e.rms_image_vs_second);

@@ -16,11 +16,11 @@ mod steps;
 mod write;
 
 use super::fields::FieldSupply;
-use super::outputs::Row;
 use super::plan::{Plan, PlanLimits};
 use super::progress::stage;
 use super::scenes::Scenes;
 use super::spec::{Spec, SpecError, Threshold};
+use super::table::Row;
 use super::{Error, Result, ResultExt};
 use crate::gpu::AdapterPreference;
 use std::path::{Path, PathBuf};

@@ -10,7 +10,7 @@ use crate::experiment::metrics::{rms_u8, rms_unquantised};
 use crate::experiment::progress::stage;
 use crate::experiment::truth_cache::{load_or_compute, TruthInputs, TruthOutcome};
 use crate::experiment::Result;
-use crate::render::image::GrayImage;
+use crate::render::image::Image;
 use crate::render::truth::TruthOptions;
 use crate::sampling::rays::RaySet;
 
@@ -111,8 +111,8 @@ impl Runner<'_> {
         }
         st.seed_refs = refs;
         let mut vs = Vec::new();
-        for ao in std::iter::once(&st.reference).chain(st.seed_refs.iter().map(|(a, _)| a)) {
-            if let Some(e) = st.truth_errors(ao) {
+        for v in std::iter::once(&st.reference).chain(st.seed_refs.iter().map(|(a, _)| a)) {
+            if let Some(e) = st.truth_errors(v) {
                 vs.push(e.all);
             }
         }
@@ -146,19 +146,19 @@ pub(super) fn raycast_truth_errors(
     Ok(out)
 }
 
-/// The errors of a cell's values on every seed (`aos[j]` on seed j, `first_image` the image of
+/// The errors of a cell's values on every seed (`values[j]` on seed j, `first_image` the image of
 /// seed 0's values), against the same-ray reference of that seed (the kind's metric columns)
 /// and against the truth.
 pub(super) fn seed_errors(
     kind: &dyn Kind,
     st: &SceneState,
     bs: &crate::experiment::scenes::BuiltScene,
-    aos: &[Vec<f32>],
-    first_image: Option<&GrayImage>,
+    values: &[Vec<f32>],
+    first_image: Option<&Image>,
 ) -> SeedErrors {
     let (mut v, mut im, mut t, mut c, mut i) = (vec![], vec![], vec![], vec![], vec![]);
     let (mut ins, mut outs) = (vec![], vec![]);
-    for (j, ao) in aos.iter().enumerate() {
+    for (j, vals) in values.iter().enumerate() {
         let (reference, ref_img) = if j == 0 {
             (&st.reference, st.ref_image.as_ref().map(|(r, _)| r))
         } else {
@@ -166,21 +166,21 @@ pub(super) fn seed_errors(
             (a, img.as_ref())
         };
         if kind.columns().vertex {
-            v.push(rms_unquantised(ao, reference));
+            v.push(rms_unquantised(vals, reference));
         }
         if let (Some(r), Some((_, mask))) = (ref_img, &st.ref_image) {
             let own;
             let img = if j == 0 {
                 first_image
             } else {
-                own = st.image(bs, ao).map(|(x, _)| x);
+                own = st.image(bs, vals).map(|(x, _)| x);
                 own.as_ref()
             };
             if let Some(img) = img {
                 im.push(rms_u8(&img.data, &r.data, Some(mask)));
             }
         }
-        if let Some(e) = st.truth_errors(ao) {
+        if let Some(e) = st.truth_errors(vals) {
             t.push(e.all);
             c.extend(e.crease);
             i.extend(e.interior);

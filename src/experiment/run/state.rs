@@ -9,7 +9,7 @@ use crate::experiment::backend::Quantity;
 use crate::experiment::backend_gpu::GpuQuantity;
 use crate::experiment::metrics::{rms_u8, rms_unquantised, rms_unquantised_where};
 use crate::render::estimator::{Estimator, Points};
-use crate::render::image::GrayImage;
+use crate::render::image::{Image, ImageChannels};
 use crate::render::points::{EvalPoints, GBuffer};
 use crate::render::primary::{gbuffer, PrimaryScene};
 use crate::render::truth::Truth;
@@ -23,6 +23,11 @@ pub(super) struct SceneState {
     pub(super) at: EvalPoints,
     /// The kind's estimator on this scene.
     pub(super) estimator: Box<dyn Estimator>,
+    /// Its values per point ([`Estimator::channels`]); every value vector below has this many
+    /// per point, point-major.
+    pub(super) channels: usize,
+    /// How they show as an image ([`crate::experiment::kinds::Kind::image_channels`]).
+    pub(super) show: ImageChannels,
     /// Its GPU kernels ([`crate::experiment::kinds::Setup::gpu`]).
     pub(super) gpu: Option<Box<dyn GpuQuantity>>,
     /// The ray offset (model units).
@@ -32,19 +37,19 @@ pub(super) struct SceneState {
     /// The kind's second reference ([`crate::experiment::kinds::Setup::second_reference`]) and
     /// its image on the first seed's rays, once the reference step has made it.
     pub(super) second: Option<(&'static str, Box<dyn Estimator>)>,
-    pub(super) second_image: Option<GrayImage>,
+    pub(super) second_image: Option<Image>,
     pub(super) triangles: Vec<[Vec3; 3]>,
     pub(super) tracer: Tracer,
     /// The G-buffer of the spec's image.
     pub(super) view: Option<GBuffer>,
     pub(super) reference: Vec<f32>,
-    pub(super) ref_image: Option<(GrayImage, Vec<bool>)>,
+    pub(super) ref_image: Option<(Image, Vec<bool>)>,
     /// The converged reference.
     pub(super) truth: Option<Truth>,
     /// Where the truth came from (cache file, or computed and how long it took).
     pub(super) truth_source: String,
     /// The same-ray reference on the seeds after the first: values and image.
-    pub(super) seed_refs: Vec<(Vec<f32>, Option<GrayImage>)>,
+    pub(super) seed_refs: Vec<(Vec<f32>, Option<Image>)>,
     /// RMS over points of the same-ray references against the truth, per seed.
     pub(super) reference_vs_truth: Vec<f64>,
     /// Ray-cast time per (backend, k).
@@ -77,6 +82,26 @@ impl SceneState {
             }
         });
         let setup = kind.setup(bs, view.as_ref());
+        let channels = setup.estimator.channels();
+        let show = kind.image_channels(channels);
+        let show = match (show, &view) {
+            (Some(s), _) => s,
+            // No image is made: the map is never read.
+            (None, None) => ImageChannels::Gray(0),
+            (None, Some(_)) => panic!(
+                "render kind \"{}\": {channels} channels per point and no image of them \
+                 (Kind::image_channels)",
+                kind.name()
+            ),
+        };
+        if let Some((name, e)) = &setup.second_reference {
+            assert_eq!(
+                e.channels(),
+                channels,
+                "render kind \"{}\": its second reference \"{name}\" has other channels",
+                kind.name()
+            );
+        }
         let spheres: Vec<crate::geometry::Sphere> = bs
             .scene
             .casters()
@@ -91,6 +116,8 @@ impl SceneState {
         SceneState {
             at: setup.points,
             estimator: setup.estimator,
+            channels,
+            show,
             gpu: setup.gpu,
             offset: setup.offset,
             shading: setup.shading,
@@ -125,16 +152,31 @@ impl SceneState {
     }
 
     /// The image showing `values`, and the mask of the pixels that show them.
-    pub(super) fn image(&self, bs: &BuiltScene, values: &[f32]) -> Option<(GrayImage, Vec<bool>)> {
-        Some(self.at.image(&bs.scene, self.view.as_ref()?, values))
+    pub(super) fn image(&self, bs: &BuiltScene, values: &[f32]) -> Option<(Image, Vec<bool>)> {
+        let view = self.view.as_ref()?;
+        Some(
+            self.at
+                .values_image(&bs.scene, view, values, self.channels, self.show),
+        )
     }
 
-    /// The shaded picture of `values` (values × the kind's shading factor), where the kind has
-    /// one and there is an image.
-    pub(super) fn shaded_image(&self, bs: &BuiltScene, values: &[f32]) -> Option<GrayImage> {
+    /// The shaded picture of `values` (each channel × the point's shading factor), where the
+    /// kind has one and there is an image.
+    pub(super) fn shaded_image(&self, bs: &BuiltScene, values: &[f32]) -> Option<Image> {
         let f = self.shading.as_ref()?;
-        let shaded: Vec<f32> = values.iter().zip(f).map(|(v, f)| v * f).collect();
+        let c = self.channels;
+        let shaded: Vec<f32> = values
+            .iter()
+            .enumerate()
+            .map(|(i, v)| v * f[i / c])
+            .collect();
         self.image(bs, &shaded).map(|(img, _)| img)
+    }
+
+    /// The point value `i` belongs to ([`Self::channels`] values per point): the index into
+    /// the per-point flags (`crease`, `in_spheres`).
+    pub(super) fn point_of(&self, i: usize) -> usize {
+        i / self.channels
     }
 
     /// (RMS per vertex, RMS per pixel) of `values` against the same-ray reference: the
@@ -157,8 +199,9 @@ impl SceneState {
     }
 }
 
-/// RMS over points of the values against the truth, 0–255, unquantised: over all points (NaN
-/// when there are none), the crease points and the other points (`None` for an empty subset).
+/// RMS over points (and their channels) of the values against the truth, 0–255, unquantised:
+/// over all points (NaN when there are none), the crease points and the other points (`None`
+/// for an empty subset).
 pub(super) struct TruthErrors {
     pub(super) all: f64,
     pub(super) crease: Option<f64>,
@@ -173,11 +216,11 @@ impl SceneState {
     pub(super) fn truth_errors(&self, values: &[f32]) -> Option<TruthErrors> {
         let t = self.truth.as_ref()?;
         let part = |mask: &[bool], want: bool| {
-            let e = rms_unquantised_where(values, &t.ao, |i| mask[i] == want);
+            let e = rms_unquantised_where(values, &t.values, |i| mask[self.point_of(i)] == want);
             (!e.is_nan()).then_some(e)
         };
         Some(TruthErrors {
-            all: rms_unquantised(values, &t.ao),
+            all: rms_unquantised(values, &t.values),
             crease: part(&self.at.crease, true),
             interior: part(&self.at.crease, false),
             in_spheres: part(&self.in_spheres, true),
@@ -199,5 +242,5 @@ pub(super) fn mean_sd(v: &[f64]) -> (f64, Option<f64>) {
 pub(super) struct CellResult {
     pub(super) cell: usize,
     pub(super) values: Vec<f32>,
-    pub(super) image: Option<GrayImage>,
+    pub(super) image: Option<Image>,
 }

@@ -13,18 +13,19 @@ use crate::experiment::methods::Method;
 use crate::experiment::metrics::{
     grain, image_errors, rms_u8, rms_unquantised, vertex_errors, ErrorStats,
 };
-use crate::experiment::outputs::{
-    CellColumns, ErrorColumns, FieldColumns, FieldSweepRow, Row, SweepRow, TimeColumns,
-};
+use crate::experiment::outputs::{FieldSweepRow, SweepRow};
 use crate::experiment::plan::{Cell, Geometry, Plan, Step};
 use crate::experiment::progress::stage_adaptive;
 use crate::experiment::scenes::{BuiltScene, Scenes};
 use crate::experiment::spec::{exact_sqrt, Backend, Spec};
+use crate::experiment::table::{
+    CellColumns, ErrorColumns, FieldColumns, Parts, Row, TableRow, TimeColumns,
+};
 use crate::experiment::{Error, Result};
 use crate::field::normals::NormalField;
 use crate::field::scene::{FieldInstance, FieldScene};
 use crate::field::{FieldParams, Precision};
-use crate::render::image::GrayImage;
+use crate::render::image::Image;
 use crate::sampling::rays::RaySet;
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -42,7 +43,7 @@ pub(super) struct Runner<'a> {
     live: HashMap<(usize, FieldParams), Supplied>,
     /// The live normal fields per (mesh, field geometry, bits), for a kind that reads them.
     live_normals: HashMap<(usize, Geometry, u32), Arc<NormalField>>,
-    pub(super) rows: Vec<(usize, Row)>,
+    pub(super) rows: Vec<(usize, TableRow)>,
     pub(super) sweep: Vec<SweepRow>,
     pub(super) field_sweep: Vec<FieldSweepRow>,
     pub(super) results: Vec<CellResult>,
@@ -256,10 +257,10 @@ impl<'a> Runner<'a> {
             scene: name,
             backend: Backend::Cpu,
             rays_per_point: k * k,
-            ao_s: s,
+            raycast_s: s,
             rms_vertex,
             rms_image,
-            kernel_s: None,
+            raycast_kernel_s: None,
             rms_vs_truth: st.truth.as_ref().map(|_| t),
             rms_vs_truth_sd: st.truth.as_ref().and(t_sd),
             truth_stderr: st.truth.as_ref().map(|t| t.rms_stderr_255()),
@@ -307,10 +308,10 @@ impl<'a> Runner<'a> {
             scene: bs.name.clone(),
             backend: b,
             rays_per_point: k * k,
-            ao_s: s,
+            raycast_s: s,
             rms_vertex,
             rms_image,
-            kernel_s,
+            raycast_kernel_s: kernel_s,
             rms_vs_truth: (!vs.is_empty()).then_some(t),
             rms_vs_truth_sd: t_sd,
             truth_stderr: st.truth.as_ref().map(|t| t.rms_stderr_255()),
@@ -338,9 +339,9 @@ impl<'a> Runner<'a> {
             shaded.save_png(&p).map_err(Error::io(&p))?;
         }
         let be = self.backends[&c.backend].as_ref();
-        let row = Row::from_parts(
-            self.cell_columns(&c, &id, st, be.adapter()),
-            TimeColumns {
+        let parts = Parts {
+            cell: self.cell_columns(&c, &id, st, be.adapter()),
+            times: TimeColumns {
                 bake_s: fields.bake_s,
                 raycast_s: st.raycast_s.get(&(c.backend, self.plan.render_k)).copied(),
                 raycast_kernel_s: st
@@ -349,9 +350,13 @@ impl<'a> Runner<'a> {
                     .copied(),
                 ..ev.times
             },
-            fields.columns,
-            ErrorColumns { image, ..errors },
-        );
+            fields: fields.columns,
+            errors: ErrorColumns { image, ..errors },
+        };
+        let row = TableRow {
+            row: Row::from_parts(&parts),
+            own: self.own_metrics(st, &ev.values[0]),
+        };
         self.rows.push((cell, row));
         self.field_sweep.extend(field_sweep);
         let values = ev.values.into_iter().next().expect("the first seed");
@@ -419,16 +424,16 @@ impl<'a> Runner<'a> {
         let (short, reps) = (self.opts.short_stage_s, self.opts.repeats);
         let msg = format!("[{}/{}] lookup {id}", self.done, self.lookups);
         let eval = be.fields(&fields.scene, st.quantity())?;
-        let mut ao_kernel_s = None;
+        let mut estimate_kernel_s = None;
         let rays = RaySet::new(k, spec.reference.seed);
-        let (first, ao_s, _) = stage_adaptive(&msg, short, reps, || {
+        let (first, estimate_s, _) = stage_adaptive(&msg, short, reps, || {
             let o = eval.estimate(st.at(), &rays)?;
-            ao_kernel_s = min_time(ao_kernel_s, o.kernel_s);
+            estimate_kernel_s = min_time(estimate_kernel_s, o.kernel_s);
             Ok::<_, Error>(o.values)
         })?;
         let times = TimeColumns {
-            ao_s,
-            ao_kernel_s,
+            estimate_s,
+            estimate_kernel_s,
             setup_s: eval.setup_s(),
             ..TimeColumns::default()
         };
@@ -446,7 +451,7 @@ impl<'a> Runner<'a> {
                 Error::invalid("reference.field_rays_sweep", format!("{n} is not a square"))
             })?;
             let (other, s) = if kn == k {
-                (None, ao_s)
+                (None, estimate_s)
             } else {
                 let rays = RaySet::new(kn, spec.reference.seed);
                 let msg = format!("  lookup {id}, {n} rays");
@@ -465,7 +470,7 @@ impl<'a> Runner<'a> {
                 selection: c.selection,
                 backend: c.backend,
                 rays_per_point: n,
-                ao_s: s,
+                estimate_s: s,
                 rms_vs_truth: e.map(|e| e.all),
                 truth_stderr: st.truth.as_ref().map(|t| t.rms_stderr_255()),
             });
@@ -482,7 +487,7 @@ impl<'a> Runner<'a> {
         st: &SceneState,
         bs: &BuiltScene,
         values: &[Vec<f32>],
-        first_image: Option<&GrayImage>,
+        first_image: Option<&Image>,
     ) -> ErrorColumns {
         let vertex: Option<ErrorStats> = self
             .kind
@@ -510,7 +515,7 @@ impl<'a> Runner<'a> {
                 let e = crate::experiment::metrics::rms_unquantised_where(
                     &values[0],
                     &st.reference,
-                    |i| !st.in_spheres[i],
+                    |i| !st.in_spheres[st.point_of(i)],
                 );
                 (!e.is_nan()).then_some(e)
             },
@@ -518,7 +523,7 @@ impl<'a> Runner<'a> {
             truth_rays: st.truth.as_ref().map(|t| t.rays_per_point),
             raycast_rms_vs_truth: (!st.reference_vs_truth.is_empty())
                 .then(|| mean_sd(&st.reference_vs_truth).0),
-            occlusion_rms: Some(rms_unquantised(
+            signal_rms: Some(rms_unquantised(
                 &vec![1.0; st.reference.len()],
                 &st.reference,
             )),
@@ -540,7 +545,7 @@ impl<'a> Runner<'a> {
     pub(super) fn write_images(
         &self,
         id: &str,
-        img: Option<&(GrayImage, Vec<bool>)>,
+        img: Option<&(Image, Vec<bool>)>,
         st: &SceneState,
     ) -> Result<String> {
         let (Some((a, _)), Some((r, _))) = (img, &st.ref_image) else {
@@ -576,7 +581,14 @@ impl<'a> Runner<'a> {
             crease_points: st.at.crease_count(),
             points_in_spheres: st.in_spheres.iter().filter(|&&b| b).count(),
             caster_triangles: bs.caster_triangles(),
+            channels: st.channels as u32,
         }
+    }
+
+    /// The kind's own metric columns of `values` (the first seed's) on `st`.
+    pub(super) fn own_metrics(&self, st: &SceneState, values: &[f32]) -> Vec<(String, f64)> {
+        self.kind
+            .own_metrics(values, &st.reference, st.truth.as_ref())
     }
 }
 

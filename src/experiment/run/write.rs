@@ -1,11 +1,12 @@
-//! The end of a run: the pair table, the CSV files, the per-point AO, `run.json`, the spec copy
-//! and the plots.
+//! The end of a run: the pair table, the CSV files, the per-point values, `run.json`, the spec
+//! copy and the plots.
 
 use super::steps::Runner;
 use super::LoadedSpec;
 use crate::experiment::metrics::{rms_u8, rms_unquantised};
-use crate::experiment::outputs::{self, PairRow, Row};
+use crate::experiment::outputs::{self, PairRow};
 use crate::experiment::spec::Backend;
+use crate::experiment::table::{write_table, Row, TableRow};
 use crate::experiment::{Error, Result};
 
 impl Runner<'_> {
@@ -54,8 +55,8 @@ impl Runner<'_> {
     }
 
     /// Per-point values of every scene whose kind has per-vertex columns: the reference and
-    /// each cell, one column each.
-    fn write_point_ao(&self) -> Result<()> {
+    /// each cell, one column each (one per channel, `NAME_cC`, for a kind with channels).
+    fn write_point_values(&self) -> Result<()> {
         if !self.kind.columns().vertex {
             return Ok(());
         }
@@ -63,31 +64,43 @@ impl Runner<'_> {
             let Some(st) = self.states[s].as_ref() else {
                 continue;
             };
+            let c = st.channels;
             let cols: Vec<_> = self
                 .results
                 .iter()
                 .filter(|r| self.plan.cells[r.cell].scene == s)
                 .collect();
-            let mut text = String::from("point,x,y,z,crease,reference");
+            let mut text = String::from("point,x,y,z,crease");
+            let mut names = vec!["reference".to_string()];
             if st.truth.is_some() {
-                text.push_str(",truth,truth_stderr");
+                names.extend(["truth".to_string(), "truth_stderr".to_string()]);
             }
-            for r in &cols {
-                text.push(',');
-                text.push_str(&self.plan.cells[r.cell].id(&bs.name));
+            names.extend(cols.iter().map(|r| self.plan.cells[r.cell].id(&bs.name)));
+            for name in &names {
+                for k in 0..c {
+                    text.push(',');
+                    text.push_str(name);
+                    if c > 1 {
+                        text.push_str(&format!("_c{k}"));
+                    }
+                }
             }
             text.push('\n');
+            let push = |text: &mut String, v: &[f32], i: usize| {
+                for x in &v[i * c..(i + 1) * c] {
+                    text.push_str(&format!(",{x}"));
+                }
+            };
             for (i, p) in st.at.points.iter().enumerate() {
                 let crease = st.at.crease[i] as u8;
-                text.push_str(&format!(
-                    "{i},{},{},{},{crease},{}",
-                    p.x, p.y, p.z, st.reference[i]
-                ));
+                text.push_str(&format!("{i},{},{},{},{crease}", p.x, p.y, p.z));
+                push(&mut text, &st.reference, i);
                 if let Some(t) = &st.truth {
-                    text.push_str(&format!(",{},{}", t.ao[i], t.stderr[i]));
+                    push(&mut text, &t.values, i);
+                    push(&mut text, &t.stderr, i);
                 }
                 for r in &cols {
-                    text.push_str(&format!(",{}", r.values[i]));
+                    push(&mut text, &r.values, i);
                 }
                 text.push('\n');
             }
@@ -107,10 +120,11 @@ impl Runner<'_> {
             .map(|c| c.id(&self.scenes.scenes[c.scene].name))
             .collect();
         (self.field_sweep).sort_by_key(|r| ids.iter().position(|id| *id == r.cell));
-        let rows: Vec<Row> = self.rows.iter().map(|(_, r)| r.clone()).collect();
+        let written: Vec<TableRow> = self.rows.iter().map(|(_, r)| r.clone()).collect();
+        let rows: Vec<Row> = written.iter().map(|r| r.row.clone()).collect();
         let pairs = self.pairs();
         let (spec, opts, out) = (self.spec, self.opts, &self.opts.out);
-        outputs::write_csv(&out.join("table.csv"), &rows)?;
+        write_table(&out.join("table.csv"), &written)?;
         outputs::write_csv(&out.join("raycast_sweep.csv"), &self.sweep)?;
         if !self.field_sweep.is_empty() {
             outputs::write_csv(&out.join("field_sweep.csv"), &self.field_sweep)?;
@@ -130,7 +144,7 @@ impl Runner<'_> {
             let pv = crate::experiment::paper::paper_vs_ours(paper, &t);
             outputs::write_csv(&out.join("paper_vs_ours.csv"), &pv)?;
         }
-        self.write_point_ao()?;
+        self.write_point_values()?;
         let mut meta = crate::experiment::meta::RunMeta::collect(Some(&ls.text)).timed();
         meta.gpu_adapter = self.backends.get(&Backend::Gpu).map(|be| be.adapter());
         let scene_info: Vec<_> = self
@@ -150,7 +164,7 @@ impl Runner<'_> {
                 serde_json::json!({
                     "name": bs.name,
                     "instances": bs.scene.instances.len(),
-                    "ao_points": st.as_ref().map(|st| st.at.len()),
+                    "points": st.as_ref().map(|st| st.at.len()),
                     "caster_triangles": bs.caster_triangles(),
                     "ray_offset": st.as_ref().map(|st| st.offset),
                     "crease_points": st.as_ref().map(|st| st.at.crease_count()),
