@@ -153,7 +153,17 @@ pub fn bake(
     }
     let centre = bounds.center.as_dvec3();
     let radius = f64::from(bounds.radius);
-    let dpoints: Vec<DVec3> = points.iter().map(|p| p.as_dvec3()).collect();
+    // Each vertex once (a mesh repeats each about six times over its triangles).
+    let mut unique: Vec<[u32; 3]> = points
+        .iter()
+        .map(|p| p.to_array().map(f32::to_bits))
+        .collect();
+    unique.sort_unstable();
+    unique.dedup();
+    let dpoints: Vec<DVec3> = unique
+        .iter()
+        .map(|b| Vec3::from_array(b.map(f32::from_bits)).as_dvec3())
+        .collect();
     let planes = SupportPlanes::new(&dpoints, centre);
     let tracer = Tracer::new(triangles);
     let cube = Cube { res: params.res };
