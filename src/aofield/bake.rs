@@ -1,4 +1,4 @@
-//! The bake (Kontkanen & Laine 2005, §4.1): per texel of the cube map, the occluder's solid
+//! The bake (Kontkanen & Laine 2005, preprocessing): per texel of the cube map, the occluder's solid
 //! angle Ω and average occluded direction Υ sampled at `radial_samples` distances along the
 //! texel's direction, then the two radial models fitted to them ([`super::fit`]).
 //!

@@ -140,7 +140,9 @@ pub fn load(path: &Path, key: &CacheKey) -> Result<Fitted, AoFieldError> {
         return Err(bad("payload checksum mismatch".into()));
     }
     let values: Vec<f32> = bytemuck::pod_collect_to_vec(payload);
-    if values.iter().any(|v| !v.is_finite()) || !(header.bounds.radius > 0.0) {
+    if values.iter().any(|v| !v.is_finite())
+        || header.bounds.radius.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
+    {
         return Err(bad("non-finite values".into()));
     }
     let texels: Vec<Texel> = values

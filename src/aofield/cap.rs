@@ -1,5 +1,5 @@
 //! The cosine-weighted occlusion of a spherical cap above a surface point, clipped by the
-//! point's horizon: Kontkanen & Laine 2005, eq. 2 with `V_cap`,
+//! point's horizon: Kontkanen & Laine 2005, their AO integral (eq. 1) with the cap's visibility `V_cap`,
 //!
 //! `Ã = 1/π ∫_cap ⌊ω·n⌋ dω`,
 //!
@@ -154,8 +154,8 @@ mod tests {
 
     #[test]
     fn sphere_solid_angle_is_the_cap_of_half_angle_asin_r_over_d() {
-        for (r, d) in [(1.0, 1.5), (0.2, 7.0), (3.0, 3.01)] {
-            let alpha = (r / d as f64).asin();
+        for (r, d) in [(1.0f64, 1.5f64), (0.2, 7.0), (3.0, 3.01)] {
+            let alpha = (r / d).asin();
             let cap = 2.0 * PI * (1.0 - alpha.cos());
             assert!((sphere_solid_angle(r, d) - cap).abs() < 1e-12);
         }

@@ -1,5 +1,5 @@
-//! The cube map an AO field stores its radial functions in (Kontkanen & Laine 2005, §3.2: "the
-//! fields are stored as radial functions in a cube map surrounding the occluder").
+//! The cube map an AO field stores its radial functions in (Kontkanen & Laine 2005, storing Ω
+//! and Υ: radial functions in a cube map around the occluder).
 //!
 //! Face `f` = 2·axis + (0 for +, 1 for −); on face (axis a, sign σ) a direction d with
 //! |d_a| its largest component maps to (u, v) = (d_b, d_c) / |d_a| ∈ [−1, 1]², b and c the other
@@ -57,7 +57,7 @@ impl Cube {
     #[inline]
     pub fn direction(face: usize, u: f32, v: f32) -> Vec3 {
         let axis = face / 2;
-        let sign = if face % 2 == 0 { 1.0 } else { -1.0 };
+        let sign = if face.is_multiple_of(2) { 1.0 } else { -1.0 };
         let mut d = Vec3::ZERO;
         d[axis] = sign;
         d[(axis + 1) % 3] = u;

@@ -1,4 +1,4 @@
-//! Evaluating AO fields at run time (Kontkanen & Laine 2005, "Run-time"): one occluder's cap
+//! Evaluating AO fields at run time (Kontkanen & Laine 2005): one occluder's cap
 //! and occlusion at a model-space point ([`AoField`]), an instance under a similarity
 //! ([`AoFieldInstance`]), and several occluders blended multiplicatively ([`AoFieldScene`]).
 

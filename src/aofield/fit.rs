@@ -1,5 +1,5 @@
 //! The two radial models of an AO-field texel and their least-squares fits (Kontkanen & Laine
-//! 2005, §3.2 and §4.1), in units of the occluder's bounding radius (`s = r / R`):
+//! 2005, storing Ω and Υ and preprocessing), in units of the occluder's bounding radius (`s = r / R`):
 //!
 //! - solid angle, `Ω̃(s) = 1 / (a s² + b s + c)` (the solid angle an object subtends falls
 //!   roughly as 1/r²), fitted by minimising the paper's `ε_Ω = Σᵢ (Ωᵢ − Ω̃(sᵢ))²`;
@@ -300,10 +300,11 @@ fn solve3(mut m: [[f64; 3]; 3], mut rhs: [f64; 3]) -> Option<[f64; 3]> {
         }
         m.swap(col, piv);
         rhs.swap(col, piv);
+        let pivot_row = m[col];
         for r in col + 1..3 {
-            let f = m[r][col] / m[col][col];
-            for k in col..3 {
-                m[r][k] -= f * m[col][k];
+            let f = m[r][col] / pivot_row[col];
+            for (x, p) in m[r][col..].iter_mut().zip(&pivot_row[col..]) {
+                *x -= f * p;
             }
             rhs[r] -= f * rhs[col];
         }

@@ -1,5 +1,5 @@
 //! The distance r₀(ω) from an occluder's centre to its convex hull along each texel's direction
-//! (Kontkanen & Laine 2005, §3.3: the fields are modelled only outside the hull, and `r₀` is
+//! (Kontkanen & Laine 2005, inside the convex hull: the fields are modelled only outside the hull, and `r₀` is
 //! stored per direction).
 //!
 //! For a centre c inside the hull of the vertices V, the hull's boundary along ω is at

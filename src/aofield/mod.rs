@@ -4,26 +4,26 @@
 //! hold radial functions from which the occluder's spherical-cap approximation at any point
 //! outside it follows with no ray at all.
 //!
-//! **The approximation** (§3.1). Seen from a point x, the occluder is replaced by a spherical
+//! **The approximation** (the spherical cap approximation). Seen from a point x, the occluder is replaced by a spherical
 //! cap of the same solid angle `Ω(x) = ∫ V(x, ω) dω` about its average occluded direction
 //! `Υ(x) = normalize(∫ V(x, ω) ω dω)`; the occlusion at x with normal n is the cap's
 //! cosine-weighted occlusion clipped by the horizon, `Ã = 1/π ∫_cap ⌊ω·n⌋ dω` ([`cap`]).
 //!
-//! **The fields** (§3.2). Along each texel direction ω, at distance r = s·R from the occluder's
+//! **The fields** (storing Ω and Υ). Along each texel direction ω, at distance r = s·R from the occluder's
 //! centre (R its bounding radius: s is scale-free), the texel stores
 //! `Ω̃(s) = 1 / (a s² + b s + c)` and `Υ̃(s) = normalize(C − s ω)`: seven channels `a, b, c`,
 //! `C` and the hull's distance `r₀` ([`storage`]), fitted by least squares to Ω and Υ sampled
 //! at `radial_samples` distances by our ray caster ([`bake`], [`fit`]).
 //!
-//! **Inside the hull** (§3.3). The functions are fitted only outside the occluder's convex hull
+//! **Inside the hull** (inside the convex hull). The functions are fitted only outside the occluder's convex hull
 //! ([`hull`]). Within it (s < s₀), the occlusion evaluated at the hull, `Ã(s₀)`, is blended
 //! towards a constant: `Ã = t Ã(s₀) + (1 − t) A₀`, `t = (s/s₀)^p` ([`Inside`]).
 //!
-//! **Run time** (§4.2). Per receiver point and occluder: into model space by the instance's
+//! **Run time** (at run time). Per receiver point and occluder: into model space by the instance's
 //! transform (Ω is invariant under a similarity, so any rigid motion and uniform scale of the
 //! occluder is exact), the cube map read bilinearly, `s_c = max(s, s₀)`, Ω̃ and Υ̃ at `s_c`, Ã
 //! from (Ω̃, n·Υ̃). Several occluders combine as the paper's multiplicative blending of their
-//! accessibilities: `1 − A = Π (1 − Ãᵢ)` (§4.3). This project's AO is the accessibility
+//! accessibilities: `1 − A = Π (1 − Ãᵢ)` (combining occluders). This project's AO is the accessibility
 //! (1 = unoccluded), so an [`AoFieldScene`] answers `Π (1 − Ãᵢ)`.
 //!
 //! What an AO field cannot answer: an occluder's occlusion of itself (its own surface lies on

@@ -1,5 +1,5 @@
-//! The precision an AO field's seven channels are stored at (Kontkanen & Laine 2005, §4.2:
-//! two cube maps, `a, b, c, r₀` in one and `C` in the other): f32, f16 or u8, and the exact
+//! The precision an AO field's seven channels are stored at (Kontkanen & Laine 2005,
+//! preprocessing: two cube maps, `a, b, c, r₀` in one and `C` in the other): f32, f16 or u8, and the exact
 //! bytes each takes. The evaluation reads the stored values and decodes them per fetch, as a
 //! texture unit does.
 //!
