@@ -23,7 +23,7 @@ use std::path::{Path, PathBuf};
 
 const MAGIC: &[u8; 8] = b"VFAOFLD1";
 /// Bumped whenever the payload or the bake's meaning changes.
-pub const FORMAT_VERSION: u32 = 1;
+pub const FORMAT_VERSION: u32 = 2;
 
 /// What identifies a fitted field.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

@@ -11,8 +11,13 @@
 //! diagonal scaling, steps accepted only when they lower the cost), started from a linearised
 //! fit: `Σᵢ (Ωᵢ − Ωᵢ² q(sᵢ))²` (the residual of 1/Ω weighted by Ω², linear in a, b, c) and, for
 //! C, the point nearest to the sample lines `sᵢω + t Υᵢ` (with a 10⁻³ pull towards the centre,
-//! which makes the radially symmetric case, all Υᵢ = −ω, well posed: C = 0). The solid-angle
-//! fit also starts from `a s² + 1/2π` and keeps the better of the two.
+//! which makes the radially symmetric case, all Υᵢ = −ω, well posed: C = 0). Each fit also has a
+//! second start (`a s² + 1/2π`; C = 0) and keeps the better result.
+//!
+//! C is kept within [`C_MAX`] bounding radii of the centre (deviation from the paper, which
+//! does not bound it): where a texel's sampled directions barely change with s, the unbounded
+//! optimum runs C off towards infinity along them (we saw |C| ≈ 10¹¹), which no 16- or 8-bit
+//! channel holds; within the bound the fit is the best C there.
 //!
 //! Outside an object's convex hull the object lies in a half-space, so Ω ≤ 2π: the solid-angle
 //! fit keeps `q ≥ 1/2π` on the whole ray `s ≥ s₀` beyond the hull (a ≥ 0 and the minimum of
@@ -29,6 +34,9 @@ pub struct Quadratic {
     pub b: f64,
     pub c: f64,
 }
+
+/// The farthest the direction model's point C may lie from the centre, in bounding radii.
+pub const C_MAX: f64 = 2.0;
 
 /// The least `q` the solid-angle fit allows beyond the hull: Ω ≤ 2π there.
 pub const Q_FLOOR: f64 = 1.0 / (2.0 * PI);
@@ -150,8 +158,11 @@ fn refine_solid_angle(start: Quadratic, s: &[f64], omega: &[f64], s0: f64) -> (Q
         let mut accepted = false;
         for _ in 0..12 {
             let mut m = jtj;
+            // Marquardt's scaling, with a floor so that a direction the cost does not yet
+            // see (a zero diagonal) still gets a damped step.
+            let floor = 1e-9 * (jtj[0][0] + jtj[1][1] + jtj[2][2]).max(1e-300);
             for (k, row) in m.iter_mut().enumerate() {
-                row[k] += lambda * jtj[k][k].max(1e-300);
+                row[k] += lambda * jtj[k][k].max(floor);
             }
             let Some(step) = solve3(m, g) else {
                 lambda *= 10.0;
@@ -226,12 +237,26 @@ pub fn fit_centre(s: &[f64], dirs: &[DVec3], w: DVec3) -> DVec3 {
         row[k] += mu;
     }
     let start = solve3(m, rhs).map_or(DVec3::ZERO, DVec3::from_array);
-    refine_centre(start, s, dirs, w)
+    // Onto the ball of radius C_MAX (just inside it).
+    let start = if start.length() > C_MAX {
+        start * (C_MAX * (1.0 - 1e-9) / start.length())
+    } else {
+        start
+    };
+    // The nearest point may lie behind the samples (on the lines at negative t, every
+    // direction reversed): the centre, the far field's answer, is the second start.
+    let a = refine_centre(start, s, dirs, w);
+    let b = refine_centre(DVec3::ZERO, s, dirs, w);
+    if direction_cost(a, s, dirs, w) <= direction_cost(b, s, dirs, w) {
+        a
+    } else {
+        b
+    }
 }
 
-/// Levenberg–Marquardt on `ε_Υ`; accepted steps lower the cost.
+/// Levenberg–Marquardt on `ε_Υ` within |C| ≤ [`C_MAX`]; accepted steps lower the cost.
 fn refine_centre(start: DVec3, s: &[f64], dirs: &[DVec3], w: DVec3) -> DVec3 {
-    let valid = |c: DVec3| s.iter().all(|&si| (c - si * w).length() > 1e-9);
+    let valid = |c: DVec3| c.length() <= C_MAX && s.iter().all(|&si| (c - si * w).length() > 1e-9);
     let mut c = if valid(start) { start } else { DVec3::ZERO };
     let mut cost = direction_cost(c, s, dirs, w);
     let mut lambda = 1e-3;
@@ -255,8 +280,11 @@ fn refine_centre(start: DVec3, s: &[f64], dirs: &[DVec3], w: DVec3) -> DVec3 {
         let mut accepted = false;
         for _ in 0..12 {
             let mut m = jtj;
+            // Marquardt's scaling, with a floor so that a direction the cost does not yet
+            // see (a zero diagonal) still gets a damped step.
+            let floor = 1e-9 * (jtj[0][0] + jtj[1][1] + jtj[2][2]).max(1e-300);
             for (k, row) in m.iter_mut().enumerate() {
-                row[k] += lambda * jtj[k][k].max(1e-300);
+                row[k] += lambda * jtj[k][k].max(floor);
             }
             let Some(step) = solve3(m, g) else {
                 lambda *= 10.0;
@@ -376,6 +404,19 @@ mod tests {
             // far-field expansion's remainder, −1/(16π s²) − …, which no quadratic cancels).
             assert!(ours > 0.0);
         }
+    }
+
+    /// Directions that do not change with s: the unbounded optimum is C at infinity along them;
+    /// the fit stays within C_MAX and still lowers the cost from its start.
+    #[test]
+    fn constant_directions_keep_c_within_its_bound() {
+        let s = radii(1.0, 8.0, 10);
+        let w = DVec3::new(0.0, 0.0, 1.0);
+        let d = DVec3::new(0.6, 0.0, -0.8);
+        let dirs = vec![d; s.len()];
+        let c = fit_centre(&s, &dirs, w);
+        assert!(c.length() <= C_MAX, "{c}");
+        assert!(direction_cost(c, &s, &dirs, w) < direction_cost(DVec3::ZERO, &s, &dirs, w));
     }
 
     #[test]

@@ -39,7 +39,7 @@
 //!   cube, at sample distances of our choosing, and the cube map is not low-pass filtered
 //!   ([`bake`]);
 //! - the fits are Levenberg–Marquardt from linearised starts, the solid-angle fit kept at
-//!   Ω̃ ≤ 2π beyond the hull ([`fit`]);
+//!   Ω̃ ≤ 2π beyond the hull and C within two bounding radii of the centre ([`fit`]);
 //! - no fade to zero between `r_near` and `r_far`: the paper's shader fades the occlusion out
 //!   at a user distance for speed; an AO field here answers unbounded AO, extrapolating the
 //!   fits past `reach`;
