@@ -27,7 +27,7 @@
 //! (1 = unoccluded), so an [`AoFieldScene`] answers `Π (1 − Ãᵢ)`.
 //!
 //! What an AO field cannot answer: an occluder's occlusion of itself (its own surface lies on
-//! or inside its hull; the paper leaves self-occlusion to precomputed per-object AO), a ray's
+//! or inside its hull; the paper's method is for inter-object occlusion), a ray's
 //! hit (shadows, reflections), and AO within a finite radius or with a distance falloff (the
 //! cap counts the whole occluder at any distance).
 //!
@@ -43,8 +43,8 @@
 //! - no fade to zero between `r_near` and `r_far`: the paper's shader fades the occlusion out
 //!   at a user distance for speed; an AO field here answers unbounded AO, extrapolating the
 //!   fits past `reach`;
-//! - `A₀` and `p` are the paper's user constants, without values given; ours default to 1 and 1
-//!   (the centre of a solid occluder is fully occluded; a linear blend).
+//! - `A₀` and `p` are the paper's user constants; ours default to 1 and 1 (the centre of a
+//!   solid occluder is fully occluded; a linear blend).
 
 pub mod bake;
 pub mod cache;
