@@ -13,6 +13,7 @@
 //! - [`sampling`]: sphere point sets, hemisphere layouts, frames, seeded ray sets.
 //! - [`trace`]: the ray-cast reference (obvhs CWBVH + watertight triangles).
 //! - [`field`]: visibility fields: bake, storage, lookup, cache.
+//! - [`aofield`]: ambient occlusion fields (Kontkanen & Laine 2005), a per-object peer.
 //! - [`visibility`]: the `Visibility` seam that ray casting and field lookup implement.
 //! - [`render`]: the AO / shadow / reflection renderers, written against `Visibility`.
 //! - [`gpu`]: headless wgpu paths.
@@ -23,6 +24,7 @@
 //! model units; field distances normalised by 2R; AO in [0, 1] (1 = unoccluded), reported on the
 //! 0–255 scale for RMS.
 
+pub mod aofield;
 pub mod experiment;
 pub mod field;
 pub mod geometry;

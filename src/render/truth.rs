@@ -79,6 +79,21 @@ pub struct Truth {
 }
 
 impl Truth {
+    /// Scalar values that are exact as they stand (an estimator that samples nothing, such as
+    /// a direct estimator of a method: its estimate is its own converged value), with no
+    /// standard error.
+    pub fn exact(values: Vec<f32>) -> Truth {
+        Truth {
+            stderr: vec![0.0; values.len()],
+            values,
+            channels: 1,
+            rays_per_point: 0,
+            k: 0,
+            batches: 1,
+            rounds: Vec::new(),
+        }
+    }
+
     /// The number of points.
     pub fn points(&self) -> usize {
         self.values.len() / self.channels.max(1)

@@ -18,6 +18,7 @@
 //! The field's cells stay in `table.csv` (their axes are the papers'); every other method is a
 //! row of `methods.csv`. Methods run on the CPU backend.
 
+pub mod aofield;
 pub mod embree;
 pub mod raycast;
 pub mod sdf;
@@ -154,7 +155,7 @@ where
 }
 
 /// The methods of this build.
-pub const BUILT_IN: &[MethodEntry] = &[raycast::ENTRY, embree::ENTRY, sdf::ENTRY];
+pub const BUILT_IN: &[MethodEntry] = &[raycast::ENTRY, embree::ENTRY, sdf::ENTRY, aofield::ENTRY];
 
 /// The registry: [`BUILT_IN`], then the methods added at run time by [`register`].
 static REGISTRY: Registry<MethodEntry> = Registry::new(BUILT_IN, "method");

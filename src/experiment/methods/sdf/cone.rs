@@ -145,15 +145,7 @@ impl Estimator for ConeEstimator {
 
     /// The same values, exact for this estimator (no rays, no standard error).
     fn converged(&self, _vis: &dyn Visibility, at: Points, _t: &TruthOptions) -> Truth {
-        let ao = self.values(at);
-        Truth {
-            stderr: vec![0.0; ao.len()],
-            ao,
-            rays_per_point: 0,
-            k: 0,
-            batches: 1,
-            rounds: Vec::new(),
-        }
+        Truth::exact(self.values(at))
     }
 
     fn key(&self) -> serde_json::Map<String, serde_json::Value> {
