@@ -396,12 +396,22 @@ fn check(
         match run_loaded(&ls, args, Some(&parent)) {
             Ok(report) => {
                 let mut f = super::check::check_rows(&report.thresholds, &report.rows);
-                let committed = committed_root.join(&name).join("table.csv");
+                let animated = ls.spec.animation.is_some();
+                let table = if animated { "frames.csv" } else { "table.csv" };
+                let committed = committed_root.join(&name).join(table);
                 let compared = if shipped || against.is_some() {
-                    match super::outputs::read_csv(&committed) {
-                        Ok(rows) => {
-                            f.extend(super::check::check_committed(&report.rows, &rows));
+                    let read = if animated {
+                        committed_frames(&report.out, &committed)
+                    } else {
+                        super::outputs::read_csv(&committed).and_then(|rows| {
+                            let mut f = super::check::check_committed(&report.rows, &rows);
                             f.extend(committed_methods(&report.out, &committed)?);
+                            Ok(f)
+                        })
+                    };
+                    match read {
+                        Ok(failures) => {
+                            f.extend(failures);
                             format!(" and the committed {}", committed.display())
                         }
                         Err(e) => {
@@ -417,8 +427,9 @@ fn check(
                     " (not a shipped spec: no committed run compared)".into()
                 };
                 println!(
-                    "{name}: {} cell(s), {} threshold(s){compared}, {} failure(s) ({:.1} s)",
-                    report.rows.len(),
+                    "{name}: {} {}, {} threshold(s){compared}, {} failure(s) ({:.1} s)",
+                    report.rows.len() + report.frames.len(),
+                    if animated { "frame row(s)" } else { "cell(s)" },
                     report.thresholds.len(),
                     f.len(),
                     report.seconds
@@ -473,6 +484,22 @@ fn check_dynamic(args: &RunArgs, parent: &Path, committed_root: &Path) -> Result
         t.elapsed().as_secs_f64()
     );
     Ok(f.into_iter().map(|f| format!("dynamic: {f}")).collect())
+}
+
+/// An animated run's `frames.csv` (in `out`) against the committed one
+/// ([`super::check::check_committed_frames`]); an error where the committed file is missing.
+fn committed_frames(out: &Path, committed: &Path) -> Result<Vec<super::check::Failure>> {
+    let theirs = super::columns::read_csv(committed)?;
+    let ours = super::columns::read_csv(&out.join("frames.csv"))?;
+    let (f, left) = super::check::check_committed_frames(&ours, &theirs);
+    if left > 0 {
+        println!(
+            "{}: {left} frame row(s) of methods the committed run lacks (Embree's, in a build \
+             with the `embree` feature) not compared",
+            out.display()
+        );
+    }
+    Ok(f)
 }
 
 /// The run's `methods.csv` rows against the committed ones beside `committed_table` (the

@@ -161,6 +161,11 @@ impl Pose {
     }
 }
 
+/// A spec vector as errors show it, each component in Rust's shortest form (`[0.0, 1e300, 0.0]`).
+fn show(v: DVec3) -> String {
+    format!("[{:?}, {:?}, {:?}]", v.x, v.y, v.z)
+}
+
 /// A seeded value in [0, 1) of (i, salt), 24 bits (splitmix64's finaliser): the seeded
 /// directions of tumbles and walks, and `experiment dynamic`'s phases and axes.
 pub fn seeded_unit(i: usize, salt: u64) -> f32 {
@@ -327,7 +332,7 @@ impl Motion {
             (!p.is_finite() || p.abs().max_element() > max).then(|| {
                 (
                     field.to_string(),
-                    format!("{p} must be finite, within ±{max:e}"),
+                    format!("{} must be finite, within ±{max:e}", show(p)),
                 )
             })
         };
@@ -335,7 +340,7 @@ impl Motion {
             a.try_normalize().is_none().then(|| {
                 (
                     field.to_string(),
-                    format!("{a} must be finite and of non-zero length"),
+                    format!("{} must be finite and of non-zero length", show(a)),
                 )
             })
         };
@@ -369,7 +374,7 @@ impl Motion {
             if !k.rotate_deg.is_finite() {
                 return bad(
                     &at("rotate_deg"),
-                    format!("{} must be finite", k.rotate_deg),
+                    format!("{} must be finite", show(k.rotate_deg)),
                 );
             }
         }

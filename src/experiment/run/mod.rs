@@ -8,6 +8,8 @@
 //! [`crate::visibility::Visibility`] behind the same estimator. Stages shorter than
 //! `short_stage_s` are timed as the best of `repeats` runs.
 
+pub mod frames;
+mod frames_write;
 mod methods;
 mod references;
 pub(crate) mod staging;
@@ -112,6 +114,9 @@ pub struct RunReport {
     pub name: String,
     pub out: PathBuf,
     pub rows: Vec<Row>,
+    /// An animated spec's rows of `frames.csv` (empty for a static spec, whose `rows` are its
+    /// cells).
+    pub frames: Vec<frames::FrameRow>,
     /// The thresholds of the profile that ran.
     pub thresholds: Vec<Threshold>,
     /// The plan as printed by `--dry-run`.
@@ -197,6 +202,9 @@ fn run_checked(
     };
     crate::experiment::plan::check_scene_memory(spec, &scenes, limits)
         .context(|| ls.path.display().to_string())?;
+    if spec.animation.is_some() {
+        return run_animated(ls, opts, spec, &scenes, started);
+    }
     let plan = Plan::new_shard(spec, &scenes, limits, opts.shard)
         .context(|| ls.path.display().to_string())?;
     let supply = &opts.supply;
@@ -207,6 +215,7 @@ fn run_checked(
         name: ls.name.clone(),
         out: opts.out.clone(),
         rows,
+        frames: Vec::new(),
         thresholds: spec.thresholds.clone(),
         plan_text: plan_text.clone(),
         seconds: started.elapsed().as_secs_f64(),
@@ -245,6 +254,72 @@ fn run_checked(
         "{}: {} cells in {:.1} s -> {}",
         ls.name,
         r.rows.len(),
+        r.seconds,
+        opts.out.display()
+    );
+    Ok(r)
+}
+
+/// [`run_checked`] for an animated spec: every scene frame by frame ([`frames`]), written by
+/// [`frames_write`] through the same staging.
+fn run_animated(
+    ls: &LoadedSpec,
+    opts: &RunOptions,
+    spec: &Spec,
+    scenes: &Scenes,
+    started: std::time::Instant,
+) -> Result<RunReport> {
+    if opts.shard.is_some() {
+        return Err(Error::invalid(
+            "--shard",
+            format!(
+                "{}: an animated spec runs whole (its rows are frames, not cells)",
+                ls.name
+            ),
+        ));
+    }
+    let frames = spec.animation.as_ref().map_or(1, |a| a.frames);
+    let cells = crate::experiment::plan::cells_of(spec).len();
+    let plan_text = format!(
+        "{}: {} scene(s) x {frames} frame(s): the ray casters once a frame, the field methods \
+         once a frame per field cell ({cells} cell(s) over all scenes), {} rays per point, each \
+         frame's converged reference\n",
+        ls.name,
+        scenes.scenes.len(),
+        spec.render.rays_per_point
+    );
+    let report = |frames: Vec<frames::FrameRow>| RunReport {
+        name: ls.name.clone(),
+        out: opts.out.clone(),
+        rows: Vec::new(),
+        frames,
+        thresholds: Vec::new(),
+        plan_text: plan_text.clone(),
+        seconds: started.elapsed().as_secs_f64(),
+    };
+    if opts.dry_run {
+        return Ok(report(Vec::new()));
+    }
+    eprint!("{plan_text}");
+    let staged = RunOptions {
+        out: staging::create(&opts.out)?,
+        ..opts.clone()
+    };
+    let done = frames::run(ls, spec, scenes, &staged)
+        .and_then(|run| frames_write::write(ls, spec, scenes, &staged, &run).map(|()| run.rows))
+        .and_then(|rows| staging::publish(&staged.out, &opts.out).map(|()| rows));
+    let rows = match done {
+        Ok(rows) => rows,
+        Err(e) => {
+            let _ = std::fs::remove_dir_all(&staged.out);
+            return Err(e);
+        }
+    };
+    let r = report(rows);
+    eprintln!(
+        "{}: {} frame rows in {:.1} s -> {}",
+        ls.name,
+        r.frames.len(),
         r.seconds,
         opts.out.display()
     );

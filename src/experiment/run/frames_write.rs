@@ -1,0 +1,166 @@
+//! The end of an animated run ([`super::frames`]): `frames.csv`, per scene the frame time and
+//! the error against the frame (`frame_time-SCENE.png`, `error-SCENE.png`) and, with an image,
+//! the animation of the reference, the first field method and their difference
+//! (`animation-SCENE.png`, APNG), `run.json` and the spec copy.
+
+use super::frames::{FrameRow, FramesRun};
+use super::{LoadedSpec, RunOptions};
+use crate::experiment::plot::{xy_plot, Axes, Series};
+use crate::experiment::scenes::Scenes;
+use crate::experiment::spec::Spec;
+use crate::experiment::{Error, Result};
+use std::path::Path;
+
+/// Each method's (and field cell's) label and its rows of `scene`, in row order.
+fn series_of<'r>(rows: &'r [FrameRow], scene: &str) -> Vec<(String, Vec<&'r FrameRow>)> {
+    let mut out: Vec<(String, Vec<&FrameRow>)> = Vec::new();
+    for r in rows.iter().filter(|r| r.scene == scene) {
+        let label = if r.cell.is_empty() {
+            r.method.clone()
+        } else {
+            format!("{} {}", r.method, r.cell)
+        };
+        match out.iter_mut().find(|(l, _)| *l == label) {
+            Some((_, v)) => v.push(r),
+            None => out.push((label, vec![r])),
+        }
+    }
+    out
+}
+
+/// Frame time (update + query) against the frame, one line per method.
+fn plot_frame_time(path: &Path, rows: &[FrameRow], scene: &str, kind: &str) -> Result<()> {
+    let series: Vec<Series> = series_of(rows, scene)
+        .into_iter()
+        .map(|(label, rs)| Series {
+            label,
+            points: rs.iter().map(|r| (r.frame as f64, r.frame_s)).collect(),
+            line: true,
+        })
+        .collect();
+    let axes = Axes {
+        title: format!("{scene}: frame time (motion update + {kind}) per method"),
+        x_label: "frame".into(),
+        y_label: "frame time (s)".into(),
+        log_x: false,
+        log_y: true,
+    };
+    xy_plot(path, &axes, &series, &[])
+}
+
+/// The error against the frame's converged reference per method, and the field methods'
+/// error against the world rebuild on the same rays.
+fn plot_error(path: &Path, rows: &[FrameRow], scene: &str) -> Result<()> {
+    let mut series = Vec::new();
+    for (label, rs) in series_of(rows, scene) {
+        series.push(Series {
+            label: format!("{label}: against the converged reference"),
+            points: rs
+                .iter()
+                .map(|r| (r.frame as f64, r.rms_vs_truth))
+                .collect(),
+            line: true,
+        });
+        if !rs[0].cell.is_empty() {
+            series.push(Series {
+                label: format!("{label}: against ray casting, same rays"),
+                points: rs
+                    .iter()
+                    .map(|r| (r.frame as f64, r.rms_vs_raycast))
+                    .collect(),
+                line: true,
+            });
+        }
+    }
+    let axes = Axes {
+        title: format!("{scene}: error per frame"),
+        x_label: "frame".into(),
+        y_label: "RMS (0-255)".into(),
+        log_x: false,
+        log_y: false,
+    };
+    xy_plot(path, &axes, &series, &[])
+}
+
+/// Writes every output of an animated run into `opts.out`.
+pub(super) fn write(
+    ls: &LoadedSpec,
+    spec: &Spec,
+    scenes: &Scenes,
+    opts: &RunOptions,
+    run: &FramesRun,
+) -> Result<()> {
+    let out = &opts.out;
+    crate::experiment::outputs::write_csv(&out.join("frames.csv"), &run.rows)?;
+    let kind = crate::experiment::kinds::of(&spec.render);
+    for bs in &scenes.scenes {
+        let n = &bs.name;
+        plot_frame_time(
+            &out.join(format!("frame_time-{n}.png")),
+            &run.rows,
+            n,
+            kind.name(),
+        )?;
+        plot_error(&out.join(format!("error-{n}.png")), &run.rows, n)?;
+    }
+    for (name, size, frames) in &run.pictures {
+        let p = out.join(format!("animation-{name}.png"));
+        crate::experiment::dynamic::animation::write(&p, frames, *size, 250)?;
+    }
+    let scene_info: Vec<_> = scenes
+        .scenes
+        .iter()
+        .map(|bs| {
+            serde_json::json!({
+                "name": bs.name,
+                "instances": bs.scene.instances.len(),
+                "frames": bs.frame_count(),
+                "caster_triangles": bs.caster_triangles(),
+                "origin": bs.origin,
+            })
+        })
+        .collect();
+    let meshes: Vec<_> = scenes
+        .meshes
+        .iter()
+        .map(|m| {
+            serde_json::json!({
+                "label": m.label,
+                "mesh_sha256": m.sha256,
+                "vertices": m.mesh.vertex_count(),
+                "triangles": m.mesh.triangle_count(),
+                "file": m.file,
+            })
+        })
+        .collect();
+    let meta = crate::experiment::meta::RunMeta::collect(Some(&ls.text)).timed();
+    let summary = serde_json::json!({
+        "spec": ls.name,
+        "spec_file": crate::experiment::meta::portable_path(&ls.path),
+        "reproduces": spec.reproduces,
+        "profile": if opts.quick { "quick" } else { "full" },
+        "meta": meta,
+        "render": kind.name(),
+        "rays_per_point": spec.render.rays_per_point,
+        "seed": spec.reference.seed,
+        "truth": spec.reference.truth,
+        "animation": spec.animation,
+        "methods": run.methods,
+        "skipped_methods": run
+            .skipped
+            .iter()
+            .map(|(m, why)| serde_json::json!({"method": m, "why": why}))
+            .collect::<Vec<_>>(),
+        "precompute": run.precompute,
+        "timing": "each method's update and query timed once per frame, all threads",
+        "cache": opts.supply.cache.as_deref().map(crate::experiment::meta::portable_path),
+        "scenes": scene_info,
+        "meshes": meshes,
+        "effective_spec": spec,
+    });
+    let p = out.join("run.json");
+    let json = serde_json::to_string_pretty(&summary).expect("run summary serialises");
+    crate::io::write_atomic(&p, json.as_bytes()).map_err(Error::io(&p))?;
+    let p = out.join("spec.json");
+    crate::io::write_atomic(&p, ls.text.as_bytes()).map_err(Error::io(&p))
+}
