@@ -539,14 +539,19 @@ fn plots(names: &[String], quick: bool, dir: Option<&Path>) -> Result<()> {
         (None, true) => discover::spec_paths()?
             .iter()
             .map(|p| root.join(discover::name_of(p)))
-            .filter(|d| d.join("table.csv").exists())
+            .filter(|d| d.join("table.csv").exists() || d.join("frames.csv").exists())
             .collect(),
     };
     for d in dirs {
-        let run: serde_json::Value = std::fs::read(d.join("run.json"))
-            .ok()
-            .and_then(|b| serde_json::from_slice(&b).ok())
-            .unwrap_or_default();
+        // An animated run: its plots from frames.csv.
+        if d.join("frames.csv").exists() && !d.join("table.csv").exists() {
+            let run = read_run_json(&d);
+            super::run::redraw_frames(&d, run["render"].as_str().unwrap_or("the kind"))?;
+            own_plots(&d, run)?;
+            println!("redrew the plots in {}", d.display());
+            continue;
+        }
+        let run = read_run_json(&d);
         let title = format!(
             "{}{}",
             run["spec"].as_str().unwrap_or(&discover::name_of(&d)),
@@ -567,6 +572,14 @@ fn plots(names: &[String], quick: bool, dir: Option<&Path>) -> Result<()> {
         println!("redrew the plots in {}", d.display());
     }
     Ok(())
+}
+
+/// A run's `run.json` (null where it has none or cannot be read).
+fn read_run_json(dir: &Path) -> serde_json::Value {
+    std::fs::read(dir.join("run.json"))
+        .ok()
+        .and_then(|b| serde_json::from_slice(&b).ok())
+        .unwrap_or_default()
 }
 
 /// Rewrites `dir/paper_vs_ours.csv` from the run's CSV files and the paper section of

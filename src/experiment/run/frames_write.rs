@@ -82,6 +82,28 @@ fn plot_error(path: &Path, rows: &[FrameRow], scene: &str) -> Result<()> {
     xy_plot(path, &axes, &series, &[])
 }
 
+/// The plots of every scene of `rows` in `dir` (`kind`: the render kind, for the titles).
+fn draw(dir: &Path, rows: &[FrameRow], kind: &str) -> Result<()> {
+    let mut scenes: Vec<&str> = Vec::new();
+    for r in rows {
+        if !scenes.contains(&r.scene.as_str()) {
+            scenes.push(&r.scene);
+        }
+    }
+    for n in scenes {
+        plot_frame_time(&dir.join(format!("frame_time-{n}.png")), rows, n, kind)?;
+        plot_error(&dir.join(format!("error-{n}.png")), rows, n)?;
+    }
+    Ok(())
+}
+
+/// Redraws the plots of the animated run in `dir` from its `frames.csv` (`kind`: its render
+/// kind, for the titles).
+pub fn redraw(dir: &Path, kind: &str) -> Result<()> {
+    let rows: Vec<FrameRow> = crate::experiment::outputs::read_csv(&dir.join("frames.csv"))?;
+    draw(dir, &rows, kind)
+}
+
 /// Writes every output of an animated run into `opts.out`.
 pub(super) fn write(
     ls: &LoadedSpec,
@@ -93,16 +115,7 @@ pub(super) fn write(
     let out = &opts.out;
     crate::experiment::outputs::write_csv(&out.join("frames.csv"), &run.rows)?;
     let kind = crate::experiment::kinds::of(&spec.render);
-    for bs in &scenes.scenes {
-        let n = &bs.name;
-        plot_frame_time(
-            &out.join(format!("frame_time-{n}.png")),
-            &run.rows,
-            n,
-            kind.name(),
-        )?;
-        plot_error(&out.join(format!("error-{n}.png")), &run.rows, n)?;
-    }
+    draw(out, &run.rows, kind.name())?;
     for (name, size, frames) in &run.pictures {
         let p = out.join(format!("animation-{name}.png"));
         crate::experiment::dynamic::animation::write(&p, frames, *size, 250)?;

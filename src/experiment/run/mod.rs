@@ -10,6 +10,8 @@
 
 pub mod frames;
 mod frames_write;
+
+pub use frames_write::redraw as redraw_frames;
 mod methods;
 mod references;
 pub(crate) mod staging;
