@@ -339,3 +339,44 @@ fn overlap_counts_on_a_constructed_approach_are_exact() {
         assert_eq!((r.sphere_overlaps, r.points_in_spheres), counts[r.frame]);
     }
 }
+
+/// Soft shadows and glossy reflections per frame, through their kinds: the ray casters agree
+/// on every shadow ray, and on every reflection ray to the f32 rounding of a hit's normal in
+/// another frame (a few units of 1e-7 of the radiance: under 255·10⁻⁶ on the 0–255 scale);
+/// the fields (with their normal fields for reflections) err by more than 1 and less than 60.
+#[test]
+fn shadows_and_reflections_are_measured_per_frame() {
+    let lights = r#""lights": [{ "center": [2, 3, 2.5], "radius": 0.2, "intensity": 1 }]"#;
+    let dir = tempfile::tempdir().unwrap();
+    for (what, own, exact) in [
+        ("shadows", String::new(), true),
+        (
+            "reflections",
+            r#", "gloss": { "phong": { "exponent": 50 } }, "normal_bits": [8]"#.to_string(),
+            false,
+        ),
+    ] {
+        let text = animated(ORBIT, "", r#"{ "frames": 2, "time_step": 1 }"#).replace(
+            r#""render": { "#,
+            &format!(r#""render": {{ "what": "{what}", {lights}{own}, "#),
+        );
+        let rows = frames_of(dir.path(), &text, what);
+        let methods = if cfg!(feature = "embree") { 6 } else { 4 };
+        assert_eq!(rows.len(), 2 * methods, "{what}");
+        for r in &rows {
+            assert!(r.points > 0 && r.truth_stderr > 0.0, "{r:?}");
+            match r.method.as_str() {
+                "field" | "field_every_sphere" => {
+                    assert!(r.rms_vs_raycast > 1.0 && r.rms_vs_raycast < 60.0, "{r:?}")
+                }
+                "world_rebuild" => assert_eq!(r.rms_vs_raycast, 0.0),
+                _ if exact => assert_eq!(r.rms_vs_raycast, 0.0, "{r:?}"),
+                _ => assert!(r.rms_vs_raycast < 255e-6, "{r:?}"),
+            }
+        }
+        assert_ne!(
+            rows[0].mean_value, rows[methods].mean_value,
+            "{what}: the frames differ"
+        );
+    }
+}
