@@ -8,7 +8,7 @@ use super::{LoadedSpec, RunOptions};
 use crate::experiment::plot::{xy_plot, Axes, Series};
 use crate::experiment::scenes::Scenes;
 use crate::experiment::spec::Spec;
-use crate::experiment::{Error, Result};
+use crate::experiment::Result;
 use std::path::Path;
 
 /// Each method's (and field cell's) label and its rows of `scene`, in row order.
@@ -133,19 +133,7 @@ pub(super) fn write(
             })
         })
         .collect();
-    let meshes: Vec<_> = scenes
-        .meshes
-        .iter()
-        .map(|m| {
-            serde_json::json!({
-                "label": m.label,
-                "mesh_sha256": m.sha256,
-                "vertices": m.mesh.vertex_count(),
-                "triangles": m.mesh.triangle_count(),
-                "file": m.file,
-            })
-        })
-        .collect();
+    let meshes = super::write::meshes_json(scenes);
     let meta = crate::experiment::meta::RunMeta::collect(Some(&ls.text)).timed();
     let summary = serde_json::json!({
         "spec": ls.name,
@@ -171,9 +159,5 @@ pub(super) fn write(
         "meshes": meshes,
         "effective_spec": spec,
     });
-    let p = out.join("run.json");
-    let json = serde_json::to_string_pretty(&summary).expect("run summary serialises");
-    crate::io::write_atomic(&p, json.as_bytes()).map_err(Error::io(&p))?;
-    let p = out.join("spec.json");
-    crate::io::write_atomic(&p, ls.text.as_bytes()).map_err(Error::io(&p))
+    super::write::write_summary(out, &summary, ls)
 }

@@ -226,31 +226,15 @@ fn run_checked(
         return Ok(report(Vec::new()));
     }
     eprint!("{plan_text}");
-    // Outputs go to a staging folder, published only once the run has finished.
-    let staged = RunOptions {
-        out: staging::create(&opts.out)?,
-        ..opts.clone()
-    };
     let method_runs = methods::runnable(ls, spec, opts)?;
-    let rows = (|| {
-        let mut runner = Runner::new(spec, &plan, &scenes, &staged)?;
+    let rows = staged_run(opts, |staged| {
+        let mut runner = Runner::new(spec, &plan, &scenes, staged)?;
         runner.method_runs = method_runs;
         for step in &plan.steps {
             runner.step(step)?;
         }
         runner.finish(ls)
-    })();
-    let rows = match rows {
-        Ok(r) => r,
-        Err(e) => {
-            let _ = std::fs::remove_dir_all(&staged.out);
-            return Err(e);
-        }
-    };
-    if let Err(e) = staging::publish(&staged.out, &opts.out) {
-        let _ = std::fs::remove_dir_all(&staged.out);
-        return Err(e);
-    }
+    })?;
     let r = report(rows);
     eprintln!(
         "{}: {} cells in {:.1} s -> {}",
@@ -260,6 +244,20 @@ fn run_checked(
         opts.out.display()
     );
     Ok(r)
+}
+
+/// Runs `work` with its outputs going to a staging folder beside `opts.out` (the options it is
+/// given), published only once it has finished; the staging folder removed on any failure.
+fn staged_run<T>(opts: &RunOptions, work: impl FnOnce(&RunOptions) -> Result<T>) -> Result<T> {
+    let staged = RunOptions {
+        out: staging::create(&opts.out)?,
+        ..opts.clone()
+    };
+    let done = work(&staged).and_then(|t| staging::publish(&staged.out, &opts.out).map(|()| t));
+    if done.is_err() {
+        let _ = std::fs::remove_dir_all(&staged.out);
+    }
+    done
 }
 
 /// [`run_checked`] for an animated spec: every scene frame by frame ([`frames`]), written by
@@ -303,20 +301,11 @@ fn run_animated(
         return Ok(report(Vec::new()));
     }
     eprint!("{plan_text}");
-    let staged = RunOptions {
-        out: staging::create(&opts.out)?,
-        ..opts.clone()
-    };
-    let done = frames::run(ls, spec, scenes, &staged)
-        .and_then(|run| frames_write::write(ls, spec, scenes, &staged, &run).map(|()| run.rows))
-        .and_then(|rows| staging::publish(&staged.out, &opts.out).map(|()| rows));
-    let rows = match done {
-        Ok(rows) => rows,
-        Err(e) => {
-            let _ = std::fs::remove_dir_all(&staged.out);
-            return Err(e);
-        }
-    };
+    let rows = staged_run(opts, |staged| {
+        let run = frames::run(ls, spec, scenes, staged)?;
+        frames_write::write(ls, spec, scenes, staged, &run)?;
+        Ok(run.rows)
+    })?;
     let r = report(rows);
     eprintln!(
         "{}: {} frame rows in {:.1} s -> {}",
