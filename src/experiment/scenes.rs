@@ -364,7 +364,7 @@ impl FramePlacements {
             };
             for (i, &(c, r)) in rel.iter().enumerate() {
                 let reach = c.abs().max_element() + r;
-                if !(reach <= MAX_WORLD_COORDINATE as f64) {
+                if reach.is_nan() || reach > MAX_WORLD_COORDINATE as f64 {
                     return Err(at(
                         field(i),
                         format!(

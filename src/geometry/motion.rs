@@ -445,7 +445,7 @@ impl Motion {
             }
         }
         let reach = self.reach(frames, dt);
-        if !(reach <= max) {
+        if reach.is_nan() || reach > max {
             return bad(
                 "",
                 format!(

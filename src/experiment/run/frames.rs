@@ -87,17 +87,17 @@ pub(super) struct FramesRun {
     pub(super) pictures: Vec<(String, (usize, usize), Vec<Frame>)>,
     /// The methods run, and those this build skipped with the reason.
     pub(super) methods: Vec<&'static str>,
-    pub(super) skipped: Vec<(&'static str, &'static str)>,
+    pub(super) skipped: Vec<Skipped>,
     /// Per scene: seconds of the ray casters' per-mesh precompute and of the fields' supply.
     pub(super) precompute: Vec<serde_json::Value>,
 }
 
+/// A method this build skips, and why.
+type Skipped = (&'static str, &'static str);
+
 /// The per-frame methods the spec asks for (`animation.methods`, default every one) that this
 /// build runs, and the ones it skips with the reason (`--require-embree` fails instead).
-fn methods(
-    spec: &Spec,
-    opts: &RunOptions,
-) -> Result<(Vec<&'static str>, Vec<(&'static str, &'static str)>)> {
+fn methods(spec: &Spec, opts: &RunOptions) -> Result<(Vec<&'static str>, Vec<Skipped>)> {
     let asked = spec.animation.as_ref().and_then(|a| a.methods.as_ref());
     let (mut run, mut skipped) = (Vec::new(), Vec::new());
     for name in movers::NAMES {
