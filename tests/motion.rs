@@ -380,3 +380,36 @@ fn shadows_and_reflections_are_measured_per_frame() {
         );
     }
 }
+
+/// A scene moved rigidly as a whole, every instance (receiver and caster) by the same
+/// keyframes, by multiples of the rebasing step: each frame, rebased on itself, has the static
+/// scene's coordinates bit for bit, so every method's values on every frame equal the static
+/// scene's.
+#[test]
+fn a_scene_moved_as_a_whole_gives_the_static_values_every_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let frames = r#"{ "frames": 3, "time_step": 1 }"#;
+    let whole = r#"{ "keyframes": [{ "time": 0 }, { "time": 2, "translate": [256, -512, 128] }] }"#;
+    let still = frames_of(dir.path(), &animated("", "", frames), "still");
+    let moved = frames_of(dir.path(), &animated(whole, whole, frames), "moved");
+    assert_eq!(still.len(), moved.len());
+    let key = |r: &FrameRow| {
+        (
+            (r.method.clone(), r.points, r.crease_points),
+            (
+                r.rms_vs_raycast.to_bits(),
+                r.rms_vs_truth.to_bits(),
+                r.mean_value.to_bits(),
+            ),
+            (r.sphere_overlaps, r.points_in_spheres),
+        )
+    };
+    let frame0: Vec<_> = still.iter().filter(|r| r.frame == 0).map(key).collect();
+    for f in 0..3 {
+        let at = |rows: &[FrameRow]| -> Vec<_> {
+            rows.iter().filter(|r| r.frame == f).map(key).collect()
+        };
+        assert_eq!(at(&still), frame0, "the still scene, frame {f}");
+        assert_eq!(at(&moved), frame0, "the moved scene, frame {f}");
+    }
+}

@@ -54,27 +54,35 @@ pub struct BuiltScene {
     pub mesh_of: Vec<usize>,
     /// The scene's own camera (spec world), if it has one.
     pub camera: Option<Camera>,
-    /// With the spec's `animation`: per frame, every instance's transform in the scene's frame
-    /// (`scene` is frame 0, and `origin` the one rebasing origin of every frame); empty for a
-    /// static scene.
-    pub frames: Vec<Vec<Similarity>>,
+    /// With the spec's `animation`: per frame, its rebasing origin and every instance's
+    /// transform in that frame (`scene` and `origin` are frame 0's); empty for a static scene.
+    pub frames: Vec<FrameTransforms>,
+}
+
+/// One frame of an animated scene: the spec-world position of its frame's origin (each frame
+/// rebased on its own instances, [`crate::geometry::rebase`]) and every instance's transform in
+/// that frame.
+#[derive(Clone, Debug)]
+pub struct FrameTransforms {
+    pub origin: DVec3,
+    pub transforms: Vec<Similarity>,
 }
 
 impl BuiltScene {
-    /// The scene at frame `f` of its animation (itself for a static scene, or frame 0), with no
-    /// frames of its own.
-    ///
-    /// # Panics
-    /// If the scene has frames and `f` is not one of them.
+    /// The scene at frame `f` of its animation, in that frame's rebased frame (itself for a
+    /// static scene), with no frames of its own.
     pub fn at_frame(&self, f: usize) -> BuiltScene {
         let mut scene = self.scene.clone();
-        if !self.frames.is_empty() {
-            for (inst, &t) in scene.instances.iter_mut().zip(&self.frames[f]) {
+        let mut origin = self.origin;
+        if let Some(frame) = self.frames.get(f) {
+            for (inst, &t) in scene.instances.iter_mut().zip(&frame.transforms) {
                 inst.transform = t;
             }
+            origin = frame.origin;
         }
         BuiltScene {
             scene,
+            origin,
             frames: Vec::new(),
             ..self.clone_static()
         }
@@ -216,19 +224,17 @@ impl Scenes {
                 let motions: Vec<_> = sc.instances.iter().map(|i| i.motion.as_ref()).collect();
                 frame_placements(&instances, &motions, a.frames, a.time_step)
             });
-            let problem = match &motion {
-                None => extent_problem(&instances),
-                Some(m) => spheres_extent_problem(&m.spheres),
-            };
-            if let Some(message) = problem {
-                return Err(SpecError::Invalid {
-                    file: file.to_path_buf(),
-                    field: format!("{path}[{si}].instances"),
-                    message,
-                });
-            }
             let (Rebased { scene, origin }, frames) = match &motion {
-                None => (rebase(&instances), Vec::new()),
+                None => {
+                    if let Some(message) = extent_problem(&instances) {
+                        return Err(SpecError::Invalid {
+                            file: file.to_path_buf(),
+                            field: format!("{path}[{si}].instances"),
+                            message,
+                        });
+                    }
+                    (rebase(&instances), Vec::new())
+                }
                 Some(m) => {
                     let at = |field: String, message| SpecError::Invalid {
                         file: file.to_path_buf(),
@@ -329,19 +335,28 @@ fn frame_placements(
 }
 
 impl FramePlacements {
-    /// Frame 0 as a scene and every frame's transforms, all in the frame of one origin (the
-    /// rebasing origin of every frame's spheres: [`rebase_origin`]). Each frame's bounding
-    /// spheres are checked as frame 0's vertices are in [`Scenes::build`]: within
-    /// ±[`MAX_WORLD_COORDINATE`] and each at least [`MIN_INSTANCE_TO_SCENE`] of the frame's
-    /// extent, refused naming the instance's motion (`at(field, message)`).
+    /// Frame 0 as a scene and every frame's origin and transforms, each frame rebased on its own
+    /// instances ([`rebase_origin`] of its spheres, so that a scene moved as a whole by a
+    /// multiple of the rebasing step keeps its coordinates bit for bit). Each frame is checked as
+    /// a static scene is in [`Scenes::build`], on its bounding spheres: its distance from the
+    /// spec's origin over its extent ([`spheres_extent_problem`]), every sphere within
+    /// ±[`MAX_WORLD_COORDINATE`] of the frame's origin, each instance at least
+    /// [`MIN_INSTANCE_TO_SCENE`] of the frame's extent; refused naming the instance's motion
+    /// (or transform) and the frame (`at(field, message)`).
     fn rebased(
         &self,
         instances: &[PlacedMesh],
         specs: &[super::spec::InstanceSpec],
         at: impl Fn(String, String) -> SpecError,
-    ) -> Result<(Rebased, Vec<Vec<Similarity>>), SpecError> {
-        let origin = rebase_origin(&self.spheres);
+    ) -> Result<(Rebased, Vec<FrameTransforms>), SpecError> {
         let n = self.instances;
+        let field = |i: usize| {
+            let moving = specs[i].motion.is_some();
+            format!(
+                "instances[{i}].{}",
+                if moving { "motion" } else { "transform" }
+            )
+        };
         let mut frames = Vec::new();
         for (f, (placed, spheres)) in self
             .placed
@@ -349,19 +364,16 @@ impl FramePlacements {
             .zip(self.spheres.chunks(n))
             .enumerate()
         {
+            if let Some(message) = spheres_extent_problem(spheres) {
+                return Err(at("instances".into(), format!("at frame {f}: {message}")));
+            }
+            let origin = rebase_origin(spheres);
             let rel: Vec<(DVec3, f64)> = spheres.iter().map(|&(c, r)| (c - origin, r)).collect();
             let (lo, hi) = rel.iter().fold(
                 (DVec3::INFINITY, DVec3::NEG_INFINITY),
                 |(lo, hi), &(c, r)| (lo.min(c - r), hi.max(c + r)),
             );
             let half = 0.5 * (hi - lo).length();
-            let field = |i: usize| {
-                let moving = specs[i].motion.is_some();
-                format!(
-                    "instances[{i}].{}",
-                    if moving { "motion" } else { "transform" }
-                )
-            };
             for (i, &(c, r)) in rel.iter().enumerate() {
                 let reach = c.abs().max_element() + r;
                 if reach.is_nan() || reach > MAX_WORLD_COORDINATE as f64 {
@@ -370,8 +382,8 @@ impl FramePlacements {
                         format!(
                             "at frame {f} puts its bounding sphere (centre {c}, radius {r:e}) past \
                              ±{MAX_WORLD_COORDINATE:e}, the f32 range in which the geometry's \
-                             squares and cross products stay finite (coordinates in the scene's \
-                             frame)"
+                             squares and cross products stay finite (coordinates in the frame's \
+                             rebased frame)"
                         ),
                     ));
                 }
@@ -388,12 +400,15 @@ impl FramePlacements {
                     ));
                 }
             }
-            frames.push(placed.iter().map(|p| p.relative_to(origin)).collect());
+            frames.push(FrameTransforms {
+                origin,
+                transforms: placed.iter().map(|p| p.relative_to(origin)).collect(),
+            });
         }
         let scene = Scene {
             instances: instances
                 .iter()
-                .zip(&frames[0])
+                .zip(&frames[0].transforms)
                 .map(|(p, &transform)| crate::geometry::Instance {
                     mesh: p.mesh.clone(),
                     transform,
@@ -402,6 +417,7 @@ impl FramePlacements {
                 })
                 .collect(),
         };
+        let origin = frames[0].origin;
         Ok((Rebased { scene, origin }, frames))
     }
 }

@@ -133,18 +133,27 @@ impl Pose {
     };
 
     /// The placement moved by this pose, for a mesh whose bounding sphere's model-space centre
-    /// is `model_centre`: the rotation composed onto the placement's, and the displacement and
-    /// the centre's correction, `s·(R₀·m) − s·(R·R₀·m)`, added to its offset; the large
-    /// translation is left as it is (so that a scene translated by a multiple of the rebasing
-    /// step keeps the untranslated scene's coordinates bit for bit, moving or not). The
+    /// is `model_centre`: the rotation composed onto the placement's and the centre's
+    /// correction, `s·(R₀·m) − s·(R·R₀·m)`, added to its offset; the displacement joins the
+    /// large translation where the sum holds it exactly, else the offset. Either way a scene's
+    /// coordinates relative to a rebasing origin ([`Placement::relative_to`]) are rounded
+    /// once: a scene moved as a whole by a multiple of the rebasing step (by its motions, or by
+    /// its placements with its motions' points) keeps its coordinates bit for bit. The
     /// identity returns the placement bit for bit.
     pub fn apply(&self, p: &Placement, model_centre: Vec3) -> Placement {
         if *self == Pose::IDENTITY {
             return *p;
         }
+        let d = self.displacement;
+        let (translation, d) = if (p.translation + d) - p.translation == d {
+            (p.translation + d, DVec3::ZERO)
+        } else {
+            (p.translation, d)
+        };
         if self.rotation == DQuat::IDENTITY {
             return Placement {
-                offset: p.offset + self.displacement,
+                translation,
+                offset: p.offset + d,
                 ..*p
             };
         }
@@ -154,9 +163,9 @@ impl Pose {
         let after = s * (rotation * model_centre).as_dvec3();
         Placement {
             rotation,
-            translation: p.translation,
+            translation,
             scale: p.scale,
-            offset: p.offset + (self.displacement + (before - after)),
+            offset: p.offset + (d + (before - after)),
         }
     }
 }

@@ -227,7 +227,8 @@ fn a_walk_steps_its_speed_times_the_time_step_in_its_plane() {
 }
 
 /// The same motion on a scene translated by a multiple of a power of two, its points with it,
-/// gives the same poses bit for bit, and the placements differ by the translation only.
+/// gives the same poses bit for bit, and the same coordinates relative to the translated
+/// origin.
 #[test]
 fn a_translated_scene_moves_as_the_untranslated_one() {
     let shift = DVec3::new(1048576.0, -2097152.0, 65536.0);
@@ -272,12 +273,24 @@ fn a_translated_scene_moves_as_the_untranslated_one() {
         );
         assert_eq!(a, b, "frame {f}");
         let (pa, pb) = (a.apply(&near, M), b.apply(&far, M));
-        assert_eq!(pb.translation - shift, pa.translation, "frame {f}");
-        assert_eq!(pa.translation, DVec3::ZERO);
         assert_eq!(
-            (pa.rotation, pa.offset),
-            (pb.rotation, pb.offset),
+            pa.relative_to(DVec3::ZERO),
+            pb.relative_to(shift),
             "frame {f}"
         );
     }
+}
+
+/// A displacement by a multiple of a power of two joins the translation exactly: the placement
+/// relative to the origin moved with it is the unmoved one, bit for bit.
+#[test]
+fn a_move_by_a_multiple_of_the_step_keeps_the_coordinates() {
+    let p = placement(DVec3::new(0.0, 0.5, 0.0));
+    let shift = DVec3::new(256.0, -512.0, 128.0);
+    let moved = Pose {
+        rotation: DQuat::IDENTITY,
+        displacement: shift,
+    }
+    .apply(&p, M);
+    assert_eq!(moved.relative_to(shift), p.relative_to(DVec3::ZERO));
 }
