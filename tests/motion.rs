@@ -413,3 +413,26 @@ fn a_scene_moved_as_a_whole_gives_the_static_values_every_frame() {
         assert_eq!(at(&moved), frame0, "the moved scene, frame {f}");
     }
 }
+
+/// A kind's check of a built scene runs on every frame: a caster orbiting into a light's
+/// sphere at frame 2 is refused before any work, naming the light and the frame.
+#[test]
+fn a_caster_moving_onto_a_light_is_refused_naming_the_frame() {
+    // The caster's sphere (centre (0.5, 0.45, 0.5), radius 0.35) turned a half turn about the
+    // vertical through (0, 0, 0.5) by frame 2: centre (−0.5, 0.45, 0.5), onto the light.
+    let motion = r#"{ "orbit": { "center": [0, 0, 0.5], "axis": [0, 1, 0], "period": 4 } }"#;
+    let lights = r#""lights": [{ "center": [-0.5, 0.45, 0.5], "radius": 0.05, "intensity": 1 }]"#;
+    let text = animated(motion, "", r#"{ "frames": 3, "time_step": 1 }"#).replace(
+        r#""render": { "#,
+        &format!(r#""render": {{ "what": "shadows", {lights}, "#),
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let ls = loaded(dir.path(), &text);
+    let out = dir.path().join("out");
+    let e = run(&ls, &options(out.clone())).unwrap_err().to_string();
+    assert!(
+        e.contains("render.lights[0]") && e.contains("at frame 2: overlaps the bounding sphere"),
+        "{e}"
+    );
+    assert!(!out.exists(), "nothing written");
+}

@@ -191,7 +191,17 @@ fn run_checked(
     });
     let scenes = scenes?;
     let kind = crate::experiment::kinds::of(&spec.render);
-    if let Some((field, message)) = scenes.scenes.iter().find_map(|bs| kind.scene_problem(bs)) {
+    // Every frame of an animated scene (a caster may move onto a light).
+    let problem = |bs: &crate::experiment::scenes::BuiltScene| {
+        if bs.frames.is_empty() {
+            return kind.scene_problem(bs);
+        }
+        (0..bs.frame_count()).find_map(|f| {
+            let (field, message) = kind.scene_problem(&bs.at_frame(f))?;
+            Some((field, format!("at frame {f}: {message}")))
+        })
+    };
+    if let Some((field, message)) = scenes.scenes.iter().find_map(problem) {
         return Err(crate::experiment::spec::SpecError::Invalid {
             file: ls.path.clone(),
             field,
