@@ -11,14 +11,20 @@ use crate::experiment::spec::Spec;
 use crate::experiment::Result;
 use std::path::Path;
 
-/// Each method's (and field cell's) label and its rows of `scene`, in row order.
+/// Each method's label and its rows of `scene`, in row order; a field method's label names
+/// its field cell where the scene has more than one.
 fn series_of<'r>(rows: &'r [FrameRow], scene: &str) -> Vec<(String, Vec<&'r FrameRow>)> {
+    let rows: Vec<&FrameRow> = rows.iter().filter(|r| r.scene == scene).collect();
+    let first_cell = rows.iter().map(|r| &r.cell).find(|c| !c.is_empty());
+    let cells = rows
+        .iter()
+        .any(|r| !r.cell.is_empty() && Some(&r.cell) != first_cell);
     let mut out: Vec<(String, Vec<&FrameRow>)> = Vec::new();
-    for r in rows.iter().filter(|r| r.scene == scene) {
-        let label = if r.cell.is_empty() {
-            r.method.clone()
-        } else {
+    for r in rows {
+        let label = if cells && !r.cell.is_empty() {
             format!("{} {}", r.method, r.cell)
+        } else {
+            r.method.clone()
         };
         match out.iter_mut().find(|(l, _)| *l == label) {
             Some((_, v)) => v.push(r),
