@@ -9,7 +9,8 @@
 //! its inverse fails, so a doubled error fails and so does an error that drops to 0 (a silent
 //! fallback to ray casting, a field that reads the reference) ([`check_committed`]). The rows
 //! of the spec's other methods (`methods.csv`) are compared the same way, each by its scene
-//! and setting ([`check_committed_methods`]).
+//! and setting ([`check_committed_methods`]), and an animated spec's frames (`frames.csv`)
+//! by scene, frame, method and field cell ([`check_committed_frames`]).
 
 use super::columns::NamedRow;
 use super::plan::Cell;
@@ -37,7 +38,8 @@ pub struct Failure {
     /// The cell id.
     pub cell: String,
     /// "rms_vertex", "rms_image" or "rms_vs_truth" (for `experiment dynamic`'s rows:
-    /// "rms_vs_raycast", "rms_vs_truth" or "mean_ao").
+    /// "rms_vs_raycast", "rms_vs_truth" or "mean_ao"; for an animated spec's frames:
+    /// "rms_vs_raycast", "rms_vs_truth" or "mean_value").
     pub metric: &'static str,
     pub value: f64,
     pub rule: Rule,
@@ -176,31 +178,71 @@ pub fn check_committed_methods(rows: &[NamedRow], committed: &[NamedRow]) -> Vec
 /// build with the `embree` feature against a run without it) are left out and counted in the
 /// second value returned.
 pub fn check_committed_dynamic(rows: &[NamedRow], committed: &[NamedRow]) -> (Vec<Failure>, usize) {
+    let id = |r: &NamedRow| {
+        let g = |k: &str| r.get(k).unwrap_or("");
+        let gap = match g("gap_radii") {
+            "" => String::new(),
+            v => format!("/gap={v}"),
+        };
+        (
+            g("sweep").to_string(),
+            format!(
+                "{}/N={}/frame={}{gap}/{}",
+                g("sweep"),
+                g("casters"),
+                g("frame"),
+                g("method")
+            ),
+        )
+    };
+    check_committed_per_method(
+        rows,
+        committed,
+        id,
+        ["rms_vs_raycast", "rms_vs_truth", "mean_ao"],
+    )
+}
+
+/// [`check_committed`] for an animated spec's `frames.csv`: each (scene, frame, method, field
+/// cell) on `rms_vs_raycast`, `rms_vs_truth` and `mean_value` against the committed row with
+/// the same key (named `SCENE/frame=…/METHOD` and `/CELL` for a field method); rows of
+/// methods the committed run has none of are left out and counted, as in
+/// [`check_committed_dynamic`].
+pub fn check_committed_frames(rows: &[NamedRow], committed: &[NamedRow]) -> (Vec<Failure>, usize) {
+    let id = |r: &NamedRow| {
+        let g = |k: &str| r.get(k).unwrap_or("");
+        let cell = match g("cell") {
+            "" => String::new(),
+            c => format!("/{c}"),
+        };
+        (
+            g("scene").to_string(),
+            format!("{}/frame={}/{}{cell}", g("scene"), g("frame"), g("method")),
+        )
+    };
+    check_committed_per_method(
+        rows,
+        committed,
+        id,
+        ["rms_vs_raycast", "rms_vs_truth", "mean_value"],
+    )
+}
+
+/// Rows of per-frame methods against the committed ones by `id` ((group, name)) on `metrics`:
+/// a committed row the run lost fails; rows of a `method` the committed run has none of are
+/// left out and counted.
+fn check_committed_per_method(
+    rows: &[NamedRow],
+    committed: &[NamedRow],
+    id: impl Fn(&NamedRow) -> (String, String),
+    metrics: [&'static str; 3],
+) -> (Vec<Failure>, usize) {
     let has = |m: &str| committed.iter().any(|r| r.get("method") == Some(m));
     let keyed = |rows: &[NamedRow]| -> Vec<(String, String, Compared)> {
         rows.iter()
             .map(|r| {
-                let g = |k: &str| r.get(k).unwrap_or("");
-                let gap = match g("gap_radii") {
-                    "" => String::new(),
-                    v => format!("/gap={v}"),
-                };
-                let metric = |m: &'static str| (m, r.number(m));
-                (
-                    g("sweep").to_string(),
-                    format!(
-                        "{}/N={}/frame={}{gap}/{}",
-                        g("sweep"),
-                        g("casters"),
-                        g("frame"),
-                        g("method")
-                    ),
-                    [
-                        metric("rms_vs_raycast"),
-                        metric("rms_vs_truth"),
-                        metric("mean_ao"),
-                    ],
-                )
+                let (group, name) = id(r);
+                (group, name, metrics.map(|m| (m, r.number(m))))
             })
             .collect()
     };
@@ -361,6 +403,57 @@ mod tests {
         assert_eq!(
             f.iter().map(|f| f.cell.as_str()).collect::<Vec<_>>(),
             ["crowd/N=4/frame=0/world_rebuild", "crowd/N=4/frame=1/field"]
+        );
+    }
+
+    fn frame_row(method: &str, cell: &str, frame: usize, rms: f64) -> NamedRow {
+        let mut r = NamedRow::new();
+        r.push("scene", "multi")
+            .push("frame", frame)
+            .push("method", method)
+            .push("cell", cell)
+            .push("rms_vs_raycast", rms)
+            .push("rms_vs_truth", 6.0)
+            .push("mean_value", 0.7);
+        r
+    }
+
+    #[test]
+    fn frames_are_compared_by_scene_frame_method_and_cell() {
+        let committed = [
+            frame_row("world_rebuild", "", 0, 0.0),
+            frame_row("field", "a", 0, 4.0),
+            frame_row("field", "b", 0, 2.0),
+        ];
+        let (f, left) = check_committed_frames(&committed, &committed);
+        assert!(f.is_empty() && left == 0);
+        // The cells of one method are told apart: b's error doubled fails, named with its cell.
+        let (f, _) = check_committed_frames(
+            &[
+                frame_row("world_rebuild", "", 0, 0.0),
+                frame_row("field", "a", 0, 4.0),
+                frame_row("field", "b", 0, 4.0),
+            ],
+            &committed,
+        );
+        assert_eq!(f.len(), 1);
+        assert_eq!(
+            (f[0].cell.as_str(), f[0].metric),
+            ("multi/frame=0/field/b", "rms_vs_raycast")
+        );
+        // A lost cell fails; a method the committed run lacks is counted, not compared.
+        let (f, left) = check_committed_frames(
+            &[
+                frame_row("world_rebuild", "", 0, 0.0),
+                frame_row("field", "a", 0, 4.0),
+                frame_row("two_level", "", 0, 0.0),
+            ],
+            &committed,
+        );
+        assert_eq!(left, 1);
+        assert_eq!(
+            f.iter().map(|f| f.cell.as_str()).collect::<Vec<_>>(),
+            ["multi/frame=0/field/b"]
         );
     }
 }

@@ -396,12 +396,22 @@ fn check(
         match run_loaded(&ls, args, Some(&parent)) {
             Ok(report) => {
                 let mut f = super::check::check_rows(&report.thresholds, &report.rows);
-                let committed = committed_root.join(&name).join("table.csv");
+                let animated = ls.spec.animation.is_some();
+                let table = if animated { "frames.csv" } else { "table.csv" };
+                let committed = committed_root.join(&name).join(table);
                 let compared = if shipped || against.is_some() {
-                    match super::outputs::read_csv(&committed) {
-                        Ok(rows) => {
-                            f.extend(super::check::check_committed(&report.rows, &rows));
+                    let read = if animated {
+                        committed_frames(&report.out, &committed)
+                    } else {
+                        super::outputs::read_csv(&committed).and_then(|rows| {
+                            let mut f = super::check::check_committed(&report.rows, &rows);
                             f.extend(committed_methods(&report.out, &committed)?);
+                            Ok(f)
+                        })
+                    };
+                    match read {
+                        Ok(failures) => {
+                            f.extend(failures);
                             format!(" and the committed {}", committed.display())
                         }
                         Err(e) => {
@@ -417,8 +427,9 @@ fn check(
                     " (not a shipped spec: no committed run compared)".into()
                 };
                 println!(
-                    "{name}: {} cell(s), {} threshold(s){compared}, {} failure(s) ({:.1} s)",
-                    report.rows.len(),
+                    "{name}: {} {}, {} threshold(s){compared}, {} failure(s) ({:.1} s)",
+                    report.rows.len() + report.frames.len(),
+                    if animated { "frame row(s)" } else { "cell(s)" },
                     report.thresholds.len(),
                     f.len(),
                     report.seconds
@@ -475,6 +486,22 @@ fn check_dynamic(args: &RunArgs, parent: &Path, committed_root: &Path) -> Result
     Ok(f.into_iter().map(|f| format!("dynamic: {f}")).collect())
 }
 
+/// An animated run's `frames.csv` (in `out`) against the committed one
+/// ([`super::check::check_committed_frames`]); an error where the committed file is missing.
+fn committed_frames(out: &Path, committed: &Path) -> Result<Vec<super::check::Failure>> {
+    let theirs = super::columns::read_csv(committed)?;
+    let ours = super::columns::read_csv(&out.join("frames.csv"))?;
+    let (f, left) = super::check::check_committed_frames(&ours, &theirs);
+    if left > 0 {
+        println!(
+            "{}: {left} frame row(s) of methods the committed run lacks (Embree's, in a build \
+             with the `embree` feature) not compared",
+            out.display()
+        );
+    }
+    Ok(f)
+}
+
 /// The run's `methods.csv` rows against the committed ones beside `committed_table` (the
 /// committed `table.csv`); a run without method rows compares nothing, and a run with them
 /// against a committed run without `methods.csv` fails each row as not committed.
@@ -512,14 +539,19 @@ fn plots(names: &[String], quick: bool, dir: Option<&Path>) -> Result<()> {
         (None, true) => discover::spec_paths()?
             .iter()
             .map(|p| root.join(discover::name_of(p)))
-            .filter(|d| d.join("table.csv").exists())
+            .filter(|d| d.join("table.csv").exists() || d.join("frames.csv").exists())
             .collect(),
     };
     for d in dirs {
-        let run: serde_json::Value = std::fs::read(d.join("run.json"))
-            .ok()
-            .and_then(|b| serde_json::from_slice(&b).ok())
-            .unwrap_or_default();
+        // An animated run: its plots from frames.csv.
+        if d.join("frames.csv").exists() && !d.join("table.csv").exists() {
+            let run = read_run_json(&d);
+            super::run::redraw_frames(&d, run["render"].as_str().unwrap_or("the kind"))?;
+            own_plots(&d, run)?;
+            println!("redrew the plots in {}", d.display());
+            continue;
+        }
+        let run = read_run_json(&d);
         let title = format!(
             "{}{}",
             run["spec"].as_str().unwrap_or(&discover::name_of(&d)),
@@ -540,6 +572,14 @@ fn plots(names: &[String], quick: bool, dir: Option<&Path>) -> Result<()> {
         println!("redrew the plots in {}", d.display());
     }
     Ok(())
+}
+
+/// A run's `run.json` (null where it has none or cannot be read).
+fn read_run_json(dir: &Path) -> serde_json::Value {
+    std::fs::read(dir.join("run.json"))
+        .ok()
+        .and_then(|b| serde_json::from_slice(&b).ok())
+        .unwrap_or_default()
 }
 
 /// Rewrites `dir/paper_vs_ours.csv` from the run's CSV files and the paper section of

@@ -11,7 +11,8 @@ use super::user_mesh::{self, FileRecord};
 use super::{Error, Result};
 use crate::geometry::procedural::{self, Supershape};
 use crate::geometry::rebase::{
-    centred_mesh, extent_problem, rebase, to_frame, PlacedMesh, Placement, Rebased,
+    centred_mesh, extent_problem, rebase, rebase_origin, spheres_extent_problem, to_frame,
+    PlacedMesh, Placement, Rebased,
 };
 use crate::geometry::{models, Mesh, Scene, Similarity};
 use crate::render::camera::Camera;
@@ -53,9 +54,57 @@ pub struct BuiltScene {
     pub mesh_of: Vec<usize>,
     /// The scene's own camera (spec world), if it has one.
     pub camera: Option<Camera>,
+    /// With the spec's `animation`: per frame, its rebasing origin and every instance's
+    /// transform in that frame (`scene` and `origin` are frame 0's); empty for a static scene.
+    pub frames: Vec<FrameTransforms>,
+}
+
+/// One frame of an animated scene: the spec-world position of its frame's origin (each frame
+/// rebased on its own instances, [`crate::geometry::rebase`]) and every instance's transform in
+/// that frame.
+#[derive(Clone, Debug)]
+pub struct FrameTransforms {
+    pub origin: DVec3,
+    pub transforms: Vec<Similarity>,
 }
 
 impl BuiltScene {
+    /// The scene at frame `f` of its animation, in that frame's rebased frame (itself for a
+    /// static scene), with no frames of its own.
+    pub fn at_frame(&self, f: usize) -> BuiltScene {
+        let mut scene = self.scene.clone();
+        let mut origin = self.origin;
+        if let Some(frame) = self.frames.get(f) {
+            for (inst, &t) in scene.instances.iter_mut().zip(&frame.transforms) {
+                inst.transform = t;
+            }
+            origin = frame.origin;
+        }
+        BuiltScene {
+            scene,
+            origin,
+            frames: Vec::new(),
+            ..self.clone_static()
+        }
+    }
+
+    /// This scene without its frames' transforms (cloned).
+    fn clone_static(&self) -> BuiltScene {
+        BuiltScene {
+            name: self.name.clone(),
+            scene: Scene::default(),
+            origin: self.origin,
+            mesh_of: self.mesh_of.clone(),
+            camera: self.camera,
+            frames: Vec::new(),
+        }
+    }
+
+    /// Frames of the scene: its animation's, else 1.
+    pub fn frame_count(&self) -> usize {
+        self.frames.len().max(1)
+    }
+
     /// A spec-world camera in the scene's frame.
     pub fn camera_in_frame(&self, cam: &Camera) -> Camera {
         Camera {
@@ -171,14 +220,30 @@ impl Scenes {
                 });
                 mesh_of.push(m);
             }
-            if let Some(message) = extent_problem(&instances) {
-                return Err(SpecError::Invalid {
-                    file: file.to_path_buf(),
-                    field: format!("{path}[{si}].instances"),
-                    message,
-                });
-            }
-            let Rebased { scene, origin } = rebase(&instances);
+            let motion = spec.animation.as_ref().map(|a| {
+                let motions: Vec<_> = sc.instances.iter().map(|i| i.motion.as_ref()).collect();
+                frame_placements(&instances, &motions, a.frames, a.time_step)
+            });
+            let (Rebased { scene, origin }, frames) = match &motion {
+                None => {
+                    if let Some(message) = extent_problem(&instances) {
+                        return Err(SpecError::Invalid {
+                            file: file.to_path_buf(),
+                            field: format!("{path}[{si}].instances"),
+                            message,
+                        });
+                    }
+                    (rebase(&instances), Vec::new())
+                }
+                Some(m) => {
+                    let at = |field: String, message| SpecError::Invalid {
+                        file: file.to_path_buf(),
+                        field: format!("{path}[{si}].{field}"),
+                        message,
+                    };
+                    m.rebased(&instances, &sc.instances, at)?
+                }
+            };
             // Placements past what f32 geometry can hold (a translation of 1e39, a scale of
             // 3e38) would reach the tracer as infinities, or overflow in its squares and cross
             // products: refused here, naming the instance, before any BVH is built.
@@ -222,9 +287,138 @@ impl Scenes {
                 origin,
                 mesh_of,
                 camera: sc.camera,
+                frames,
             });
         }
         Ok(out)
+    }
+}
+
+/// Every frame's placements of a scene's instances, and their bounding spheres.
+struct FramePlacements {
+    /// Frame-major: frame f's instance i at `f · instances + i`.
+    placed: Vec<Placement>,
+    /// The world bounding sphere of each, in the same order.
+    spheres: Vec<(DVec3, f64)>,
+    instances: usize,
+}
+
+/// The placements of `instances` at every frame of `frames` of `dt` seconds, each moved by its
+/// motion ([`crate::geometry::motion::Motion::pose`]; none: where it is placed).
+fn frame_placements(
+    instances: &[PlacedMesh],
+    motions: &[Option<&crate::geometry::motion::Motion>],
+    frames: u32,
+    dt: f64,
+) -> FramePlacements {
+    let model: Vec<crate::geometry::Sphere> =
+        instances.iter().map(|p| p.mesh.bounding_sphere()).collect();
+    let mut placed = Vec::with_capacity(frames as usize * instances.len());
+    let mut spheres = Vec::with_capacity(placed.capacity());
+    for f in 0..frames {
+        for ((p, m), s) in instances.iter().zip(motions).zip(&model) {
+            let q = match m {
+                Some(m) => m
+                    .pose(f, dt, &p.placement, s.center)
+                    .apply(&p.placement, s.center),
+                None => p.placement,
+            };
+            spheres.push((q.to_world_point(s.center), s.radius as f64 * q.scale as f64));
+            placed.push(q);
+        }
+    }
+    FramePlacements {
+        placed,
+        spheres,
+        instances: instances.len(),
+    }
+}
+
+impl FramePlacements {
+    /// Frame 0 as a scene and every frame's origin and transforms, each frame rebased on its own
+    /// instances ([`rebase_origin`] of its spheres, so that a scene moved as a whole by a
+    /// multiple of the rebasing step keeps its coordinates bit for bit). Each frame is checked as
+    /// a static scene is in [`Scenes::build`], on its bounding spheres: its distance from the
+    /// spec's origin over its extent ([`spheres_extent_problem`]), every sphere within
+    /// ±[`MAX_WORLD_COORDINATE`] of the frame's origin, each instance at least
+    /// [`MIN_INSTANCE_TO_SCENE`] of the frame's extent; refused naming the instance's motion
+    /// (or transform) and the frame (`at(field, message)`).
+    fn rebased(
+        &self,
+        instances: &[PlacedMesh],
+        specs: &[super::spec::InstanceSpec],
+        at: impl Fn(String, String) -> SpecError,
+    ) -> Result<(Rebased, Vec<FrameTransforms>), SpecError> {
+        let n = self.instances;
+        let field = |i: usize| {
+            let moving = specs[i].motion.is_some();
+            format!(
+                "instances[{i}].{}",
+                if moving { "motion" } else { "transform" }
+            )
+        };
+        let mut frames = Vec::new();
+        for (f, (placed, spheres)) in self
+            .placed
+            .chunks(n)
+            .zip(self.spheres.chunks(n))
+            .enumerate()
+        {
+            if let Some(message) = spheres_extent_problem(spheres) {
+                return Err(at("instances".into(), format!("at frame {f}: {message}")));
+            }
+            let origin = rebase_origin(spheres);
+            let rel: Vec<(DVec3, f64)> = spheres.iter().map(|&(c, r)| (c - origin, r)).collect();
+            let (lo, hi) = rel.iter().fold(
+                (DVec3::INFINITY, DVec3::NEG_INFINITY),
+                |(lo, hi), &(c, r)| (lo.min(c - r), hi.max(c + r)),
+            );
+            let half = 0.5 * (hi - lo).length();
+            for (i, &(c, r)) in rel.iter().enumerate() {
+                let reach = c.abs().max_element() + r;
+                if reach.is_nan() || reach > MAX_WORLD_COORDINATE as f64 {
+                    return Err(at(
+                        field(i),
+                        format!(
+                            "at frame {f} puts its bounding sphere (centre {c}, radius {r:e}) past \
+                             ±{MAX_WORLD_COORDINATE:e}, the f32 range in which the geometry's \
+                             squares and cross products stay finite (coordinates in the frame's \
+                             rebased frame)"
+                        ),
+                    ));
+                }
+            }
+            for (i, &(_, r)) in rel.iter().enumerate() {
+                if r < half * MIN_INSTANCE_TO_SCENE as f64 {
+                    return Err(at(
+                        field(i),
+                        format!(
+                            "at frame {f}: an instance of radius {r:e} in a frame of half-extent \
+                             {half:e}: below 2⁻²¹ of it, the resolution at which the ray \
+                             casters' BVH builders order triangles"
+                        ),
+                    ));
+                }
+            }
+            frames.push(FrameTransforms {
+                origin,
+                transforms: placed.iter().map(|p| p.relative_to(origin)).collect(),
+            });
+        }
+        let scene = Scene {
+            instances: instances
+                .iter()
+                .zip(&frames[0].transforms)
+                .map(|(p, &transform)| crate::geometry::Instance {
+                    mesh: p.mesh.clone(),
+                    transform,
+                    caster: p.caster,
+                    receiver: p.receiver,
+                })
+                .collect(),
+        };
+        let origin = frames[0].origin;
+        Ok((Rebased { scene, origin }, frames))
     }
 }
 

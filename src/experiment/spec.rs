@@ -70,6 +70,25 @@ pub struct Spec {
     pub thresholds: Vec<Threshold>,
     /// The `--quick` profile (smaller axes, for CI and regression checks).
     pub quick: QuickProfile,
+    /// Frames: every scene evaluated at each, its instances moved along their `motion`, every
+    /// per-frame method measured (`frames.csv`, see `experiment::run`); none: one static frame
+    /// (`table.csv`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub animation: Option<AnimationSpec>,
+}
+
+/// A spec's frames ([`Spec::animation`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AnimationSpec {
+    /// Frames (1 to `validate::MAX_FRAMES`); frame f is at time f · `time_step`.
+    pub frames: u32,
+    /// Seconds between frames (positive, finite).
+    pub time_step: f64,
+    /// The per-frame methods measured beside `world_rebuild` (the reference, always run), by
+    /// name (`experiment::dynamic::movers::NAMES`); default every one this build has.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub methods: Option<Vec<String>>,
 }
 
 fn default_backends() -> Vec<Backend> {
@@ -125,6 +144,10 @@ pub struct InstanceSpec {
     /// Placement.
     #[serde(default)]
     pub transform: TransformSpec,
+    /// Its rigid path over the spec's `animation` ([`crate::geometry::motion`]), relative to
+    /// its placement; none: it stays where `transform` puts it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub motion: Option<crate::geometry::motion::Motion>,
 }
 
 /// Where a mesh comes from. Its JSON is one key naming the kind (`{"model": NAME}`,
@@ -659,6 +682,9 @@ pub struct QuickProfile {
     /// Replaces `reference.truth.max_rays`.
     #[serde(default)]
     pub truth_max_rays: Option<u32>,
+    /// Replaces `animation.frames`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frames: Option<u32>,
     /// The quick profile's thresholds.
     #[serde(default)]
     pub thresholds: Vec<Threshold>,
@@ -724,6 +750,9 @@ impl Spec {
         }
         if let Some(m) = q.truth_max_rays {
             s.reference.truth.max_rays = m;
+        }
+        if let (Some(f), Some(a)) = (q.frames, s.animation.as_mut()) {
+            a.frames = f;
         }
         s.thresholds = q.thresholds.clone();
         s

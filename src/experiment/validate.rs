@@ -22,6 +22,9 @@ pub const MAX_SEEDS: u32 = 64;
 pub const MAX_TRUTH_RAYS: u32 = 1 << 20;
 /// The most batches of the converged reference.
 pub const MAX_TRUTH_BATCHES: u32 = 64;
+/// The most frames of an animation: each costs every per-frame method a BVH build or an update
+/// and a query, and a converged reference.
+pub const MAX_FRAMES: u32 = 10_000;
 
 /// Where each replaceable part of a profile lives in the file.
 struct Paths {
@@ -35,6 +38,7 @@ struct Paths {
     truth_max_rays: &'static str,
     thresholds: &'static str,
     backends: &'static str,
+    frames: &'static str,
 }
 
 /// Validates both profiles of `spec`.
@@ -50,6 +54,7 @@ pub fn validate(spec: &Spec, file: &Path) -> Result<(), SpecError> {
         truth_max_rays: "reference.truth.max_rays",
         thresholds: "thresholds",
         backends: "backends",
+        frames: "animation.frames",
     };
     let q = &spec.quick;
     let pick = |given: bool, quick: &'static str, full: &'static str| {
@@ -79,6 +84,7 @@ pub fn validate(spec: &Spec, file: &Path) -> Result<(), SpecError> {
         ),
         thresholds: "quick.thresholds",
         backends: pick(q.backends.is_some(), "quick.backends", full.backends),
+        frames: pick(q.frames.is_some(), "quick.frames", full.frames),
     };
     let ctx = Validator { file };
     ctx.profile(spec, &full)?;
@@ -244,6 +250,103 @@ impl Validator<'_> {
         }
         for (i, t) in s.thresholds.iter().enumerate() {
             self.threshold(s, t, &format!("{}[{i}]", p.thresholds))?;
+        }
+        self.animation(s, p)
+    }
+
+    /// The frames and every instance's motion: a motion only with `animation`; frames in
+    /// 1..=[`MAX_FRAMES`], a positive finite time step, known per-frame methods, each named
+    /// once; each motion's own values ([`crate::geometry::motion::Motion::problem`]). An
+    /// animated spec runs on the CPU and writes `frames.csv`, so the keys of the static table
+    /// (`methods`, `paper`, `thresholds`, `reference.field_rays_sweep`, the "gpu" backend) are
+    /// refused in it.
+    fn animation(&self, s: &Spec, p: &Paths) -> Result<(), SpecError> {
+        let motions = s.scenes.iter().enumerate().flat_map(|(i, sc)| {
+            let here = format!("{}[{i}]", p.scenes);
+            (sc.instances.iter().enumerate()).filter_map(move |(j, inst)| {
+                Some((
+                    format!("{here}.instances[{j}].motion"),
+                    inst.motion.as_ref()?,
+                ))
+            })
+        });
+        let Some(a) = &s.animation else {
+            if let Some((at, _)) = motions.into_iter().next() {
+                return Err(self.err(
+                    &at,
+                    "moves only in a spec with `animation` (its frames and time step)".into(),
+                ));
+            }
+            if let Some(f) = s.quick.frames {
+                return Err(self.err(
+                    "quick.frames",
+                    format!("{f} frames: the spec has no `animation`"),
+                ));
+            }
+            return Ok(());
+        };
+        if !(1..=MAX_FRAMES).contains(&a.frames) {
+            return Err(self.err(
+                p.frames,
+                format!("{} frames: needs 1 to {MAX_FRAMES}", a.frames),
+            ));
+        }
+        let end = a.time_step * (a.frames - 1) as f64;
+        if !(a.time_step > 0.0 && a.time_step.is_finite() && end.is_finite()) {
+            return Err(self.err(
+                "animation.time_step",
+                format!("{} must be positive and finite", a.time_step),
+            ));
+        }
+        let known = super::dynamic::movers::NAMES;
+        for (i, m) in a.methods.iter().flatten().enumerate() {
+            let at = format!("animation.methods[{i}]");
+            if !known.contains(&m.as_str()) {
+                return Err(self.err(
+                    &at,
+                    format!(
+                        "unknown per-frame method \"{m}\"; known: {}",
+                        known.join(", ")
+                    ),
+                ));
+            }
+            if a.methods.iter().flatten().take(i).any(|o| o == m) {
+                return Err(self.err(&at, format!("\"{m}\" twice")));
+            }
+        }
+        let refuse =
+            |field: &str, why: &str| Err(self.err(field, format!("an animated spec {why}")));
+        if s.backends.contains(&Backend::Gpu) {
+            return refuse(p.backends, "runs on the CPU only: drop \"gpu\"");
+        }
+        if !s.methods.is_empty() {
+            return refuse(
+                "methods",
+                "measures its per-frame methods: list them in `animation.methods`",
+            );
+        }
+        if s.paper.is_some() {
+            return refuse("paper", "pairs no paper cell (its rows are frames)");
+        }
+        if !s.thresholds.is_empty() {
+            return refuse(
+                p.thresholds,
+                "has no thresholds (`check` compares its frames with the committed run)",
+            );
+        }
+        if !s.reference.field_rays_sweep.is_empty() {
+            return refuse(p.field_sweep, "has no field sweep");
+        }
+        let max = super::scenes::MAX_WORLD_COORDINATE as f64;
+        for (at, m) in motions {
+            if let Some((field, message)) = m.problem(a.frames, a.time_step, max) {
+                let at = if field.is_empty() {
+                    at
+                } else {
+                    format!("{at}.{field}")
+                };
+                return Err(self.err(&at, message));
+            }
         }
         Ok(())
     }

@@ -12,6 +12,7 @@
 //! - [`minimal_bounding_sphere`]: exact minimal enclosing spheres (Welzl).
 //! - [`Similarity`], [`Instance`], [`Scene`]: meshes placed in the world with caster / receiver
 //!   roles.
+//! - [`motion`]: rigid paths of instances over the frames of an animation.
 //! - [`rebase`]: scenes moved next to the origin in f64 before f32 world coordinates are formed.
 //! - [`models`]: the registry of real meshes (`data/models.json`), found and sha256-checked.
 //! - [`procedural`]: corner, plane, cube with a hole, UV sphere, supershapes, the default scene.
@@ -21,6 +22,7 @@ mod instance;
 mod mesh;
 mod mesh_file;
 pub mod models;
+pub mod motion;
 mod obj;
 mod ply;
 pub mod procedural;

@@ -135,12 +135,17 @@ pub const MAX_DISTANCE_TO_EXTENT: f64 = 18_014_398_509_481_984.0;
 /// spec's origin over their half-extent passes [`MAX_DISTANCE_TO_EXTENT`], or a coordinate is
 /// not finite.
 pub fn extent_problem(placed: &[PlacedMesh]) -> Option<String> {
-    let spheres = world_spheres(placed);
+    spheres_extent_problem(&world_spheres(placed))
+}
+
+/// [`extent_problem`] of bounding spheres `(centre, radius)` in true world coordinates (the
+/// placed meshes' of every frame of an animation, say).
+pub fn spheres_extent_problem(spheres: &[(DVec3, f64)]) -> Option<String> {
     let &(c0, _) = spheres.first()?;
     // The extent relative to the first centre: exact differences, where the absolute bounds
     // would round the scene away at large distances.
     let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-    for &(c, r) in &spheres {
+    for &(c, r) in spheres {
         lo = lo.min(c - c0 - r);
         hi = hi.max(c - c0 + r);
     }

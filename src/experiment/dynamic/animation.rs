@@ -1,11 +1,12 @@
-//! An animated PNG (APNG) of a moving scene's frames, seen from above the receiver plane: the
-//! ray-cast reference, the field and their difference ×5 side by side, each frame a row of
-//! the plane's vertex AO (one vertex a pixel, scaled up by whole pixels).
+//! An animated PNG (APNG) of a moving scene's frames: the ray-cast reference, the field and
+//! their difference ×5 side by side, each panel a `width × height` grid of values scaled up by
+//! whole pixels (`experiment dynamic`: the plane's vertex AO seen from above, one vertex a
+//! pixel; an animated spec: its image, one pixel a pixel).
 
 use crate::experiment::{Error, Result};
 use std::path::Path;
 
-/// One frame: the reference's and the field's values at the plane's `side × side` vertices.
+/// One frame: the reference's and the field's values on the `width × height` grid, row-major.
 pub struct Frame {
     pub reference: Vec<f32>,
     pub field: Vec<f32>,
@@ -15,30 +16,36 @@ fn level(v: f32) -> u8 {
     (v.clamp(0.0, 1.0) * 255.0).round() as u8
 }
 
-/// The three panels of `f` as one 8-bit grey image, `3·side·scale` × `side·scale`.
-fn panels(f: &Frame, side: usize, scale: usize) -> Vec<u8> {
-    let w = 3 * side * scale;
-    let mut img = vec![0u8; w * side * scale];
-    for y in 0..side * scale {
-        for x in 0..side * scale {
-            let i = (y / scale) * side + x / scale;
+/// The three panels of `f` as one 8-bit grey image, `3·w·scale` × `h·scale`.
+fn panels(f: &Frame, (w, h): (usize, usize), scale: usize) -> Vec<u8> {
+    let row_len = 3 * w * scale;
+    let mut img = vec![0u8; row_len * h * scale];
+    for y in 0..h * scale {
+        for x in 0..w * scale {
+            let i = (y / scale) * w + x / scale;
             let (r, v) = (f.reference[i], f.field[i]);
-            let row = y * w;
+            let row = y * row_len;
             img[row + x] = level(r);
-            img[row + side * scale + x] = level(v);
-            img[row + 2 * side * scale + x] = level(5.0 * (v - r).abs());
+            img[row + w * scale + x] = level(v);
+            img[row + 2 * w * scale + x] = level(5.0 * (v - r).abs());
         }
     }
     img
 }
 
-/// Writes `frames` as an APNG at `path` (atomically), `delay_ms` per frame, looping.
-pub fn write(path: &Path, frames: &[Frame], side: usize, delay_ms: u16) -> Result<()> {
+/// Writes `frames`, each on a `width × height` grid, as an APNG at `path` (atomically),
+/// `delay_ms` per frame, looping; panels at least 256 pixels on their longer side.
+pub fn write(
+    path: &Path,
+    frames: &[Frame],
+    (width, height): (usize, usize),
+    delay_ms: u16,
+) -> Result<()> {
     if frames.is_empty() {
         return Ok(());
     }
-    let scale = (256 / side.max(1)).max(1);
-    let (w, h) = ((3 * side * scale) as u32, (side * scale) as u32);
+    let scale = (256 / width.max(height).max(1)).max(1);
+    let (w, h) = ((3 * width * scale) as u32, (height * scale) as u32);
     let mut bytes = Vec::new();
     let encode = |bytes: &mut Vec<u8>| -> std::result::Result<(), png::EncodingError> {
         let mut enc = png::Encoder::new(&mut *bytes, w, h);
@@ -48,7 +55,7 @@ pub fn write(path: &Path, frames: &[Frame], side: usize, delay_ms: u16) -> Resul
         enc.set_frame_delay(delay_ms, 1000)?;
         let mut writer = enc.write_header()?;
         for f in frames {
-            writer.write_image_data(&panels(f, side, scale))?;
+            writer.write_image_data(&panels(f, (width, height), scale))?;
         }
         writer.finish()
     };
@@ -69,7 +76,7 @@ mod tests {
             reference: vec![0.0, 1.0, 0.5, 0.5],
             field: vec![0.1, 1.0, 0.5, 0.375],
         };
-        let img = panels(&f, 2, 1);
+        let img = panels(&f, (2, 2), 1);
         assert_eq!(img.len(), 6 * 2);
         assert_eq!(&img[0..6], &[0, 255, 26, 255, 128, 0]);
         assert_eq!(&img[6..12], &[128, 128, 128, 96, 0, 159]);
@@ -85,11 +92,25 @@ mod tests {
                 field: vec![0.5; 16],
             })
             .collect();
-        write(&p, &frames, 4, 100).unwrap();
+        write(&p, &frames, (4, 4), 100).unwrap();
         let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&p).unwrap()));
         let reader = dec.read_info().unwrap();
         let info = reader.info();
         assert_eq!(info.animation_control.map(|a| a.num_frames), Some(3));
         assert_eq!((info.width, info.height), (3 * 4 * 64, 4 * 64));
+        // A wide grid: scaled by its longer side.
+        let wide: Vec<Frame> = (0..2)
+            .map(|_| Frame {
+                reference: vec![0.5; 8 * 2],
+                field: vec![0.25; 8 * 2],
+            })
+            .collect();
+        write(&p, &wide, (8, 2), 100).unwrap();
+        let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&p).unwrap()));
+        let reader = dec.read_info().unwrap();
+        assert_eq!(
+            (reader.info().width, reader.info().height),
+            (3 * 8 * 32, 2 * 32)
+        );
     }
 }

@@ -1,7 +1,7 @@
 //! The crowd: N rigid casters over a receiver plane, each orbiting its grid cell's centre and
 //! tumbling, every method answering vertex AO at the plane's vertices frame after frame.
 
-use super::movers::{FrameCasters, Mover, WorldRebuild};
+use super::movers::{FrameCasters, Mover};
 use super::FrameRow;
 use crate::experiment::fields::FieldSupply;
 use crate::experiment::metrics::rms_unquantised;
@@ -19,7 +19,6 @@ use crate::sampling::rays::RaySet;
 use crate::sampling::{LayoutKind, SphereKind};
 use glam::{Quat, Vec3};
 use std::sync::Arc;
-use std::time::Instant;
 
 /// Grid cell side (world units); the plane is √N cells wide.
 const CELL: f32 = 1.0;
@@ -185,11 +184,7 @@ struct CasterMotion {
 
 /// A value in [0, 1) of (i, salt): the crowd's seeded phases and axes.
 fn unit(i: usize, salt: u64) -> f32 {
-    let mut x = (i as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ salt;
-    x ^= x >> 31;
-    x = x.wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    x ^= x >> 27;
-    (x >> 40) as f32 / (1u64 << 24) as f32
+    crate::geometry::motion::seeded_unit(i, salt)
 }
 
 impl Crowd {
@@ -322,45 +317,25 @@ impl Crowd {
 
     /// Caster pairs whose world spheres overlap, and receiver points inside some sphere.
     fn overlaps(&self, frame: &[(usize, Similarity)]) -> (usize, usize) {
-        let spheres: Vec<crate::geometry::Sphere> = frame
+        let spheres: Vec<(usize, crate::geometry::Sphere)> = frame
             .iter()
-            .map(|&(m, t)| t.to_world_sphere(&self.meshes[m].bounding_sphere()))
+            .enumerate()
+            .map(|(i, &(m, t))| (i, t.to_world_sphere(&self.meshes[m].bounding_sphere())))
             .collect();
-        let mut pairs = 0;
-        for (i, a) in spheres.iter().enumerate() {
-            for b in &spheres[i + 1..] {
-                if a.center.distance(b.center) < a.radius + b.radius {
-                    pairs += 1;
-                }
-            }
-        }
-        let inside = self
-            .points
-            .iter()
-            .filter(|&&p| spheres.iter().any(|s| p.distance(s.center) < s.radius))
-            .count();
-        (pairs, inside)
+        super::movers::overlaps(&spheres, &self.points, |_| None)
     }
 
     /// The methods of this build, each with its precompute done (per-mesh BVHs or scenes,
     /// the fields): the world rebuild first.
     pub fn movers(&self) -> Result<Vec<Box<dyn Mover>>> {
-        let mut v: Vec<Box<dyn Mover>> = vec![
-            Box::<WorldRebuild>::default(),
-            Box::new(super::movers::TwoLevelRebuild::new(&self.meshes)),
-        ];
-        #[cfg(feature = "embree")]
-        {
-            v.push(Box::<super::movers::EmbreeRebuild>::default());
-            v.push(Box::new(super::movers::EmbreeInstanced::new(&self.meshes)?));
-        }
-        for sphere_bvh in [false, true] {
-            v.push(Box::new(super::movers::Fields::new(
-                self.fields.clone(),
-                LookupOptions::default(),
-                sphere_bvh,
-            )));
-        }
+        let names = &super::movers::NAMES;
+        let mut v = super::movers::ray_casters(&self.meshes, names)?;
+        v.extend(super::movers::field_methods(
+            &self.fields,
+            &[],
+            LookupOptions::default(),
+            names,
+        ));
         Ok(v)
     }
 
@@ -423,12 +398,13 @@ impl Crowd {
             let mut reference: Option<Vec<f32>> = None;
             let mut truth = None;
             for m in movers.iter_mut() {
-                let t = Instant::now();
-                m.update(&casters)?;
-                let update_s = t.elapsed().as_secs_f64();
-                let t = Instant::now();
-                let ao = ao_at_points(m.vis(), &self.points, &self.normals, &self.rays, &self.opts);
-                let query_s = t.elapsed().as_secs_f64();
+                let super::movers::Timed {
+                    update_s,
+                    query_s,
+                    values: ao,
+                } = super::movers::timed(m.as_mut(), &casters, |vis| {
+                    ao_at_points(vis, &self.points, &self.normals, &self.rays, &self.opts)
+                })?;
                 let reference = reference.get_or_insert_with(|| ao.clone());
                 if animated && m.name() == "field" {
                     pictures.push(super::animation::Frame {

@@ -104,7 +104,12 @@ pub fn run(out: &Path, quick: bool, supply: &FieldSupply) -> Result<Vec<FrameRow
         let crowd = crowd::Crowd::new(&profile, n, supply)?;
         let (r, pictures) = crowd.frames(&profile, cache)?;
         rows.extend(r);
-        animation::write(&out.join("crowd.png"), &pictures, crowd.plane_side, 250)?;
+        animation::write(
+            &out.join("crowd.png"),
+            &pictures,
+            (crowd.plane_side, crowd.plane_side),
+            250,
+        )?;
     }
     let approach = crowd::Crowd::approach(&profile, supply, profile.gaps.clone())?;
     let (r, pictures) = approach.frames(&profile, cache)?;
@@ -112,7 +117,7 @@ pub fn run(out: &Path, quick: bool, supply: &FieldSupply) -> Result<Vec<FrameRow
     animation::write(
         &out.join("approach.png"),
         &pictures,
-        approach.plane_side,
+        (approach.plane_side, approach.plane_side),
         500,
     )?;
     super::outputs::write_csv(&out.join("table.csv"), &rows)?;

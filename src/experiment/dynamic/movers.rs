@@ -1,15 +1,137 @@
 //! The methods of a moving scene, each charged for what a frame's motion costs it
-//! ([`Mover::update`]) apart from the query on the frame's rays.
+//! ([`Mover::update`]) apart from the query on the frame's rays ([`timed`]): `experiment
+//! dynamic`'s crowd and every animated spec measure them the same way.
 
 use crate::field::lookup::LookupOptions;
+use crate::field::normals::NormalField;
 use crate::field::scene::{FieldInstance, FieldScene};
 use crate::field::sphere_bvh::SphereBvhScene;
 use crate::field::VisibilityField;
-use crate::geometry::{Mesh, Similarity};
+use crate::geometry::{Mesh, Similarity, Sphere};
 use crate::trace::Tracer;
 use crate::visibility::Visibility;
 use glam::Vec3;
 use std::sync::Arc;
+use std::time::Instant;
+
+/// Every per-frame method, in the order their rows are written: the ray casters (the world
+/// rebuild first: the reference of the others), then the fields.
+pub const NAMES: [&str; 6] = [
+    "world_rebuild",
+    "two_level",
+    "embree_rebuild",
+    "embree_instances",
+    "field_every_sphere",
+    "field",
+];
+
+/// Why this build cannot run the method `name`, if it cannot (Embree's without the `embree`
+/// feature).
+pub fn unavailable(name: &str) -> Option<&'static str> {
+    (name.starts_with("embree") && !cfg!(feature = "embree"))
+        .then_some("this build lacks the `embree` feature (cargo build --features embree)")
+}
+
+/// The ray casters among `names` over `meshes` (in [`NAMES`] order, the per-mesh precompute
+/// of the two-level and instanced ones done), each that this build runs; the world rebuild
+/// always, first.
+pub fn ray_casters(
+    meshes: &[Arc<Mesh>],
+    names: &[&str],
+) -> crate::experiment::Result<Vec<Box<dyn Mover>>> {
+    let mut v: Vec<Box<dyn Mover>> = vec![Box::<WorldRebuild>::default()];
+    if names.contains(&"two_level") {
+        v.push(Box::new(TwoLevelRebuild::new(meshes)));
+    }
+    #[cfg(feature = "embree")]
+    {
+        if names.contains(&"embree_rebuild") {
+            v.push(Box::<EmbreeRebuild>::default());
+        }
+        if names.contains(&"embree_instances") {
+            v.push(Box::new(EmbreeInstanced::new(meshes)?));
+        }
+    }
+    Ok(v)
+}
+
+/// The field methods among `names` on one field per mesh (with its normal field, for a kind
+/// that reads them), testing every sphere and with the sphere BVH, in [`NAMES`] order.
+pub fn field_methods(
+    fields: &[Arc<VisibilityField>],
+    normals: &[Option<Arc<NormalField>>],
+    options: LookupOptions,
+    names: &[&str],
+) -> Vec<Box<dyn Mover>> {
+    [(false, "field_every_sphere"), (true, "field")]
+        .into_iter()
+        .filter(|(_, n)| names.contains(n))
+        .map(|(bvh, _)| {
+            let mut f = Fields::new(fields.to_vec(), options, bvh);
+            f.normals = normals.to_vec();
+            Box::new(f) as Box<dyn Mover>
+        })
+        .collect()
+}
+
+/// One method on one frame: its update and its query timed apart.
+pub struct Timed {
+    /// Seconds of [`Mover::update`].
+    pub update_s: f64,
+    /// Seconds of the query.
+    pub query_s: f64,
+    /// The query's values.
+    pub values: Vec<f32>,
+}
+
+/// Brings `mover` to `frame` and answers `query` through it, each timed (all threads).
+pub fn timed(
+    mover: &mut dyn Mover,
+    frame: &FrameCasters,
+    query: impl FnOnce(&dyn Visibility) -> Vec<f32>,
+) -> crate::experiment::Result<Timed> {
+    let t = Instant::now();
+    mover.update(frame)?;
+    let update_s = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let values = query(mover.vis());
+    Ok(Timed {
+        update_s,
+        query_s: t.elapsed().as_secs_f64(),
+        values,
+    })
+}
+
+/// A frame's overlap counts: caster pairs whose world bounding spheres overlap, and points
+/// inside the sphere of some caster other than their own (`owner`: the caster a point belongs
+/// to, if any: a caster's own points always lie in its sphere, the intra-object case). Where
+/// the papers' "non-penetrating" assumption stops holding. `spheres`: each caster's
+/// (instance, world sphere); an overlap is a distance strictly below the sum of the radii.
+pub fn overlaps(
+    spheres: &[(usize, Sphere)],
+    points: &[Vec3],
+    owner: impl Fn(usize) -> Option<usize> + Sync,
+) -> (usize, usize) {
+    use rayon::prelude::*;
+    let mut pairs = 0;
+    for (i, (_, a)) in spheres.iter().enumerate() {
+        for (_, b) in &spheres[i + 1..] {
+            if a.center.distance(b.center) < a.radius + b.radius {
+                pairs += 1;
+            }
+        }
+    }
+    let inside = (0..points.len())
+        .into_par_iter()
+        .filter(|&j| {
+            let p = points[j];
+            spheres
+                .iter()
+                .any(|(inst, s)| owner(j) != Some(*inst) && p.distance(s.center) < s.radius)
+        })
+        .count();
+    (pairs, inside)
+}
 
 /// One frame's casters: each instance's mesh and transform.
 pub struct FrameCasters<'a> {
@@ -191,6 +313,8 @@ impl Mover for TwoLevelRebuild {
 pub struct Fields {
     /// Per mesh, its field.
     pub fields: Vec<Arc<VisibilityField>>,
+    /// Per mesh, its normal field (reflections read them; empty or `None`: none).
+    pub normals: Vec<Option<Arc<NormalField>>>,
     pub options: LookupOptions,
     pub sphere_bvh: bool,
     /// The frame's scene: without the tree, or with it.
@@ -206,6 +330,7 @@ impl Fields {
     ) -> Fields {
         Fields {
             fields,
+            normals: Vec::new(),
             options,
             sphere_bvh,
             plain: FieldScene::default(),
@@ -228,7 +353,13 @@ impl Mover for Fields {
             instances: frame
                 .instances
                 .iter()
-                .map(|&(m, t)| FieldInstance::new(self.fields[m].clone(), t))
+                .map(|&(m, t)| {
+                    let f = FieldInstance::new(self.fields[m].clone(), t);
+                    match self.normals.get(m).cloned().flatten() {
+                        Some(n) => f.with_normals(n),
+                        None => f,
+                    }
+                })
                 .collect(),
             options: self.options,
         };
@@ -249,6 +380,7 @@ impl Mover for Fields {
     }
 
     fn bytes(&self) -> Option<u64> {
-        Some(self.fields.iter().map(|f| f.bytes()).sum::<u64>() + self.tree.bvh().bytes())
+        let normals: u64 = self.normals.iter().flatten().map(|n| n.bytes()).sum();
+        Some(self.fields.iter().map(|f| f.bytes()).sum::<u64>() + normals + self.tree.bvh().bytes())
     }
 }

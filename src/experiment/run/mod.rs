@@ -8,6 +8,10 @@
 //! [`crate::visibility::Visibility`] behind the same estimator. Stages shorter than
 //! `short_stage_s` are timed as the best of `repeats` runs.
 
+pub mod frames;
+mod frames_write;
+
+pub use frames_write::redraw as redraw_frames;
 mod methods;
 mod references;
 pub(crate) mod staging;
@@ -112,6 +116,9 @@ pub struct RunReport {
     pub name: String,
     pub out: PathBuf,
     pub rows: Vec<Row>,
+    /// An animated spec's rows of `frames.csv` (empty for a static spec, whose `rows` are its
+    /// cells).
+    pub frames: Vec<frames::FrameRow>,
     /// The thresholds of the profile that ran.
     pub thresholds: Vec<Threshold>,
     /// The plan as printed by `--dry-run`.
@@ -184,7 +191,17 @@ fn run_checked(
     });
     let scenes = scenes?;
     let kind = crate::experiment::kinds::of(&spec.render);
-    if let Some((field, message)) = scenes.scenes.iter().find_map(|bs| kind.scene_problem(bs)) {
+    // Every frame of an animated scene (a caster may move onto a light).
+    let problem = |bs: &crate::experiment::scenes::BuiltScene| {
+        if bs.frames.is_empty() {
+            return kind.scene_problem(bs);
+        }
+        (0..bs.frame_count()).find_map(|f| {
+            let (field, message) = kind.scene_problem(&bs.at_frame(f))?;
+            Some((field, format!("at frame {f}: {message}")))
+        })
+    };
+    if let Some((field, message)) = scenes.scenes.iter().find_map(problem) {
         return Err(crate::experiment::spec::SpecError::Invalid {
             file: ls.path.clone(),
             field,
@@ -197,6 +214,9 @@ fn run_checked(
     };
     crate::experiment::plan::check_scene_memory(spec, &scenes, limits)
         .context(|| ls.path.display().to_string())?;
+    if spec.animation.is_some() {
+        return run_animated(ls, opts, spec, &scenes, started);
+    }
     let plan = Plan::new_shard(spec, &scenes, limits, opts.shard)
         .context(|| ls.path.display().to_string())?;
     let supply = &opts.supply;
@@ -207,6 +227,7 @@ fn run_checked(
         name: ls.name.clone(),
         out: opts.out.clone(),
         rows,
+        frames: Vec::new(),
         thresholds: spec.thresholds.clone(),
         plan_text: plan_text.clone(),
         seconds: started.elapsed().as_secs_f64(),
@@ -215,36 +236,91 @@ fn run_checked(
         return Ok(report(Vec::new()));
     }
     eprint!("{plan_text}");
-    // Outputs go to a staging folder, published only once the run has finished.
-    let staged = RunOptions {
-        out: staging::create(&opts.out)?,
-        ..opts.clone()
-    };
     let method_runs = methods::runnable(ls, spec, opts)?;
-    let rows = (|| {
-        let mut runner = Runner::new(spec, &plan, &scenes, &staged)?;
+    let rows = staged_run(opts, |staged| {
+        let mut runner = Runner::new(spec, &plan, &scenes, staged)?;
         runner.method_runs = method_runs;
         for step in &plan.steps {
             runner.step(step)?;
         }
         runner.finish(ls)
-    })();
-    let rows = match rows {
-        Ok(r) => r,
-        Err(e) => {
-            let _ = std::fs::remove_dir_all(&staged.out);
-            return Err(e);
-        }
-    };
-    if let Err(e) = staging::publish(&staged.out, &opts.out) {
-        let _ = std::fs::remove_dir_all(&staged.out);
-        return Err(e);
-    }
+    })?;
     let r = report(rows);
     eprintln!(
         "{}: {} cells in {:.1} s -> {}",
         ls.name,
         r.rows.len(),
+        r.seconds,
+        opts.out.display()
+    );
+    Ok(r)
+}
+
+/// Runs `work` with its outputs going to a staging folder beside `opts.out` (the options it is
+/// given), published only once it has finished; the staging folder removed on any failure.
+fn staged_run<T>(opts: &RunOptions, work: impl FnOnce(&RunOptions) -> Result<T>) -> Result<T> {
+    let staged = RunOptions {
+        out: staging::create(&opts.out)?,
+        ..opts.clone()
+    };
+    let done = work(&staged).and_then(|t| staging::publish(&staged.out, &opts.out).map(|()| t));
+    if done.is_err() {
+        let _ = std::fs::remove_dir_all(&staged.out);
+    }
+    done
+}
+
+/// [`run_checked`] for an animated spec: every scene frame by frame ([`frames`]), written by
+/// [`frames_write`] through the same staging.
+fn run_animated(
+    ls: &LoadedSpec,
+    opts: &RunOptions,
+    spec: &Spec,
+    scenes: &Scenes,
+    started: std::time::Instant,
+) -> Result<RunReport> {
+    if opts.shard.is_some() {
+        return Err(Error::invalid(
+            "--shard",
+            format!(
+                "{}: an animated spec runs whole (its rows are frames, not cells)",
+                ls.name
+            ),
+        ));
+    }
+    let frames = spec.animation.as_ref().map_or(1, |a| a.frames);
+    let cells = crate::experiment::plan::cells_of(spec).len();
+    let plan_text = format!(
+        "{}: {} scene(s) x {frames} frame(s): the ray casters once a frame, the field methods \
+         once a frame per field cell ({cells} cell(s) over all scenes), {} rays per point, each \
+         frame's converged reference\n",
+        ls.name,
+        scenes.scenes.len(),
+        spec.render.rays_per_point
+    );
+    let report = |frames: Vec<frames::FrameRow>| RunReport {
+        name: ls.name.clone(),
+        out: opts.out.clone(),
+        rows: Vec::new(),
+        frames,
+        thresholds: Vec::new(),
+        plan_text: plan_text.clone(),
+        seconds: started.elapsed().as_secs_f64(),
+    };
+    if opts.dry_run {
+        return Ok(report(Vec::new()));
+    }
+    eprint!("{plan_text}");
+    let rows = staged_run(opts, |staged| {
+        let run = frames::run(ls, spec, scenes, staged)?;
+        frames_write::write(ls, spec, scenes, staged, &run)?;
+        Ok(run.rows)
+    })?;
+    let r = report(rows);
+    eprintln!(
+        "{}: {} frame rows in {:.1} s -> {}",
+        ls.name,
+        r.frames.len(),
         r.seconds,
         opts.out.display()
     );

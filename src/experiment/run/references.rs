@@ -28,6 +28,17 @@ pub(super) struct SeedErrors {
     pub(super) interior: Option<f64>,
 }
 
+/// The converged reference's options of `spec` (`reference.truth`).
+pub(super) fn truth_options(spec: &crate::experiment::spec::Spec) -> TruthOptions {
+    let t = &spec.reference.truth;
+    TruthOptions {
+        target_stderr_255: t.target_stderr,
+        max_rays: t.max_rays,
+        batches: t.batches,
+        ..TruthOptions::default()
+    }
+}
+
 impl Runner<'_> {
     /// The seeds of every cell: `seed`, `seed + 1`, … (`reference.seeds` of them).
     pub(super) fn seeds(&self) -> Vec<u64> {
@@ -39,13 +50,7 @@ impl Runner<'_> {
 
     /// The converged reference of scene `scene`, from the cache or computed.
     pub(super) fn truth(&mut self, scene: usize) -> Result<()> {
-        let t = &self.spec.reference.truth;
-        let topts = TruthOptions {
-            target_stderr_255: t.target_stderr,
-            max_rays: t.max_rays,
-            batches: t.batches,
-            ..TruthOptions::default()
-        };
+        let topts = truth_options(self.spec);
         let cache = self.opts.supply.cache.clone();
         let scenes = self.scenes;
         let bs = &scenes.scenes[scene];

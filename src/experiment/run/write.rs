@@ -9,6 +9,37 @@ use crate::experiment::spec::Backend;
 use crate::experiment::table::{write_table, Row, TableRow};
 use crate::experiment::{Error, Result};
 
+/// Writes `summary` as `out/run.json` and the spec as run as `out/spec.json`, atomically.
+pub(super) fn write_summary(
+    out: &std::path::Path,
+    summary: &serde_json::Value,
+    ls: &LoadedSpec,
+) -> Result<()> {
+    let p = out.join("run.json");
+    let json = serde_json::to_string_pretty(summary).expect("run summary serialises");
+    crate::io::write_atomic(&p, json.as_bytes()).map_err(Error::io(&p))?;
+    let p = out.join("spec.json");
+    crate::io::write_atomic(&p, ls.text.as_bytes()).map_err(Error::io(&p))
+}
+
+/// Each mesh of `scenes` as `run.json` lists it: its label and content hash (the field cache's
+/// key), its counts, and for a user's file the path as the spec gives it and its bytes' sha256.
+pub(super) fn meshes_json(scenes: &crate::experiment::scenes::Scenes) -> Vec<serde_json::Value> {
+    scenes
+        .meshes
+        .iter()
+        .map(|m| {
+            serde_json::json!({
+                "label": m.label,
+                "mesh_sha256": m.sha256,
+                "vertices": m.mesh.vertex_count(),
+                "triangles": m.mesh.triangle_count(),
+                "file": m.file,
+            })
+        })
+        .collect()
+}
+
 impl Runner<'_> {
     /// RMS between every two cells that differ only in precision.
     fn pairs(&self) -> Vec<PairRow> {
@@ -180,22 +211,7 @@ impl Runner<'_> {
                 })
             })
             .collect();
-        // Each mesh by its label and content hash (the field cache's key); a user's file with
-        // the path as the spec gives it, its bytes' sha256 and its counts.
-        let meshes: Vec<_> = self
-            .scenes
-            .meshes
-            .iter()
-            .map(|m| {
-                serde_json::json!({
-                    "label": m.label,
-                    "mesh_sha256": m.sha256,
-                    "vertices": m.mesh.vertex_count(),
-                    "triangles": m.mesh.triangle_count(),
-                    "file": m.file,
-                })
-            })
-            .collect();
+        let meshes = meshes_json(self.scenes);
         let plan = self.plan;
         let summary = serde_json::json!({
             "spec": ls.name,
@@ -228,11 +244,7 @@ impl Runner<'_> {
             "meshes": meshes,
             "effective_spec": spec,
         });
-        let p = out.join("run.json");
-        let json = serde_json::to_string_pretty(&summary).expect("run summary serialises");
-        crate::io::write_atomic(&p, json.as_bytes()).map_err(Error::io(&p))?;
-        let p = out.join("spec.json");
-        crate::io::write_atomic(&p, ls.text.as_bytes()).map_err(Error::io(&p))?;
+        write_summary(out, &summary, ls)?;
         let title = format!("{}{}", ls.name, if opts.quick { " (quick)" } else { "" });
         crate::experiment::figures::draw_all(out, &title)?;
         Ok(rows)

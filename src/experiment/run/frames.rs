@@ -1,0 +1,417 @@
+//! The runner of an animated spec ([`crate::experiment::spec::Spec::animation`]): every scene
+//! at every frame, its instances moved along their motions ([`crate::geometry::motion`]), the
+//! render kind evaluated at that frame's points (its `setup` on the frame's scene: receiver
+//! vertices, or the receiver pixels of the frame's G-buffer from the fixed camera) by every
+//! per-frame method of [`crate::experiment::dynamic::movers`] on the same seeded rays (the
+//! first seed's), each charged for the frame's motion (`update_s`: a BVH rebuilt, a top level
+//! rebuilt, a scene committed, an instance list) apart from the query (`query_s`).
+//!
+//! Per frame and method a row of `frames.csv` ([`FrameRow`]): the errors against the world
+//! rebuild's ray cast on the same rays (`rms_vs_raycast`) and against the frame's converged
+//! reference (`rms_vs_truth`, cached by frame: its key covers the frame's points and world
+//! triangles), and the frame's overlap counts (caster pairs whose bounding spheres overlap,
+//! points inside another caster's sphere), where the papers' non-penetrating assumption stops
+//! holding. The ray casters are measured once per frame; the field methods once per field cell
+//! of the spec's `fields`, each cell's fields (one per caster mesh, shared by its instances)
+//! supplied once, before the frames. [`super::frames_write`] writes the outputs.
+
+use super::{LoadedSpec, RunOptions};
+use crate::experiment::dynamic::animation::Frame;
+use crate::experiment::dynamic::movers::{self, FrameCasters, Mover, Timed};
+use crate::experiment::kinds::Kind;
+use crate::experiment::metrics::rms_unquantised;
+use crate::experiment::plan::cells_of;
+use crate::experiment::scenes::{BuiltScene, Scenes};
+use crate::experiment::spec::{exact_sqrt, Spec};
+use crate::experiment::truth_cache::{load_or_compute, TruthInputs};
+use crate::experiment::{Error, Result};
+use crate::geometry::{Mesh, Similarity, Sphere};
+use crate::render::points::{EvalPoints, GBuffer, Support};
+use crate::render::primary::{gbuffer, PrimaryScene};
+use crate::render::truth::TruthOptions;
+use crate::sampling::rays::RaySet;
+use crate::visibility::Visibility;
+use serde::{Deserialize, Serialize};
+use std::sync::Arc;
+use std::time::Instant;
+
+/// One per-frame method on one frame of one scene: a row of `frames.csv`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FrameRow {
+    pub scene: String,
+    pub frame: usize,
+    /// The frame's time, `frame × animation.time_step` (seconds).
+    pub time_s: f64,
+    /// `world_rebuild` (the reference), `two_level`, `embree_rebuild`, `embree_instances`,
+    /// `field_every_sphere`, `field`.
+    pub method: String,
+    /// The field cell of a field method (`Cell::id`); empty for the ray casters.
+    pub cell: String,
+    /// Evaluation points this frame, and those touching another surface.
+    pub points: usize,
+    pub crease_points: usize,
+    /// Rays of one evaluation: points × the kind's rays per point.
+    pub rays: u64,
+    pub caster_triangles: usize,
+    /// The frame's points (the kind's setup on the moved scene, with its G-buffer where there
+    /// is an image), the same for every method and in no method's `frame_s`.
+    pub points_s: f64,
+    /// What the frame's motion costs the method (seconds).
+    pub update_s: f64,
+    /// The kind's estimate on the frame's rays (seconds, all threads).
+    pub query_s: f64,
+    pub frame_s: f64,
+    /// rays / query_s, millions.
+    pub mrays_s: f64,
+    /// RMS over the points (0–255, unquantised) against `world_rebuild` on the same rays.
+    pub rms_vs_raycast: f64,
+    /// RMS over the points (0–255, unquantised) against the frame's converged reference.
+    pub rms_vs_truth: f64,
+    /// The converged reference's RMS standard error (0–255): the floor of `rms_vs_truth`.
+    pub truth_stderr: f64,
+    /// Mean value over the points (the answer's size, for reading the RMS).
+    pub mean_value: f64,
+    /// Bytes the method keeps for the scene, where it can say.
+    pub bytes: Option<u64>,
+    /// Caster pairs whose world bounding spheres overlap this frame.
+    pub sphere_overlaps: usize,
+    /// Points inside the bounding sphere of a caster other than their own instance.
+    pub points_in_spheres: usize,
+}
+
+/// What an animated run produced, for [`super::frames_write`].
+pub(super) struct FramesRun {
+    pub(super) rows: Vec<FrameRow>,
+    /// Per scene with an image: its name, the image's size and the frames of its animation
+    /// (the reference and the first field method).
+    pub(super) pictures: Vec<(String, (usize, usize), Vec<Frame>)>,
+    /// The methods run, and those this build skipped with the reason.
+    pub(super) methods: Vec<&'static str>,
+    pub(super) skipped: Vec<Skipped>,
+    /// Per scene: seconds of the ray casters' per-mesh precompute and of the fields' supply.
+    pub(super) precompute: Vec<serde_json::Value>,
+}
+
+/// A method this build skips, and why.
+type Skipped = (&'static str, &'static str);
+
+/// The per-frame methods the spec asks for (`animation.methods`, default every one) that this
+/// build runs, and the ones it skips with the reason (`--require-embree` fails instead).
+fn methods(spec: &Spec, opts: &RunOptions) -> Result<(Vec<&'static str>, Vec<Skipped>)> {
+    let asked = spec.animation.as_ref().and_then(|a| a.methods.as_ref());
+    let (mut run, mut skipped) = (Vec::new(), Vec::new());
+    for name in movers::NAMES {
+        if name != "world_rebuild" && asked.is_some_and(|m| !m.iter().any(|m| m == name)) {
+            continue;
+        }
+        match movers::unavailable(name) {
+            Some(why) if opts.require_embree => {
+                return Err(Error::invalid(format!("animation method {name}"), why))
+            }
+            Some(why) => {
+                eprintln!("SKIPPED per-frame method {name}: {why}");
+                skipped.push((name, why));
+            }
+            None => run.push(name),
+        }
+    }
+    Ok((run, skipped))
+}
+
+/// Runs every scene of the animated `spec` frame by frame (outputs left to
+/// [`super::frames_write`]).
+pub(super) fn run(
+    ls: &LoadedSpec,
+    spec: &Spec,
+    scenes: &Scenes,
+    opts: &RunOptions,
+) -> Result<FramesRun> {
+    let anim = spec
+        .animation
+        .as_ref()
+        .expect("an animated spec has its animation");
+    let k = exact_sqrt(spec.render.rays_per_point)
+        .ok_or_else(|| Error::invalid("render.rays_per_point", "not a perfect square"))?;
+    let (names, skipped) = methods(spec, opts)?;
+    let kind = crate::experiment::kinds::of(&spec.render);
+    let runner = SceneRunner {
+        spec,
+        opts,
+        kind: kind.as_ref(),
+        rays: RaySet::new(k, spec.reference.seed),
+        names: &names,
+        truth: super::references::truth_options(spec),
+        dt: anim.time_step,
+    };
+    let mut out = FramesRun {
+        rows: Vec::new(),
+        pictures: Vec::new(),
+        methods: names.clone(),
+        skipped,
+        precompute: Vec::new(),
+    };
+    for (s, bs) in scenes.scenes.iter().enumerate() {
+        runner
+            .scene(scenes, s, bs, &mut out)
+            .map_err(|e| e.context(format!("{}: scene {}", ls.path.display(), bs.name)))?;
+    }
+    Ok(out)
+}
+
+/// What every scene of a run shares.
+struct SceneRunner<'a> {
+    spec: &'a Spec,
+    opts: &'a RunOptions,
+    kind: &'a dyn Kind,
+    rays: RaySet,
+    names: &'a [&'static str],
+    truth: TruthOptions,
+    dt: f64,
+}
+
+/// A field cell's methods on one scene.
+struct CellMovers {
+    id: String,
+    movers: Vec<Box<dyn Mover>>,
+}
+
+/// The instance each point lies on (vertices: their receiver's; pixels: the G-buffer hit's).
+fn point_owners(at: &EvalPoints, view: Option<&GBuffer>) -> Vec<Option<usize>> {
+    match &at.support {
+        Support::Vertices(r) => {
+            let mut owners = vec![None; at.len()];
+            for &(inst, start, count) in &r.ranges {
+                owners[start..start + count].fill(Some(inst));
+            }
+            owners
+        }
+        Support::Pixels(pixels) => pixels
+            .iter()
+            .map(|&px| view.and_then(|v| v.hits[px]).map(|h| h.instance as usize))
+            .collect(),
+    }
+}
+
+impl SceneRunner<'_> {
+    /// The G-buffer of the spec's image on the scene at one frame (the camera fixed).
+    fn view(&self, fbs: &BuiltScene) -> Option<GBuffer> {
+        let img = self.kind.image()?;
+        let cam = fbs.view_camera(img);
+        Some(GBuffer {
+            hits: gbuffer(&PrimaryScene::new(&fbs.scene), &cam, img.width, img.height),
+            width: img.width,
+            height: img.height,
+        })
+    }
+
+    /// Every frame of scene `s`, every method.
+    fn scene(&self, scenes: &Scenes, s: usize, bs: &BuiltScene, out: &mut FramesRun) -> Result<()> {
+        let global = bs.caster_meshes();
+        let meshes: Vec<Arc<Mesh>> = global
+            .iter()
+            .map(|&m| scenes.meshes[m].mesh.clone())
+            .collect();
+        let local = |m: usize| global.iter().position(|&g| g == m).expect("a caster mesh");
+        let model_spheres: Vec<Sphere> = bs
+            .scene
+            .instances
+            .iter()
+            .map(|i| i.mesh.bounding_sphere())
+            .collect();
+        let t = Instant::now();
+        let mut casters = movers::ray_casters(&meshes, self.names)?;
+        let raycast_precompute_s = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let mut cells = self.cells(scenes, s, bs, &global)?;
+        let fields_s = t.elapsed().as_secs_f64();
+        out.precompute.push(serde_json::json!({
+            "scene": bs.name,
+            "ray_casters_s": raycast_precompute_s,
+            "fields_s": fields_s,
+        }));
+        let mut pictures = Vec::new();
+        let tris = bs.caster_triangles();
+        for f in 0..bs.frame_count() {
+            let fbs = bs.at_frame(f);
+            let t = Instant::now();
+            let view = self.view(&fbs);
+            let setup = self.kind.setup(&fbs, view.as_ref());
+            let points_s = t.elapsed().as_secs_f64();
+            if setup.points.is_empty() {
+                return Err(Error::invalid(
+                    format!("scene {} frame {f}", bs.name),
+                    format!(
+                        "no point to evaluate: {} has nothing there",
+                        self.kind.name()
+                    ),
+                ));
+            }
+            let instances: Vec<(usize, Similarity)> = fbs
+                .scene
+                .casters()
+                .map(|(i, inst)| (local(bs.mesh_of[i]), inst.transform))
+                .collect();
+            let spheres: Vec<(usize, Sphere)> = fbs
+                .scene
+                .casters()
+                .map(|(i, inst)| (i, inst.transform.to_world_sphere(&model_spheres[i])))
+                .collect();
+            let owners = point_owners(&setup.points, view.as_ref());
+            let (sphere_overlaps, points_in_spheres) =
+                movers::overlaps(&spheres, &setup.points.points, |j| owners[j]);
+            let frame = FrameCasters {
+                meshes: &meshes,
+                instances: &instances,
+            };
+            let at = setup.points.at();
+            let est = setup.estimator.as_ref();
+            let query = |vis: &dyn Visibility| est.estimate(vis, at, &self.rays);
+            // The ray casters, the world rebuild first: the frame's reference and the tracer
+            // of its converged reference.
+            let mut measured: Vec<(&'static str, String, Timed, Option<u64>)> = Vec::new();
+            let mut truth = None;
+            for m in casters.iter_mut() {
+                let r = movers::timed(m.as_mut(), &frame, query)?;
+                if truth.is_none() {
+                    let world = frame.world_triangles();
+                    let inputs = TruthInputs {
+                        estimator: est,
+                        tracer: m.vis(),
+                        casters: &world,
+                        at,
+                    };
+                    let name = format!("{}-f{f}", bs.name);
+                    let cache = self.opts.supply.cache.as_deref();
+                    truth = Some(load_or_compute(cache, &name, &inputs, &self.truth)?.0);
+                }
+                measured.push((m.name(), String::new(), r, m.bytes()));
+            }
+            for c in cells.iter_mut() {
+                for m in c.movers.iter_mut() {
+                    let r = movers::timed(m.as_mut(), &frame, query)?;
+                    measured.push((m.name(), c.id.clone(), r, m.bytes()));
+                }
+            }
+            let truth = truth.expect("the world rebuild runs first");
+            let reference = measured[0].2.values.clone();
+            let rays = setup.points.len() as u64 * self.kind.rays_cast_per_point();
+            let mut line = format!(
+                "{} frame {f}: {} points, overlaps {sphere_overlaps}/{points_in_spheres};",
+                bs.name,
+                setup.points.len()
+            );
+            for (method, cell, r, bytes) in &measured {
+                let rms = rms_unquantised(&r.values, &reference);
+                line.push_str(&format!(
+                    " {method} {:.4} s ({rms:.2})",
+                    r.update_s + r.query_s
+                ));
+                out.rows.push(FrameRow {
+                    scene: bs.name.clone(),
+                    frame: f,
+                    time_s: f as f64 * self.dt,
+                    method: method.to_string(),
+                    cell: cell.clone(),
+                    points: setup.points.len(),
+                    crease_points: setup.points.crease_count(),
+                    rays,
+                    caster_triangles: tris,
+                    points_s,
+                    update_s: r.update_s,
+                    query_s: r.query_s,
+                    frame_s: r.update_s + r.query_s,
+                    mrays_s: rays as f64 / r.query_s.max(1e-12) / 1e6,
+                    rms_vs_raycast: rms,
+                    rms_vs_truth: rms_unquantised(&r.values, &truth.values),
+                    truth_stderr: truth.rms_stderr_255(),
+                    mean_value: r.values.iter().map(|&v| v as f64).sum::<f64>()
+                        / r.values.len().max(1) as f64,
+                    bytes: *bytes,
+                    sphere_overlaps,
+                    points_in_spheres,
+                });
+            }
+            eprintln!("{line}");
+            // The animation: the reference and the first field method, where there is an image.
+            if let (Some(v), Some(field)) = (&view, measured.iter().find(|m| !m.1.is_empty())) {
+                let img = |values: &[f32]| setup.points.image(&fbs.scene, v, values).0.data;
+                pictures.push(Frame {
+                    reference: img(&reference),
+                    field: img(&field.2.values),
+                });
+            }
+        }
+        if let Some(img) = self.kind.image() {
+            let size = (img.width as usize, img.height as usize);
+            out.pictures.push((bs.name.clone(), size, pictures));
+        }
+        Ok(())
+    }
+
+    /// The field methods of every field cell of scene `s`, each cell's fields supplied once
+    /// (one per caster mesh, `global`: the meshes' indices in `scenes`), refused where all of
+    /// them together pass the memory limit.
+    fn cells(
+        &self,
+        scenes: &Scenes,
+        s: usize,
+        bs: &BuiltScene,
+        global: &[usize],
+    ) -> Result<Vec<CellMovers>> {
+        let cells: Vec<_> = cells_of(self.spec)
+            .into_iter()
+            .filter(|c| c.scene == s)
+            .collect();
+        let field_names: Vec<&str> = self
+            .names
+            .iter()
+            .copied()
+            .filter(|n| n.starts_with("field"))
+            .collect();
+        if field_names.is_empty() {
+            return Ok(Vec::new());
+        }
+        let bytes: u64 = cells
+            .iter()
+            .map(|c| c.params.storage_bytes() * global.len() as u64)
+            .sum();
+        let limit = self.opts.supply.memory_limit;
+        if bytes > limit {
+            return Err(Error::invalid(
+                format!("scene {}", bs.name),
+                format!(
+                    "an animated spec keeps every field cell's fields of a scene for all its \
+                     frames: {bytes} bytes, past the memory limit of {limit} (--max-memory-mib)"
+                ),
+            ));
+        }
+        let mut out = Vec::new();
+        for c in cells {
+            let (mut fields, mut normals) = (Vec::new(), Vec::new());
+            for &m in global {
+                let mesh = &scenes.meshes[m];
+                match c.normal_bits {
+                    Some(b) => {
+                        let (f, n) = self.opts.supply.obtain_with_normals(mesh, c.params, &[b])?;
+                        fields.push(f.field);
+                        normals.push(n.into_iter().next().map(|(_, n)| n));
+                    }
+                    None => {
+                        fields.push(self.opts.supply.obtain(mesh, c.params)?.field);
+                        normals.push(None);
+                    }
+                }
+            }
+            out.push(CellMovers {
+                id: c.id(&bs.name),
+                movers: movers::field_methods(
+                    &fields,
+                    &normals,
+                    self.kind.lookup_options(c.selection),
+                    &field_names,
+                ),
+            });
+        }
+        Ok(out)
+    }
+}

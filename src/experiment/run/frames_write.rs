@@ -1,0 +1,169 @@
+//! The end of an animated run ([`super::frames`]): `frames.csv`, per scene the frame time and
+//! the error against the frame (`frame_time-SCENE.png`, `error-SCENE.png`) and, with an image,
+//! the animation of the reference, the first field method and their difference
+//! (`animation-SCENE.png`, APNG), `run.json` and the spec copy.
+
+use super::frames::{FrameRow, FramesRun};
+use super::{LoadedSpec, RunOptions};
+use crate::experiment::plot::{xy_plot, Axes, Series};
+use crate::experiment::scenes::Scenes;
+use crate::experiment::spec::Spec;
+use crate::experiment::Result;
+use std::path::Path;
+
+/// Each method's label and its rows of `scene`, in row order; a field method's label names
+/// its field cell where the scene has more than one.
+fn series_of<'r>(rows: &'r [FrameRow], scene: &str) -> Vec<(String, Vec<&'r FrameRow>)> {
+    let rows: Vec<&FrameRow> = rows.iter().filter(|r| r.scene == scene).collect();
+    let first_cell = rows.iter().map(|r| &r.cell).find(|c| !c.is_empty());
+    let cells = rows
+        .iter()
+        .any(|r| !r.cell.is_empty() && Some(&r.cell) != first_cell);
+    let mut out: Vec<(String, Vec<&FrameRow>)> = Vec::new();
+    for r in rows {
+        let label = if cells && !r.cell.is_empty() {
+            format!("{} {}", r.method, r.cell)
+        } else {
+            r.method.clone()
+        };
+        match out.iter_mut().find(|(l, _)| *l == label) {
+            Some((_, v)) => v.push(r),
+            None => out.push((label, vec![r])),
+        }
+    }
+    out
+}
+
+/// Frame time (update + query) against the frame, one line per method.
+fn plot_frame_time(path: &Path, rows: &[FrameRow], scene: &str, kind: &str) -> Result<()> {
+    let series: Vec<Series> = series_of(rows, scene)
+        .into_iter()
+        .map(|(label, rs)| Series {
+            label,
+            points: rs.iter().map(|r| (r.frame as f64, r.frame_s)).collect(),
+            line: true,
+        })
+        .collect();
+    let axes = Axes {
+        title: format!("{scene}: frame time (motion update + {kind}) per method"),
+        x_label: "frame".into(),
+        y_label: "frame time (s)".into(),
+        log_x: false,
+        log_y: true,
+    };
+    xy_plot(path, &axes, &series, &[])
+}
+
+/// The error against the frame's converged reference per method, and the field methods'
+/// error against the world rebuild on the same rays.
+fn plot_error(path: &Path, rows: &[FrameRow], scene: &str) -> Result<()> {
+    let mut series = Vec::new();
+    for (label, rs) in series_of(rows, scene) {
+        series.push(Series {
+            label: format!("{label}: against the converged reference"),
+            points: rs
+                .iter()
+                .map(|r| (r.frame as f64, r.rms_vs_truth))
+                .collect(),
+            line: true,
+        });
+        if !rs[0].cell.is_empty() {
+            series.push(Series {
+                label: format!("{label}: against ray casting, same rays"),
+                points: rs
+                    .iter()
+                    .map(|r| (r.frame as f64, r.rms_vs_raycast))
+                    .collect(),
+                line: true,
+            });
+        }
+    }
+    let axes = Axes {
+        title: format!("{scene}: error per frame"),
+        x_label: "frame".into(),
+        y_label: "RMS (0-255)".into(),
+        log_x: false,
+        log_y: false,
+    };
+    xy_plot(path, &axes, &series, &[])
+}
+
+/// The plots of every scene of `rows` in `dir` (`kind`: the render kind, for the titles).
+fn draw(dir: &Path, rows: &[FrameRow], kind: &str) -> Result<()> {
+    let mut scenes: Vec<&str> = Vec::new();
+    for r in rows {
+        if !scenes.contains(&r.scene.as_str()) {
+            scenes.push(&r.scene);
+        }
+    }
+    for n in scenes {
+        plot_frame_time(&dir.join(format!("frame_time-{n}.png")), rows, n, kind)?;
+        plot_error(&dir.join(format!("error-{n}.png")), rows, n)?;
+    }
+    Ok(())
+}
+
+/// Redraws the plots of the animated run in `dir` from its `frames.csv` (`kind`: its render
+/// kind, for the titles).
+pub fn redraw(dir: &Path, kind: &str) -> Result<()> {
+    let rows: Vec<FrameRow> = crate::experiment::outputs::read_csv(&dir.join("frames.csv"))?;
+    draw(dir, &rows, kind)
+}
+
+/// Writes every output of an animated run into `opts.out`.
+pub(super) fn write(
+    ls: &LoadedSpec,
+    spec: &Spec,
+    scenes: &Scenes,
+    opts: &RunOptions,
+    run: &FramesRun,
+) -> Result<()> {
+    let out = &opts.out;
+    crate::experiment::outputs::write_csv(&out.join("frames.csv"), &run.rows)?;
+    let kind = crate::experiment::kinds::of(&spec.render);
+    draw(out, &run.rows, kind.name())?;
+    for (name, size, frames) in &run.pictures {
+        let p = out.join(format!("animation-{name}.png"));
+        crate::experiment::dynamic::animation::write(&p, frames, *size, 250)?;
+    }
+    let scene_info: Vec<_> = scenes
+        .scenes
+        .iter()
+        .map(|bs| {
+            serde_json::json!({
+                "name": bs.name,
+                "instances": bs.scene.instances.len(),
+                "frames": bs.frame_count(),
+                "caster_triangles": bs.caster_triangles(),
+                "origin": bs.origin,
+            })
+        })
+        .collect();
+    let meshes = super::write::meshes_json(scenes);
+    let meta = crate::experiment::meta::RunMeta::collect(Some(&ls.text)).timed();
+    let summary = serde_json::json!({
+        "spec": ls.name,
+        "spec_file": crate::experiment::meta::portable_path(&ls.path),
+        "reproduces": spec.reproduces,
+        "profile": if opts.quick { "quick" } else { "full" },
+        "meta": meta,
+        "render": kind.name(),
+        "rays_per_point": spec.render.rays_per_point,
+        "seed": spec.reference.seed,
+        "truth": spec.reference.truth,
+        "animation": spec.animation,
+        "methods": run.methods,
+        "skipped_methods": run
+            .skipped
+            .iter()
+            .map(|(m, why)| serde_json::json!({"method": m, "why": why}))
+            .collect::<Vec<_>>(),
+        "precompute": run.precompute,
+        "timing": "each method's update and query timed once per frame, all threads",
+        "cache": opts.supply.cache.as_deref().map(crate::experiment::meta::portable_path),
+        "scenes": scene_info,
+        "meshes": meshes,
+        "effective_spec": spec,
+    });
+    super::write::write_summary(out, &summary, ls)
+}

@@ -1,0 +1,296 @@
+//! Closed forms of the paths: interpolated keys, rigid turns about a pivot and an axis,
+//! orbits' radii and angles, tumbles about the centre, walks' step lengths, and the identity
+//! and translations of the whole scene kept exactly.
+
+use super::*;
+use glam::{Quat, Vec3Swizzles};
+
+/// A placement with every part non-trivial: rotated, scaled, translated, with an offset.
+fn placement(translation: DVec3) -> Placement {
+    Placement {
+        rotation: Quat::from_euler(EulerRot::YXZ, 0.4, -0.3, 1.1),
+        translation,
+        scale: 0.75,
+        offset: DVec3::new(0.125, -0.25, 0.5),
+    }
+}
+
+const M: Vec3 = Vec3::new(0.5, -0.25, 1.0);
+
+/// A model point's world position under the placement moved by `pose`.
+fn world(pose: &Pose, p: &Placement, x: Vec3) -> DVec3 {
+    pose.apply(p, M).to_world_point(x)
+}
+
+fn close(a: DVec3, b: DVec3, tol: f64) {
+    assert!((a - b).length() <= tol, "{a} vs {b}");
+}
+
+/// f32 rotations and positions: a few units of 6e-8 of the unit-sized coordinates.
+const TOL: f64 = 1e-5;
+
+const PROBES: [Vec3; 3] = [
+    Vec3::new(0.0, 0.0, 0.0),
+    Vec3::new(1.0, 2.0, -1.0),
+    Vec3::new(-0.5, 0.25, 3.0),
+];
+
+#[test]
+fn the_identity_keeps_the_placement_bit_for_bit() {
+    let p = placement(DVec3::new(1e4, -3.0, 2.0));
+    assert_eq!(Pose::IDENTITY.apply(&p, M), p);
+    let still = Motion {
+        keyframes: vec![Keyframe {
+            time: 0.0,
+            translate: DVec3::ZERO,
+            rotate_deg: DVec3::ZERO,
+        }],
+        ..Motion::default()
+    };
+    assert_eq!(still.pose(3, 0.1, &p, M), Pose::IDENTITY);
+}
+
+#[test]
+fn keys_interpolate_linearly_and_by_slerp_and_hold_at_the_ends() {
+    let m = Motion {
+        keyframes: vec![
+            Keyframe {
+                time: 1.0,
+                translate: DVec3::ZERO,
+                rotate_deg: DVec3::ZERO,
+            },
+            Keyframe {
+                time: 3.0,
+                translate: DVec3::new(2.0, 0.0, -4.0),
+                rotate_deg: DVec3::new(0.0, 90.0, 0.0),
+            },
+        ],
+        ..Motion::default()
+    };
+    let p = placement(DVec3::ZERO);
+    // Frame f is at f · 0.5 s: before the first key, halfway, after the last.
+    assert_eq!(m.pose(1, 0.5, &p, M), Pose::IDENTITY);
+    let half = m.pose(4, 0.5, &p, M);
+    close(half.displacement, DVec3::new(1.0, 0.0, -2.0), 1e-12);
+    let (axis, angle) = half.rotation.to_axis_angle();
+    assert!((angle - 45f64.to_radians()).abs() < 1e-12, "{angle}");
+    close(axis, DVec3::Y, 1e-12);
+    let end = m.pose(20, 0.5, &p, M);
+    close(end.displacement, DVec3::new(2.0, 0.0, -4.0), 0.0);
+    assert!((end.rotation.to_axis_angle().1 - 90f64.to_radians()).abs() < 1e-12);
+}
+
+#[test]
+fn keys_about_a_pivot_move_every_instance_as_one_rigid_body() {
+    let pivot = DVec3::new(0.5, 0.0, 0.5);
+    let (r, d) = (DVec3::new(30.0, -45.0, 10.0), DVec3::new(0.25, 1.0, -0.5));
+    let m = Motion {
+        keyframes: vec![Keyframe {
+            time: 0.0,
+            translate: d,
+            rotate_deg: r,
+        }],
+        pivot: Some(pivot),
+        ..Motion::default()
+    };
+    let rigid = |x: DVec3| pivot + euler(r) * (x - pivot) + d;
+    for p in [
+        placement(DVec3::ZERO),
+        placement(DVec3::new(-2.0, 1.0, 3.0)),
+    ] {
+        let pose = m.pose(0, 1.0, &p, M);
+        for x in PROBES {
+            close(world(&pose, &p, x), rigid(p.to_world_point(x)), TOL);
+        }
+    }
+}
+
+#[test]
+fn an_orbit_keeps_its_radius_and_height_and_turns_by_the_period() {
+    let centre = DVec3::new(0.5, 0.0, 0.5);
+    let p = placement(DVec3::new(1.0, 0.5, 0.0));
+    let c0 = p.to_world_point(M);
+    let m = |turn: bool| Motion {
+        orbit: Some(Orbit {
+            center: Some(centre),
+            axis: DVec3::new(0.0, 2.0, 0.0),
+            radius: None,
+            period: 4.0,
+            phase_deg: 0.0,
+            turn,
+        }),
+        ..Motion::default()
+    };
+    // A quarter period: the centre turned 90° about the vertical through `centre`.
+    let q = DQuat::from_rotation_y(90f64.to_radians());
+    let pose = m(false).pose(1, 1.0, &p, M);
+    close(c0 + pose.displacement, centre + q * (c0 - centre), 1e-12);
+    assert_eq!(pose.rotation, DQuat::IDENTITY);
+    // Every frame: the same distance from the axis and height.
+    for f in 0..9 {
+        let c = c0 + m(false).pose(f, 0.7, &p, M).displacement - centre;
+        let d0 = c0 - centre;
+        assert!((c.y - d0.y).abs() < 1e-12);
+        assert!((c.xz().length() - d0.xz().length()).abs() < 1e-12);
+    }
+    // Turning with it: a rigid turn about the axis line.
+    let turned = m(true).pose(1, 1.0, &p, M);
+    for x in PROBES {
+        let w = p.to_world_point(x);
+        close(world(&turned, &p, x), centre + q * (w - centre), TOL);
+    }
+}
+
+#[test]
+fn an_orbit_about_its_own_centre_circles_at_its_radius() {
+    let p = placement(DVec3::ZERO);
+    let m = Motion {
+        orbit: Some(Orbit {
+            center: None,
+            axis: DVec3::Z,
+            radius: Some(0.25),
+            period: -2.0,
+            phase_deg: 30.0,
+            turn: false,
+        }),
+        ..Motion::default()
+    };
+    let mut seen = Vec::new();
+    for f in 0..8 {
+        let d = m.pose(f, 0.25, &p, M).displacement;
+        assert!(
+            (d.length() - 0.25).abs() < 1e-12 && d.z.abs() < 1e-15,
+            "{d}"
+        );
+        seen.push(d);
+    }
+    // 1/8 turn a frame, clockwise about +z (a negative period).
+    for w in seen.windows(2) {
+        let a = w[0].y.atan2(w[0].x) - w[1].y.atan2(w[1].x);
+        assert!((a.rem_euclid(TAU) - TAU / 8.0).abs() < 1e-12, "{a}");
+    }
+}
+
+#[test]
+fn a_tumble_turns_about_the_centre_at_its_rate() {
+    let p = placement(DVec3::new(3.0, 1.0, 0.0));
+    let m = |axis| Motion {
+        tumble: Some(Tumble {
+            rate_deg: 36.0,
+            axis,
+            seed: 9,
+        }),
+        ..Motion::default()
+    };
+    let pose = m(Some(DVec3::X)).pose(5, 0.5, &p, M);
+    assert_eq!(pose.displacement, DVec3::ZERO);
+    let (axis, angle) = pose.rotation.to_axis_angle();
+    close(axis, DVec3::X, 1e-12);
+    assert!((angle - 90f64.to_radians()).abs() < 1e-12);
+    // The centre stays; another point turns about it.
+    let c0 = p.to_world_point(M);
+    close(world(&pose, &p, M), c0, TOL);
+    // A seeded axis: unit, the same for the same seed, another for another seed.
+    let a = m(None).pose(1, 1.0, &p, M).rotation.to_axis_angle().0;
+    let b = m(None).pose(2, 1.0, &p, M).rotation.to_axis_angle().0;
+    close(a, b, 1e-12);
+    let mut other = m(None);
+    other.tumble.as_mut().unwrap().seed = 10;
+    let c = other.pose(1, 1.0, &p, M).rotation.to_axis_angle().0;
+    assert!((a - c).length() > 1e-3, "{a} {c}");
+}
+
+#[test]
+fn a_walk_steps_its_speed_times_the_time_step_in_its_plane() {
+    let p = placement(DVec3::ZERO);
+    let walk = |plane_normal| Motion {
+        walk: Some(Walk {
+            speed: 2.0,
+            seed: 4,
+            plane_normal,
+        }),
+        ..Motion::default()
+    };
+    for n in [None, Some(DVec3::new(0.0, 3.0, 0.0))] {
+        let m = walk(n);
+        assert_eq!(m.pose(0, 0.1, &p, M).displacement, DVec3::ZERO);
+        let d: Vec<DVec3> = (0..6).map(|f| m.pose(f, 0.1, &p, M).displacement).collect();
+        for w in d.windows(2) {
+            assert!(((w[1] - w[0]).length() - 0.2).abs() < 1e-12);
+            if n.is_some() {
+                assert_eq!(w[1].y, 0.0);
+            }
+        }
+        // Seeded directions, not one line.
+        assert!((d[5] - d[0]).length() < 1.0 - 1e-6);
+    }
+}
+
+/// The same motion on a scene translated by a multiple of a power of two, its points with it,
+/// gives the same poses bit for bit, and the same coordinates relative to the translated
+/// origin.
+#[test]
+fn a_translated_scene_moves_as_the_untranslated_one() {
+    let shift = DVec3::new(1048576.0, -2097152.0, 65536.0);
+    let m = |s: DVec3| Motion {
+        keyframes: vec![
+            Keyframe {
+                time: 0.0,
+                translate: DVec3::ZERO,
+                rotate_deg: DVec3::ZERO,
+            },
+            Keyframe {
+                time: 1.0,
+                translate: DVec3::new(0.5, 0.0, 0.25),
+                rotate_deg: DVec3::new(0.0, 60.0, 20.0),
+            },
+        ],
+        pivot: Some(DVec3::new(0.5, 0.25, 0.5) + s),
+        orbit: Some(Orbit {
+            center: Some(DVec3::new(0.25, 0.0, 0.75) + s),
+            axis: DVec3::Y,
+            radius: None,
+            period: 3.0,
+            phase_deg: 10.0,
+            turn: true,
+        }),
+        tumble: Some(Tumble {
+            rate_deg: 50.0,
+            axis: None,
+            seed: 2,
+        }),
+        walk: Some(Walk {
+            speed: 0.5,
+            seed: 1,
+            plane_normal: None,
+        }),
+    };
+    let (near, far) = (placement(DVec3::ZERO), placement(shift));
+    for f in 0..6 {
+        let (a, b) = (
+            m(DVec3::ZERO).pose(f, 0.3, &near, M),
+            m(shift).pose(f, 0.3, &far, M),
+        );
+        assert_eq!(a, b, "frame {f}");
+        let (pa, pb) = (a.apply(&near, M), b.apply(&far, M));
+        assert_eq!(
+            pa.relative_to(DVec3::ZERO),
+            pb.relative_to(shift),
+            "frame {f}"
+        );
+    }
+}
+
+/// A displacement by a multiple of a power of two joins the translation exactly: the placement
+/// relative to the origin moved with it is the unmoved one, bit for bit.
+#[test]
+fn a_move_by_a_multiple_of_the_step_keeps_the_coordinates() {
+    let p = placement(DVec3::new(0.0, 0.5, 0.0));
+    let shift = DVec3::new(256.0, -512.0, 128.0);
+    let moved = Pose {
+        rotation: DQuat::IDENTITY,
+        displacement: shift,
+    }
+    .apply(&p, M);
+    assert_eq!(moved.relative_to(shift), p.relative_to(DVec3::ZERO));
+}
