@@ -41,6 +41,8 @@ mod rays;
 mod reflect_rays;
 mod relief;
 mod relief_peers;
+mod sdf_data;
+mod sdf_kernel;
 mod shadow_rays;
 mod texture;
 mod tracer;
@@ -54,6 +56,7 @@ pub use field_reflect::FieldReflectKernel;
 pub use field_shadow::FieldShadowKernel;
 pub use relief::ReliefKernel;
 pub use relief_peers::ReliefPeersKernel;
+pub use sdf_kernel::{SdfKernel, SDF_CONES_PER_INVOCATION, SDF_RAYS_PER_INVOCATION};
 pub use tracer::{GpuHit, GpuTracer};
 
 use std::time::Duration;
