@@ -29,6 +29,7 @@
 //! has a `#[repr(C)]`, `Pod` twin with the same named fields (padding spelled out as `_pad*`)
 //! and compile-time size and offset assertions.
 
+mod aofield_kernel;
 mod context;
 mod field_ao;
 mod field_binding;
@@ -47,6 +48,7 @@ mod shadow_rays;
 mod texture;
 mod tracer;
 
+pub use aofield_kernel::AoFieldKernel;
 pub use context::{AdapterPreference, GpuContext, ADAPTER_ENV};
 pub use field_ao::{FieldAoKernel, LookupProbe};
 pub use field_binding::FieldLayout;
