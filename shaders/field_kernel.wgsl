@@ -1,7 +1,8 @@
 // What every field kernel shares (src/gpu/field_kernel.rs): the parameter header, the receivers
 // and the output words, bindings 0-2 of the kernel's own group; a kernel's own inputs follow
 // from binding 3 (FIRST_OWN_BINDING). `tables`, `mesh`, `instances` and the stored distances are
-// the field group's (src/gpu/field_binding.rs).
+// the field group's (src/gpu/field_binding.rs). The per-object peers' kernels (SDF, AO fields)
+// share this header and bind everything of theirs in group 0.
 
 // Mirrors `KernelParamsGpu` (src/gpu/field_kernel.rs), 64 bytes.
 struct Params {
@@ -33,9 +34,12 @@ struct Params {
     tmax: f32,
     // Shadows: the lights.
     light_count: u32,
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
+    // SDF kernels: steps per ray, cone and volume (`SdfTrace::max_steps`).
+    max_steps: u32,
+    // SDF cone kernels: a cone's least step, a share of its radius (`ConeTrace::step`).
+    cone_step: f32,
+    // SDF cone AO: tan of the cones' common half-angle (`ConeSet::tan_half`).
+    cone_tan: f32,
 }
 
 @group(0) @binding(0) var<uniform> params: Params;

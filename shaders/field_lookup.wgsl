@@ -74,19 +74,6 @@ struct Instance {
     cand_base: u32,
 }
 
-// glam's `Quat::mul_vec3a`: v (w^2 - b.b) + b 2(v.b) + (b x v) 2w.
-fn quat_rotate(q: vec4<f32>, v: vec3<f32>) -> vec3<f32> {
-    let b = q.xyz;
-    let w = q.w;
-    let b2 = dot(b, b);
-    return v * (w * w - b2) + b * (dot(v, b) * 2.0) + cross(b, v) * (w * 2.0);
-}
-
-// glam's `normalize`: v * (1 / |v|).
-fn normalize_exact(v: vec3<f32>) -> vec3<f32> {
-    return v * (1.0 / sqrt(dot(v, v)));
-}
-
 // Near and far roots of a unit-direction ray against a sphere (Haines et al., Ray Tracing
 // Gems ch. 7, in f32); z = 1 when it hits, 0 when it misses.
 fn ray_sphere(o: vec3<f32>, d: vec3<f32>, c: vec3<f32>, r: f32) -> vec3<f32> {

@@ -1,4 +1,5 @@
-// Constants and the orthonormal frame shared by every kernel.
+// Constants, the orthonormal frame, and glam's rotation by a quaternion and normalisation,
+// shared by every kernel.
 
 const TAU: f32 = 6.283185307179586;
 const PI: f32 = 3.141592653589793;
@@ -29,3 +30,16 @@ fn frame_to_world(f: Frame, v: vec3<f32>) -> vec3<f32> {
     return f.x * v.x + f.y * v.y + f.z * v.z;
 }
 
+
+// glam's `Quat::mul_vec3a`: v (w^2 - b.b) + b 2(v.b) + (b x v) 2w.
+fn quat_rotate(q: vec4<f32>, v: vec3<f32>) -> vec3<f32> {
+    let b = q.xyz;
+    let w = q.w;
+    let b2 = dot(b, b);
+    return v * (w * w - b2) + b * (dot(v, b) * 2.0) + cross(b, v) * (w * 2.0);
+}
+
+// glam's `normalize`: v * (1 / |v|).
+fn normalize_exact(v: vec3<f32>) -> vec3<f32> {
+    return v * (1.0 / sqrt(dot(v, v)));
+}

@@ -6,7 +6,8 @@
 //! the shader source with the lookup's WGSL and the shared header, the rays-per-invocation
 //! budget, and one batched dispatch. Each quantity (`field_ao.rs`, `field_shadow.rs`,
 //! `field_reflect.rs`) supplies only its inputs, its ray loop in WGSL and how its output words
-//! become values (src/gpu/loop_budget.rs).
+//! become values (src/gpu/loop_budget.rs). The group-0 part alone ([`KernelGroup`], the WGSL
+//! of [`HEADER_WGSL`]) also serves the per-object peers' kernels, which bind no field.
 
 use super::context::{entry, storage_layout_entry, uniform_layout_entry, GpuContext};
 use super::field_binding::{FieldBinding, FieldBindingOptions, FieldLayout};
@@ -111,12 +112,18 @@ pub(super) struct KernelParamsGpu {
     pub tmax: f32,
     /// Shadows: the lights.
     pub light_count: u32,
-    pub _pad: [u32; 3],
+    /// SDF kernels: steps per ray, cone and volume (`SdfTrace::max_steps`).
+    pub max_steps: u32,
+    /// SDF cone kernels: a cone's least step, a share of its radius (`ConeTrace::step`).
+    pub cone_step: f32,
+    /// SDF cone AO: tan of the cones' common half-angle (`ConeSet::tan_half`).
+    pub cone_tan: f32,
 }
 const _: () = assert!(std::mem::size_of::<KernelParamsGpu>() == 64);
 const _: () = assert!(std::mem::offset_of!(KernelParamsGpu, selection) == 16);
 const _: () = assert!(std::mem::offset_of!(KernelParamsGpu, origin_offset) == 32);
 const _: () = assert!(std::mem::offset_of!(KernelParamsGpu, light_count) == 48);
+const _: () = assert!(std::mem::offset_of!(KernelParamsGpu, cone_tan) == 60);
 
 /// The shared bindings of a field kernel's own group (0); the fields are group
 /// [`super::field_binding::FIELD_GROUP`].
@@ -126,16 +133,114 @@ const OUT_BINDING: u32 = 2;
 /// The first binding of a kernel's own inputs.
 pub(super) const FIRST_OWN_BINDING: u32 = 3;
 
+/// A kernel's own bind group (0): the shared header's bindings (params, receivers, output
+/// words) and the kernel's own read-only storage inputs from [`FIRST_OWN_BINDING`] on. The
+/// field kernels add the fields as group 1 ([`FieldKernel`]); the per-object peers' kernels
+/// (src/gpu/sdf_kernel.rs, src/gpu/aofield_kernel.rs) bind everything here.
+pub(super) struct KernelGroup {
+    pub layout: wgpu::BindGroupLayout,
+    label: &'static str,
+}
+
+/// The shared header's WGSL, in order: the receivers, the loop budget, `Params` and the
+/// bindings of group 0.
+pub(super) const HEADER_WGSL: [&str; 3] = [
+    include_str!("../../shaders/receiver.wgsl"),
+    include_str!("../../shaders/loop_budget.wgsl"),
+    include_str!("../../shaders/field_kernel.wgsl"),
+];
+
+impl KernelGroup {
+    /// The layout of the shared bindings and `own` read-only storage inputs.
+    pub fn new(ctx: &GpuContext, label: &'static str, own: u32) -> KernelGroup {
+        let mut entries = vec![
+            uniform_layout_entry(PARAMS_BINDING),
+            storage_layout_entry(RECEIVERS_BINDING, true),
+            storage_layout_entry(OUT_BINDING, false),
+        ];
+        entries.extend((0..own).map(|i| storage_layout_entry(FIRST_OWN_BINDING + i, true)));
+        let layout = ctx
+            .device
+            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some(label),
+                entries: &entries,
+            });
+        KernelGroup { layout, label }
+    }
+
+    /// Compiles `entry_point` of `source` for a kernel whose only group is this one.
+    pub fn pipeline(
+        &self,
+        ctx: &GpuContext,
+        name: &str,
+        source: &str,
+        entry_point: &str,
+    ) -> Result<wgpu::ComputePipeline, GpuError> {
+        let layout = ctx
+            .device
+            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some(self.label),
+                bind_group_layouts: &[Some(&self.layout)],
+                immediate_size: 0,
+            });
+        ctx.compute_pipeline_with_layout(name, source, entry_point, Some(&layout))
+    }
+
+    /// Uploads the receivers batch by batch, dispatches `threads_per_item` threads per
+    /// receiver, each writing `words_per_thread` words, with `own` bound from
+    /// [`FIRST_OWN_BINDING`] on and `fixed_groups` as groups 1, 2, …, and reads the words back,
+    /// receiver-major ([`GpuContext::run_batched`]).
+    #[allow(clippy::too_many_arguments)]
+    pub fn run(
+        &self,
+        ctx: &GpuContext,
+        pipeline: &wgpu::ComputePipeline,
+        fixed_groups: &[&wgpu::BindGroup],
+        mut params: KernelParamsGpu,
+        recv: &[ReceiverGpu],
+        own: &[&wgpu::Buffer],
+        shape: (u32, u32),
+    ) -> Result<Dispatched, GpuError> {
+        ctx.run_batched(
+            pipeline,
+            fixed_groups,
+            recv,
+            "receiver",
+            shape,
+            |part, stride, out| {
+                params.point_count = part.len() as u32;
+                params.row_stride = stride;
+                let uniform = ctx.uniform_buffer("kernel params", bytemuck::bytes_of(&params));
+                let recv_buf = ctx.storage_buffer("receivers", bytemuck::cast_slice(part));
+                let mut entries = vec![
+                    entry(PARAMS_BINDING, uniform.as_entire_binding()),
+                    entry(RECEIVERS_BINDING, recv_buf.as_entire_binding()),
+                    entry(OUT_BINDING, out.as_entire_binding()),
+                ];
+                entries.extend(
+                    own.iter()
+                        .zip(FIRST_OWN_BINDING..)
+                        .map(|(b, i)| entry(i, b.as_entire_binding())),
+                );
+                ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some(self.label),
+                    layout: &self.layout,
+                    entries: &entries,
+                })
+            },
+        )
+    }
+}
+
 /// The skeleton of a field kernel: its fields bound, its group layout, its rays-per-invocation
 /// budget and its lookup options; the quantity's kernel holds one and its pipelines.
 pub(super) struct FieldKernel<'a> {
     pub ctx: &'a GpuContext,
-    /// Layout of the kernel's own group (0).
-    group_layout: wgpu::BindGroupLayout,
+    /// The kernel's own group (0).
+    group: KernelGroup,
     pub field: FieldBinding,
     /// Rays per invocation, as last found to fit (src/gpu/loop_budget.rs).
     pub rays_per_invocation: AtomicU32,
-    label: &'static str,
 }
 
 impl<'a> FieldKernel<'a> {
@@ -150,42 +255,25 @@ impl<'a> FieldKernel<'a> {
     ) -> Result<Self, GpuError> {
         // The receivers and the output are storage buffers too.
         let field = FieldBinding::new(ctx, instances, &opts.binding_options(own + 2))?;
-        let mut entries = vec![
-            uniform_layout_entry(PARAMS_BINDING),
-            storage_layout_entry(RECEIVERS_BINDING, true),
-            storage_layout_entry(OUT_BINDING, false),
-        ];
-        entries.extend((0..own).map(|i| storage_layout_entry(FIRST_OWN_BINDING + i, true)));
-        let group_layout = ctx
-            .device
-            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some(label),
-                entries: &entries,
-            });
         Ok(FieldKernel {
             ctx,
-            group_layout,
+            group: KernelGroup::new(ctx, label, own),
             field,
             rays_per_invocation: opts.start_rays_per_invocation(instances.len()),
-            label,
         })
     }
 
-    /// The kernel's WGSL: the lookup's, the receivers', the loop budget's, the shared header,
-    /// then `kernel` (the quantity's helpers and its entry points).
+    /// The kernel's WGSL: the lookup's, the shared header ([`HEADER_WGSL`]), then `kernel`
+    /// (the quantity's helpers and its entry points).
     pub fn source(&self, kernel: &[&str]) -> String {
-        let mut parts = vec![
-            include_str!("../../shaders/receiver.wgsl"),
-            include_str!("../../shaders/loop_budget.wgsl"),
-            include_str!("../../shaders/field_kernel.wgsl"),
-        ];
+        let mut parts = HEADER_WGSL.to_vec();
         parts.extend_from_slice(kernel);
         self.field.shader_source(&parts)
     }
 
     /// The pipeline layout: the kernel's group 0 and the fields' group 1.
     pub fn pipeline_layout(&self) -> wgpu::PipelineLayout {
-        self.field.pipeline_layout(self.ctx, &self.group_layout)
+        self.field.pipeline_layout(self.ctx, &self.group.layout)
     }
 
     /// Compiles `entry_point` of `source` with [`Self::pipeline_layout`].
@@ -231,49 +319,18 @@ impl<'a> FieldKernel<'a> {
         }
     }
 
-    /// Uploads the receivers batch by batch, dispatches `threads_per_item` threads per
-    /// receiver, each writing `words_per_thread` words, with `own` bound from
-    /// [`FIRST_OWN_BINDING`] on and the fields as their own group, and reads the words back,
-    /// receiver-major ([`GpuContext::run_batched`]).
+    /// Runs `pipeline` over the receivers ([`KernelGroup::run`]) with the fields as group 1.
     pub fn run(
         &self,
         pipeline: &wgpu::ComputePipeline,
-        mut params: KernelParamsGpu,
+        params: KernelParamsGpu,
         recv: &[ReceiverGpu],
         own: &[&wgpu::Buffer],
         shape: (u32, u32),
     ) -> Result<Dispatched, GpuError> {
-        let ctx = self.ctx;
         let field_group = [self.field.bind_group()];
-        ctx.run_batched(
-            pipeline,
-            &field_group,
-            recv,
-            "receiver",
-            shape,
-            |part, stride, out| {
-                params.point_count = part.len() as u32;
-                params.row_stride = stride;
-                let uniform =
-                    ctx.uniform_buffer("field kernel params", bytemuck::bytes_of(&params));
-                let recv_buf = ctx.storage_buffer("receivers", bytemuck::cast_slice(part));
-                let mut entries = vec![
-                    entry(PARAMS_BINDING, uniform.as_entire_binding()),
-                    entry(RECEIVERS_BINDING, recv_buf.as_entire_binding()),
-                    entry(OUT_BINDING, out.as_entire_binding()),
-                ];
-                entries.extend(
-                    own.iter()
-                        .zip(FIRST_OWN_BINDING..)
-                        .map(|(b, i)| entry(i, b.as_entire_binding())),
-                );
-                ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some(self.label),
-                    layout: &self.group_layout,
-                    entries: &entries,
-                })
-            },
-        )
+        self.group
+            .run(self.ctx, pipeline, &field_group, params, recv, own, shape)
     }
 }
 

@@ -39,8 +39,9 @@ pub(crate) type Dispatched = (Vec<u32>, Option<Duration>, Duration);
 /// `words_per_invocation` words per invocation, point-major, the first of them [`CUT_SHORT`]
 /// where the invocation was cut short, until no invocation is: starts from `split`'s rays per
 /// invocation, halves them while any invocation is cut short, and keeps the last value in
-/// `split` for the next call. Returns the words, the invocations per point, and the kernel and
-/// upload times added up over the dispatches. `rays` must be positive.
+/// `split` for the next call. Returns the words, the invocations per point, the rays per
+/// invocation, and the kernel and upload times added up over the dispatches. `rays` must be
+/// positive.
 ///
 /// Errors: [`GpuError::Unsupported`] when even one ray per invocation is cut short.
 pub(crate) fn complete_runs(
@@ -48,7 +49,7 @@ pub(crate) fn complete_runs(
     rays: u32,
     words_per_invocation: usize,
     mut dispatch: impl FnMut(u32, u32) -> Result<Dispatched, GpuError>,
-) -> Result<(Vec<u32>, u32, Option<Duration>, Duration), GpuError> {
+) -> Result<(Vec<u32>, u32, u32, Option<Duration>, Duration), GpuError> {
     debug_assert!(rays > 0 && words_per_invocation > 0);
     let (mut kernel, mut upload) = (None, Duration::ZERO);
     loop {
@@ -61,7 +62,7 @@ pub(crate) fn complete_runs(
             .chunks_exact(words_per_invocation)
             .any(|w| w[0] == CUT_SHORT)
         {
-            return Ok((words, per_point, kernel, upload));
+            return Ok((words, per_point, per_invocation, kernel, upload));
         }
         if per_invocation == 1 {
             return Err(GpuError::Unsupported(
@@ -88,7 +89,7 @@ pub(crate) fn free_fractions(
     if rays == 0 {
         return Ok((vec![1.0; points], None, Duration::ZERO));
     }
-    let (words, per_point, kernel, upload) = complete_runs(split, rays, 1, dispatch)?;
+    let (words, per_point, _, kernel, upload) = complete_runs(split, rays, 1, dispatch)?;
     debug_assert_eq!(words.len(), points * per_point as usize);
     let ao = words
         .chunks_exact(per_point as usize)
@@ -129,7 +130,7 @@ pub(crate) fn weighted_means(
     if rays == 0 {
         return Ok((vec![empty; points], None, Duration::ZERO));
     }
-    let (words, per_point, kernel, upload) = complete_runs(split, rays, 2, dispatch)?;
+    let (words, per_point, _, kernel, upload) = complete_runs(split, rays, 2, dispatch)?;
     debug_assert_eq!(words.len(), points * 2 * per_point as usize);
     let fractions = words
         .chunks_exact(2 * per_point as usize)
@@ -147,6 +148,35 @@ pub(crate) fn weighted_means(
         })
         .collect();
     Ok((fractions, kernel, upload))
+}
+
+/// One word per ray of `points` points with `rays` rays each (the cone kernels: a cone's
+/// visibility as f32 bits), point-major, from `dispatch(rays_per_invocation,
+/// invocations_per_point)`, which returns `rays_per_invocation` words per invocation,
+/// point-major: invocation c of a point writes the words of its rays c·rays_per_invocation …,
+/// leaving those past the point's last ray, and writes [`CUT_SHORT`] in each of its words when
+/// it was cut short ([`complete_runs`], which then halves the rays per invocation).
+///
+/// Errors: [`GpuError::Unsupported`] when even one ray per invocation is cut short.
+pub(crate) fn ray_words(
+    split: &AtomicU32,
+    rays: u32,
+    points: usize,
+    dispatch: impl FnMut(u32, u32) -> Result<Dispatched, GpuError>,
+) -> Result<(Vec<u32>, Option<Duration>, Duration), GpuError> {
+    if rays == 0 {
+        return Ok((Vec::new(), None, Duration::ZERO));
+    }
+    let (words, per_point, per_invocation, kernel, upload) =
+        complete_runs(split, rays, 1, dispatch)?;
+    let stride = (per_point * per_invocation) as usize;
+    debug_assert_eq!(words.len(), points * stride);
+    let out = words
+        .chunks_exact(stride)
+        .flat_map(|w| &w[..rays as usize])
+        .copied()
+        .collect();
+    Ok((out, kernel, upload))
 }
 
 #[cfg(test)]
@@ -261,5 +291,43 @@ mod tests {
             weighted_fractions(&split, 2, 1, |_, _| Ok((vec![0, 0], None, Duration::ZERO)))
                 .unwrap();
         assert_eq!(v, vec![1.0]);
+    }
+
+    #[test]
+    fn ray_words_keep_each_rays_word_in_order_across_splits() {
+        // 7 rays a point, word of ray r of point p = 100 p + r; an invocation of more than 3
+        // rays is cut short (every word CUT_SHORT): 4 → 2, then 4 invocations a point, the
+        // last with one ray and a word left unwritten (0).
+        let (rays, points) = (7u32, 3usize);
+        let split = AtomicU32::new(4);
+        let mut calls = Vec::new();
+        let dispatch = |per_invocation: u32, per_point: u32| {
+            calls.push(per_invocation);
+            let mut words = Vec::new();
+            for p in 0..points as u32 {
+                for c in 0..per_point {
+                    let lo = c * per_invocation;
+                    let hi = (lo + per_invocation).min(rays);
+                    for k in 0..per_invocation {
+                        words.push(if per_invocation > 3 {
+                            CUT_SHORT
+                        } else if lo + k < hi {
+                            100 * p + lo + k
+                        } else {
+                            0
+                        });
+                    }
+                }
+            }
+            Ok((words, None, Duration::ZERO))
+        };
+        let (w, _, _) = ray_words(&split, rays, points, dispatch).unwrap();
+        assert_eq!(calls, vec![4, 2]);
+        let want: Vec<u32> = (0..points as u32)
+            .flat_map(|p| (0..rays).map(move |r| 100 * p + r))
+            .collect();
+        assert_eq!(w, want);
+        let (w, _, _) = ray_words(&split, 0, 2, |_, _| unreachable!()).unwrap();
+        assert!(w.is_empty());
     }
 }

@@ -29,6 +29,7 @@
 //! has a `#[repr(C)]`, `Pod` twin with the same named fields (padding spelled out as `_pad*`)
 //! and compile-time size and offset assertions.
 
+mod aofield_kernel;
 mod context;
 mod field_ao;
 mod field_binding;
@@ -41,10 +42,13 @@ mod rays;
 mod reflect_rays;
 mod relief;
 mod relief_peers;
+mod sdf_data;
+mod sdf_kernel;
 mod shadow_rays;
 mod texture;
 mod tracer;
 
+pub use aofield_kernel::AoFieldKernel;
 pub use context::{AdapterPreference, GpuContext, ADAPTER_ENV};
 pub use field_ao::{FieldAoKernel, LookupProbe};
 pub use field_binding::FieldLayout;
@@ -54,6 +58,7 @@ pub use field_reflect::FieldReflectKernel;
 pub use field_shadow::FieldShadowKernel;
 pub use relief::ReliefKernel;
 pub use relief_peers::ReliefPeersKernel;
+pub use sdf_kernel::{SdfKernel, SDF_CONES_PER_INVOCATION, SDF_RAYS_PER_INVOCATION};
 pub use tracer::{GpuHit, GpuTracer};
 
 use std::time::Duration;

@@ -282,13 +282,13 @@ impl SdfScene {
         opts: &ConeTrace,
     ) -> f32 {
         let frame = Frame::from_normal(n);
-        let (mut sum, mut weight) = (0.0f32, 0.0f32);
-        for &a in &cones.axes {
-            let axis = frame.to_world(a).normalize();
-            sum += a.z * self.cone_visibility(origin, axis, cones.tan_half, tmax, opts);
-            weight += a.z;
-        }
-        sum / weight
+        cone_ao_mean(
+            cones,
+            cones.axes.iter().map(|&a| {
+                let axis = frame.to_world(a).normalize();
+                self.cone_visibility(origin, axis, cones.tan_half, tmax, opts)
+            }),
+        )
     }
 
     /// The cone-traced light fraction of `lights` at `origin` (already off the surface) with
@@ -300,35 +300,83 @@ impl SdfScene {
         lights: &[ConeLight],
         opts: &ConeTrace,
     ) -> f32 {
-        let (mut lit, mut total) = (0.0f64, 0.0f64);
-        for l in lights {
-            let to = l.center - origin;
-            let (d2, r2) = (to.length_squared(), l.radius * l.radius);
-            if d2 <= r2 || d2 == 0.0 {
-                continue;
-            }
-            let d = d2.sqrt();
-            let axis = to / d;
-            let cos = n.dot(axis) as f64;
-            let (w, tan, far) = if l.radius == 0.0 {
-                (l.intensity as f64 * cos.max(0.0) / d2 as f64, 0.0, d)
-            } else {
-                let q = (l.radius as f64).powi(2) / d2 as f64;
-                let w = l.intensity as f64 * cap_irradiance(cos, q);
-                (w, l.radius / (d2 - r2).sqrt(), d - l.radius)
-            };
-            if w <= 0.0 {
-                continue;
-            }
-            total += w;
-            lit += w * self.cone_visibility(origin, axis, tan, far, opts) as f64;
-        }
-        if total > 0.0 {
-            (lit / total) as f32
-        } else {
-            1.0
-        }
+        light_fraction(lights.iter().map(|l| {
+            LightCone::new(origin, n, l).map(|c| {
+                let v = self.cone_visibility(origin, c.axis, c.tan, c.far, opts);
+                (c.weight, v)
+            })
+        }))
     }
+}
+
+/// One spherical light's cone at a point (see the module docs, soft shadows).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightCone {
+    /// Unit axis, from the point towards the light's centre.
+    pub axis: Vec3,
+    /// tan of the half-angle (0: a point light).
+    pub tan: f32,
+    /// Where the cone ends: the light's near side (its centre for a point light).
+    pub far: f32,
+    /// The light's unshadowed irradiance at the point, E_L (positive).
+    pub weight: f64,
+}
+
+impl LightCone {
+    /// The cone of `l` at `origin` with unit normal `n`, or none where the light does not
+    /// count: the point inside it or at its centre, or no irradiance (below the horizon).
+    pub fn new(origin: Vec3, n: Vec3, l: &ConeLight) -> Option<LightCone> {
+        let to = l.center - origin;
+        let (d2, r2) = (to.length_squared(), l.radius * l.radius);
+        if d2 <= r2 || d2 == 0.0 {
+            return None;
+        }
+        let d = d2.sqrt();
+        let axis = to / d;
+        let cos = n.dot(axis) as f64;
+        let (weight, tan, far) = if l.radius == 0.0 {
+            (l.intensity as f64 * cos.max(0.0) / d2 as f64, 0.0, d)
+        } else {
+            let q = (l.radius as f64).powi(2) / d2 as f64;
+            let w = l.intensity as f64 * cap_irradiance(cos, q);
+            (w, l.radius / (d2 - r2).sqrt(), d - l.radius)
+        };
+        if weight <= 0.0 {
+            return None;
+        }
+        Some(LightCone {
+            axis,
+            tan,
+            far,
+            weight,
+        })
+    }
+}
+
+/// Σ E_L V_L / Σ E_L over the lights' (weight, visibility), in f64, in order (none: a light
+/// that does not count); 1 where no light counts.
+pub fn light_fraction(lights: impl Iterator<Item = Option<(f64, f32)>>) -> f32 {
+    let (mut lit, mut total) = (0.0f64, 0.0f64);
+    for (w, v) in lights.flatten() {
+        total += w;
+        lit += w * v as f64;
+    }
+    if total > 0.0 {
+        (lit / total) as f32
+    } else {
+        1.0
+    }
+}
+
+/// The cosine-weighted mean Σ cos β_i V_i / Σ cos β_i of the cones' visibilities (in the
+/// order of `cones`' axes), in f32 as [`SdfScene::cone_ao`] sums them.
+pub fn cone_ao_mean(cones: &ConeSet, visibility: impl Iterator<Item = f32>) -> f32 {
+    let (mut sum, mut weight) = (0.0f32, 0.0f32);
+    for (a, v) in cones.axes.iter().zip(visibility) {
+        sum += a.z * v;
+        weight += a.z;
+    }
+    sum / weight
 }
 
 #[cfg(test)]

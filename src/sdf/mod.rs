@@ -38,7 +38,7 @@ pub mod cone;
 pub mod storage;
 mod volume;
 
-pub use cone::{ConeLight, ConeSet, ConeTrace};
+pub use cone::{ConeLight, ConeSet, ConeTrace, LightCone};
 pub use storage::{Precision, Samples};
 pub use volume::DistanceVolume;
 

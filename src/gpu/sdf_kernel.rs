@@ -1,0 +1,383 @@
+//! Mesh signed distance fields on the GPU (the engines' per-object peer, `crate::sdf`; D.
+//! Wright, "Dynamic Occlusion with Signed Distance Fields", SIGGRAPH 2015 course *Advances in
+//! Real-Time Rendering*): instanced distance volumes uploaded once (src/gpu/sdf_data.rs) and
+//! three kernels on them (shaders/sdf_volume.wgsl, shaders/sdf_kernel.wgsl):
+//!
+//! - [`SdfKernel::ao`]: AO by sphere tracing the CPU path's rays, as
+//!   [`crate::render::ao::ao_at_points`] computes it through an [`SdfScene`] (its `Visibility`);
+//! - [`SdfKernel::cone_ao`]: cone-traced AO, as [`SdfScene::cone_ao`];
+//! - [`SdfKernel::cone_light_fractions`]: the cone-traced light fraction of spherical lights,
+//!   as [`SdfScene::cone_light_fraction`].
+//!
+//! The group-0 skeleton is the field kernels' ([`KernelGroup`]: the shared parameter header,
+//! receivers, output words), with the volumes, the instances, the stored samples and the
+//! directions (rays, cone axes or lights) as the kernel's own inputs. The per-ray and per-cone
+//! arithmetic is a line-by-line port in the CPU's f32 order: the trilinear read with every
+//! precision decoded as the host decodes it (u8 through the host's table of the codes'
+//! distances), glam's rotation, `min`, `max` and normalisation, the sphere trace's box clip and
+//! steps, the cone's bound test and march. What the host computes instead: the rotated base
+//! directions' cos and sin (src/gpu/rays.rs), the cone axes, `hi`, the bounding spheres, the hit
+//! threshold and start offset in each volume's units, and the lights' weights (f64, with the
+//! transcendental functions of `sdf::cone::cap_irradiance`), which only multiply the device's
+//! visibilities on the host. The cones' means are taken on the host in the CPU's order
+//! (`sdf::cone::cone_ao_mean`, `sdf::cone::light_fraction`), so a point whose cones read the
+//! same visibilities gets the CPU's value bit for bit.
+//!
+//! What may still differ: WGSL's division and square root, which Vulkan allows 2.5 ulp (on
+//! lavapipe they are IEEE, as on the host), and multiply-adds a driver may fuse. A sphere
+//! trace or a cone march is a sequence of comparisons (a read below the hit threshold, a step
+//! past the box), so a rounding difference may end one ray or cone at a different step:
+//! the parity test (tests/gpu_peers.rs) counts such rays and cones and bounds their effect.
+//!
+//! Deviations from the CPU path: jittered ray sets are refused (no shared directions), as a
+//! distance falloff for AO (the kernel counts free rays; the CPU weighs hit distances); an
+//! unbounded AO or cone is traced to `f32::MAX` (the CPU's infinity: every trace is clipped to
+//! a volume's box first, so the far end never binds); a cone of a light the host drops (the
+//! point inside the light or below its horizon) is still marched, and its value unused.
+
+use super::context::GpuContext;
+use super::field_kernel::{KernelGroup, KernelParamsGpu, HEADER_WGSL};
+use super::loop_budget::{free_fractions, ray_words, COMPLETION_TRIPS};
+use super::rays::{base_directions, receivers, ReceiverGpu};
+use super::sdf_data::{pack, SdfInstanceGpu, SdfVolumeGpu};
+use super::{GpuError, GpuTiming};
+use crate::render::ao::{AoOptions, Falloff};
+use crate::sampling::rays::RaySet;
+use crate::sdf::cone::{cone_ao_mean, light_fraction};
+use crate::sdf::{ConeLight, ConeSet, ConeTrace, LightCone, SdfScene};
+use glam::Vec3;
+use std::sync::atomic::AtomicU32;
+use std::time::{Duration, Instant};
+
+/// The kernel's own inputs: volumes, instances, sample words, directions.
+const OWN_INPUTS: u32 = 4;
+
+/// Rays one invocation of the sphere tracer starts with: a ray may take `max_steps` (256 by
+/// default) steps per volume, against lavapipe's 65,535 loop iterations per invocation; the
+/// host halves it where a driver cuts invocations short (src/gpu/loop_budget.rs).
+pub const SDF_RAYS_PER_INVOCATION: u32 = 64;
+/// Cones one invocation of a cone kernel starts with (likewise).
+pub const SDF_CONES_PER_INVOCATION: u32 = 16;
+
+/// Instanced distance volumes on the device and the SDF kernels over them.
+pub struct SdfKernel<'a> {
+    ctx: &'a GpuContext,
+    group: KernelGroup,
+    trace_ao: wgpu::ComputePipeline,
+    cone_ao: wgpu::ComputePipeline,
+    cone_shadow: wgpu::ComputePipeline,
+    volumes: wgpu::Buffer,
+    instances: wgpu::Buffer,
+    words: wgpu::Buffer,
+    instance_count: u32,
+    max_steps: u32,
+    sample_bytes: u64,
+    setup: Duration,
+    /// Rays (sphere tracing) and cones per invocation, as last found to fit.
+    rays_per_invocation: AtomicU32,
+    cones_per_invocation: AtomicU32,
+}
+
+impl<'a> SdfKernel<'a> {
+    /// Packs and uploads `scene`'s volumes (each distinct volume once) and instances, with its
+    /// trace options (hit threshold, start offset, steps), and compiles the kernels.
+    ///
+    /// Errors: [`GpuError::Invalid`] for a scene without instances, [`GpuError::TooLarge`]
+    /// where the samples pass the adapter's storage binding limit.
+    pub fn new(ctx: &'a GpuContext, scene: &SdfScene) -> Result<Self, GpuError> {
+        let start = Instant::now();
+        let packed = pack(scene)?;
+        let max_binding = ctx.max_binding();
+        let word_bytes = packed.words.len() as u64 * 4;
+        if word_bytes > max_binding {
+            return Err(GpuError::TooLarge {
+                what: format!("{} distance volumes' samples", packed.volumes.len()),
+                need: word_bytes,
+                limit: max_binding,
+                limit_name: "max_storage_buffer_binding_size",
+            });
+        }
+        let group = KernelGroup::new(ctx, "sdf", OWN_INPUTS);
+        let mut parts = vec![include_str!("../../shaders/frame.wgsl")];
+        parts.extend_from_slice(&HEADER_WGSL);
+        parts.push(include_str!("../../shaders/sdf_volume.wgsl"));
+        parts.push(include_str!("../../shaders/sdf_kernel.wgsl"));
+        let source = parts.concat();
+        let pipeline = |entry: &str| group.pipeline(ctx, entry, &source, entry);
+        let trace_ao = pipeline("sdf_ao_main")?;
+        let cone_ao = pipeline("cone_ao_main")?;
+        let cone_shadow = pipeline("cone_shadow_main")?;
+        Ok(SdfKernel {
+            ctx,
+            trace_ao,
+            cone_ao,
+            cone_shadow,
+            volumes: ctx.storage_buffer(
+                "sdf volumes",
+                bytemuck::cast_slice::<SdfVolumeGpu, u8>(&packed.volumes),
+            ),
+            instances: ctx.storage_buffer(
+                "sdf instances",
+                bytemuck::cast_slice::<SdfInstanceGpu, u8>(&packed.instances),
+            ),
+            words: ctx.storage_buffer("sdf samples", bytemuck::cast_slice(&packed.words)),
+            group,
+            instance_count: packed.instances.len() as u32,
+            max_steps: scene.trace.max_steps,
+            sample_bytes: packed.sample_bytes,
+            setup: start.elapsed(),
+            rays_per_invocation: AtomicU32::new(SDF_RAYS_PER_INVOCATION),
+            cones_per_invocation: AtomicU32::new(SDF_CONES_PER_INVOCATION),
+        })
+    }
+
+    /// Host time of packing, uploading and compiling in [`Self::new`].
+    pub fn setup_time(&self) -> Duration {
+        self.setup
+    }
+
+    /// Bytes of the stored samples (each distinct volume once), as the host stores them; the
+    /// device's words add the u8 volumes' 256-entry tables and round each volume up to a word.
+    pub fn sample_bytes(&self) -> u64 {
+        self.sample_bytes
+    }
+
+    /// Rays per invocation the next sphere-traced AO call starts with.
+    pub fn rays_per_invocation(&self) -> u32 {
+        self.rays_per_invocation
+            .load(std::sync::atomic::Ordering::Relaxed)
+    }
+
+    /// The header of a call: the instances, the steps, the completion trips.
+    fn params(&self, rays_per_point: u32, origin_offset: f32, tmax: f32) -> KernelParamsGpu {
+        KernelParamsGpu {
+            rays_per_point,
+            instance_count: self.instance_count,
+            completion_trips: COMPLETION_TRIPS,
+            origin_offset,
+            tmax: tmax.min(f32::MAX),
+            max_steps: self.max_steps,
+            ..Default::default()
+        }
+    }
+
+    /// A storage buffer of `what`, refused past the adapter's binding limit.
+    fn input(&self, what: &str, data: &[[f32; 4]]) -> Result<wgpu::Buffer, GpuError> {
+        let need = data.len() as u64 * 16;
+        let limit = self.ctx.max_binding();
+        if need > limit {
+            return Err(GpuError::TooLarge {
+                what: format!("{} {what}", data.len()),
+                need,
+                limit,
+                limit_name: "max_storage_buffer_binding_size",
+            });
+        }
+        Ok(self.ctx.storage_buffer(what, bytemuck::cast_slice(data)))
+    }
+
+    /// AO at every point by sphere tracing (point `i` uses the directions of point index `i`
+    /// of `rays`), as [`crate::render::ao::ao_at_points`] computes it over the [`SdfScene`]
+    /// this kernel was made from.
+    ///
+    /// Errors: [`GpuError::Unsupported`] for a jittered ray set or a linear falloff.
+    pub fn ao(
+        &self,
+        points: &[Vec3],
+        normals: &[Vec3],
+        rays: &RaySet,
+        opts: &AoOptions,
+    ) -> Result<(Vec<f32>, GpuTiming), GpuError> {
+        let start = Instant::now();
+        if opts.falloff != Falloff::Step {
+            return Err(GpuError::Unsupported(
+                "SDF AO with a distance falloff (the kernel counts free rays)".into(),
+            ));
+        }
+        let base = base_directions(rays)?;
+        let recv = receivers(points, normals, rays)?;
+        let dirs = self.input("ray directions", &base)?;
+        let tmax = opts.max_distance.unwrap_or(f32::INFINITY);
+        let mut params = self.params(base.len() as u32, opts.offset, tmax);
+        let own = [&self.volumes, &self.instances, &self.words, &dirs];
+        let (ao, kernel, upload) = free_fractions(
+            &self.rays_per_invocation,
+            base.len() as u32,
+            recv.len(),
+            |per_invocation, per_point| {
+                params.rays_per_invocation = per_invocation;
+                params.invocations_per_point = per_point;
+                self.group.run(
+                    self.ctx,
+                    &self.trace_ao,
+                    &[],
+                    params,
+                    &recv,
+                    &own,
+                    (per_point, 1),
+                )
+            },
+        )?;
+        Ok((
+            ao,
+            GpuTiming {
+                kernel,
+                upload,
+                wall: start.elapsed(),
+            },
+        ))
+    }
+
+    /// Each point's cones' visibilities, point-major (`dirs`: the cones' axes or lights).
+    #[allow(clippy::too_many_arguments)]
+    fn cones(
+        &self,
+        pipeline: &wgpu::ComputePipeline,
+        points: &[Vec3],
+        normals: &[Vec3],
+        dirs: &[[f32; 4]],
+        offset: f32,
+        tmax: f32,
+        tan: f32,
+        trace: &ConeTrace,
+    ) -> Result<(Vec<f32>, Option<Duration>, Duration), GpuError> {
+        if points.len() != normals.len() {
+            return Err(GpuError::Invalid(format!(
+                "{} points but {} normals",
+                points.len(),
+                normals.len()
+            )));
+        }
+        let recv: Vec<ReceiverGpu> = points
+            .iter()
+            .zip(normals)
+            .map(|(p, n)| ReceiverGpu {
+                position: p.to_array(),
+                normal: n.to_array(),
+                ..Default::default()
+            })
+            .collect();
+        let buf = self.input("cones", dirs)?;
+        let mut params = KernelParamsGpu {
+            cone_step: trace.step,
+            cone_tan: tan,
+            max_steps: trace.max_steps,
+            ..self.params(dirs.len() as u32, offset, tmax)
+        };
+        let own = [&self.volumes, &self.instances, &self.words, &buf];
+        let (words, kernel, upload) = ray_words(
+            &self.cones_per_invocation,
+            dirs.len() as u32,
+            recv.len(),
+            |per_invocation, per_point| {
+                params.rays_per_invocation = per_invocation;
+                params.invocations_per_point = per_point;
+                self.group.run(
+                    self.ctx,
+                    pipeline,
+                    &[],
+                    params,
+                    &recv,
+                    &own,
+                    (per_point, per_invocation),
+                )
+            },
+        )?;
+        Ok((
+            words.into_iter().map(f32::from_bits).collect(),
+            kernel,
+            upload,
+        ))
+    }
+
+    /// Cone-traced AO at every point (`cones` about each normal, from `point + offset ·
+    /// normal`, each to `tmax`), as [`SdfScene::cone_ao`]; the scene's hit threshold and start
+    /// offset, `trace`'s least step and steps.
+    pub fn cone_ao(
+        &self,
+        points: &[Vec3],
+        normals: &[Vec3],
+        cones: &ConeSet,
+        (offset, tmax): (f32, f32),
+        trace: &ConeTrace,
+    ) -> Result<(Vec<f32>, GpuTiming), GpuError> {
+        let start = Instant::now();
+        let axes: Vec<[f32; 4]> = cones
+            .axes
+            .iter()
+            .map(|a| a.extend(0.0).to_array())
+            .collect();
+        let (v, kernel, upload) = self.cones(
+            &self.cone_ao,
+            points,
+            normals,
+            &axes,
+            offset,
+            tmax,
+            cones.tan_half,
+            trace,
+        )?;
+        let ao = if axes.is_empty() {
+            vec![f32::NAN; points.len()]
+        } else {
+            v.chunks_exact(axes.len())
+                .map(|c| cone_ao_mean(cones, c.iter().copied()))
+                .collect()
+        };
+        Ok((
+            ao,
+            GpuTiming {
+                kernel,
+                upload,
+                wall: start.elapsed(),
+            },
+        ))
+    }
+
+    /// The cone-traced light fraction of `lights` at every point (from `point + offset ·
+    /// normal`), as [`SdfScene::cone_light_fraction`]: the device marches each light's cone,
+    /// the host weighs them ([`LightCone`]).
+    pub fn cone_light_fractions(
+        &self,
+        points: &[Vec3],
+        normals: &[Vec3],
+        lights: &[ConeLight],
+        offset: f32,
+        trace: &ConeTrace,
+    ) -> Result<(Vec<f32>, GpuTiming), GpuError> {
+        let start = Instant::now();
+        let records: Vec<[f32; 4]> = lights
+            .iter()
+            .map(|l| l.center.extend(l.radius).to_array())
+            .collect();
+        let (v, kernel, upload) = self.cones(
+            &self.cone_shadow,
+            points,
+            normals,
+            &records,
+            offset,
+            f32::MAX,
+            0.0,
+            trace,
+        )?;
+        let fractions = points
+            .iter()
+            .zip(normals)
+            .enumerate()
+            .map(|(i, (&p, &n))| {
+                let origin = p + offset * n;
+                light_fraction(lights.iter().enumerate().map(|(k, l)| {
+                    LightCone::new(origin, n, l).map(|c| (c.weight, v[i * lights.len() + k]))
+                }))
+            })
+            .collect();
+        Ok((
+            fractions,
+            GpuTiming {
+                kernel,
+                upload,
+                wall: start.elapsed(),
+            },
+        ))
+    }
+}
