@@ -516,6 +516,11 @@ fn plots(names: &[String], quick: bool, dir: Option<&Path>) -> Result<()> {
             .collect(),
     };
     for d in dirs {
+        if super::performance::plots::is_performance_run(&d) {
+            super::performance::plots::redraw(&d)?;
+            println!("redrew the plots in {}", d.display());
+            continue;
+        }
         let run: serde_json::Value = std::fs::read(d.join("run.json"))
             .ok()
             .and_then(|b| serde_json::from_slice(&b).ok())
