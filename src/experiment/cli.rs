@@ -543,6 +543,11 @@ fn plots(names: &[String], quick: bool, dir: Option<&Path>) -> Result<()> {
             .collect(),
     };
     for d in dirs {
+        if super::performance::plots::is_performance_run(&d) {
+            super::performance::plots::redraw(&d)?;
+            println!("redrew the plots in {}", d.display());
+            continue;
+        }
         // An animated run: its plots from frames.csv.
         if d.join("frames.csv").exists() && !d.join("table.csv").exists() {
             let run = read_run_json(&d);

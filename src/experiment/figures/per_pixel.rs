@@ -1,134 +1,194 @@
 //! The plots of the 2010 paper's per-pixel figures, drawn when a run has what they need:
 //!
-//! - `time_vs_rays.png` (Figure 4): the estimate's time against rays per point, one series per field cell
-//!   and backend (from `field_sweep.csv`) and one per ray-casting backend (from
-//!   `raycast_sweep.csv`), when the field sweep has at least two ray counts. The paper's claim
-//!   is that the field's time is flat in the map count and linear in the rays;
+//! - `time_vs_rays.png` (Figure 4): the estimate's time against rays per point, one series per
+//!   field cell (from `field_sweep.csv`) and one for ray casting (from `raycast_sweep.csv`), a
+//!   panel per device and positional count where they do not fit one, when the field sweep has
+//!   at least two ray counts. The paper's claim is that the field's time is flat in the map
+//!   count and linear in the rays;
 //! - `grain_vs_positional.png` (Figure 5 and the elongated-model limitation): the graininess of
 //!   the error image ([`crate::experiment::metrics::grain`]) against positional samples, one
 //!   series per scene and other varying axis, when the rows have it.
 
-use super::{distinct_backends, key};
-use crate::experiment::outputs::{FieldSweepRow, SweepRow};
-use crate::experiment::plot::{xy_plot, Axes, Series};
+use super::compare::res_ranks;
+use super::facet::{pack, styled, viridis, Family, Group};
+use super::labels::Devices;
+use super::{key, RunData};
+use crate::experiment::plot::{Axes, Figure, Marker, Panel, Series, Style, MAX_SERIES};
 use crate::experiment::spec::Backend;
-use crate::experiment::table::Row;
-use crate::experiment::Result;
-use std::path::Path;
 
-/// Draws `time_vs_rays.png` when `field_sweep` has two ray counts or more.
-pub fn time_vs_rays(
-    out: &Path,
-    title: &str,
-    rows: &[Row],
-    field_sweep: &[FieldSweepRow],
-    sweep: &[SweepRow],
-) -> Result<()> {
-    let mut counts: Vec<u32> = field_sweep.iter().map(|f| f.rays_per_point).collect();
+/// `time_vs_rays.png`, when `field_sweep.csv` has two ray counts or more.
+pub fn time_vs_rays(run: &RunData) -> Option<Figure> {
+    let mut counts: Vec<u32> = run.field_sweep.iter().map(|f| f.rays_per_point).collect();
     counts.sort_unstable();
     counts.dedup();
     if counts.len() < 2 {
-        return Ok(());
+        return None;
     }
-    let backends = distinct_backends(rows.iter().map(|r| r.backend));
-    let on = |b: Backend| {
-        if backends.len() > 1 {
-            format!(" ({})", b.name())
-        } else {
-            String::new()
-        }
-    };
-    let mut series: Vec<Series> = Vec::new();
-    for r in rows {
-        let mut pts: Vec<(f64, f64)> = field_sweep
-            .iter()
-            .filter(|f| f.cell == r.cell && f.backend == r.backend)
-            .map(|f| (f.rays_per_point as f64, 1e3 * f.estimate_s))
-            .collect();
-        if pts.is_empty() {
-            continue;
-        }
-        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let varying = key(rows, r, &["backend"]);
-        let label = if varying == "field" {
-            format!("field {} maps", r.positional_samples)
-        } else {
-            format!("field {} maps {varying}", r.positional_samples)
-        };
-        series.push(Series {
-            label: format!("{label}{}", on(r.backend)),
-            points: pts,
-            line: true,
-        });
-    }
+    let rows = &run.rows;
+    let devices = Devices::of(rows);
+    let ranks = res_ranks(rows);
+    let scenes = run.scenes();
+    let mut backends: Vec<Backend> = rows.iter().map(|r| r.backend).collect();
+    backends.sort();
+    backends.dedup();
+    let mut panels: Vec<Panel> = Vec::new();
     for &b in &backends {
-        let mut scenes: Vec<&str> = sweep
+        let d = devices.name(b);
+        // Ray casting on this device, per scene.
+        let context: Vec<_> = scenes
             .iter()
-            .filter(|s| s.backend == b)
-            .map(|s| s.scene.as_str())
+            .filter_map(|sc| {
+                let mut pts: Vec<(f64, f64)> = run
+                    .sweep
+                    .iter()
+                    .filter(|s| s.backend == b && s.scene == *sc)
+                    .map(|s| (s.rays_per_point as f64, 1e3 * s.raycast_s))
+                    .collect();
+                pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+                let scene = if scenes.len() > 1 {
+                    format!(" {sc}")
+                } else {
+                    String::new()
+                };
+                (!pts.is_empty()).then(|| {
+                    styled(
+                        Series {
+                            label: format!("ray cast{scene}, {d}"),
+                            points: pts,
+                            line: true,
+                        },
+                        Family::RayCast.style(0, 0),
+                    )
+                })
+            })
             .collect();
-        scenes.sort_unstable();
-        scenes.dedup();
-        for sc in scenes {
-            let mut pts: Vec<(f64, f64)> = sweep
+        let mut groups: Vec<Group> = Vec::new();
+        for r in rows.iter().filter(|r| r.backend == b) {
+            let mut pts: Vec<(f64, f64)> = run
+                .field_sweep
                 .iter()
-                .filter(|s| s.backend == b && s.scene == sc)
-                .map(|s| (s.rays_per_point as f64, 1e3 * s.raycast_s))
+                .filter(|f| f.cell == r.cell)
+                .map(|f| (f.rays_per_point as f64, 1e3 * f.estimate_s))
                 .collect();
+            if pts.is_empty() {
+                continue;
+            }
             pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-            let scene = if scenes_differ(rows) {
-                format!(" {sc}")
-            } else {
-                String::new()
-            };
-            series.push(Series {
-                label: format!("ray cast{scene}{}", on(b)),
-                points: pts,
-                line: true,
+            let varying = key(rows, r, &["backend"]);
+            let title = format!("{d}, {} maps", r.positional_samples);
+            let s = styled(
+                Series {
+                    label: format!("field {} maps {varying}", r.positional_samples),
+                    points: pts,
+                    line: true,
+                },
+                Style::new(viridis(ranks.rank(r.directional_res)), Marker::Circle),
+            );
+            match groups.iter_mut().find(|g| g.title == title) {
+                Some(g) => g.series.push(s),
+                None => groups.push(Group {
+                    title,
+                    series: vec![s],
+                }),
+            }
+        }
+        let total: usize = groups.iter().map(|g| g.series.len()).sum::<usize>() + context.len();
+        if total <= MAX_SERIES {
+            let mut series = context.clone();
+            series.extend(groups.into_iter().flat_map(|g| g.series));
+            panels.push(Panel {
+                title: d.to_string(),
+                series,
+                hlines: Vec::new(),
             });
+        } else {
+            panels.extend(pack(groups, &context, ""));
         }
     }
-    let axes = Axes {
-        title: format!("{title}: estimate time against rays per point"),
-        x_label: "rays per point".into(),
-        y_label: "estimate time, ms (log)".into(),
-        log_x: false,
-        log_y: true,
-    };
-    xy_plot(&out.join("time_vs_rays.png"), &axes, &series, &[])
+    let q = run.quantity();
+    Some(Figure {
+        axes: Axes {
+            title: format!("{}: {q} estimate time against rays per point", run.title),
+            x_label: "rays per point".into(),
+            y_label: format!("{q} estimate time, ms (log)"),
+            log_x: false,
+            log_y: true,
+        },
+        panels,
+        notes: Vec::new(),
+    })
 }
 
-/// Draws `grain_vs_positional.png` when every row has a graininess.
-pub fn grain_vs_positional(out: &Path, title: &str, rows: &[Row]) -> Result<()> {
+/// `grain_vs_positional.png`, when every row has a graininess.
+pub fn grain_vs_positional(run: &RunData) -> Option<Figure> {
+    let rows = &run.rows;
     if rows.is_empty() || rows.iter().any(|r| r.grain.is_none()) {
-        return Ok(());
+        return None;
     }
     let first = rows[0].backend;
-    let mut series: Vec<Series> = Vec::new();
+    let devices = Devices::of(rows);
+    let mut groups: Vec<Group> = Vec::new();
     // One backend (the first): GPU parity makes the others' images the same to 1/255.
     for r in rows.iter().filter(|r| r.backend == first) {
         let label = key(rows, r, &["backend"]);
         let Some(y) = r.grain else { continue };
         let p = (r.positional_samples as f64, y);
-        match series.iter_mut().find(|s| s.label == label) {
-            Some(s) => s.points.push(p),
-            None => series.push(Series {
-                label,
-                points: vec![p],
-                line: true,
-            }),
+        match groups
+            .iter_mut()
+            .flat_map(|g| g.series.iter_mut())
+            .find(|s| s.series.label == label)
+        {
+            Some(s) => s.series.points.push(p),
+            None => {
+                let n: usize = groups.iter().map(|g| g.series.len()).sum();
+                let s = styled(
+                    Series {
+                        label,
+                        points: vec![p],
+                        line: true,
+                    },
+                    Style::palette(n),
+                );
+                match groups.iter_mut().find(|g| g.title == r.scene) {
+                    Some(g) => g.series.push(s),
+                    None => groups.push(Group {
+                        title: r.scene.clone(),
+                        series: vec![s],
+                    }),
+                }
+            }
         }
     }
-    let axes = Axes {
-        title: format!("{title}: graininess of the error against positional samples"),
-        x_label: "positional samples (maps)".into(),
-        y_label: "grain: RMS of the error's 3×3 high-pass (0–255)".into(),
-        log_x: true,
-        log_y: false,
+    let total: usize = groups.iter().map(|g| g.series.len()).sum();
+    let panels = if total <= MAX_SERIES {
+        vec![Panel {
+            title: String::new(),
+            series: groups.into_iter().flat_map(|g| g.series).collect(),
+            hlines: Vec::new(),
+        }]
+    } else {
+        pack(groups, &[], "")
     };
-    xy_plot(&out.join("grain_vs_positional.png"), &axes, &series, &[])
-}
-
-fn scenes_differ(rows: &[Row]) -> bool {
-    rows.iter().any(|r| r.scene != rows[0].scene)
+    let notes = if rows.iter().any(|r| r.backend != first) {
+        vec![format!(
+            "{} rows (the other backends' images are the same to 1/255: GPU parity)",
+            devices.name(first)
+        )]
+    } else {
+        Vec::new()
+    };
+    Some(Figure {
+        axes: Axes {
+            title: format!(
+                "{}: graininess of the error against positional samples",
+                run.title
+            ),
+            x_label: "positional samples (maps; log)".into(),
+            y_label: "grain: RMS of the error's 3×3 high-pass (0–255)".into(),
+            log_x: true,
+            log_y: false,
+        },
+        panels,
+        notes,
+    })
 }

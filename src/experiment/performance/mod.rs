@@ -17,9 +17,9 @@
 //!   enters the caster's bounding sphere (the rays whose answer the field must read).
 
 pub mod floor;
+pub mod plots;
 
 use super::fields::FieldSupply;
-use super::plot::{xy_plot, Axes, HLine, Series};
 use super::scenes::{mesh_sha256, LoadedMesh};
 use super::{Error, Result};
 use crate::field::lookup::{LookupOptions, SphereOrigin};
@@ -491,7 +491,8 @@ pub fn run(out: &Path, quick: bool, supply: &FieldSupply) -> Result<Vec<PerfRow>
     }
     std::fs::create_dir_all(out).map_err(Error::io(out))?;
     super::outputs::write_csv(&out.join("table.csv"), &table)?;
-    plots(out, &table)?;
+    let rows: Vec<plots::PlotRow> = table.iter().map(plots::PlotRow::of).collect();
+    plots::draw(out, &rows, Some(&plots::cache_sizes()))?;
     let json = out.join("run.json");
     let meta = meta.timed();
     crate::io::write_atomic(&json, meta.to_json().as_bytes()).map_err(Error::io(&json))?;
@@ -554,83 +555,4 @@ fn free_share(vis: &dyn Visibility, dirs: &[(Vec3, Vec<Vec3>)], opts: &AoOptions
         .sum();
     let total: usize = dirs.iter().map(|d| d.1.len()).sum();
     free as f64 / total.max(1) as f64
-}
-
-/// The three growth plots.
-fn plots(out: &Path, rows: &[PerfRow]) -> Result<()> {
-    let series = |sweep: &str, x: &dyn Fn(&PerfRow) -> f64| -> Vec<Series> {
-        let mut names: Vec<&str> = Vec::new();
-        for r in rows.iter().filter(|r| r.sweep == sweep) {
-            if !names.contains(&r.backend) {
-                names.push(r.backend);
-            }
-        }
-        names
-            .iter()
-            .map(|&b| Series {
-                label: b.to_string(),
-                points: rows
-                    .iter()
-                    .filter(|r| r.sweep == sweep && r.backend == b)
-                    .map(|r| (x(r), r.mrays_s))
-                    .collect(),
-                line: true,
-            })
-            .collect()
-    };
-    let axes = |title: &str, x: &str, log_x: bool| Axes {
-        title: title.to_string(),
-        x_label: x.to_string(),
-        y_label: "Mrays/s (same rays, all threads)".to_string(),
-        log_x,
-        log_y: true,
-    };
-    let plot = |name: &str, a: Axes, s: Vec<Series>, h: &[HLine]| -> Result<()> {
-        if s.iter().all(|s| s.points.is_empty()) {
-            return Ok(());
-        }
-        xy_plot(&out.join(name), &a, &s, h)
-    };
-    plot(
-        "growth_triangles.png",
-        axes(
-            "Vertex AO rays against caster triangles",
-            "caster triangles",
-            true,
-        ),
-        series("triangles", &|r| r.triangles as f64),
-        &[],
-    )?;
-    let caches = cache_sizes();
-    plot(
-        "growth_field_size.png",
-        axes(
-            &format!("Against field size ({caches})"),
-            "field storage, bytes",
-            true,
-        ),
-        series("field_size", &|r| r.field_bytes as f64),
-        &[],
-    )?;
-    plot(
-        "growth_entering.png",
-        axes(
-            "Against the share of rays entering the caster's sphere",
-            "share of rays entering the bounding sphere",
-            false,
-        ),
-        series("entering", &|r| r.entering_share),
-        &[],
-    )
-}
-
-/// "L2 512 KiB, L3 16384 KiB" from sysfs (empty where unknown).
-fn cache_sizes() -> String {
-    let read = |i: u32| {
-        let d = format!("/sys/devices/system/cpu/cpu0/cache/index{i}");
-        let level = std::fs::read_to_string(format!("{d}/level")).ok()?;
-        let size = std::fs::read_to_string(format!("{d}/size")).ok()?;
-        Some(format!("L{} {}", level.trim(), size.trim()))
-    };
-    (2..5).filter_map(read).collect::<Vec<_>>().join(", ")
 }

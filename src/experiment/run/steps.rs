@@ -231,6 +231,10 @@ impl<'a> Runner<'a> {
             img.save_png(&p).map_err(Error::io(&p))?;
             let p = out.join(format!("images/{}-reference.exr", bs.name));
             img.save_exr(&p).map_err(Error::io(&p))?;
+            if let Some(view) = &st.view {
+                let p = crate::experiment::figures::grids::coverage_path(&out, &bs.name);
+                crate::experiment::figures::grids::write_coverage(&p, view)?;
+            }
         }
         if let Some(shaded) = st.shaded_image(bs, &st.reference) {
             let p = out.join(format!("images/{}-reference-shaded.png", bs.name));

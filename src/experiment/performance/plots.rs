@@ -1,0 +1,344 @@
+//! The performance run's three growth plots, drawn from its rows (after the run, or from its
+//! `table.csv` by `experiment plots --dir results/performance`):
+//!
+//! - `growth_triangles.png`: each caster is another model, so its points are not joined: a
+//!   line across models would read as one model's growth; the models are named under the plot;
+//! - `growth_field_size.png`: one caster, a line per storage precision (fields of one
+//!   precision at growing sizes), so that fields of two precisions at one size are two points,
+//!   not a vertical step of one curve;
+//! - `growth_entering.png`: one caster and field, a line per backend over the share of rays
+//!   entering its sphere.
+
+use super::PerfRow;
+use crate::experiment::figures::facet::Family;
+use crate::experiment::plot::{figure_plot, Axes, Figure, Panel, Series, Style, Styled};
+use crate::experiment::Result;
+use serde::Deserialize;
+use std::path::Path;
+
+/// The columns of a `table.csv` row the plots read.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+pub struct PlotRow {
+    pub sweep: String,
+    pub caster: String,
+    pub triangles: usize,
+    pub field: String,
+    pub field_bytes: u64,
+    pub entering_share: f64,
+    pub backend: String,
+    pub mrays_s: f64,
+}
+
+impl PlotRow {
+    pub fn of(r: &PerfRow) -> PlotRow {
+        PlotRow {
+            sweep: r.sweep.to_string(),
+            caster: r.caster.clone(),
+            triangles: r.triangles,
+            field: r.field.clone(),
+            field_bytes: r.field_bytes,
+            entering_share: r.entering_share,
+            backend: r.backend.to_string(),
+            mrays_s: r.mrays_s,
+        }
+    }
+
+    /// The storage precision of the row's field ("4226x32² u8" → "u8").
+    fn precision(&self) -> &str {
+        self.field.rsplit(' ').next().unwrap_or("")
+    }
+}
+
+/// Whether `dir` holds a performance run (its `table.csv` starts with `sweep`, `caster`).
+pub fn is_performance_run(dir: &Path) -> bool {
+    std::fs::read_to_string(dir.join("table.csv"))
+        .map(|t| t.starts_with("sweep,caster,"))
+        .unwrap_or(false)
+}
+
+/// Redraws the plots of the performance run in `dir` from its `table.csv`.
+pub fn redraw(dir: &Path) -> Result<()> {
+    let rows: Vec<PlotRow> = crate::experiment::outputs::read_csv(&dir.join("table.csv"))?;
+    draw(dir, &rows, None)
+}
+
+/// The style of a backend: ours, Embree and the field as in the comparison plots, the floors
+/// in grey.
+fn style(backend: &str, i: usize) -> Style {
+    match backend {
+        "raycast" => Family::RayCast.style(0, 0),
+        "embree" => Family::Embree.style(0, 0),
+        b if b.starts_with("field") => Family::Field.style(0, 0),
+        "floor_sphere_cull" => Family::RayCast.style(2, 3),
+        "floor_no_query" => Family::RayCast.style(1, 1),
+        _ => Style::palette(i),
+    }
+}
+
+/// The backends of a sweep, in order.
+fn backends<'a>(rows: &'a [PlotRow], sweep: &str) -> Vec<&'a str> {
+    let mut names: Vec<&str> = Vec::new();
+    for r in rows.iter().filter(|r| r.sweep == sweep) {
+        if !names.contains(&r.backend.as_str()) {
+            names.push(&r.backend);
+        }
+    }
+    names
+}
+
+/// The three figures, by file name (`caches`: the machine's cache sizes, for the field-size
+/// plot's title, when drawn by the run).
+pub fn figures(rows: &[PlotRow], caches: Option<&str>) -> Vec<(&'static str, Figure)> {
+    let axes = |title: String, x: &str, log_x: bool| Axes {
+        title,
+        x_label: x.to_string(),
+        y_label: "Mrays/s (same rays, all threads; log)".to_string(),
+        log_x,
+        log_y: true,
+    };
+    let one = |a: Axes, series: Vec<Styled>, notes: Vec<String>| Figure {
+        axes: a,
+        panels: vec![Panel {
+            title: String::new(),
+            series,
+            hlines: Vec::new(),
+        }],
+        notes,
+    };
+    let mut out = Vec::new();
+
+    // Caster triangles: points per backend, never joined across models.
+    let sweep = "triangles";
+    let tri: Vec<Styled> = backends(rows, sweep)
+        .iter()
+        .enumerate()
+        .map(|(i, &b)| Styled {
+            series: Series {
+                label: b.to_string(),
+                points: rows
+                    .iter()
+                    .filter(|r| r.sweep == sweep && r.backend == b)
+                    .map(|r| (r.triangles as f64, r.mrays_s))
+                    .collect(),
+                line: false,
+            },
+            style: style(b, i),
+        })
+        .collect();
+    let mut models: Vec<(usize, &str)> = rows
+        .iter()
+        .filter(|r| r.sweep == sweep)
+        .map(|r| (r.triangles, r.caster.as_str()))
+        .collect();
+    models.sort_unstable();
+    models.dedup();
+    let field = rows
+        .iter()
+        .find(|r| r.sweep == sweep)
+        .map_or(String::new(), |r| format!(" (field {})", r.field));
+    let names: Vec<String> = models.iter().map(|(t, m)| format!("{m} {t}")).collect();
+    if !tri.iter().all(|s| s.series.points.is_empty()) {
+        out.push((
+            "growth_triangles.png",
+            one(
+                axes(
+                    format!("Vertex AO rays against caster triangles{field}"),
+                    "caster triangles (log; each a different model)",
+                    true,
+                ),
+                tri,
+                vec![
+                    "points, not curves: each x is another model".into(),
+                    format!("models (triangles): {}", names.join(", ")),
+                ],
+            ),
+        ));
+    }
+
+    // Field size: a line per precision for the field's lookups; the backends that read no
+    // field (ray casters, floors) as points, repeats on the same rays.
+    let sweep = "field_size";
+    let mut precisions: Vec<&str> = rows
+        .iter()
+        .filter(|r| r.sweep == sweep)
+        .map(PlotRow::precision)
+        .collect();
+    precisions.sort_unstable();
+    precisions.dedup();
+    let mut size: Vec<Styled> = Vec::new();
+    for (i, &b) in backends(rows, sweep).iter().enumerate() {
+        let these = |p: Option<&str>| -> Vec<(f64, f64)> {
+            rows.iter()
+                .filter(|r| r.sweep == sweep && r.backend == b)
+                .filter(|r| p.is_none_or(|p| r.precision() == p))
+                .map(|r| (r.field_bytes as f64 / 1e6, r.mrays_s))
+                .collect()
+        };
+        let st = style(b, i);
+        if !b.starts_with("field") {
+            size.push(Styled {
+                series: Series {
+                    label: format!("{b} (reads no field)"),
+                    points: these(None),
+                    line: false,
+                },
+                style: Style {
+                    dashed: false,
+                    ..st
+                },
+            });
+            continue;
+        }
+        for (k, &p) in precisions.iter().enumerate() {
+            let points = these(Some(p));
+            if points.is_empty() {
+                continue;
+            }
+            size.push(Styled {
+                series: Series {
+                    label: format!("{b}, {p} fields"),
+                    points,
+                    line: true,
+                },
+                style: if k % 2 == 1 { st.hollow().dashed() } else { st },
+            });
+        }
+    }
+    let caster = rows
+        .iter()
+        .find(|r| r.sweep == sweep)
+        .map_or(String::new(), |r| format!("{} ", r.caster));
+    let caches = caches
+        .filter(|c| !c.is_empty())
+        .map_or(String::new(), |c| format!(" ({c})"));
+    if !size.is_empty() {
+        out.push((
+            "growth_field_size.png",
+            one(
+                axes(
+                    format!("Against field size{caches}"),
+                    &format!("{caster}field storage, MB (10⁶ bytes; log)"),
+                    true,
+                ),
+                size,
+                Vec::new(),
+            ),
+        ));
+    }
+
+    // The share of rays entering the caster's sphere.
+    let sweep = "entering";
+    let enter: Vec<Styled> = backends(rows, sweep)
+        .iter()
+        .enumerate()
+        .map(|(i, &b)| Styled {
+            series: Series {
+                label: b.to_string(),
+                points: rows
+                    .iter()
+                    .filter(|r| r.sweep == sweep && r.backend == b)
+                    .map(|r| (r.entering_share, r.mrays_s))
+                    .collect(),
+                line: true,
+            },
+            style: style(b, i),
+        })
+        .collect();
+    if !enter.is_empty() {
+        out.push((
+            "growth_entering.png",
+            one(
+                axes(
+                    "Against the share of rays entering the caster's sphere".into(),
+                    "share of rays entering the bounding sphere",
+                    false,
+                ),
+                enter,
+                Vec::new(),
+            ),
+        ));
+    }
+    out
+}
+
+/// Draws the figures into `out`.
+pub fn draw(out: &Path, rows: &[PlotRow], caches: Option<&str>) -> Result<()> {
+    for (name, fig) in figures(rows, caches) {
+        figure_plot(&out.join(name), &fig)?;
+    }
+    Ok(())
+}
+
+/// "L2 512 KiB, L3 16384 KiB" from sysfs (empty where unknown).
+pub fn cache_sizes() -> String {
+    let read = |i: u32| {
+        let d = format!("/sys/devices/system/cpu/cpu0/cache/index{i}");
+        let level = std::fs::read_to_string(format!("{d}/level")).ok()?;
+        let size = std::fs::read_to_string(format!("{d}/size")).ok()?;
+        Some(format!("L{} {}", level.trim(), size.trim()))
+    };
+    (2..5).filter_map(read).collect::<Vec<_>>().join(", ")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(sweep: &str, caster: &str, tris: usize, field: &str, backend: &str) -> PlotRow {
+        PlotRow {
+            sweep: sweep.into(),
+            caster: caster.into(),
+            triangles: tris,
+            field: field.into(),
+            field_bytes: 1000 * tris as u64,
+            entering_share: 0.25,
+            backend: backend.into(),
+            mrays_s: 10.0,
+        }
+    }
+
+    #[test]
+    fn models_are_points_and_precisions_are_lines_of_their_own() {
+        let rows = vec![
+            row("triangles", "bunny", 3674, "4226x32² u8", "raycast"),
+            row("triangles", "dragon", 100000, "4226x32² u8", "raycast"),
+            row("field_size", "bunny", 10, "4226x32² u8", "field_nearest"),
+            row("field_size", "bunny", 20, "4226x64² u8", "field_nearest"),
+            row("field_size", "bunny", 20, "4226x32² f32", "field_nearest"),
+        ];
+        let figs = figures(&rows, None);
+        let tri = &figs
+            .iter()
+            .find(|f| f.0 == "growth_triangles.png")
+            .unwrap()
+            .1;
+        // Two models: two points of one backend, not joined.
+        let s = &tri.panels[0].series;
+        assert_eq!(s.len(), 1);
+        assert!(!s[0].series.line);
+        assert_eq!(s[0].series.points.len(), 2);
+        assert!(tri
+            .notes
+            .iter()
+            .any(|n| n.contains("bunny 3674, dragon 100000")));
+        // Two precisions: two lines, neither holding both fields of 20 kB.
+        let size = &figs
+            .iter()
+            .find(|f| f.0 == "growth_field_size.png")
+            .unwrap()
+            .1;
+        let labels: Vec<&str> = size.panels[0]
+            .series
+            .iter()
+            .map(|s| s.series.label.as_str())
+            .collect();
+        assert_eq!(
+            labels,
+            ["field_nearest, f32 fields", "field_nearest, u8 fields"]
+        );
+        assert_eq!(size.panels[0].series[1].series.points.len(), 2);
+        assert!(size.panels[0].series.iter().all(|s| s.series.line));
+        // No entering rows: no plot.
+        assert!(!figs.iter().any(|f| f.0 == "growth_entering.png"));
+    }
+}
