@@ -117,18 +117,19 @@ fn a_folder_with_methods_puts_them_on_both_comparison_plots() {
             .flat_map(|p| p.series.iter().map(|s| s.series.label.clone()))
             .collect()
     };
+    // A label names the settings that vary among the method's rows: every row here is f16.
     let pareto = labels(&figures::compare::pareto(&run));
     for m in [
         "raycast",
         "embree",
-        "sdf f16 trace (res 32/64)",
-        "sdf f16 cone (res 32/64)",
+        "sdf trace (res 32/64)",
+        "sdf cone (res 32/64)",
     ] {
         assert!(pareto.iter().any(|l| l == m), "{m} not in {pareto:?}");
     }
     let bytes_fig = figures::compare::bytes(&run);
     let bytes = labels(&bytes_fig);
-    assert!(bytes.iter().any(|l| l == "sdf f16 trace (res 32/64)"));
+    assert!(bytes.iter().any(|l| l == "sdf trace (res 32/64)"));
     assert!(!bytes.iter().any(|l| l.starts_with("embree")));
     assert!(bytes_fig.notes.iter().any(|n| n.ends_with("embree")));
 }

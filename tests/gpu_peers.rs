@@ -145,7 +145,7 @@ impl Agreement {
             let d = (g - c).abs();
             equal += (g.to_bits() == c.to_bits()) as usize;
             max_diff = max_diff.max(d);
-            over += !(d <= *a) as usize;
+            over += (d.is_nan() || d > *a) as usize;
         }
         Agreement {
             equal_share: equal as f64 / gpu.len().max(1) as f64,

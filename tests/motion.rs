@@ -4,11 +4,11 @@
 
 use std::path::Path;
 use visfield::experiment::outputs::read_csv;
-use visfield::experiment::table::Row;
 use visfield::experiment::run::frames::FrameRow;
 use visfield::experiment::run::run;
 use visfield::experiment::scenes::Scenes;
 use visfield::experiment::spec::Spec;
+use visfield::experiment::table::Row;
 
 mod common;
 use common::{loaded, options, tiny, ONE_FIELD};

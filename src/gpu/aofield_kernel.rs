@@ -296,9 +296,9 @@ mod tests {
     #[allow(clippy::excessive_precision)]
     fn atan_cephes(x: f32) -> f32 {
         let (y0, t) = if x > 2.414213562373095 {
-            (1.5707963267948966, -1.0 / x)
+            (std::f32::consts::FRAC_PI_2, -1.0 / x)
         } else if x > 0.4142135623730950 {
-            (0.7853981633974483, (x - 1.0) / (x + 1.0))
+            (std::f32::consts::FRAC_PI_4, (x - 1.0) / (x + 1.0))
         } else {
             (0.0, x)
         };

@@ -35,6 +35,10 @@ pub const DEFAULT_RAYS_PER_INVOCATION: u32 = 256;
 /// One dispatch of an AO kernel: its output words, kernel time, upload time.
 pub(crate) type Dispatched = (Vec<u32>, Option<Duration>, Duration);
 
+/// What [`complete_runs`] returns: the words, the invocations per point, the rays per
+/// invocation, the kernel time and the upload time.
+pub(crate) type Completed = (Vec<u32>, u32, u32, Option<Duration>, Duration);
+
 /// Runs `dispatch(rays_per_invocation, invocations_per_point)`, which returns
 /// `words_per_invocation` words per invocation, point-major, the first of them [`CUT_SHORT`]
 /// where the invocation was cut short, until no invocation is: starts from `split`'s rays per
@@ -49,7 +53,7 @@ pub(crate) fn complete_runs(
     rays: u32,
     words_per_invocation: usize,
     mut dispatch: impl FnMut(u32, u32) -> Result<Dispatched, GpuError>,
-) -> Result<(Vec<u32>, u32, u32, Option<Duration>, Duration), GpuError> {
+) -> Result<Completed, GpuError> {
     debug_assert!(rays > 0 && words_per_invocation > 0);
     let (mut kernel, mut upload) = (None, Duration::ZERO);
     loop {

@@ -59,15 +59,15 @@ pub fn quantity(render: Option<&str>) -> String {
 /// Two values that a plot draws as one: within this fraction of the larger.
 pub const COINCIDE: f64 = 0.005;
 
+/// A key's points on one device: `(key, device, points)`.
+pub type DevicePart = (String, String, Vec<(f64, f64)>);
+
 /// One series per `(key, device, points)`, except that the devices' series of one key whose
 /// points are at the same x and agree in y within [`COINCIDE`] are one series, labelled
 /// "KEY (CPU = lavapipe (CPU))"; the others are labelled "KEY, DEVICE" where the key has
 /// several devices and "KEY" where it has one. Keys keep their first order; each series comes
 /// with its key.
-pub fn merge_devices(
-    parts: &[(String, String, Vec<(f64, f64)>)],
-    line: bool,
-) -> Vec<(String, Series)> {
+pub fn merge_devices(parts: &[DevicePart], line: bool) -> Vec<(String, Series)> {
     let mut keys: Vec<&str> = Vec::new();
     for (k, _, _) in parts {
         if !keys.contains(&k.as_str()) {
@@ -76,8 +76,7 @@ pub fn merge_devices(
     }
     let mut out = Vec::new();
     for k in keys {
-        let these: Vec<&(String, String, Vec<(f64, f64)>)> =
-            parts.iter().filter(|(key, _, _)| key == k).collect();
+        let these: Vec<&DevicePart> = parts.iter().filter(|(key, _, _)| key == k).collect();
         if these.len() == 1 {
             let s = Series {
                 label: k.to_string(),

@@ -36,7 +36,7 @@ pub fn figure(run: &RunData) -> Figure {
     let mut paper_any = false;
     for sc in &scenes {
         let rows: Vec<&Row> = run.rows.iter().filter(|r| &r.scene == sc).collect();
-        let mut parts: Vec<(String, String, Vec<(f64, f64)>)> = Vec::new();
+        let mut parts: Vec<super::labels::DevicePart> = Vec::new();
         for r in &rows {
             let Some(y) = m(r) else { continue };
             let k = key(&run.rows, r, &skip);

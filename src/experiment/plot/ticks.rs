@@ -56,7 +56,7 @@ pub fn ticks(axis: &AxisLayout) -> Ticks {
 fn linear_ticks(axis: &AxisLayout) -> Ticks {
     let (lo, hi) = (axis.lo, axis.hi);
     let span = hi - lo;
-    if !(span > 0.0) || !span.is_finite() {
+    if span.is_nan() || span <= 0.0 || !span.is_finite() {
         return Ticks {
             labels: vec![lo],
             light: vec![],
@@ -109,7 +109,7 @@ const LOG_SETS: [(&[f64], i32); 8] = [
 /// placed logarithmically).
 fn log_ticks(axis: &AxisLayout) -> Ticks {
     let (lo, hi) = (axis.lo, axis.hi);
-    if !(lo > 0.0 && hi > lo) || !hi.is_finite() {
+    if !(lo > 0.0 && hi > lo && hi.is_finite()) {
         return linear_ticks(axis);
     }
     let decades = (hi / lo).log10();
