@@ -661,7 +661,7 @@ pub fn main() -> Result<i32> {
 /// Runs a parsed command line (see [`main`]).
 pub fn run(cli: Cli) -> Result<i32> {
     match cli.command {
-        Command::Quickstart { out } => super::quickstart::run(&out)?,
+        Command::Quickstart { out } => super::quickstart::run(&out, false)?,
         Command::List => return list(),
         Command::Stability { out } => {
             super::stability::run(&out)?;
@@ -739,7 +739,8 @@ pub fn run(cli: Cli) -> Result<i32> {
             }
             // The command-made results beside the specs' (same root).
             let root = |name: &str| opts.out(name, opts.out.as_deref());
-            super::quickstart::run(&root("quickstart"))?;
+            // The quickstart in the run's profile: with --quick, what `check --quick` compares.
+            super::quickstart::run(&root("quickstart"), opts.quick)?;
             super::sampling_report::run(&root("sampling")).map_err(|e| e.context("sampling"))?;
             let adapter = adapter_preference(opts.adapter.as_deref());
             super::relief::run(&root("relief"), opts.quick, Some(adapter))?;

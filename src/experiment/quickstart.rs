@@ -23,10 +23,13 @@ pub fn spec() -> Result<LoadedSpec> {
     })
 }
 
-/// Runs the tour into `out` (the field from the cache when there) and prints its summary.
-pub fn run(out: &Path) -> Result<()> {
+/// Runs the tour into `out` (the field from the cache when there), in the quick profile where
+/// `quick`, and prints its summary.
+pub fn run(out: &Path, quick: bool) -> Result<()> {
     let ls = spec()?;
-    let report = run::run(&ls, &RunOptions::new(out.to_path_buf()))?;
+    let mut options = RunOptions::new(out.to_path_buf());
+    options.quick = quick;
+    let report = run::run(&ls, &options)?;
     let r = &report.rows[0];
     let opt = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.3}"));
     println!();
