@@ -104,41 +104,26 @@ pub fn load(path: &Path, key: &CacheKey) -> Result<Fitted, AoFieldError> {
     let bytes = std::fs::read(path)
         .map_err(|e| AoFieldError::Invalid(format!("{}: {e}", path.display())))?;
     let bad = |why: String| AoFieldError::Invalid(format!("{}: {why}", path.display()));
-    if bytes.len() < 16 || &bytes[..8] != MAGIC {
-        return Err(bad(
-            "not an AO field cache file (bad magic or truncated)".into()
-        ));
-    }
-    let version = u32::from_le_bytes(bytes[8..12].try_into().expect("4 bytes"));
-    if version != FORMAT_VERSION {
-        return Err(bad(format!(
-            "format version {version}, this build reads {FORMAT_VERSION}"
-        )));
-    }
-    let hlen = u32::from_le_bytes(bytes[12..16].try_into().expect("4 bytes")) as usize;
-    let end = 16usize
-        .checked_add(hlen)
-        .filter(|&e| e <= bytes.len())
-        .ok_or_else(|| bad("truncated header".into()))?;
-    let header: Header = serde_json::from_slice(&bytes[16..end])
-        .map_err(|e| bad(format!("unreadable header: {e}")))?;
+    let (header, payload): (Header, &[u8]) =
+        crate::io::unframe(&bytes, MAGIC, FORMAT_VERSION, "visfield AO field cache").map_err(
+            |e| match e {
+                crate::io::Unframed::Corrupt(why) => bad(why),
+                crate::io::Unframed::Stale(why) => bad(format!("stale: {why}")),
+            },
+        )?;
     if &header.key != key {
         return Err(bad(
             "stale: the key (mesh, parameters or code version) differs".into(),
         ));
     }
-    let payload = &bytes[end..];
-    let texels = 6 * key.params.res * key.params.res;
-    let expect = texels * CHANNELS * 4;
-    if payload.len() as u64 != header.payload_len || payload.len() != expect {
+    let expect = 6 * key.params.res * key.params.res * CHANNELS * 4;
+    if payload.len() != expect {
         return Err(bad(format!(
             "payload of {} bytes, expected {expect}",
             payload.len()
         )));
     }
-    if crate::io::sha256_hex(payload) != header.payload_sha256 {
-        return Err(bad("payload checksum mismatch".into()));
-    }
+    crate::io::check_payload(payload, header.payload_len, &header.payload_sha256).map_err(bad)?;
     let values: Vec<f32> = bytemuck::pod_collect_to_vec(payload);
     if values.iter().any(|v| !v.is_finite())
         || header.bounds.radius.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)

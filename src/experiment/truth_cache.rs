@@ -130,37 +130,20 @@ pub fn load(path: &Path, key: &str) -> std::result::Result<Truth, CacheError> {
         path: path.to_path_buf(),
         reason: why,
     };
-    if bytes.len() < 16 || &bytes[..8] != MAGIC {
-        return Err(bad("not a truth cache file (bad magic or truncated)"));
-    }
-    let version = u32::from_le_bytes(bytes[8..12].try_into().expect("4 bytes"));
-    if version != FORMAT_VERSION {
-        return Err(stale(format!(
-            "format version {version}, this build reads {FORMAT_VERSION}"
-        )));
-    }
-    let hlen = u32::from_le_bytes(bytes[12..16].try_into().expect("4 bytes")) as usize;
-    let end = 16usize
-        .checked_add(hlen)
-        .filter(|&e| e <= bytes.len())
-        .ok_or_else(|| bad("truncated header"))?;
-    let h: TruthHeader =
-        serde_json::from_slice(&bytes[16..end]).map_err(|e| bad(&format!("header: {e}")))?;
+    let (h, payload): (TruthHeader, &[u8]) =
+        crate::io::unframe(&bytes, MAGIC, FORMAT_VERSION, "truth cache").map_err(|e| match e {
+            crate::io::Unframed::Corrupt(why) => bad(&why),
+            crate::io::Unframed::Stale(why) => stale(why),
+        })?;
     if h.key != key {
         return Err(stale("the key differs".into()));
     }
-    let payload = &bytes[end..];
     let values = h
         .points
         .checked_mul(h.channels)
         .filter(|&v| h.channels > 0 && v.checked_mul(8) == Some(h.payload_len))
         .ok_or_else(|| bad("the payload's length is not points × channels × 8"))?;
-    if payload.len() as u64 != h.payload_len {
-        return Err(bad("truncated payload"));
-    }
-    if crate::io::sha256_hex(payload) != h.payload_sha256 {
-        return Err(bad("payload checksum mismatch"));
-    }
+    crate::io::check_payload(payload, h.payload_len, &h.payload_sha256).map_err(|e| bad(&e))?;
     let n = values as usize;
     let floats: Vec<f32> = bytemuck::pod_collect_to_vec(payload);
     Ok(Truth {

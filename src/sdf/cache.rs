@@ -126,42 +126,24 @@ pub fn load(path: &Path, key: &CacheKey) -> Result<DistanceVolume, CacheError> {
         path: path.to_path_buf(),
         reason,
     };
-    if bytes.len() < 16 || &bytes[..8] != MAGIC {
-        return Err(corrupt(
-            "not a visfield SDF cache file (bad magic or truncated)".into(),
-        ));
-    }
-    let version = u32::from_le_bytes(bytes[8..12].try_into().expect("4 bytes"));
-    if version != FORMAT_VERSION {
-        return Err(CacheError::Stale {
-            path: path.to_path_buf(),
-            reason: format!("format version {version}, this build reads {FORMAT_VERSION}"),
-        });
-    }
-    let hlen = u32::from_le_bytes(bytes[12..16].try_into().expect("4 bytes")) as usize;
-    let header_end = 16usize
-        .checked_add(hlen)
-        .filter(|&e| e <= bytes.len())
-        .ok_or_else(|| corrupt(format!("truncated header ({} bytes in file)", bytes.len())))?;
-    let header: CacheHeader = serde_json::from_slice(&bytes[16..header_end])
-        .map_err(|e| corrupt(format!("unreadable header: {e}")))?;
+    let (header, payload): (CacheHeader, &[u8]) =
+        crate::io::unframe(&bytes, MAGIC, FORMAT_VERSION, "visfield SDF cache").map_err(
+            |e| match e {
+                crate::io::Unframed::Corrupt(reason) => corrupt(reason),
+                crate::io::Unframed::Stale(reason) => CacheError::Stale {
+                    path: path.to_path_buf(),
+                    reason,
+                },
+            },
+        )?;
     if header.key != *key {
         return Err(CacheError::Stale {
             path: path.to_path_buf(),
             reason: "the key (mesh, resolution, margin, precision or code version) differs".into(),
         });
     }
-    let payload = &bytes[header_end..];
-    if payload.len() as u64 != header.payload_len {
-        return Err(corrupt(format!(
-            "truncated payload: {} of {} bytes",
-            payload.len(),
-            header.payload_len
-        )));
-    }
-    if crate::io::sha256_hex(payload) != header.payload_sha256 {
-        return Err(corrupt("payload checksum mismatch".into()));
-    }
+    crate::io::check_payload(payload, header.payload_len, &header.payload_sha256)
+        .map_err(corrupt)?;
     let lo = Vec3::from_array(header.lo);
     let max = DistanceVolume::MAX_RES;
     if !(lo.is_finite() && header.voxel.is_finite() && header.voxel > 0.0)
