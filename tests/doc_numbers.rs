@@ -194,6 +194,7 @@ fn figure6(c: &mut Claims) {
         embree / lo,
     );
     c.quotes("README.md", &text, from);
+    c.quotes("docs/results.md", &text, from);
     // The RMS table, with the paper's in brackets.
     for n in [290usize, 1090, 4226, 16642] {
         let mut text = format!("| {n} |");
