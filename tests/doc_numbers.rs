@@ -1094,6 +1094,85 @@ fn figure5_intra(c: &mut Claims) {
     c.quotes("docs/results.md", &text, from);
 }
 
+/// The "which method wins where" table: per scene and method family, the lowest error against
+/// the converged reference with its time, and the fastest setting with its error.
+fn wins_table() -> String {
+    let mut out = String::from(
+        "| scene | method | lowest error (its time, ms) | fastest, ms (its error) |\n|---|---|---|---|\n",
+    );
+    let scenes = [
+        ("2008 Figure 6, vertex AO", "figure6", "bunny"),
+        ("2010 Figure 3, per-pixel AO", "ao2010_figure3", "bunny"),
+        (
+            "2010 Figure 7, soft shadows",
+            "shadows2010_figure7",
+            "bunny",
+        ),
+    ];
+    for (label, spec, scene) in scenes {
+        let cpu = |r: &Row| r["backend"] == "cpu" && r["scene"] == scene;
+        let table: Vec<Row> = read(&format!("results/{spec}/table.csv"))
+            .into_iter()
+            .filter(cpu)
+            .collect();
+        let methods: Vec<Row> = read(&format!("results/{spec}/methods.csv"))
+            .into_iter()
+            .filter(cpu)
+            .collect();
+        let mut families: Vec<(&str, Vec<&Row>)> =
+            vec![("visibility field", table.iter().collect())];
+        for (name, m, q) in [
+            ("ray casting (ours)", "raycast", ""),
+            ("Embree 3", "embree", ""),
+            ("SDF, sphere traced", "sdf", "trace"),
+            ("SDF, cone traced", "sdf", "cone"),
+            ("AO field", "aofield", ""),
+        ] {
+            let rows: Vec<&Row> = methods
+                .iter()
+                .filter(|r| r["method"] == m && r.get("query").map_or("", |v| v.as_str()) == q)
+                .collect();
+            if !rows.is_empty() {
+                families.push((name, rows));
+            }
+        }
+        for (name, rows) in families {
+            let by = |col: &str| {
+                *rows
+                    .iter()
+                    .min_by(|a, b| f(a, col).total_cmp(&f(b, col)))
+                    .unwrap()
+            };
+            let (best, fast) = (by("rms_vs_truth"), by("estimate_s"));
+            let ms = |r: &Row| {
+                let t = 1e3 * f(r, "estimate_s");
+                if t < 10.0 {
+                    format!("{t:.2}")
+                } else {
+                    format!("{t:.0}")
+                }
+            };
+            out.push_str(&format!(
+                "| {label} | {name} | {:.2} ({}) | {} ({:.2}) |\n",
+                f(best, "rms_vs_truth"),
+                ms(best),
+                ms(fast),
+                f(fast, "rms_vs_truth"),
+            ));
+        }
+    }
+    out
+}
+
+fn wins(c: &mut Claims) {
+    let text = wins_table();
+    if std::env::var("VISFIELD_PRINT_WINS").is_ok() {
+        println!("{text}");
+    }
+    let from = "results/{figure6,ao2010_figure3,shadows2010_figure7}/{table,methods}.csv";
+    c.quotes("docs/results.md", &text, from);
+}
+
 #[test]
 fn quoted_numbers_match_the_committed_csvs() {
     let mut c = Claims::new();
@@ -1107,6 +1186,7 @@ fn quoted_numbers_match_the_committed_csvs() {
     dynamic(&mut c);
     headline_2010(&mut c);
     peers(&mut c);
+    wins(&mut c);
     figure5_intra(&mut c);
     models_table(&mut c);
     performance_prose(&mut c);
