@@ -553,6 +553,7 @@ mod toy_method {
                 bytes: Some(0),
                 cached: false,
                 columns: vec![("toy".into(), "yes".into())],
+                gpu: None,
             })
         }
     }

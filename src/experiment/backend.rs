@@ -82,6 +82,11 @@ pub trait ComputeBackend {
         q: Quantity<'s>,
     ) -> Result<Box<dyn Eval + 's>>;
 
+    /// The GPU device, for the kernels of methods on the `gpu` backend; none on the CPU.
+    fn gpu_context(&self) -> Option<&crate::gpu::GpuContext> {
+        None
+    }
+
     /// `q` by ray casting the casters, on the same rays.
     fn raycast_estimate(
         &self,

@@ -148,6 +148,10 @@ impl ComputeBackend for GpuBackend {
         self.ctx.adapter_label()
     }
 
+    fn gpu_context(&self) -> Option<&GpuContext> {
+        Some(&self.ctx)
+    }
+
     fn fields<'s>(&'s self, fields: &'s FieldScene, q: Quantity<'s>) -> Result<Box<dyn Eval + 's>> {
         let opts = FieldGpuOptions {
             lookup: fields.options,

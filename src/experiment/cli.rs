@@ -377,7 +377,8 @@ fn check(
             }
         };
         let name = ls.name.clone();
-        let gpu = ls.spec.profile(args.quick).backends.contains(&Backend::Gpu);
+        let gpu = ls.spec.profile(args.quick).backends.contains(&Backend::Gpu)
+            || ls.spec.methods.iter().any(|m| m.backends.contains(&Backend::Gpu));
         if gpu && *missing_vulkan.get_or_init(|| no_vulkan(args)) {
             let why = "no Vulkan adapter (install mesa-vulkan-drivers for lavapipe)";
             if require_gpu {
@@ -388,6 +389,9 @@ fn check(
             ls.spec.backends.retain(|&b| b != Backend::Gpu);
             if let Some(b) = &mut ls.spec.quick.backends {
                 b.retain(|&b| b != Backend::Gpu);
+            }
+            for m in &mut ls.spec.methods {
+                m.backends.retain(|&b| b != Backend::Gpu);
             }
             if ls.spec.profile(args.quick).backends.is_empty() {
                 continue;

@@ -201,7 +201,8 @@ pub enum Step {
 #[derive(Clone, Debug)]
 pub struct Plan {
     pub cells: Vec<Cell>,
-    /// The ids of the spec's method settings ([`super::methods::settings_of`]), in order.
+    /// The labels of the spec's method settings on their backends
+    /// ([`super::methods::settings_of`], [`super::methods::Setting::label`]), in order.
     pub methods: Vec<String>,
     pub steps: Vec<Step>,
     /// Largest sum of live field bytes.
@@ -240,10 +241,8 @@ impl Plan {
         let cells = super::shard::select(cells_of(spec), shard, |c| (c.scene, c.geometry()));
         let render_k = square_root(spec.render.rays_per_point, "render.rays_per_point")?;
         let ref_k = square_root(spec.reference.rays_per_point, "reference.rays_per_point")?;
-        let methods: Vec<String> = super::methods::settings_of(spec)
-            .iter()
-            .map(|m| m.id())
-            .collect();
+        let settings = super::methods::settings_of(spec);
+        let methods: Vec<String> = settings.iter().map(|m| m.label()).collect();
         let mut steps = Vec::new();
         for s in 0..scenes.scenes.len() {
             if shard.is_some() && !cells.iter().any(|c| c.scene == s) {
@@ -280,7 +279,8 @@ impl Plan {
         }
         let (steps, peak) = (groups.steps, groups.peak);
         Ok(Plan {
-            needs_gpu: cells.iter().any(|c| c.backend == Backend::Gpu),
+            needs_gpu: cells.iter().any(|c| c.backend == Backend::Gpu)
+                || settings.iter().any(|m| m.backend == Backend::Gpu),
             needs_normal_field: kind.needs().normal_field,
             cells,
             methods,

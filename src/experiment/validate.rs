@@ -360,21 +360,32 @@ impl Validator<'_> {
             let at = format!("methods[{i}]");
             m.options.validate(&at, s, self)?;
             for setting in m.settings() {
-                if let Some(why) = setting.refuses(kind) {
+                let refusal = match setting.backend {
+                    super::spec::Backend::Cpu => setting.method.refuses(kind),
+                    super::spec::Backend::Gpu => setting
+                        .method
+                        .refuses(kind)
+                        .or_else(|| setting.method.refuses_on_gpu(kind)),
+                };
+                if let Some(why) = refusal {
+                    let on = match setting.backend {
+                        super::spec::Backend::Cpu => String::new(),
+                        b => format!(" on backend \"{}\"", b.name()),
+                    };
                     return Err(self.err(
                         &at,
                         format!(
-                            "\"{}\" cannot answer render \"{}\": {why}",
+                            "\"{}\" cannot answer render \"{}\"{on}: {why}",
                             setting.id(),
                             kind.name()
                         ),
                     ));
                 }
-                let id = setting.id();
-                if seen.contains(&id) {
-                    return Err(self.err(&at, format!("setting \"{id}\" listed twice")));
+                let label = setting.label();
+                if seen.contains(&label) {
+                    return Err(self.err(&at, format!("setting \"{label}\" listed twice")));
                 }
-                seen.push(id);
+                seen.push(label);
             }
         }
         Ok(())

@@ -11,12 +11,17 @@
 //! square, default 256); `reach`, the farthest sample in bounding radii (1.5–1000, default 8);
 //! `inner_ao` and `inner_power`, the paper's A₀ and p inside the hull (defaults 1 and 1).
 //!
+//! On the `gpu` backend (`"backends": ["cpu", "gpu"]`) the fields are read by
+//! [`crate::gpu::AoFieldKernel`] (the CPU's cube-map reads, the cap evaluated in f32).
+//!
 //! Refused, before any work: any kind but the AO kinds (an AO field casts no ray, so it has no
 //! shadow or reflection to give), a finite `render.max_distance` or a distance falloff (the cap
 //! counts the whole occluder at any distance), and a scene with an instance that is both caster
 //! and receiver (an AO field does not model an occluder's occlusion of itself).
 
-use super::{Answer, Method, MethodContext, MethodEntry, MethodOptions, Prepared};
+use super::{Answer, GpuMethod, Method, MethodContext, MethodEntry, MethodOptions, Prepared};
+use crate::experiment::backend::{Estimate, Eval};
+use crate::gpu::{AoFieldKernel, GpuContext};
 use crate::aofield::cache::{load_or_bake, Outcome};
 use crate::aofield::{AoField, AoFieldInstance, AoFieldScene, BakeParams, Inside, Precision};
 use crate::experiment::kinds::Kind;
@@ -237,6 +242,11 @@ impl Method for AoFieldMethod {
         None
     }
 
+    /// The kernel answers every kind the CPU answers ([`Method::refuses`]).
+    fn refuses_on_gpu(&self, _kind: &dyn Kind) -> Option<String> {
+        None
+    }
+
     fn prepare(&self, ctx: &MethodContext) -> Result<Prepared> {
         let scene = ctx.scene;
         let what = || {
@@ -300,6 +310,9 @@ impl Method for AoFieldMethod {
             bytes: Some(fields.bytes()),
             cached,
             columns: Vec::new(),
+            gpu: Some(Box::new(AoFieldGpu {
+                fields: fields.clone(),
+            })),
             answer: Answer::Direct(Box::new(AoFieldEstimator { fields })),
         })
     }
@@ -333,5 +346,30 @@ impl Estimator for AoFieldEstimator {
             serde_json::json!(self.fields.inside.power),
         );
         m
+    }
+}
+
+/// The fields on the `gpu` backend ([`AoFieldKernel`]: the same cube-map reads, the cap in f32).
+struct AoFieldGpu {
+    fields: AoFieldScene,
+}
+
+impl GpuMethod for AoFieldGpu {
+    fn upload<'a>(&'a self, ctx: &'a GpuContext) -> Result<Box<dyn Eval + 'a>> {
+        Ok(Box::new(AoFieldKernel::new(ctx, &self.fields)?))
+    }
+}
+
+impl Eval for AoFieldKernel<'_> {
+    fn estimate(&self, at: Points, _rays: &RaySet) -> Result<Estimate> {
+        let (values, t) = self.ao(at.points, at.normals)?;
+        Ok(Estimate {
+            values,
+            kernel_s: t.kernel.map(|d| d.as_secs_f64()),
+        })
+    }
+
+    fn setup_s(&self) -> Option<f64> {
+        Some(self.setup_time().as_secs_f64())
     }
 }

@@ -61,6 +61,7 @@ impl Method for Embree {
             cached: false,
             columns: vec![("embree_version".into(), tracer.version())],
             answer: Answer::Rays(Box::new(tracer)),
+            gpu: None,
         })
     }
 

@@ -16,19 +16,26 @@
 //! converged reference.
 //!
 //! The field's cells stay in `table.csv` (their axes are the papers'); every other method is a
-//! row of `methods.csv`. Methods run on the CPU backend.
+//! row of `methods.csv`. Every entry runs on the CPU backend; one whose method has kernels
+//! (`sdf`, `aofield`) may also list `"backends": ["cpu", "gpu"]` (read here, beside `method`,
+//! before the method's own keys): each setting then has a row per backend ([`Setting`]), the
+//! `gpu` row answered by the kernels the prepared method hands over ([`Prepared::gpu`],
+//! [`GpuMethod`]); a method without them, or without one for the kind, is refused by name
+//! before any work ([`Method::refuses_on_gpu`]).
 
 pub mod aofield;
 pub mod embree;
 pub mod raycast;
 pub mod sdf;
 
+use super::backend::Eval;
 use super::kinds::Kind;
 use super::registry::{Entry, Registry};
 use super::scenes::BuiltScene;
-use super::spec::{Spec, SpecError};
+use super::spec::{Backend, Spec, SpecError};
 use super::validate::Validator;
 use super::Result;
+use crate::gpu::GpuContext;
 use crate::render::estimator::Estimator;
 use crate::visibility::Visibility;
 use glam::Vec3;
@@ -67,6 +74,17 @@ pub struct Prepared {
     pub cached: bool,
     /// Extra columns of the method's own, in order (name, value).
     pub columns: Vec<(String, String)>,
+    /// Its kernels on the `gpu` backend, where it has them for this kind (none: the `gpu`
+    /// backend is refused, [`Method::refuses_on_gpu`]).
+    pub gpu: Option<Box<dyn GpuMethod>>,
+}
+
+/// A prepared method's kernels on the `gpu` backend: what it precomputed, ready to upload.
+pub trait GpuMethod: Send + Sync {
+    /// Uploads the precompute to `ctx` and compiles the kernels; the result answers the kind
+    /// at its points on the reference's rays, as the CPU answer does ([`Eval::setup_s`]: the
+    /// upload and compile, the row's `setup_s`).
+    fn upload<'a>(&'a self, ctx: &'a GpuContext) -> Result<Box<dyn Eval + 'a>>;
 }
 
 /// One setting of a method: what answers a kind, with its parameters fixed.
@@ -80,6 +98,12 @@ pub trait Method: Send + Sync {
     /// Why it cannot answer `kind` (refused before any work, naming both), or none.
     fn refuses(&self, _kind: &dyn Kind) -> Option<String> {
         None
+    }
+    /// Why it cannot answer `kind` on the `gpu` backend, or none (refused before any work,
+    /// naming both): by default, that it has no GPU kernel. A method that overrides it hands
+    /// its kernels over in [`Prepared::gpu`].
+    fn refuses_on_gpu(&self, _kind: &dyn Kind) -> Option<String> {
+        Some(format!("method \"{}\" has no GPU kernel", self.name()))
     }
     /// Why this build cannot run it (a cargo feature it needs), or none: the runner skips it
     /// with that reason, or fails where the run requires it.
@@ -181,22 +205,61 @@ pub fn names() -> Vec<&'static str> {
     REGISTRY.names()
 }
 
-/// Every setting of a spec's `methods`, in order: each entry's settings in its own order.
-pub fn settings_of(spec: &Spec) -> Vec<Box<dyn Method>> {
+/// One row source of `methods.csv`: a method's setting on a backend.
+pub struct Setting {
+    pub method: Box<dyn Method>,
+    pub backend: Backend,
+}
+
+impl Setting {
+    /// The setting's id ([`Method::id`]; the `setting` column, the same on every backend).
+    pub fn id(&self) -> String {
+        self.method.id()
+    }
+
+    /// The id with the backend where it is not the CPU (`sdf-64-f16-trace@gpu`): what names
+    /// the row in plans, images and checks.
+    pub fn label(&self) -> String {
+        match self.backend {
+            Backend::Cpu => self.id(),
+            b => format!("{}@{}", self.id(), b.name()),
+        }
+    }
+}
+
+/// Every setting of a spec's `methods` on each of its entry's backends, in order: each entry's
+/// settings in its own order, each on its backends in theirs.
+pub fn settings_of(spec: &Spec) -> Vec<Setting> {
     spec.methods.iter().flat_map(|m| m.settings()).collect()
 }
 
-/// One entry of a spec's `methods`: the method's name and its own options.
+/// The CPU, where an entry lists no `backends`.
+fn default_backends() -> Vec<Backend> {
+    vec![Backend::Cpu]
+}
+
+/// One entry of a spec's `methods`: the method's name, the backends it runs on and its own
+/// options.
 #[derive(Debug)]
 pub struct MethodSpec {
     pub method: &'static str,
     pub options: Box<dyn MethodOptions>,
+    /// `backends` (default `["cpu"]`).
+    pub backends: Vec<Backend>,
 }
 
 impl MethodSpec {
-    /// Its settings ([`MethodOptions::settings`]).
-    pub fn settings(&self) -> Vec<Box<dyn Method>> {
-        self.options.settings()
+    /// Its settings ([`MethodOptions::settings`]), each on its backends.
+    pub fn settings(&self) -> Vec<Setting> {
+        let mut out = Vec::new();
+        for &backend in &self.backends {
+            for (i, method) in self.options.settings().into_iter().enumerate() {
+                out.push((i, Setting { method, backend }));
+            }
+        }
+        // Setting-major, each setting's backends in the entry's order.
+        out.sort_by_key(|(i, _)| *i);
+        out.into_iter().map(|(_, s)| s).collect()
     }
 }
 
@@ -205,13 +268,16 @@ impl Clone for MethodSpec {
         MethodSpec {
             method: self.method,
             options: self.options.clone_box(),
+            backends: self.backends.clone(),
         }
     }
 }
 
 impl PartialEq for MethodSpec {
     fn eq(&self, other: &MethodSpec) -> bool {
-        self.method == other.method && self.options.to_json() == other.options.to_json()
+        self.method == other.method
+            && self.backends == other.backends
+            && self.options.to_json() == other.options.to_json()
     }
 }
 
@@ -219,8 +285,12 @@ impl serde::Serialize for MethodSpec {
     fn serialize<S: serde::Serializer>(&self, ser: S) -> std::result::Result<S::Ok, S::Error> {
         use serde::ser::SerializeMap;
         let own = self.options.to_json();
-        let mut m = ser.serialize_map(Some(1 + own.len()))?;
+        let backends = self.backends != default_backends();
+        let mut m = ser.serialize_map(Some(1 + backends as usize + own.len()))?;
         m.serialize_entry("method", self.method)?;
+        if backends {
+            m.serialize_entry("backends", &self.backends)?;
+        }
         for (k, v) in &own {
             m.serialize_entry(k, v)?;
         }
@@ -229,7 +299,7 @@ impl serde::Serialize for MethodSpec {
 }
 
 impl<'de> serde::Deserialize<'de> for MethodSpec {
-    /// Two steps: `method`, then the rest by that method's plug-in.
+    /// Two steps: `method` and `backends`, then the rest by that method's plug-in.
     fn deserialize<D: serde::Deserializer<'de>>(
         de: D,
     ) -> std::result::Result<MethodSpec, D::Error> {
@@ -254,11 +324,27 @@ impl<'de> serde::Deserialize<'de> for MethodSpec {
                     .join(", ")
             ))
         })?;
+        let backends = match own.remove("backends") {
+            None => default_backends(),
+            Some(v) => {
+                let b: Vec<Backend> = serde_json::from_value(v).map_err(|e| {
+                    D::Error::custom(format!("\"{}\": `backends`: {e}", entry.name))
+                })?;
+                if b.is_empty() {
+                    return Err(D::Error::custom(format!(
+                        "\"{}\": `backends` needs at least one of \"cpu\", \"gpu\"",
+                        entry.name
+                    )));
+                }
+                b
+            }
+        };
         let options = (entry.read)(serde_json::Value::Object(own))
             .map_err(|e| D::Error::custom(format!("\"{}\": {e}", entry.name)))?;
         Ok(MethodSpec {
             method: entry.name,
             options,
+            backends,
         })
     }
 }

@@ -47,6 +47,7 @@ impl Method for Raycast {
             cached: false,
             columns: Vec::new(),
             answer: Answer::Rays(Box::new(tracer)),
+            gpu: None,
         })
     }
 }

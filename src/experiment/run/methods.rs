@@ -1,15 +1,19 @@
 //! The spec's methods ([`crate::experiment::methods`]) on each scene: the precompute timed,
 //! then the kind through the method on every seed (the first timed), measured against the same
 //! same-ray reference and converged reference as the field's cells, one `methods.csv` row per
-//! scene and setting, built from named parts ([`crate::experiment::columns`]).
+//! scene, setting and backend, built from named parts ([`crate::experiment::columns`]). On the
+//! `gpu` backend the prepared method's kernels ([`crate::experiment::methods::GpuMethod`]) are
+//! uploaded (the row's `setup_s`) and answer in place of the CPU answer; the row adds the
+//! kernels' own time (`estimate_kernel_s`).
 
 use super::steps::Runner;
 use super::{Error, LoadedSpec, Result, RunOptions};
 use crate::experiment::columns::NamedRow;
+use crate::experiment::backend::Eval;
 use crate::experiment::methods::{Answer, Method, MethodContext};
 use crate::experiment::metrics::rms_unquantised;
 use crate::experiment::progress::{stage, stage_adaptive};
-use crate::experiment::spec::Spec;
+use crate::experiment::spec::{Backend, Spec};
 use crate::experiment::table::ErrorColumns;
 use crate::render::estimator::Points;
 use crate::sampling::rays::RaySet;
@@ -21,19 +25,19 @@ use glam::Vec3;
 pub(super) fn runnable(ls: &LoadedSpec, spec: &Spec, opts: &RunOptions) -> Result<Vec<bool>> {
     let settings = crate::experiment::methods::settings_of(spec);
     let mut out = Vec::with_capacity(settings.len());
-    for m in &settings {
-        match m.unavailable() {
+    for s in &settings {
+        match s.method.unavailable() {
             None => out.push(true),
             Some(why) if opts.require_embree => {
                 return Err(Error::invalid(
-                    format!("{}: methods \"{}\"", ls.path.display(), m.name()),
+                    format!("{}: methods \"{}\"", ls.path.display(), s.method.name()),
                     format!("{why}; --require-embree refuses to run without it"),
                 ))
             }
             Some(why) => {
                 println!(
                     "SKIPPED method \"{}\" of {}: {why}; --require-embree fails instead",
-                    m.id(),
+                    s.label(),
                     ls.name
                 );
                 out.push(false);
@@ -69,10 +73,11 @@ impl Runner<'_> {
             return Ok(());
         }
         self.scene(scene);
-        let m: &dyn Method = self.methods[setting].as_ref();
+        let backend = self.methods[setting].backend;
+        let m: &dyn Method = self.methods[setting].method.as_ref();
         let bs = &self.scenes.scenes[scene];
         let st = self.states[scene].as_ref().expect("scene state");
-        let id = format!("{}-{}", bs.name, m.id());
+        let id = format!("{}-{}", bs.name, self.methods[setting].label());
         let ctx = MethodContext {
             scene: bs,
             triangles: &st.triangles,
@@ -81,10 +86,20 @@ impl Runner<'_> {
             memory_limit: self.opts.supply.memory_limit,
         };
         let context = |e: Error| e.context(format!("method {id}"));
-        if let Some(why) = m.refuses(self.kind.as_ref()) {
+        let refusal = match backend {
+            Backend::Cpu => m.refuses(self.kind.as_ref()),
+            Backend::Gpu => m
+                .refuses(self.kind.as_ref())
+                .or_else(|| m.refuses_on_gpu(self.kind.as_ref())),
+        };
+        if let Some(why) = refusal {
+            let on = match backend {
+                Backend::Cpu => String::new(),
+                b => format!(" on backend \"{}\"", b.name()),
+            };
             return Err(Error::invalid(
                 format!("methods \"{}\"", m.name()),
-                format!("cannot answer render \"{}\": {why}", self.kind.name()),
+                format!("cannot answer render \"{}\"{on}: {why}", self.kind.name()),
             ));
         }
         let (prepared, precompute_s) = stage(&format!("{id}: precompute"), || m.prepare(&ctx));
@@ -103,21 +118,52 @@ impl Runner<'_> {
                 ));
             }
         }
-        let estimate = |at: Points, rays: &RaySet| match &prepared.answer {
-            Answer::Rays(v) => st.estimator.estimate(v.as_ref(), at, rays),
-            Answer::Direct(e) => e.estimate(&NoRays, at, rays),
+        // On the GPU: the prepared method's kernels, uploaded once.
+        let be = match backend {
+            Backend::Cpu => &self.cpu as &dyn crate::experiment::backend::ComputeBackend,
+            b => self.backends[&b].as_ref(),
+        };
+        let gpu: Option<Box<dyn Eval + '_>> = match backend {
+            Backend::Cpu => None,
+            Backend::Gpu => {
+                let device = be.gpu_context().expect("the gpu backend has a device");
+                let kernels = prepared.gpu.as_ref().ok_or_else(|| {
+                    Error::invalid(
+                        format!("methods \"{}\"", m.name()),
+                        format!("prepared no GPU kernel for render \"{}\"", self.kind.name()),
+                    )
+                })?;
+                Some(kernels.upload(device).map_err(context)?)
+            }
+        };
+        let kernel_s = std::cell::Cell::new(None::<f64>);
+        let estimate = |at: Points, rays: &RaySet| -> Result<Vec<f32>> {
+            Ok(match (&gpu, &prepared.answer) {
+                (Some(g), _) => {
+                    let e = g.estimate(at, rays)?;
+                    if let Some(k) = e.kernel_s {
+                        kernel_s.set(Some(kernel_s.get().map_or(k, |b: f64| b.min(k))));
+                    }
+                    e.values
+                }
+                (None, Answer::Rays(v)) => st.estimator.estimate(v.as_ref(), at, rays),
+                (None, Answer::Direct(e)) => e.estimate(&NoRays, at, rays),
+            })
         };
         let (short, reps) = (self.opts.short_stage_s, self.opts.repeats);
         let k = self.plan.render_k;
         let rays = RaySet::new(k, self.spec.reference.seed);
         let (first, estimate_s, _) =
             stage_adaptive(&format!("{id}: estimate"), short, reps, || {
-                Ok::<_, Error>(estimate(st.at(), &rays))
+                estimate(st.at(), &rays).map_err(context)
             })?;
+        let estimate_kernel_s = kernel_s.get();
         let mut values = vec![first];
         for &sd in &self.seeds()[1..] {
-            values.push(estimate(st.at(), &RaySet::new(k, sd)));
+            values.push(estimate(st.at(), &RaySet::new(k, sd)).map_err(context)?);
         }
+        let setup_s = gpu.as_ref().and_then(|g| g.setup_s());
+        drop(gpu);
         let img = st.image(bs, &values[0]);
         let errors = self.measure(st, bs, &values, img.as_ref().map(|(i, _)| i));
         let image = self.write_images(&id, img.as_ref(), st)?;
@@ -134,8 +180,8 @@ impl Runner<'_> {
         for (name, value) in m.params() {
             row.push(name, value);
         }
-        row.push("backend", "cpu")
-            .push("adapter", self.cpu.adapter())
+        row.push("backend", backend.name())
+            .push("adapter", be.adapter())
             .push("rays_per_point", self.kind.rays_per_point())
             .push("rays_cast", rays_cast)
             .push("points", st.at.len())
@@ -159,11 +205,17 @@ impl Runner<'_> {
         for (name, value) in &prepared.columns {
             row.push(name.clone(), value);
         }
-        // The times.
+        // The times (on the GPU also the upload and compile, and the kernels alone).
+        if backend == Backend::Gpu {
+            row.push_opt("setup_s", setup_s);
+        }
         row.push("estimate_s", estimate_s).push_opt(
             "estimate_mrays_s",
             (estimate_s > 0.0).then(|| rays_cast as f64 / estimate_s / 1e6),
         );
+        if backend == Backend::Gpu {
+            row.push_opt("estimate_kernel_s", estimate_kernel_s);
+        }
         // The metrics, the same as the field cells'.
         push_errors(&mut row, &errors);
         row.push("rms_vs_raycast", rms_unquantised(&values[0], &st.reference))

@@ -9,7 +9,7 @@ use crate::experiment::backend::{self, Casters, ComputeBackend, CpuBackend, Quan
 use crate::experiment::columns::NamedRow;
 use crate::experiment::fields::{derive, Supplied};
 use crate::experiment::kinds::Kind;
-use crate::experiment::methods::Method;
+use crate::experiment::methods::Setting;
 use crate::experiment::metrics::{
     grain, image_errors, rms_u8, rms_unquantised, vertex_errors, ErrorStats,
 };
@@ -51,7 +51,7 @@ pub(super) struct Runner<'a> {
     done: usize,
     /// The spec's method settings ([`crate::experiment::methods::settings_of`]), whether this
     /// build runs each, and their rows.
-    pub(super) methods: Vec<Box<dyn Method>>,
+    pub(super) methods: Vec<Setting>,
     pub(super) method_runs: Vec<bool>,
     pub(super) method_rows: Vec<NamedRow>,
 }
@@ -78,9 +78,16 @@ impl<'a> Runner<'a> {
         scenes: &'a Scenes,
         opts: &'a RunOptions,
     ) -> Result<Runner<'a>> {
+        let methods = crate::experiment::methods::settings_of(spec);
         let mut backends = HashMap::new();
-        for &b in &spec.backends {
-            backends.insert(b, backend::open(b, &opts.adapter)?);
+        for &b in spec
+            .backends
+            .iter()
+            .chain(methods.iter().map(|m| &m.backend))
+        {
+            if !backends.contains_key(&b) {
+                backends.insert(b, backend::open(b, &opts.adapter)?);
+            }
         }
         Ok(Runner {
             spec,
@@ -103,7 +110,7 @@ impl<'a> Runner<'a> {
                 .filter(|s| matches!(s, Step::Lookup { .. }))
                 .count(),
             done: 0,
-            methods: crate::experiment::methods::settings_of(spec),
+            methods,
             method_runs: Vec::new(),
             method_rows: Vec::new(),
         })

@@ -16,7 +16,7 @@ use crate::visibility::Visibility;
 use rayon::prelude::*;
 
 /// The kinds the cones answer: the AO kinds and shadows.
-const AO_KINDS: [&str; 2] = ["vertex_ao", "image_ao"];
+pub(super) const AO_KINDS: [&str; 2] = ["vertex_ao", "image_ao"];
 const LIGHT_KINDS: [&str; 1] = ["shadows"];
 
 /// Why the cones cannot answer `kind`, or none.

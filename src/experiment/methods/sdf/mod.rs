@@ -17,12 +17,17 @@
 //! (default 2); `max_steps` per ray, cone and volume (default 256); `cones`, the AO cones
 //! (default 9, UE's count); `step`, a cone's least step as a share of its radius (default 0.25).
 //!
+//! On the `gpu` backend (`"backends": ["cpu", "gpu"]`), `trace` answers AO and `cone` AO and
+//! shadows through the SDF kernels (`gpu.rs`, `crate::gpu::SdfKernel`); sphere-traced shadows
+//! and reflections are refused there.
+//!
 //! Its precompute is the bakes, or their loads from the run's cache (`crate::sdf::cache`: keyed
 //! by the mesh's sha256, res, margin, precision and format version; a lower precision is
 //! derived from the cached f32 volume); `precompute_cached` says no bake ran. Its bytes are the
 //! volumes' stored samples, each distinct mesh once.
 
 mod cone;
+mod gpu;
 
 use super::{Answer, Method, MethodContext, MethodEntry, MethodOptions, Prepared};
 use crate::experiment::kinds::Kind;
@@ -311,6 +316,22 @@ impl Method for Sdf {
         }
     }
 
+    fn refuses_on_gpu(&self, kind: &dyn Kind) -> Option<String> {
+        match self.query {
+            Query::Trace => {
+                // The AO kinds with a step falloff: those the cones answer, less shadows.
+                let ao = cone::AO_KINDS.contains(&kind.name()) && cone::refusal(kind).is_none();
+                (!ao).then(|| {
+                    "query \"trace\" on the gpu backend answers ambient occlusion (falloff \
+                     \"step\") only: the SDF kernels trace no shadow or reflection rays; use \
+                     query \"cone\" for shadows, or the cpu backend"
+                        .to_string()
+                })
+            }
+            Query::Cone => cone::refusal(kind),
+        }
+    }
+
     fn prepare(&self, ctx: &MethodContext) -> Result<Prepared> {
         let label = format!(
             "scene {}: method \"sdf\" ({})",
@@ -336,6 +357,23 @@ impl Method for Sdf {
             ),
         };
         let (scene, bytes, cached) = self.volumes(ctx, &label)?;
+        // The kernels where the kind has one: the cones' quantity, or AO for the trace.
+        let gpu = match &quantity {
+            None => cone::quantity_of(ctx.estimator)
+                .ok()
+                .and_then(|q| gpu::GpuQuery::trace(&q)),
+            Some(q) => Some(gpu::GpuQuery::cone(
+                q,
+                ConeSet::hemisphere(self.cones),
+                self.cone,
+            )),
+        }
+        .map(|query| -> Box<dyn super::GpuMethod> {
+            Box::new(gpu::SdfGpu {
+                scene: scene.clone(),
+                query,
+            })
+        });
         let (answer, columns) = match quantity {
             None => (Answer::Rays(Box::new(scene)), Vec::new()),
             Some(quantity) => {
@@ -360,6 +398,7 @@ impl Method for Sdf {
             cached,
             columns,
             answer,
+            gpu,
         })
     }
 }
