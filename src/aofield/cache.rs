@@ -1,5 +1,5 @@
 //! The on-disk cache of fitted AO fields, keyed by (mesh sha256, [`BakeParams`], code and format
-//! version), in the field cache's container ([`crate::io::framed`]):
+//! version), in the caches' container ([`crate::io::write_cache`]):
 //!
 //! ```text
 //! magic    8 bytes  "VFAOFLD1"
@@ -17,6 +17,7 @@ use super::bake::{bake, BakeStats, Fitted};
 use super::storage::{Texel, CHANNELS};
 use super::{AoFieldError, BakeParams};
 use crate::geometry::Sphere;
+use crate::io::CacheError;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -81,7 +82,7 @@ pub enum Outcome {
 }
 
 /// Writes `fitted` under `key` to `path`, atomically.
-pub fn save(path: &Path, key: &CacheKey, fitted: &Fitted) -> Result<(), AoFieldError> {
+pub fn save(path: &Path, key: &CacheKey, fitted: &Fitted) -> Result<(), CacheError> {
     #[cfg(not(target_endian = "little"))]
     compile_error!("the AO field cache assumes a little-endian machine");
     let payload: Vec<u8> = bytemuck::cast_slice(&fitted.texels).to_vec();
@@ -91,44 +92,30 @@ pub fn save(path: &Path, key: &CacheKey, fitted: &Fitted) -> Result<(), AoFieldE
         payload_len: payload.len() as u64,
         payload_sha256: crate::io::sha256_hex(&payload),
     };
-    let h = serde_json::to_vec(&header).expect("header serialises");
-    crate::io::write_atomic(
-        path,
-        &crate::io::framed(MAGIC, FORMAT_VERSION, &h, &payload),
-    )
-    .map_err(|e| AoFieldError::Invalid(format!("{}: {e}", path.display())))
+    crate::io::write_cache(path, MAGIC, FORMAT_VERSION, &header, &payload)
 }
 
 /// Reads the field saved under `key`, verifying magic, version, key, length and checksum.
-pub fn load(path: &Path, key: &CacheKey) -> Result<Fitted, AoFieldError> {
-    let bytes = std::fs::read(path)
-        .map_err(|e| AoFieldError::Invalid(format!("{}: {e}", path.display())))?;
-    let bad = |why: String| AoFieldError::Invalid(format!("{}: {why}", path.display()));
-    let (header, payload): (Header, &[u8]) =
-        crate::io::unframe(&bytes, MAGIC, FORMAT_VERSION, "visfield AO field cache").map_err(
-            |e| match e {
-                crate::io::Unframed::Corrupt(why) => bad(why),
-                crate::io::Unframed::Stale(why) => bad(format!("stale: {why}")),
-            },
-        )?;
+pub fn load(path: &Path, key: &CacheKey) -> Result<Fitted, CacheError> {
+    let file: crate::io::CacheFile<Header> =
+        crate::io::read_cache(path, MAGIC, FORMAT_VERSION, "visfield AO field cache")?;
+    let header = &file.header;
     if &header.key != key {
-        return Err(bad(
-            "stale: the key (mesh, parameters or code version) differs".into(),
-        ));
+        return Err(file.stale("the key (mesh, parameters or code version) differs"));
     }
+    let payload = file.payload(header.payload_len, &header.payload_sha256)?;
     let expect = 6 * key.params.res * key.params.res * CHANNELS * 4;
     if payload.len() != expect {
-        return Err(bad(format!(
+        return Err(file.corrupt(format!(
             "payload of {} bytes, expected {expect}",
             payload.len()
         )));
     }
-    crate::io::check_payload(payload, header.payload_len, &header.payload_sha256).map_err(bad)?;
     let values: Vec<f32> = bytemuck::pod_collect_to_vec(payload);
     if values.iter().any(|v| !v.is_finite())
         || header.bounds.radius.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
     {
-        return Err(bad("non-finite values".into()));
+        return Err(file.corrupt("non-finite values"));
     }
     let texels: Vec<Texel> = values
         .chunks_exact(CHANNELS)

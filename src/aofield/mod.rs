@@ -66,6 +66,8 @@ use serde::{Deserialize, Serialize};
 pub enum AoFieldError {
     #[error("ao field: {0}")]
     Invalid(String),
+    #[error("ao field cache: {0}")]
+    Cache(#[from] crate::io::CacheError),
 }
 
 /// The largest cube-map side a bake accepts.

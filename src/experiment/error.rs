@@ -3,11 +3,11 @@
 //! as `figure6: cell bunny-slater-290-…-gpu: backend "gpu": device: …`.
 
 use crate::experiment::spec::SpecError;
-use crate::field::cache::CacheError;
 use crate::field::FieldError;
 use crate::geometry::models::ModelError;
 use crate::geometry::GeometryError;
 use crate::gpu::GpuError;
+use crate::io::CacheError;
 use crate::sampling::SamplingError;
 use std::path::{Path, PathBuf};
 

@@ -9,9 +9,10 @@ use super::progress;
 use super::scenes::LoadedMesh;
 use super::{Error, Result};
 use crate::field::bake::{bake, bake_mesh_with_normals, BakeOptions, BakeStats};
-use crate::field::cache::{self, CacheError, CacheKey};
+use crate::field::cache::{self, CacheKey};
 use crate::field::normals::NormalField;
 use crate::field::{FieldParams, Precision, Storage, VisibilityField};
+use crate::io::CacheError;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
@@ -74,14 +75,8 @@ impl BakeRecord {
     /// The record of `path`'s field under `key`, or why it is not used.
     fn load(path: &std::path::Path, key: &CacheKey) -> std::result::Result<BakeRecord, CacheError> {
         let rp = record_path(path);
-        let corrupt = |reason: String| CacheError::Corrupt {
-            path: rp.clone(),
-            reason,
-        };
-        let bytes = std::fs::read(&rp).map_err(|source| CacheError::Io {
-            path: rp.clone(),
-            source,
-        })?;
+        let corrupt = |reason: String| CacheError::corrupt(&rp, reason);
+        let bytes = std::fs::read(&rp).map_err(CacheError::io(&rp))?;
         let r: BakeRecord = serde_json::from_slice(&bytes).map_err(|e| corrupt(e.to_string()))?;
         let finite = |v: f64| v.is_finite() && v >= 0.0;
         if r.sha256 != r.digest(key) || !finite(r.seconds) || !finite(r.bvh_seconds) {

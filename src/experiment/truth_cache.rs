@@ -23,7 +23,7 @@
 //! Files are written atomically; a truncated, corrupt or stale file is reported and recomputed.
 
 use super::{Error, Result};
-use crate::field::cache::CacheError;
+use crate::io::CacheError;
 use crate::render::estimator::{Estimator, Points};
 use crate::render::truth::{Truth, TruthOptions};
 use crate::visibility::Visibility;
@@ -111,39 +111,24 @@ pub fn save(path: &Path, key: &str, truth: &Truth) -> Result<()> {
         payload_len: payload.len() as u64,
         payload_sha256: crate::io::sha256_hex(&payload),
     };
-    let h = serde_json::to_vec(&header).expect("header serialises");
-    let out = crate::io::framed(MAGIC, FORMAT_VERSION, &h, &payload);
-    crate::io::write_atomic(path, &out).map_err(Error::io(path))
+    crate::io::write_cache(path, MAGIC, FORMAT_VERSION, &header, &payload)
+        .map_err(Error::cache("the truth cache"))
 }
 
 /// Reads a truth saved under `key`, verifying magic, version, key, length and checksum.
 pub fn load(path: &Path, key: &str) -> std::result::Result<Truth, CacheError> {
-    let bytes = std::fs::read(path).map_err(|source| CacheError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    let bad = |why: &str| CacheError::Corrupt {
-        path: path.to_path_buf(),
-        reason: why.to_string(),
-    };
-    let stale = |why: String| CacheError::Stale {
-        path: path.to_path_buf(),
-        reason: why,
-    };
-    let (h, payload): (TruthHeader, &[u8]) =
-        crate::io::unframe(&bytes, MAGIC, FORMAT_VERSION, "truth cache").map_err(|e| match e {
-            crate::io::Unframed::Corrupt(why) => bad(&why),
-            crate::io::Unframed::Stale(why) => stale(why),
-        })?;
+    let file: crate::io::CacheFile<TruthHeader> =
+        crate::io::read_cache(path, MAGIC, FORMAT_VERSION, "truth cache")?;
+    let h = &file.header;
     if h.key != key {
-        return Err(stale("the key differs".into()));
+        return Err(file.stale("the key differs"));
     }
     let values = h
         .points
         .checked_mul(h.channels)
         .filter(|&v| h.channels > 0 && v.checked_mul(8) == Some(h.payload_len))
-        .ok_or_else(|| bad("the payload's length is not points × channels × 8"))?;
-    crate::io::check_payload(payload, h.payload_len, &h.payload_sha256).map_err(|e| bad(&e))?;
+        .ok_or_else(|| file.corrupt("the payload's length is not points × channels × 8"))?;
+    let payload = file.payload(h.payload_len, &h.payload_sha256)?;
     let n = values as usize;
     let floats: Vec<f32> = bytemuck::pod_collect_to_vec(payload);
     Ok(Truth {
@@ -153,7 +138,7 @@ pub fn load(path: &Path, key: &str) -> std::result::Result<Truth, CacheError> {
         rays_per_point: h.rays_per_point,
         k: h.k,
         batches: h.batches,
-        rounds: h.rounds,
+        rounds: h.rounds.clone(),
     })
 }
 

@@ -68,20 +68,7 @@ struct CacheHeader {
     payload_sha256: String,
 }
 
-/// Why a cache file was not used.
-#[derive(Debug, thiserror::Error)]
-pub enum CacheError {
-    #[error("{path}: {source}")]
-    Io {
-        path: PathBuf,
-        #[source]
-        source: std::io::Error,
-    },
-    #[error("{path}: {reason}")]
-    Corrupt { path: PathBuf, reason: String },
-    #[error("{path}: stale cache ({reason})")]
-    Stale { path: PathBuf, reason: String },
-}
+pub use crate::io::CacheError;
 
 fn payload_bytes(storage: &Storage) -> Vec<u8> {
     #[cfg(not(target_endian = "little"))]
@@ -138,42 +125,19 @@ pub fn save(path: &Path, key: &CacheKey, field: &VisibilityField) -> Result<(), 
         payload_len: payload.len() as u64,
         payload_sha256: crate::io::sha256_hex(&payload),
     };
-    let h = serde_json::to_vec(&header).expect("header serialises");
-    let out = crate::io::framed(MAGIC, FORMAT_VERSION, &h, &payload);
-    crate::io::write_atomic(path, &out).map_err(|source| CacheError::Io {
-        path: path.to_path_buf(),
-        source,
-    })
+    crate::io::write_cache(path, MAGIC, FORMAT_VERSION, &header, &payload)
 }
 
 /// Reads a field saved under `key`, verifying magic, version, key, length and checksum.
 pub fn load(path: &Path, key: &CacheKey) -> Result<VisibilityField, CacheError> {
-    let bytes = std::fs::read(path).map_err(|source| CacheError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    let corrupt = |reason: String| CacheError::Corrupt {
-        path: path.to_path_buf(),
-        reason,
-    };
-    let (header, payload): (CacheHeader, &[u8]) =
-        crate::io::unframe(&bytes, MAGIC, FORMAT_VERSION, "visfield cache").map_err(
-            |e| match e {
-                crate::io::Unframed::Corrupt(reason) => corrupt(reason),
-                crate::io::Unframed::Stale(reason) => CacheError::Stale {
-                    path: path.to_path_buf(),
-                    reason,
-                },
-            },
-        )?;
+    let file: crate::io::CacheFile<CacheHeader> =
+        crate::io::read_cache(path, MAGIC, FORMAT_VERSION, "visfield cache")?;
+    let header = &file.header;
     if &header.key != key {
-        return Err(CacheError::Stale {
-            path: path.to_path_buf(),
-            reason: "the key (mesh, parameters or code version) differs".into(),
-        });
+        return Err(file.stale("the key (mesh, parameters or code version) differs"));
     }
-    crate::io::check_payload(payload, header.payload_len, &header.payload_sha256)
-        .map_err(corrupt)?;
+    let payload = file.payload(header.payload_len, &header.payload_sha256)?;
+    let corrupt = |reason: String| file.corrupt(reason);
     let storage = storage_from_payload(&key.params, payload)
         .ok_or_else(|| corrupt("payload size does not match the parameters".into()))?;
     let field = VisibilityField::from_storage(key.params, header.bounds, storage)

@@ -1,4 +1,8 @@
-//! Small I/O helpers shared by every module: atomic writes and hashing.
+//! Small I/O helpers shared by every module: atomic writes, hashing and the caches' container.
+
+mod cache;
+
+pub use cache::{read_cache, write_cache, CacheError, CacheFile};
 
 use std::io::Write;
 use std::path::Path;
@@ -92,98 +96,9 @@ pub fn sha256_hex(bytes: &[u8]) -> String {
     digest.iter().map(|b| format!("{b:02x}")).collect()
 }
 
-/// The container of the on-disk caches: `magic` (8 bytes), `version` (u32 LE), the header's
-/// length (u32 LE), the header, the payload.
-pub fn framed(magic: &[u8; 8], version: u32, header: &[u8], payload: &[u8]) -> Vec<u8> {
-    let mut out = Vec::with_capacity(16 + header.len() + payload.len());
-    out.extend_from_slice(magic);
-    out.extend_from_slice(&version.to_le_bytes());
-    out.extend_from_slice(&(header.len() as u32).to_le_bytes());
-    out.extend_from_slice(header);
-    out.extend_from_slice(payload);
-    out
-}
-
-/// Why a [`framed`] file could not be read.
-#[derive(Debug, PartialEq)]
-pub enum Unframed {
-    /// Not such a file, cut short, or its bytes are not what its header says.
-    Corrupt(String),
-    /// A valid file of another format version.
-    Stale(String),
-}
-
-/// Reads a [`framed`] file's header as JSON: checks the magic (`what` names the file kind in
-/// the message), the version and the header's length; returns the header and the payload.
-pub fn unframe<'a, H: serde::de::DeserializeOwned>(
-    bytes: &'a [u8],
-    magic: &[u8; 8],
-    version: u32,
-    what: &str,
-) -> Result<(H, &'a [u8]), Unframed> {
-    if bytes.len() < 16 || &bytes[..8] != magic {
-        return Err(Unframed::Corrupt(format!(
-            "not a {what} file (bad magic or truncated)"
-        )));
-    }
-    let found = u32::from_le_bytes(bytes[8..12].try_into().expect("4 bytes"));
-    if found != version {
-        return Err(Unframed::Stale(format!(
-            "format version {found}, this build reads {version}"
-        )));
-    }
-    let hlen = u32::from_le_bytes(bytes[12..16].try_into().expect("4 bytes")) as usize;
-    let end = 16usize
-        .checked_add(hlen)
-        .filter(|&e| e <= bytes.len())
-        .ok_or_else(|| {
-            Unframed::Corrupt(format!("truncated header ({} bytes in file)", bytes.len()))
-        })?;
-    let header = serde_json::from_slice(&bytes[16..end])
-        .map_err(|e| Unframed::Corrupt(format!("unreadable header: {e}")))?;
-    Ok((header, &bytes[end..]))
-}
-
-/// Checks that `payload` has the `len` bytes and the SHA-256 `sha256` its header records.
-pub fn check_payload(payload: &[u8], len: u64, sha256: &str) -> Result<(), String> {
-    if payload.len() as u64 != len {
-        return Err(format!(
-            "truncated payload: {} of {len} bytes",
-            payload.len()
-        ));
-    }
-    if sha256_hex(payload) != sha256 {
-        return Err("payload checksum mismatch".into());
-    }
-    Ok(())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn framed_files_round_trip_and_damage_is_named() {
-        let payload = b"payload";
-        let header = serde_json::to_vec(&serde_json::json!({"n": 3})).unwrap();
-        let file = framed(b"VFTEST01", 2, &header, payload);
-        let (h, p): (serde_json::Value, &[u8]) = unframe(&file, b"VFTEST01", 2, "test").unwrap();
-        assert_eq!((h["n"].as_u64(), p), (Some(3), &payload[..]));
-        assert_eq!(check_payload(p, 7, &sha256_hex(payload)), Ok(()));
-        assert!(check_payload(&p[..6], 7, &sha256_hex(payload)).is_err());
-        assert!(check_payload(b"paylxad", 7, &sha256_hex(payload)).is_err());
-        let err =
-            |b: &[u8], v| unframe::<serde_json::Value>(b, b"VFTEST01", v, "test").unwrap_err();
-        assert!(matches!(err(&file, 3), Unframed::Stale(_)));
-        assert!(matches!(err(&file[..5], 2), Unframed::Corrupt(_)));
-        assert!(matches!(err(&file[..20], 2), Unframed::Corrupt(_)));
-        let mut other = file.clone();
-        other[0] = b'X';
-        assert_eq!(
-            err(&other, 2),
-            Unframed::Corrupt("not a test file (bad magic or truncated)".into())
-        );
-    }
 
     #[test]
     fn sha256_of_abc_matches_fips_180_2() {
