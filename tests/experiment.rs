@@ -1081,3 +1081,45 @@ fn the_points_inside_a_caster_sphere_are_counted_and_their_error_split() {
     assert_eq!(r.rms_vs_truth_in_spheres, None);
     assert_eq!(r.rms_vs_truth_outside_spheres, r.rms_vs_truth);
 }
+
+/// The image RMS as the 2010 paper takes it (`rms_image_window`, over every pixel that sees a
+/// surface): equal to `rms_image` when every surface is a receiver (every active pixel is
+/// evaluated), below it when the caster's pixels are drawn unevaluated; and the shaded images'
+/// RMS (`rms_image_shaded`) only for a kind with a shading factor, where a factor in [0, 1]
+/// can only shrink a difference (up to the images' 8-bit rounding).
+#[test]
+fn window_and_shaded_image_errors_follow_their_pixel_sets() {
+    let dir = tempfile::tempdir().unwrap();
+    let run_of = |name: &str, text: &str| -> Row {
+        let d = dir.path().join(name);
+        std::fs::create_dir_all(&d).unwrap();
+        let ls = loaded(&d, text);
+        let report = run(&ls, &options(d.join("out"))).unwrap();
+        assert_eq!(report.rows.len(), 1);
+        report.rows[0].clone()
+    };
+    let image_ao = tiny(ONE_FIELD, "").replace(
+        r#""render": { "rays_per_point": 16"#,
+        r#""render": { "what": "image_ao", "rays_per_point": 16"#,
+    );
+    let r = run_of("caster", &image_ao);
+    let (image, window) = (r.rms_image.unwrap(), r.rms_image_window.unwrap());
+    assert!(0.0 < window && window < image, "{window} {image}");
+    assert_eq!(r.rms_image_shaded, None);
+    let both = image_ao.replace(r#""caster": true,"#, r#""caster": true, "receiver": true,"#);
+    assert_ne!(both, image_ao);
+    let r = run_of("both", &both);
+    let (image, window) = (r.rms_image.unwrap(), r.rms_image_window.unwrap());
+    assert!(
+        image > 0.0 && (window - image).abs() <= 1e-12 * image,
+        "{window} {image}"
+    );
+
+    let shadows = tiny(ONE_FIELD, "").replace(
+        r#""render": { "rays_per_point": 16"#,
+        r#""render": { "what": "shadows", "lights": [{ "center": [2.5, 2.6, 2.2], "radius": 0.3, "intensity": 1 }], "rays_per_point": 16"#,
+    );
+    let r = run_of("shadows", &shadows);
+    let (image, shaded) = (r.rms_image.unwrap(), r.rms_image_shaded.unwrap());
+    assert!(0.0 < shaded && shaded <= image + 0.5, "{shaded} {image}");
+}

@@ -504,6 +504,54 @@ fn ao_fields_match_the_cpu_at_every_precision_within_the_derived_bound() {
     }
 }
 
+/// The peers through the harness with `"backends": ["cpu", "gpu"]` (the tiny spec: a supershape
+/// over a corner, vertex AO): each setting a CPU row and then a GPU row naming the adapter, with
+/// its upload time, and the GPU row's same-ray error and error against the converged reference
+/// those of the CPU row (the kernels' per-point parity above allows a few points to move by a
+/// ray's share: within 0.5 on the 0–255 scale), neither of them 0.
+fn the_peers_run_on_the_gpu_backend_beside_the_cpu() {
+    use visfield::experiment::columns::{read_csv, NamedRow};
+    let Some(ctx) = context() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let methods = r#""methods": [
+        {"method": "sdf", "res": [24], "query": ["trace", "cone"], "backends": ["cpu", "gpu"]},
+        {"method": "aofield", "res": [8], "radial_samples": 6, "rays": 64, "backends": ["cpu", "gpu"]}
+    ], "reference": {"#;
+    let text = common::tiny(common::ONE_FIELD, "").replace(r#""reference": {"#, methods);
+    let ls = common::loaded(dir.path(), &text);
+    let out = dir.path().join("out");
+    visfield::experiment::run::run(&ls, &common::options(out.clone())).unwrap();
+    let rows: Vec<NamedRow> = read_csv(&out.join("methods.csv")).unwrap();
+    let col = |name: &str| -> Vec<&str> { rows.iter().map(|r| r.get(name).unwrap()).collect() };
+    assert_eq!(
+        col("setting"),
+        [
+            "sdf-24-f32-trace",
+            "sdf-24-f32-trace",
+            "sdf-24-f32-cone",
+            "sdf-24-f32-cone",
+            "aofield-8-6-f32",
+            "aofield-8-6-f32"
+        ]
+    );
+    assert_eq!(col("backend"), ["cpu", "gpu", "cpu", "gpu", "cpu", "gpu"]);
+    for pair in rows.chunks(2) {
+        let (cpu, gpu) = (&pair[0], &pair[1]);
+        let setting = cpu.get("setting").unwrap();
+        assert_eq!(gpu.get("adapter"), Some(ctx.adapter_label().as_str()));
+        assert!(gpu.number("setup_s").unwrap() > 0.0, "{setting}");
+        assert_eq!(gpu.get("bytes"), cpu.get("bytes"), "{setting}");
+        for m in ["rms_vs_raycast", "rms_vs_truth"] {
+            let (c, g) = (cpu.number(m).unwrap(), gpu.number(m).unwrap());
+            eprintln!("{setting} {m}: cpu {c:.4} gpu {g:.4}");
+            assert!(
+                c > 0.0 && g > 0.0 && (c - g).abs() <= 0.5,
+                "{setting} {m}: {c} {g}"
+            );
+        }
+    }
+}
+
 /// The harness: every test above, run where a Vulkan adapter exists and reported as ignored,
 /// with the reason, where none does (a skipped test never shows as passed).
 fn main() {
@@ -521,6 +569,10 @@ fn main() {
             (
                 "ao_fields_match_the_cpu_at_every_precision_within_the_derived_bound",
                 ao_fields_match_the_cpu_at_every_precision_within_the_derived_bound,
+            ),
+            (
+                "the_peers_run_on_the_gpu_backend_beside_the_cpu",
+                the_peers_run_on_the_gpu_backend_beside_the_cpu,
             ),
         ],
         &[],

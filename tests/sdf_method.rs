@@ -200,3 +200,62 @@ fn cones_are_refused_by_name_where_they_cannot_answer() {
         assert!(e.contains(want), "{methods}: {e}");
     }
 }
+
+/// `backends` on a method entry: the GPU refused by name where the setting has no kernel for
+/// the kind (sphere-traced shadows, our ray caster), an empty list refused, and a sound entry
+/// read back with its backends (the GPU rows themselves: tests/gpu_peers.rs).
+#[test]
+fn gpu_backends_of_methods_are_refused_by_name_where_no_kernel_answers() {
+    let parse = |text: &str| {
+        Spec::parse(text, Path::new("specs/m.json"))
+            .map(|s| {
+                s.methods
+                    .iter()
+                    .map(|m| m.backends.len())
+                    .collect::<Vec<_>>()
+            })
+            .map_err(|e| e.to_string())
+    };
+    let shadows = render("shadows", &format!(r#", "lights": {LIGHTS}"#));
+    let e = parse(&with_methods(
+        &shadows,
+        r#"[{"method": "sdf", "res": [16], "query": ["trace"], "backends": ["cpu", "gpu"]}]"#,
+    ))
+    .unwrap_err();
+    assert!(
+        e.contains("methods[0]") && e.contains("on backend \"gpu\"") && e.contains("trace"),
+        "{e}"
+    );
+    // The cones answer shadows on the GPU.
+    let cone = r#"[{"method": "sdf", "res": [16], "query": ["cone"], "backends": ["cpu", "gpu"]}]"#;
+    assert_eq!(parse(&with_methods(&shadows, cone)), Ok(vec![2]));
+    let ao = tiny(ONE_FIELD, "");
+    let e = parse(&with_methods(
+        &ao,
+        r#"[{"method": "raycast", "backends": ["gpu"]}]"#,
+    ))
+    .unwrap_err();
+    assert!(
+        e.contains("methods[0]") && e.contains("no GPU kernel"),
+        "{e}"
+    );
+    let e = parse(&with_methods(
+        &ao,
+        r#"[{"method": "aofield", "res": [8], "backends": []}]"#,
+    ))
+    .unwrap_err();
+    assert!(e.contains("backends") && e.contains("aofield"), "{e}");
+    let e = parse(&with_methods(
+        &ao,
+        r#"[{"method": "aofield", "res": [8], "backends": ["tpu"]}]"#,
+    ))
+    .unwrap_err();
+    assert!(e.contains("backends") && e.contains("tpu"), "{e}");
+    // The same setting twice on one backend.
+    let e = parse(&with_methods(
+        &ao,
+        r#"[{"method": "aofield", "res": [8], "backends": ["gpu", "gpu"]}]"#,
+    ))
+    .unwrap_err();
+    assert!(e.contains("aofield-8") && e.contains("twice"), "{e}");
+}

@@ -148,17 +148,23 @@ pub fn check_committed(rows: &[Row], committed: &[Row]) -> Vec<Failure> {
 }
 
 /// [`check_committed`] for the rows of `methods.csv`: each row against the committed row of
-/// the same scene and setting, on the same three errors (named `SCENE/SETTING`).
+/// the same scene, setting and backend, on the same three errors (named `SCENE/SETTING`, with
+/// `@gpu` for a setting on the GPU).
 pub fn check_committed_methods(rows: &[NamedRow], committed: &[NamedRow]) -> Vec<Failure> {
     let keyed = |rows: &[NamedRow]| -> Vec<(String, String, Compared)> {
         rows.iter()
             .map(|r| {
                 let (scene, setting) =
                     (r.get("scene").unwrap_or(""), r.get("setting").unwrap_or(""));
+                // A setting on the GPU is its own row (`SCENE/SETTING@gpu`).
+                let on = match r.get("backend") {
+                    None | Some("") | Some("cpu") => String::new(),
+                    Some(b) => format!("@{b}"),
+                };
                 let metric = |m: &'static str| (m, r.number(m));
                 (
                     scene.to_string(),
-                    format!("{scene}/{setting}"),
+                    format!("{scene}/{setting}{on}"),
                     [
                         metric("rms_vertex"),
                         metric("rms_image"),

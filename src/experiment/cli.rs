@@ -378,7 +378,11 @@ fn check(
         };
         let name = ls.name.clone();
         let gpu = ls.spec.profile(args.quick).backends.contains(&Backend::Gpu)
-            || ls.spec.methods.iter().any(|m| m.backends.contains(&Backend::Gpu));
+            || ls
+                .spec
+                .methods
+                .iter()
+                .any(|m| m.backends.contains(&Backend::Gpu));
         if gpu && *missing_vulkan.get_or_init(|| no_vulkan(args)) {
             let why = "no Vulkan adapter (install mesa-vulkan-drivers for lavapipe)";
             if require_gpu {

@@ -96,6 +96,10 @@ pub struct ErrorColumns {
     pub grain: Option<f64>,
     pub second_reference: Option<String>,
     pub rms_image_vs_second: Option<f64>,
+    /// `rms_image` over the window's active pixels (the 2010 paper's pixel set).
+    pub rms_image_window: Option<f64>,
+    /// The same-ray RMS of the shaded images, mean over seeds (kinds with a shading factor).
+    pub rms_image_shaded: Option<f64>,
     /// The image, relative to the output folder (empty without an image).
     pub image: String,
 }
@@ -306,6 +310,18 @@ table_columns! {
     /// direction; 1 in tables written before the column.
     #[serde(default = "one")]
     channels: u32 = |p| p.cell.channels;
+    /// `rms_image` as the 2010 paper takes an image's RMS: over every pixel of the window that
+    /// sees a surface (its "active pixels"), the pixels no value is evaluated at (a caster
+    /// drawn with its own shading, the same in both images) counting as exact, so
+    /// `rms_image` × √(evaluated pixels / active pixels). None without an image.
+    #[serde(default)]
+    rms_image_window: Option<f64> = |p| p.errors.rms_image_window;
+    /// RMS per pixel (0–255) of the shaded image (each value × the kind's shading factor, the
+    /// `-shaded.png` pictures: shadows × the unshadowed direct light) against the same-ray
+    /// reference's shaded image, over the evaluated pixels, mean over seeds: the images the
+    /// 2010 paper compares. None for a kind without shading.
+    #[serde(default)]
+    rms_image_shaded: Option<f64> = |p| p.errors.rms_image_shaded;
 }
 
 /// A row as written: the standard columns, then the kind's own metric columns (name, value).

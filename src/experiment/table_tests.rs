@@ -59,6 +59,8 @@ fn parts() -> Parts {
             grain: Some(0.75),
             second_reference: Some("mirror".into()),
             rms_image_vs_second: Some(12.0),
+            rms_image_window: Some(2.25),
+            rms_image_shaded: Some(1.5),
             image: "images/s.png".into(),
         },
     }
@@ -137,10 +139,13 @@ fn a_table_under_the_former_names_reads_back_the_same() {
     write_csv(&path, std::slice::from_ref(&row)).unwrap();
     let text = std::fs::read_to_string(&path).unwrap();
     let (head, body) = text.split_once('\n').unwrap();
-    // The header as tables were written before: former names, no `channels` (read as 1).
-    let former: Vec<&str> = head
-        .split(',')
-        .filter(|n| *n != "channels")
+    // The header as tables were written before: former names, none of the columns from
+    // `channels` on (`channels` read as 1, the later ones as none).
+    let names: Vec<&str> = head.split(',').collect();
+    let kept = names.iter().position(|n| *n == "channels").unwrap();
+    let former: Vec<&str> = names[..kept]
+        .iter()
+        .copied()
         .map(|n| {
             FORMER_NAMES
                 .iter()
@@ -149,10 +154,20 @@ fn a_table_under_the_former_names_reads_back_the_same() {
         })
         .collect();
     assert!(former.contains(&"ao_s") && former.contains(&"occlusion_rms"));
-    let body: Vec<&str> = body.trim_end().rsplitn(2, ',').collect();
-    std::fs::write(&path, format!("{}\n{}\n", former.join(","), body[1])).unwrap();
+    // The values of the dropped columns are numbers, with no comma.
+    let dropped = names.len() - kept;
+    let body: Vec<&str> = body.trim_end().rsplitn(dropped + 1, ',').collect();
+    std::fs::write(&path, format!("{}\n{}\n", former.join(","), body[dropped])).unwrap();
     let back: Vec<Row> = read_csv(&path).unwrap();
-    assert_eq!(back, [Row { channels: 1, ..row }]);
+    assert_eq!(
+        back,
+        [Row {
+            channels: 1,
+            rms_image_window: None,
+            rms_image_shaded: None,
+            ..row
+        }]
+    );
 }
 
 #[test]

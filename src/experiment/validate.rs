@@ -360,26 +360,8 @@ impl Validator<'_> {
             let at = format!("methods[{i}]");
             m.options.validate(&at, s, self)?;
             for setting in m.settings() {
-                let refusal = match setting.backend {
-                    super::spec::Backend::Cpu => setting.method.refuses(kind),
-                    super::spec::Backend::Gpu => setting
-                        .method
-                        .refuses(kind)
-                        .or_else(|| setting.method.refuses_on_gpu(kind)),
-                };
-                if let Some(why) = refusal {
-                    let on = match setting.backend {
-                        super::spec::Backend::Cpu => String::new(),
-                        b => format!(" on backend \"{}\"", b.name()),
-                    };
-                    return Err(self.err(
-                        &at,
-                        format!(
-                            "\"{}\" cannot answer render \"{}\"{on}: {why}",
-                            setting.id(),
-                            kind.name()
-                        ),
-                    ));
+                if let Some(why) = setting.refuses(kind) {
+                    return Err(self.err(&at, format!("\"{}\" {why}", setting.id())));
                 }
                 let label = setting.label();
                 if seen.contains(&label) {

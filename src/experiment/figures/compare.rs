@@ -445,7 +445,12 @@ pub fn method_groups(
     metric: Metric,
     x: impl Fn(&MethodRow) -> Option<f64>,
 ) -> (Vec<FamilyGroup>, Vec<String>) {
-    let rows: Vec<&MethodRow> = methods.iter().filter(|m| m.scene == sc).collect();
+    // The CPU rows: a method's GPU rows (the same values from its kernels) are in methods.csv,
+    // and their times are the adapter's, not comparable on one axis with the CPU's.
+    let rows: Vec<&MethodRow> = methods
+        .iter()
+        .filter(|m| m.scene == sc && matches!(m.backend.as_str(), "" | "cpu"))
+        .collect();
     let mut names: Vec<&str> = Vec::new();
     for m in &rows {
         if !names.contains(&m.method.as_str()) {

@@ -20,14 +20,14 @@
 //! and receiver (an AO field does not model an occluder's occlusion of itself).
 
 use super::{Answer, GpuMethod, Method, MethodContext, MethodEntry, MethodOptions, Prepared};
-use crate::experiment::backend::{Estimate, Eval};
-use crate::gpu::{AoFieldKernel, GpuContext};
 use crate::aofield::cache::{load_or_bake, Outcome};
 use crate::aofield::{AoField, AoFieldInstance, AoFieldScene, BakeParams, Inside, Precision};
+use crate::experiment::backend::{Estimate, Eval};
 use crate::experiment::kinds::Kind;
 use crate::experiment::spec::{Spec, SpecError};
 use crate::experiment::validate::Validator;
 use crate::experiment::{Error, Result};
+use crate::gpu::{AoFieldKernel, GpuContext};
 use crate::render::estimator::{Estimator, Points};
 use crate::render::truth::{Truth, TruthOptions};
 use crate::sampling::rays::RaySet;

@@ -217,6 +217,24 @@ impl Setting {
         self.method.id()
     }
 
+    /// Why it cannot answer `kind` on its backend ([`Method::refuses`], and on the GPU
+    /// [`Method::refuses_on_gpu`]), as "cannot answer render …", naming a backend other than
+    /// the CPU; none where it can.
+    pub fn refuses(&self, kind: &dyn Kind) -> Option<String> {
+        let why = self.method.refuses(kind).or_else(|| match self.backend {
+            Backend::Cpu => None,
+            Backend::Gpu => self.method.refuses_on_gpu(kind),
+        })?;
+        let on = match self.backend {
+            Backend::Cpu => String::new(),
+            b => format!(" on backend \"{}\"", b.name()),
+        };
+        Some(format!(
+            "cannot answer render \"{}\"{on}: {why}",
+            kind.name()
+        ))
+    }
+
     /// The id with the backend where it is not the CPU (`sdf-64-f16-trace@gpu`): what names
     /// the row in plans, images and checks.
     pub fn label(&self) -> String {

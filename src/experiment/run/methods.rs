@@ -8,8 +8,8 @@
 
 use super::steps::Runner;
 use super::{Error, LoadedSpec, Result, RunOptions};
-use crate::experiment::columns::NamedRow;
 use crate::experiment::backend::Eval;
+use crate::experiment::columns::NamedRow;
 use crate::experiment::methods::{Answer, Method, MethodContext};
 use crate::experiment::metrics::rms_unquantised;
 use crate::experiment::progress::{stage, stage_adaptive};
@@ -86,21 +86,8 @@ impl Runner<'_> {
             memory_limit: self.opts.supply.memory_limit,
         };
         let context = |e: Error| e.context(format!("method {id}"));
-        let refusal = match backend {
-            Backend::Cpu => m.refuses(self.kind.as_ref()),
-            Backend::Gpu => m
-                .refuses(self.kind.as_ref())
-                .or_else(|| m.refuses_on_gpu(self.kind.as_ref())),
-        };
-        if let Some(why) = refusal {
-            let on = match backend {
-                Backend::Cpu => String::new(),
-                b => format!(" on backend \"{}\"", b.name()),
-            };
-            return Err(Error::invalid(
-                format!("methods \"{}\"", m.name()),
-                format!("cannot answer render \"{}\"{on}: {why}", self.kind.name()),
-            ));
+        if let Some(why) = self.methods[setting].refuses(self.kind.as_ref()) {
+            return Err(Error::invalid(format!("methods \"{}\"", m.name()), why));
         }
         let (prepared, precompute_s) = stage(&format!("{id}: precompute"), || m.prepare(&ctx));
         let prepared = prepared.map_err(context)?;
@@ -255,5 +242,7 @@ fn push_errors(row: &mut NamedRow, e: &ErrorColumns) {
         .push_opt("signal_rms", e.signal_rms)
         .push_opt("grain", e.grain)
         .push_opt("second_reference", e.second_reference.as_ref())
-        .push_opt("rms_image_vs_second", e.rms_image_vs_second);
+        .push_opt("rms_image_vs_second", e.rms_image_vs_second)
+        .push_opt("rms_image_window", e.rms_image_window)
+        .push_opt("rms_image_shaded", e.rms_image_shaded);
 }

@@ -26,6 +26,8 @@ pub(super) struct SeedErrors {
     pub(super) in_spheres: Option<f64>,
     pub(super) outside_spheres: Option<f64>,
     pub(super) interior: Option<f64>,
+    /// Mean over seeds of the same-ray RMS of the shaded images ([`SceneState::shaded_image`]).
+    pub(super) shaded: Option<f64>,
 }
 
 /// The converged reference's options of `spec` (`reference.truth`).
@@ -162,7 +164,7 @@ pub(super) fn seed_errors(
     first_image: Option<&Image>,
 ) -> SeedErrors {
     let (mut v, mut im, mut t, mut c, mut i) = (vec![], vec![], vec![], vec![], vec![]);
-    let (mut ins, mut outs) = (vec![], vec![]);
+    let (mut ins, mut outs, mut shaded) = (vec![], vec![], vec![]);
     for (j, vals) in values.iter().enumerate() {
         let (reference, ref_img) = if j == 0 {
             (&st.reference, st.ref_image.as_ref().map(|(r, _)| r))
@@ -184,6 +186,10 @@ pub(super) fn seed_errors(
             if let Some(img) = img {
                 im.push(rms_u8(&img.data, &r.data, Some(mask)));
             }
+            if let (Some(a), Some(b)) = (st.shaded_image(bs, vals), st.shaded_image(bs, reference))
+            {
+                shaded.push(rms_u8(&a.data, &b.data, Some(mask)));
+            }
         }
         if let Some(e) = st.truth_errors(vals) {
             t.push(e.all);
@@ -202,5 +208,6 @@ pub(super) fn seed_errors(
         interior: ms(&i).map(|m| m.0),
         in_spheres: ms(&ins).map(|m| m.0),
         outside_spheres: ms(&outs).map(|m| m.0),
+        shaded: ms(&shaded).map(|m| m.0),
     }
 }

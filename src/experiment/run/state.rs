@@ -160,6 +160,16 @@ impl SceneState {
         )
     }
 
+    /// The share of the window's active pixels (those that see a surface) that show values:
+    /// the evaluated pixels over the active ones; none without an image.
+    pub(super) fn window_share(&self) -> Option<f64> {
+        let view = self.view.as_ref()?;
+        let (_, mask) = self.ref_image.as_ref()?;
+        let active = view.hits.iter().filter(|h| h.is_some()).count();
+        let shown = mask.iter().filter(|&&m| m).count();
+        (active > 0).then(|| shown as f64 / active as f64)
+    }
+
     /// The shaded picture of `values` (each channel × the point's shading factor), where the
     /// kind has one and there is an image.
     pub(super) fn shaded_image(&self, bs: &BuiltScene, values: &[f32]) -> Option<Image> {

@@ -85,8 +85,8 @@ impl<'a> Runner<'a> {
             .iter()
             .chain(methods.iter().map(|m| &m.backend))
         {
-            if !backends.contains_key(&b) {
-                backends.insert(b, backend::open(b, &opts.adapter)?);
+            if let std::collections::hash_map::Entry::Vacant(e) = backends.entry(b) {
+                e.insert(backend::open(b, &opts.adapter)?);
             }
         }
         Ok(Runner {
@@ -547,6 +547,8 @@ impl<'a> Runner<'a> {
                 (Some(a), Some(s), Some((_, mask))) => Some(rms_u8(&a.data, &s.data, Some(mask))),
                 _ => None,
             },
+            rms_image_window: se.image.zip(st.window_share()).map(|(m, s)| m.0 * s.sqrt()),
+            rms_image_shaded: se.shaded,
             image: String::new(),
         }
     }
