@@ -1341,7 +1341,7 @@ fn paper_pixel_sets(c: &mut Claims) {
 /// The peers' GPU rows against their CPU twins (same scene and setting) in the runs that have
 /// them: how many pairs, the largest difference of the error against the converged reference.
 fn peers_gpu(c: &mut Claims) {
-    let mut pairs = 0;
+    let (mut pairs, mut exact) = (0, 0);
     let mut worst = 0.0f64;
     for spec in ["figure6", "ao2010_figure3", "shadows2010_figure7"] {
         let rows = read(&format!("results/{spec}/methods.csv"));
@@ -1355,15 +1355,74 @@ fn peers_gpu(c: &mut Claims) {
                 })
                 .unwrap_or_else(|| panic!("{spec}: no CPU twin of {}", g["setting"]));
             pairs += 1;
-            worst = worst.max((f(g, "rms_vs_truth") - f(twin, "rms_vs_truth")).abs());
+            let d = (f(g, "rms_vs_truth") - f(twin, "rms_vs_truth")).abs();
+            worst = worst.max(d);
+            exact += (d == 0.0) as usize;
         }
     }
     let text = format!(
         "over the {pairs} settings with a GPU row in 2008 Figure 6, 2010 Figure 3 and 2010 Figure \
          7, the GPU row's error against the converged reference differs from its CPU twin's by at \
-         most {worst:.3}"
+         most {} ({exact} of them not at all)",
+        sci(worst)
     );
     c.quotes("docs/results.md", &text, "results/figure6/methods.csv");
+}
+
+/// Figure 6's peers at about a field's bytes: for the field 1090 × 32² u8, each peer family's
+/// setting whose bytes are nearest to the field's (on a log scale), with its error and time.
+fn equal_bytes(c: &mut Claims) {
+    let from = "results/figure6/methods.csv";
+    let field = read("results/figure6/table.csv")
+        .into_iter()
+        .find(|r| {
+            r["backend"] == "cpu"
+                && r["positional_samples"] == "1090"
+                && r["directional_res"] == "32"
+                && r["precision"] == "u8"
+        })
+        .expect("figure6's 1090 × 32² u8 cell");
+    let fb = f(&field, "field_bytes");
+    let methods: Vec<Row> = read(from)
+        .into_iter()
+        .filter(|r| r["backend"] == "cpu" && !r["bytes"].is_empty())
+        .collect();
+    let nearest = |family: &dyn Fn(&Row) -> bool| -> &Row {
+        methods
+            .iter()
+            .filter(|r| family(r))
+            .min_by(|a, b| {
+                let d = |r: &Row| (f(r, "bytes") / fb).ln().abs();
+                d(a).partial_cmp(&d(b)).unwrap()
+            })
+            .expect("a setting of the family")
+    };
+    let say = |r: &Row| {
+        format!(
+            "{} ({} bytes: {:.2} in {:.2} ms)",
+            r["setting"],
+            with_commas(f(r, "bytes") as u64),
+            f(r, "rms_vs_truth"),
+            1e3 * f(r, "estimate_s")
+        )
+    };
+    let trace = nearest(&|r| r["method"] == "sdf" && r["query"] == "trace");
+    let cone = nearest(&|r| r["method"] == "sdf" && r["query"] == "cone");
+    let aofield = nearest(&|r| r["method"] == "aofield");
+    let text = format!(
+        "At about the bytes of the field 1090 × 32² u8 ({} bytes: {:.2} against the converged \
+         reference in {:.2} ms), the nearest settings are {}, {} and {}",
+        with_commas(fb as u64),
+        f(&field, "rms_vs_truth"),
+        1e3 * f(&field, "estimate_s"),
+        say(trace),
+        say(cone),
+        say(aofield),
+    );
+    if std::env::var("VISFIELD_PRINT_ANIMATED").is_ok() {
+        println!("{text}");
+    }
+    c.quotes("docs/results.md", &text, from);
 }
 
 #[test]
@@ -1383,6 +1442,7 @@ fn quoted_numbers_match_the_committed_csvs() {
     crowd_pixels(&mut c);
     paper_pixel_sets(&mut c);
     peers_gpu(&mut c);
+    equal_bytes(&mut c);
     wins(&mut c);
     figure5_intra(&mut c);
     models_table(&mut c);

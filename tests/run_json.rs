@@ -125,9 +125,10 @@ fn a_runs_run_json_holds_no_absolute_path_and_its_wall_times() {
     assert!(wall > 0.0 && sum > 0.0 && sum <= wall, "{sum} of {wall}");
 }
 
-/// Every committed `run.json` under `results/` names no machine's folders.
+/// Every committed `run.json` under `results/` names no machine's folders, and a commit whose
+/// tree was clean when it ran (no `-dirty`: the code that made it is that commit's).
 #[test]
-fn committed_run_jsons_hold_no_absolute_path() {
+fn committed_run_jsons_hold_no_absolute_path_and_a_clean_commit() {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("results");
     let mut stack = vec![root];
     let mut seen = 0;
@@ -140,6 +141,15 @@ fn committed_run_jsons_hold_no_absolute_path() {
                 let v: serde_json::Value =
                     serde_json::from_slice(&std::fs::read(&p).unwrap()).unwrap();
                 assert_no_absolute_path(&v, &p.display().to_string());
+                let commit = v["meta"]["commit"]
+                    .as_str()
+                    .or(v["commit"].as_str())
+                    .unwrap_or_else(|| panic!("{}: no commit", p.display()));
+                assert!(
+                    commit.len() >= 40 && !commit.ends_with("-dirty"),
+                    "{}: commit {commit}",
+                    p.display()
+                );
                 seen += 1;
             }
         }
