@@ -1425,6 +1425,58 @@ fn equal_bytes(c: &mut Claims) {
     c.quotes("docs/results.md", &text, from);
 }
 
+/// 2010 Figure 9: the floor pixels inside the bunny's bounding sphere, their share of the
+/// squared error against the converged lobe, and the same-ray error without them beside the
+/// paper's.
+fn figure9_population(c: &mut Claims) {
+    let from = "results/reflections2010_figure9/table.csv";
+    let rows: Vec<Row> = read(from)
+        .into_iter()
+        .filter(|r| r["backend"] == "cpu")
+        .collect();
+    let paper = read("results/reflections2010_figure9/paper_vs_ours.csv");
+    let view = |v: &str| -> Vec<&Row> { rows.iter().filter(|r| r["scene"] == v).collect() };
+    let range = |rs: &[&Row], col: &str| {
+        let (lo, hi) = min_max(rs.iter().map(|r| f(r, col)));
+        format!("{lo:.2}–{hi:.2}")
+    };
+    let paper_range = |v: &str| {
+        let (lo, hi) = min_max(
+            paper
+                .iter()
+                .filter(|r| r["label"].starts_with(v))
+                .map(|r| f(r, "paper_rms")),
+        );
+        format!("{lo:.2}–{hi:.2}")
+    };
+    let share = |r: &Row| {
+        let (k, n) = (f(r, "points_in_spheres"), f(r, "receiver_points"));
+        let (inside, all) = (f(r, "rms_vs_truth_in_spheres"), f(r, "rms_vs_truth"));
+        100.0 * inside * inside * k / (all * all * n)
+    };
+    let (a, b) = (view("view_a"), view("view_b"));
+    let (slo, shi) = min_max(rows.iter().map(share));
+    let pct = |v: &[&Row]| 100.0 * f(v[0], "points_in_spheres") / f(v[0], "receiver_points");
+    let text = format!(
+        "The {} (view_a) and {} (view_b) floor pixels inside the bunny's bounding sphere, {:.1}% \
+         and {:.1}% of the receiver pixels, carry {slo:.0}–{shi:.0}% of the fields' squared error \
+         against the converged lobe; without them the fields' same-ray RMS (per pixel, \
+         unquantised) is {} (view_a) and {} (view_b), against the paper's {} and {}",
+        with_commas(f(a[0], "points_in_spheres") as u64),
+        with_commas(f(b[0], "points_in_spheres") as u64),
+        pct(&a),
+        pct(&b),
+        range(&a, "rms_outside_spheres"),
+        range(&b, "rms_outside_spheres"),
+        paper_range("view_a"),
+        paper_range("view_b"),
+    );
+    if std::env::var("VISFIELD_PRINT_ANIMATED").is_ok() {
+        println!("{text}");
+    }
+    c.quotes("docs/results.md", &text, from);
+}
+
 #[test]
 fn quoted_numbers_match_the_committed_csvs() {
     let mut c = Claims::new();
@@ -1443,6 +1495,7 @@ fn quoted_numbers_match_the_committed_csvs() {
     paper_pixel_sets(&mut c);
     peers_gpu(&mut c);
     equal_bytes(&mut c);
+    figure9_population(&mut c);
     wins(&mut c);
     figure5_intra(&mut c);
     models_table(&mut c);
@@ -1455,6 +1508,26 @@ fn quoted_numbers_match_the_committed_csvs() {
         c.count,
         c.missing.join("\n")
     );
+}
+
+/// The specs' claims of equality and difference between precisions, which README and
+/// docs/results.md state: without an AO radius (figure7_unbounded) every precision keeps hit or
+/// miss, so its 1-bit and u8 fields agree to the bit (`pairs.csv`: RMS 0);
+/// with a linear falloff (figure7_linear) every stored distance counts and they differ.
+#[test]
+fn the_committed_precision_pairs_hold_the_specs_claims() {
+    let rows = read("results/figure7_unbounded/pairs.csv");
+    assert!(!rows.is_empty(), "figure7_unbounded: no pairs");
+    for r in &rows {
+        for col in ["rms_vertex", "rms_image"] {
+            assert_eq!(f(r, col), 0.0, "figure7_unbounded/pairs.csv {col}: {r:?}");
+        }
+    }
+    let rows = read("results/figure7_linear/pairs.csv");
+    assert!(!rows.is_empty());
+    for r in &rows {
+        assert!(f(r, "rms_vertex") > 0.1, "figure7_linear/pairs.csv: {r:?}");
+    }
 }
 
 #[test]
