@@ -1,7 +1,7 @@
 //! The crowd: N rigid casters over a receiver plane, each orbiting its grid cell's centre and
 //! tumbling, every method answering vertex AO at the plane's vertices frame after frame.
 
-use super::movers::{FrameCasters, Mover};
+use super::movers::{AoFields, FrameCasters, Mover, Sdfs};
 use super::FrameRow;
 use crate::experiment::fields::FieldSupply;
 use crate::experiment::metrics::rms_unquantised;
@@ -12,7 +12,7 @@ use crate::field::lookup::LookupOptions;
 use crate::field::{FieldParams, Precision};
 use crate::geometry::procedural::{supershape, Supershape};
 use crate::geometry::{models, procedural, Mesh, Similarity};
-use crate::render::ao::{ao_at_points, AoOptions};
+use crate::render::ao::AoOptions;
 use crate::render::estimator::{AoEstimator, Points};
 use crate::render::truth::TruthOptions;
 use crate::sampling::rays::RaySet;
@@ -44,6 +44,10 @@ pub struct Profile {
     /// Rays per point (k²).
     pub k: u32,
     pub field: (usize, u32, Precision),
+    /// The per-object peers: the distance volumes' samples along each mesh box's longest side
+    /// and the AO fields' texels per cube face side (both f32, one per mesh).
+    pub sdf_res: usize,
+    pub aofield_res: usize,
     /// The converged reference of every frame.
     pub truth: TruthOptions,
     /// The crowd drawn as an animation (`crowd.png`, APNG).
@@ -63,6 +67,8 @@ impl Profile {
                 plane_per_cell: 8,
                 k: 4,
                 field: (290, 16, Precision::U8),
+                sdf_res: 32,
+                aofield_res: 8,
                 truth: TruthOptions {
                     target_stderr_255: 1.0,
                     max_rays: 1024,
@@ -88,6 +94,8 @@ impl Profile {
                 plane_per_cell: 16,
                 k: 8,
                 field: (1090, 32, Precision::U8),
+                sdf_res: 64,
+                aofield_res: 16,
                 truth: TruthOptions {
                     target_stderr_255: 0.5,
                     max_rays: 1024,
@@ -118,6 +126,8 @@ impl Profile {
             "sphere_centre_height": HEIGHT * CELL,
             "truth": self.truth,
             "approach_gaps_radii": self.gaps,
+            "sdf": { "res": self.sdf_res, "margin": 2, "precision": "f32" },
+            "aofield": { "res": self.aofield_res, "precision": "f32" },
         })
     }
 
@@ -151,6 +161,56 @@ fn load(name: &str) -> Result<Mesh> {
     }
 }
 
+/// The per-object peers of `mesh`: its distance volume (f32, `p.sdf_res` samples along its
+/// box's longest side, margin 2) and its AO field (`p.aofield_res`² texels a face, the bake's
+/// other defaults, f32), from the run's cache where it holds them.
+fn peers(
+    p: &Profile,
+    mesh: &LoadedMesh,
+    supply: &FieldSupply,
+) -> Result<(
+    Arc<crate::sdf::DistanceVolume>,
+    Arc<crate::aofield::AoField>,
+)> {
+    let triangles: Vec<[Vec3; 3]> = (0..mesh.mesh.triangle_count())
+        .map(|t| mesh.mesh.triangle(t))
+        .collect();
+    let what = |peer: &str| format!("dynamic: {peer} of {}", mesh.label);
+    let volume = match supply.cache.as_deref() {
+        Some(dir) => {
+            crate::sdf::cache::load_or_bake(
+                dir,
+                &triangles,
+                &mesh.sha256,
+                (p.sdf_res, 2),
+                crate::sdf::Precision::F32,
+            )
+            .map_err(|e| Error::invalid(what("sdf"), e.to_string()))?
+            .0
+        }
+        None => crate::sdf::DistanceVolume::bake(&triangles, p.sdf_res, 2)
+            .map_err(|e| Error::invalid(what("sdf"), e.to_string()))?,
+    };
+    let params = crate::aofield::BakeParams {
+        res: p.aofield_res,
+        ..crate::aofield::BakeParams::default()
+    };
+    let (fit, _) = crate::aofield::cache::load_or_bake(
+        supply.cache.as_deref(),
+        &mesh.sha256,
+        &triangles,
+        &params,
+    )
+    .map_err(|e| Error::invalid(what("aofield"), e.to_string()))?;
+    Ok((
+        Arc::new(volume),
+        Arc::new(crate::aofield::AoField::new(
+            &fit,
+            crate::aofield::Precision::F32,
+        )),
+    ))
+}
+
 /// One crowd: its meshes, fields, receiver points and rays.
 pub struct Crowd {
     /// `crowd` or `approach`.
@@ -161,6 +221,9 @@ pub struct Crowd {
     gaps: Option<Vec<f32>>,
     meshes: Vec<Arc<Mesh>>,
     fields: Vec<Arc<crate::field::VisibilityField>>,
+    /// The per-object peers, one per mesh: mesh distance fields and AO fields.
+    volumes: Vec<Arc<crate::sdf::DistanceVolume>>,
+    ao_fields: Vec<Arc<crate::aofield::AoField>>,
     /// Per caster: its mesh, its scale, the mesh's bounding sphere centre (model space), its
     /// orbit phase and tumble axis.
     casters: Vec<CasterMotion>,
@@ -199,6 +262,7 @@ impl Crowd {
         let used = p.models.len().min(n);
         let mut meshes = Vec::new();
         let mut fields = Vec::new();
+        let (mut volumes, mut ao_fields) = (Vec::new(), Vec::new());
         let (count, res, precision) = p.field;
         let params = FieldParams {
             sphere: SphereKind::Slater,
@@ -217,6 +281,9 @@ impl Crowd {
                 file: None,
             };
             fields.push(supply.obtain(&lm, params)?.field);
+            let (volume, ao_field) = peers(p, &lm, supply)?;
+            volumes.push(volume);
+            ao_fields.push(ao_field);
             meshes.push(mesh);
         }
         let width = side as f32 * CELL;
@@ -256,6 +323,8 @@ impl Crowd {
             gaps: None,
             meshes,
             fields,
+            volumes,
+            ao_fields,
             casters,
             points: plane.positions.clone(),
             normals: plane.normals.clone(),
@@ -326,7 +395,7 @@ impl Crowd {
     }
 
     /// The methods of this build, each with its precompute done (per-mesh BVHs or scenes,
-    /// the fields): the world rebuild first.
+    /// the fields): the world rebuild first, the per-object peers last.
     pub fn movers(&self) -> Result<Vec<Box<dyn Mover>>> {
         let names = &super::movers::NAMES;
         let mut v = super::movers::ray_casters(&self.meshes, names)?;
@@ -336,6 +405,8 @@ impl Crowd {
             LookupOptions::default(),
             names,
         ));
+        v.push(Box::new(Sdfs::new(self.volumes.clone())));
+        v.push(Box::new(AoFields::new(self.ao_fields.clone())));
         Ok(v)
     }
 
@@ -347,13 +418,7 @@ impl Crowd {
             meshes: &self.meshes,
             instances: &frame,
         })?;
-        Ok(ao_at_points(
-            mover.vis(),
-            &self.points,
-            &self.normals,
-            &self.rays,
-            &self.opts,
-        ))
+        Ok(mover.ao(&self.points, &self.normals, &self.rays, &self.opts))
     }
 
     /// Every frame, every method: its update, its query, its errors against the world rebuild
@@ -402,8 +467,8 @@ impl Crowd {
                     update_s,
                     query_s,
                     values: ao,
-                } = super::movers::timed(m.as_mut(), &casters, |vis| {
-                    ao_at_points(vis, &self.points, &self.normals, &self.rays, &self.opts)
+                } = super::movers::timed(m.as_mut(), &casters, |m| {
+                    m.ao(&self.points, &self.normals, &self.rays, &self.opts)
                 })?;
                 let reference = reference.get_or_insert_with(|| ao.clone());
                 if animated && m.name() == "field" {

@@ -21,7 +21,12 @@
 //!   instances) placed by the frame's transforms, every ray testing every caster's sphere
 //!   (`update_s` is making the instance list);
 //! - `field`: the same with the BVH over the casters' bounding spheres
-//!   ([`crate::field::sphere_bvh`]) rebuilt per frame (in `update_s`); the same answers.
+//!   ([`crate::field::sphere_bvh`]) rebuilt per frame (in `update_s`); the same answers;
+//! - `sdf`: the per-object peer engines use, mesh signed distance fields ([`crate::sdf`], one
+//!   f32 volume per mesh, shared by its instances) placed by the frame's transforms and sphere
+//!   traced on the same rays;
+//! - `aofield`: ambient occlusion fields (Kontkanen and Laine 2005, [`crate::aofield`], one per
+//!   mesh) placed likewise, AO with no rays.
 //!
 //! Each row is one (N, frame, method): `update_s` (what the motion costs), `query_s` (the AO
 //! pass, all threads), `frame_s` = both, Mrays/s, `rms_vs_raycast` (0–255, unquantised, against
@@ -65,7 +70,7 @@ pub struct FrameRow {
     pub caster_triangles: usize,
     pub frame: usize,
     /// `world_rebuild`, `two_level`, `embree_rebuild`, `embree_instances`,
-    /// `field_every_sphere`, `field`.
+    /// `field_every_sphere`, `field`, `sdf`, `aofield`.
     pub method: &'static str,
     /// What the frame's motion costs the method (seconds): BVH rebuild, scene commit, the
     /// instance list.

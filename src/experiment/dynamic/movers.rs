@@ -2,14 +2,18 @@
 //! ([`Mover::update`]) apart from the query on the frame's rays ([`timed`]): `experiment
 //! dynamic`'s crowd and every animated spec measure them the same way.
 
+use crate::aofield::{AoField, AoFieldInstance, AoFieldScene};
 use crate::field::lookup::LookupOptions;
 use crate::field::normals::NormalField;
 use crate::field::scene::{FieldInstance, FieldScene};
 use crate::field::sphere_bvh::SphereBvhScene;
 use crate::field::VisibilityField;
 use crate::geometry::{Mesh, Similarity, Sphere};
+use crate::render::ao::{ao_at_points, AoOptions};
+use crate::sampling::rays::RaySet;
+use crate::sdf::{DistanceVolume, SdfInstance, SdfScene, SdfTrace};
 use crate::trace::Tracer;
-use crate::visibility::Visibility;
+use crate::visibility::{SurfaceHit, Visibility};
 use glam::Vec3;
 use std::sync::Arc;
 use std::time::Instant;
@@ -88,13 +92,13 @@ pub struct Timed {
 pub fn timed(
     mover: &mut dyn Mover,
     frame: &FrameCasters,
-    query: impl FnOnce(&dyn Visibility) -> Vec<f32>,
+    query: impl FnOnce(&dyn Mover) -> Vec<f32>,
 ) -> crate::experiment::Result<Timed> {
     let t = Instant::now();
     mover.update(frame)?;
     let update_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let values = query(mover.vis());
+    let values = query(&*mover);
     Ok(Timed {
         update_s,
         query_s: t.elapsed().as_secs_f64(),
@@ -165,6 +169,11 @@ pub trait Mover {
     fn vis(&self) -> &dyn Visibility;
     /// Bytes kept for the scene, where known.
     fn bytes(&self) -> Option<u64>;
+    /// Vertex AO at `points` (unit `normals`) on `rays`: the AO estimator through
+    /// [`Self::vis`]; a method that answers AO with no rays (AO fields) answers it directly.
+    fn ao(&self, points: &[Vec3], normals: &[Vec3], rays: &RaySet, opts: &AoOptions) -> Vec<f32> {
+        ao_at_points(self.vis(), points, normals, rays, opts)
+    }
 }
 
 /// Our ray caster over the world triangles, its BVH rebuilt every frame.
@@ -382,5 +391,120 @@ impl Mover for Fields {
     fn bytes(&self) -> Option<u64> {
         let normals: u64 = self.normals.iter().flatten().map(|n| n.bytes()).sum();
         Some(self.fields.iter().map(|f| f.bytes()).sum::<u64>() + normals + self.tree.bvh().bytes())
+    }
+}
+
+/// Mesh signed distance fields as engines keep them for moving rigid objects (`crate::sdf`:
+/// one volume per mesh, shared by its instances) placed by the frame's transforms and sphere
+/// traced on the same rays; the update is the instance list, nothing is rebuilt. `experiment
+/// dynamic`'s crowd measures it (`sdf`); animated specs do not list it.
+pub struct Sdfs {
+    /// Per mesh, its volume.
+    pub volumes: Vec<Arc<DistanceVolume>>,
+    scene: SdfScene,
+}
+
+impl Sdfs {
+    pub fn new(volumes: Vec<Arc<DistanceVolume>>) -> Sdfs {
+        Sdfs {
+            volumes,
+            scene: SdfScene {
+                instances: Vec::new(),
+                trace: SdfTrace::default(),
+            },
+        }
+    }
+}
+
+impl Mover for Sdfs {
+    fn name(&self) -> &'static str {
+        "sdf"
+    }
+
+    fn update(&mut self, frame: &FrameCasters) -> crate::experiment::Result<()> {
+        self.scene.instances = frame
+            .instances
+            .iter()
+            .map(|&(m, transform)| SdfInstance {
+                volume: self.volumes[m].clone(),
+                transform,
+            })
+            .collect();
+        Ok(())
+    }
+
+    fn vis(&self) -> &dyn Visibility {
+        &self.scene
+    }
+
+    fn bytes(&self) -> Option<u64> {
+        Some(self.volumes.iter().map(|v| v.bytes()).sum())
+    }
+}
+
+/// Ambient occlusion fields (Kontkanen and Laine, I3D 2005; `crate::aofield`: one per mesh,
+/// shared by its instances) placed by the frame's transforms: AO at a point with no ray, the
+/// casters blended multiplicatively ([`Mover::ao`]); the update is the instance list.
+/// `experiment dynamic`'s crowd measures it (`aofield`); it answers AO only, so animated specs
+/// (any kind) do not list it, and its [`Mover::vis`] refuses every ray.
+pub struct AoFields {
+    /// Per mesh, its field.
+    pub fields: Vec<Arc<AoField>>,
+    scene: AoFieldScene,
+}
+
+impl AoFields {
+    pub fn new(fields: Vec<Arc<AoField>>) -> AoFields {
+        AoFields {
+            fields,
+            scene: AoFieldScene::default(),
+        }
+    }
+}
+
+/// The visibility of a method that casts no ray: every query is a caller's bug.
+struct NoRays;
+
+impl Visibility for NoRays {
+    fn occluded(&self, _: Vec3, _: Vec3, _: f32, _: f32) -> bool {
+        unreachable!("an AO field casts no ray: its AO comes from Mover::ao")
+    }
+
+    fn hit_distance(&self, _: Vec3, _: Vec3, _: f32, _: f32) -> Option<f32> {
+        unreachable!("an AO field casts no ray: its AO comes from Mover::ao")
+    }
+
+    fn surface_hit(&self, _: Vec3, _: Vec3, _: f32, _: f32) -> Option<SurfaceHit> {
+        unreachable!("an AO field casts no ray: its AO comes from Mover::ao")
+    }
+}
+
+impl Mover for AoFields {
+    fn name(&self) -> &'static str {
+        "aofield"
+    }
+
+    fn update(&mut self, frame: &FrameCasters) -> crate::experiment::Result<()> {
+        self.scene.instances = frame
+            .instances
+            .iter()
+            .map(|&(m, transform)| AoFieldInstance {
+                field: self.fields[m].clone(),
+                transform,
+            })
+            .collect();
+        Ok(())
+    }
+
+    fn vis(&self) -> &dyn Visibility {
+        &NoRays
+    }
+
+    fn bytes(&self) -> Option<u64> {
+        Some(self.fields.iter().map(|f| f.bytes()).sum())
+    }
+
+    fn ao(&self, points: &[Vec3], normals: &[Vec3], _: &RaySet, _: &AoOptions) -> Vec<f32> {
+        self.scene.ao_at_points(points, normals)
     }
 }

@@ -30,7 +30,6 @@ use crate::render::points::{EvalPoints, GBuffer, Support};
 use crate::render::primary::{gbuffer, PrimaryScene};
 use crate::render::truth::TruthOptions;
 use crate::sampling::rays::RaySet;
-use crate::visibility::Visibility;
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
 use std::time::Instant;
@@ -265,7 +264,7 @@ impl SceneRunner<'_> {
             };
             let at = setup.points.at();
             let est = setup.estimator.as_ref();
-            let query = |vis: &dyn Visibility| est.estimate(vis, at, &self.rays);
+            let query = |m: &dyn Mover| est.estimate(m.vis(), at, &self.rays);
             // The ray casters, the world rebuild first: the frame's reference and the tracer
             // of its converged reference.
             let mut measured: Vec<(&'static str, String, Timed, Option<u64>)> = Vec::new();
