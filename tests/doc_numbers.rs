@@ -1477,6 +1477,48 @@ fn figure9_population(c: &mut Claims) {
     c.quotes("docs/results.md", &text, from);
 }
 
+/// The per-object peers in the moving crowd at 64 casters: mean frame and errors beside the
+/// field's and ray casting's (`results/dynamic/table.csv`).
+fn crowd_peers(c: &mut Claims) {
+    let from = "results/dynamic/table.csv";
+    let rows: Vec<Row> = read(from)
+        .into_iter()
+        .filter(|r| r["sweep"] == "crowd" && r["casters"] == "64")
+        .collect();
+    let mean = |m: &str, col: &str| {
+        let v: Vec<f64> = rows
+            .iter()
+            .filter(|r| r["method"] == m)
+            .map(|r| f(r, col))
+            .collect();
+        assert!(!v.is_empty(), "no {m} rows at 64 casters");
+        v.iter().sum::<f64>() / v.len() as f64
+    };
+    let say = |m: &str| {
+        format!(
+            "{:.1} ms a frame ({:.2} from ray casting on the same rays, {:.2} from the converged \
+             reference)",
+            1e3 * mean(m, "frame_s"),
+            mean(m, "rms_vs_raycast"),
+            mean(m, "rms_vs_truth")
+        )
+    };
+    let text = format!(
+        "At 64 casters, mesh distance fields sphere traced on the same rays take {}, AO fields {}, \
+         the visibility field {}; Embree's instances take {:.1} ms, and the 64-ray ray cast is \
+         {:.2} from the converged reference",
+        say("sdf"),
+        say("aofield"),
+        say("field"),
+        1e3 * mean("embree_instances", "frame_s"),
+        mean("world_rebuild", "rms_vs_truth"),
+    );
+    if std::env::var("VISFIELD_PRINT_ANIMATED").is_ok() {
+        println!("{text}");
+    }
+    c.quotes("docs/results.md", &text, from);
+}
+
 #[test]
 fn quoted_numbers_match_the_committed_csvs() {
     let mut c = Claims::new();
@@ -1496,6 +1538,7 @@ fn quoted_numbers_match_the_committed_csvs() {
     peers_gpu(&mut c);
     equal_bytes(&mut c);
     figure9_population(&mut c);
+    crowd_peers(&mut c);
     wins(&mut c);
     figure5_intra(&mut c);
     models_table(&mut c);
