@@ -13,7 +13,7 @@ use crate::render::ao::{ao_at_points, AoOptions};
 use crate::sampling::rays::RaySet;
 use crate::sdf::{DistanceVolume, SdfInstance, SdfScene, SdfTrace};
 use crate::trace::Tracer;
-use crate::visibility::{SurfaceHit, Visibility};
+use crate::visibility::Visibility;
 use glam::Vec3;
 use std::sync::Arc;
 use std::time::Instant;
@@ -462,23 +462,6 @@ impl AoFields {
     }
 }
 
-/// The visibility of a method that casts no ray: every query is a caller's bug.
-struct NoRays;
-
-impl Visibility for NoRays {
-    fn occluded(&self, _: Vec3, _: Vec3, _: f32, _: f32) -> bool {
-        unreachable!("an AO field casts no ray: its AO comes from Mover::ao")
-    }
-
-    fn hit_distance(&self, _: Vec3, _: Vec3, _: f32, _: f32) -> Option<f32> {
-        unreachable!("an AO field casts no ray: its AO comes from Mover::ao")
-    }
-
-    fn surface_hit(&self, _: Vec3, _: Vec3, _: f32, _: f32) -> Option<SurfaceHit> {
-        unreachable!("an AO field casts no ray: its AO comes from Mover::ao")
-    }
-}
-
 impl Mover for AoFields {
     fn name(&self) -> &'static str {
         "aofield"
@@ -497,7 +480,7 @@ impl Mover for AoFields {
     }
 
     fn vis(&self) -> &dyn Visibility {
-        &NoRays
+        &crate::experiment::methods::NoRays
     }
 
     fn bytes(&self) -> Option<u64> {

@@ -87,6 +87,30 @@ pub trait GpuMethod: Send + Sync {
     fn upload<'a>(&'a self, ctx: &'a GpuContext) -> Result<Box<dyn Eval + 'a>>;
 }
 
+/// The visibility handed to a method that casts no ray (a direct estimator, an AO field in a
+/// moving scene): any query through it is a bug of the method, reported as such.
+pub struct NoRays;
+
+impl Visibility for NoRays {
+    fn occluded(&self, _: Vec3, _: Vec3, _: f32, _: f32) -> bool {
+        unreachable!("a method that casts no ray was asked about one")
+    }
+
+    fn hit_distance(&self, _: Vec3, _: Vec3, _: f32, _: f32) -> Option<f32> {
+        unreachable!("a method that casts no ray was asked about one")
+    }
+
+    fn surface_hit(
+        &self,
+        _: Vec3,
+        _: Vec3,
+        _: f32,
+        _: f32,
+    ) -> Option<crate::visibility::SurfaceHit> {
+        unreachable!("a method that casts no ray was asked about one")
+    }
+}
+
 /// One setting of a method: what answers a kind, with its parameters fixed.
 pub trait Method: Send + Sync {
     /// Its name in specs and tables (`method`).

@@ -10,15 +10,13 @@ use super::steps::Runner;
 use super::{Error, LoadedSpec, Result, RunOptions};
 use crate::experiment::backend::Eval;
 use crate::experiment::columns::NamedRow;
-use crate::experiment::methods::{Answer, Method, MethodContext};
+use crate::experiment::methods::{Answer, Method, MethodContext, NoRays};
 use crate::experiment::metrics::rms_unquantised;
 use crate::experiment::progress::{stage, stage_adaptive};
 use crate::experiment::spec::{Backend, Spec};
 use crate::experiment::table::ErrorColumns;
 use crate::render::estimator::Points;
 use crate::sampling::rays::RaySet;
-use crate::visibility::{SurfaceHit, Visibility};
-use glam::Vec3;
 
 /// The spec's method settings this run evaluates: those this build cannot run are skipped,
 /// saying why, or refused where `opts.require_embree` asks for every one.
@@ -45,24 +43,6 @@ pub(super) fn runnable(ls: &LoadedSpec, spec: &Spec, opts: &RunOptions) -> Resul
         }
     }
     Ok(out)
-}
-
-/// The visibility a direct estimator is handed: it casts no ray, so any query is a bug of the
-/// method, reported as such.
-struct NoRays;
-
-impl Visibility for NoRays {
-    fn occluded(&self, _: Vec3, _: Vec3, _: f32, _: f32) -> bool {
-        unreachable!("a direct method's estimator cast a ray")
-    }
-
-    fn hit_distance(&self, _: Vec3, _: Vec3, _: f32, _: f32) -> Option<f32> {
-        unreachable!("a direct method's estimator cast a ray")
-    }
-
-    fn surface_hit(&self, _: Vec3, _: Vec3, _: f32, _: f32) -> Option<SurfaceHit> {
-        unreachable!("a direct method's estimator cast a ray")
-    }
 }
 
 impl Runner<'_> {
