@@ -114,11 +114,12 @@ impl Runner<'_> {
                 .cpu
                 .raycast_estimate(&casters, st.quantity(), st.at(), &rays)?;
             let img = st.image(bs, &values).map(|(i, _)| i);
-            refs.push((values, img));
+            let shaded = st.shaded_image(bs, &values);
+            refs.push((values, img, shaded));
         }
         st.seed_refs = refs;
         let mut vs = Vec::new();
-        for v in std::iter::once(&st.reference).chain(st.seed_refs.iter().map(|(a, _)| a)) {
+        for v in std::iter::once(&st.reference).chain(st.seed_refs.iter().map(|(a, ..)| a)) {
             if let Some(e) = st.truth_errors(v) {
                 vs.push(e.all);
             }
@@ -166,11 +167,15 @@ pub(super) fn seed_errors(
     let (mut v, mut im, mut t, mut c, mut i) = (vec![], vec![], vec![], vec![], vec![]);
     let (mut ins, mut outs, mut shaded) = (vec![], vec![], vec![]);
     for (j, vals) in values.iter().enumerate() {
-        let (reference, ref_img) = if j == 0 {
-            (&st.reference, st.ref_image.as_ref().map(|(r, _)| r))
+        let (reference, ref_img, ref_shaded) = if j == 0 {
+            (
+                &st.reference,
+                st.ref_image.as_ref().map(|(r, _)| r),
+                st.ref_shaded.as_ref(),
+            )
         } else {
-            let (a, img) = &st.seed_refs[j - 1];
-            (a, img.as_ref())
+            let (a, img, shaded) = &st.seed_refs[j - 1];
+            (a, img.as_ref(), shaded.as_ref())
         };
         if kind.columns().vertex {
             v.push(rms_unquantised(vals, reference));
@@ -186,8 +191,10 @@ pub(super) fn seed_errors(
             if let Some(img) = img {
                 im.push(rms_u8(&img.data, &r.data, Some(mask)));
             }
-            if let (Some(a), Some(b)) = (st.shaded_image(bs, vals), st.shaded_image(bs, reference))
-            {
+            if let Some(b) = ref_shaded {
+                let a = st
+                    .shaded_image(bs, vals)
+                    .expect("a kind with a shaded reference");
                 shaded.push(rms_u8(&a.data, &b.data, Some(mask)));
             }
         }

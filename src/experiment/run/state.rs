@@ -44,12 +44,14 @@ pub(super) struct SceneState {
     pub(super) view: Option<GBuffer>,
     pub(super) reference: Vec<f32>,
     pub(super) ref_image: Option<(Image, Vec<bool>)>,
+    /// The same-ray reference's shaded picture ([`Self::shaded_image`]), where the kind has one.
+    pub(super) ref_shaded: Option<Image>,
     /// The converged reference.
     pub(super) truth: Option<Truth>,
     /// Where the truth came from (cache file, or computed and how long it took).
     pub(super) truth_source: String,
-    /// The same-ray reference on the seeds after the first: values and image.
-    pub(super) seed_refs: Vec<(Vec<f32>, Option<Image>)>,
+    /// The same-ray reference on the seeds after the first: values, image and shaded picture.
+    pub(super) seed_refs: Vec<(Vec<f32>, Option<Image>, Option<Image>)>,
     /// RMS over points of the same-ray references against the truth, per seed.
     pub(super) reference_vs_truth: Vec<f64>,
     /// Ray-cast time per (backend, k).
@@ -132,6 +134,7 @@ impl SceneState {
             view,
             reference: Vec::new(),
             ref_image: None,
+            ref_shaded: None,
             raycast_s: HashMap::new(),
             raycast_kernel_s: HashMap::new(),
             in_spheres,

@@ -243,7 +243,8 @@ impl<'a> Runner<'a> {
                 crate::experiment::figures::grids::write_coverage(&p, view)?;
             }
         }
-        if let Some(shaded) = st.shaded_image(bs, &st.reference) {
+        st.ref_shaded = st.shaded_image(bs, &st.reference);
+        if let Some(shaded) = &st.ref_shaded {
             let p = out.join(format!("images/{}-reference-shaded.png", bs.name));
             shaded.save_png(&p).map_err(Error::io(&p))?;
         }
