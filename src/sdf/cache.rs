@@ -172,6 +172,25 @@ impl Outcome {
     }
 }
 
+/// [`load_or_bake`] where there is a cache folder; without one, the volume baked (and stored
+/// at `precision`), with no outcome.
+pub fn load_or_bake_in(
+    dir: Option<&Path>,
+    triangles: &[[Vec3; 3]],
+    mesh_sha256: &str,
+    (res, margin): (usize, usize),
+    precision: Precision,
+) -> Result<(DistanceVolume, Option<Outcome>), SdfError> {
+    match dir {
+        Some(dir) => load_or_bake(dir, triangles, mesh_sha256, (res, margin), precision)
+            .map(|(v, outcome)| (v, Some(outcome))),
+        None => Ok((
+            DistanceVolume::bake(triangles, res, margin)?.with_precision(precision),
+            None,
+        )),
+    }
+}
+
 /// Loads the volume of (`triangles`, sha256 `mesh_sha256`, `res`, `margin`, `precision`) from
 /// `dir`, or bakes and caches it (a lower precision from the f32 volume, cached too). A
 /// rejected file is reported in the outcome and replaced; a file that cannot be written is

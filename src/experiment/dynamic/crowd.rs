@@ -176,21 +176,14 @@ fn peers(
         .map(|t| mesh.mesh.triangle(t))
         .collect();
     let what = |peer: &str| format!("dynamic: {peer} of {}", mesh.label);
-    let volume = match supply.cache.as_deref() {
-        Some(dir) => {
-            crate::sdf::cache::load_or_bake(
-                dir,
-                &triangles,
-                &mesh.sha256,
-                (p.sdf_res, 2),
-                crate::sdf::Precision::F32,
-            )
-            .map_err(|e| Error::invalid(what("sdf"), e.to_string()))?
-            .0
-        }
-        None => crate::sdf::DistanceVolume::bake(&triangles, p.sdf_res, 2)
-            .map_err(|e| Error::invalid(what("sdf"), e.to_string()))?,
-    };
+    let (volume, _) = crate::sdf::cache::load_or_bake_in(
+        supply.cache.as_deref(),
+        &triangles,
+        &mesh.sha256,
+        (p.sdf_res, 2),
+        crate::sdf::Precision::F32,
+    )
+    .map_err(|e| Error::invalid(what("sdf"), e.to_string()))?;
     let params = crate::aofield::BakeParams {
         res: p.aofield_res,
         ..crate::aofield::BakeParams::default()

@@ -253,30 +253,19 @@ impl Sdf {
                     let tris: Vec<_> = (0..inst.mesh.triangle_count())
                         .map(|t| inst.mesh.triangle(t))
                         .collect();
-                    let v = match &ctx.cache {
-                        Some(dir) => {
-                            let sha = crate::experiment::scenes::mesh_sha256(&inst.mesh);
-                            let (v, outcome) = cache::load_or_bake(
-                                dir,
-                                &tris,
-                                &sha,
-                                (self.res, self.margin),
-                                self.precision,
-                            )
-                            .map_err(invalid)?;
-                            for why in outcome.rejected() {
-                                eprintln!("  sdf cache entry rejected, rebaking: {why}");
-                            }
-                            cached &= outcome.cached();
-                            v
-                        }
-                        None => {
-                            cached = false;
-                            DistanceVolume::bake(&tris, self.res, self.margin)
-                                .map_err(invalid)?
-                                .with_precision(self.precision)
-                        }
-                    };
+                    let sha = crate::experiment::scenes::mesh_sha256(&inst.mesh);
+                    let (v, outcome) = cache::load_or_bake_in(
+                        ctx.cache.as_deref(),
+                        &tris,
+                        &sha,
+                        (self.res, self.margin),
+                        self.precision,
+                    )
+                    .map_err(invalid)?;
+                    for why in outcome.iter().flat_map(|o| o.rejected()) {
+                        eprintln!("  sdf cache entry rejected, rebaking: {why}");
+                    }
+                    cached &= outcome.is_some_and(|o| o.cached());
                     let v = Arc::new(v);
                     volumes.push((mesh, v.clone()));
                     v
