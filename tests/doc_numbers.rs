@@ -783,7 +783,6 @@ fn dynamic(c: &mut Claims) {
         println!("{text}");
     }
     c.quotes("docs/results.md", &text, from);
-    c.quotes("README.md", &text, from);
     let (lo, hi) = min_max(
         rows.iter()
             .filter(|r| r["sweep"] == "crowd")
@@ -1211,9 +1210,6 @@ fn animated_figure8(c: &mut Claims) {
         mean("world_rebuild"),
         mean("two_level"),
     );
-    if std::env::var("VISFIELD_PRINT_ANIMATED").is_ok() {
-        println!("{text}");
-    }
     c.quotes("docs/results.md", &text, from);
 }
 
@@ -1265,9 +1261,6 @@ fn crowd_pixels(c: &mut Claims) {
         frame("embree_rebuild") / frame("field"),
         frame("world_rebuild") / frame("field"),
     );
-    if std::env::var("VISFIELD_PRINT_ANIMATED").is_ok() {
-        println!("{text}");
-    }
     c.quotes("docs/results.md", &text, from);
     let short = format!(
         "per pixel at {casters} casters (`results/dynamic2010_crowd/`, AO at every receiver pixel of \
@@ -1328,9 +1321,6 @@ fn paper_pixel_sets(c: &mut Claims) {
         range(&fig8, "rms_image_shaded"),
         range(&fig8, "rms_image"),
     );
-    if std::env::var("VISFIELD_PRINT_ANIMATED").is_ok() {
-        println!("{text}");
-    }
     c.quotes(
         "docs/results.md",
         &text,
@@ -1419,9 +1409,6 @@ fn equal_bytes(c: &mut Claims) {
         say(cone),
         say(aofield),
     );
-    if std::env::var("VISFIELD_PRINT_ANIMATED").is_ok() {
-        println!("{text}");
-    }
     c.quotes("docs/results.md", &text, from);
 }
 
@@ -1471,9 +1458,6 @@ fn figure9_population(c: &mut Claims) {
         paper_range("view_a"),
         paper_range("view_b"),
     );
-    if std::env::var("VISFIELD_PRINT_ANIMATED").is_ok() {
-        println!("{text}");
-    }
     c.quotes("docs/results.md", &text, from);
 }
 
@@ -1513,9 +1497,6 @@ fn crowd_peers(c: &mut Claims) {
         1e3 * mean("embree_instances", "frame_s"),
         mean("world_rebuild", "rms_vs_truth"),
     );
-    if std::env::var("VISFIELD_PRINT_ANIMATED").is_ok() {
-        println!("{text}");
-    }
     c.quotes("docs/results.md", &text, from);
 }
 
