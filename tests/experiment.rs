@@ -343,7 +343,7 @@ fn tiny_spec_runs_end_to_end_and_check_uses_its_thresholds() {
     );
     for f in [
         "raycast_sweep.csv",
-        "ao_tiny.csv",
+        "values_tiny.csv",
         "spec.json",
         "images.png",
         "differences.png",
@@ -535,7 +535,7 @@ fn image_ao_evaluates_at_the_receiver_pixels_of_the_gbuffer() {
     assert!(r.rms_vertex.is_none() && r.max_error_vertex.is_none());
     assert!(r.rms_image.unwrap().is_finite() && r.rms_vs_truth.unwrap().is_finite());
     // No per-vertex CSV for a per-pixel kind.
-    assert!(!out.join("ao_tiny.csv").exists());
+    assert!(!out.join("values_tiny.csv").exists());
 
     // The same points and reference, computed here from the scene alone.
     let scenes = Scenes::build(&ls.spec, &ls.path, "scenes").unwrap();

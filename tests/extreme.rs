@@ -179,7 +179,7 @@ fn a_distant_object_leaves_the_ao_unchanged() {
         let dir = tempfile::tempdir().unwrap();
         let ls = common::loaded(dir.path(), text);
         run(&ls, &common::options(dir.path().join("out"))).unwrap();
-        let csv = std::fs::read_to_string(dir.path().join("out/ao_tiny.csv")).unwrap();
+        let csv = std::fs::read_to_string(dir.path().join("out/values_tiny.csv")).unwrap();
         let mut lines = csv.lines();
         let header: Vec<&str> = lines.next().unwrap().split(',').collect();
         let col = header.iter().position(|&h| h == "reference").unwrap();

@@ -157,7 +157,7 @@ fn a_kind_registered_at_run_time_is_read_validated_and_run_end_to_end() {
     assert_eq!(r.rms_image, Some(0.0));
     assert_eq!(r.rms_vs_truth, Some(0.0));
     // The per-point values written beside the table are the kind's, in every column.
-    let text = std::fs::read_to_string(out.join("ao_tiny.csv")).unwrap();
+    let text = std::fs::read_to_string(out.join("values_tiny.csv")).unwrap();
     let mut lines = text.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
     let value_columns: Vec<usize> = header
@@ -410,8 +410,8 @@ fn a_kind_with_three_channels_runs_to_a_table_rgb_images_and_its_own_columns() {
     assert_eq!(s.channels, 1);
     assert!((s.rms_vertex.unwrap() - e0).abs() <= 1e-9 * e0);
     let (sc, rc) = (
-        csv_columns(&scalar_out.join("ao_tiny.csv")),
-        csv_columns(&out.join("ao_tiny.csv")),
+        csv_columns(&scalar_out.join("values_tiny.csv")),
+        csv_columns(&out.join("values_tiny.csv")),
     );
     assert_eq!(rc["reference_c0"], sc["reference"]);
     assert_eq!(rc[&format!("{}_c0", r.cell)], sc[&s.cell]);

@@ -12,8 +12,9 @@
 //! - `pairs.csv`: every shard's pairs (a pair's two cells share a field group, so one shard
 //!   measured it: [`super::shard`]), in the single run's order of their cells (`cell_a`,
 //!   `cell_b`);
-//! - a per-point CSV (`ao_SCENE.csv`): the columns every shard writes (the points, the
-//!   references) from the first shard holding it, then each shard's cell columns in order;
+//! - a per-point CSV (`values_SCENE.csv`; `ao_SCENE.csv` in runs written before): the columns
+//!   every shard writes (the points, the references) from the first shard holding it, then
+//!   each shard's cell columns in order;
 //! - any other CSV (`raycast_sweep.csv`: per scene): a scene's rows from the first shard that
 //!   ran it (the scene steps of shards sharing a scene compute the same values; only times
 //!   differ);
@@ -164,7 +165,7 @@ fn join_csv(name: &str, parts: &[(&Path, Table)], ids: &[String]) -> Result<Tabl
         rows.sort_by_key(|r| keys.iter().map(|&k| at(&r[k])).collect::<Vec<_>>());
         return Ok((header.clone(), rows));
     }
-    if name.starts_with("ao_") {
+    if name.starts_with("values_") || name.starts_with("ao_") {
         // Shared columns: those every shard writes; the rest are cells'.
         let shared: Vec<String> = header
             .iter()

@@ -135,7 +135,7 @@ impl Runner<'_> {
                 }
                 text.push('\n');
             }
-            let p = self.opts.out.join(format!("ao_{}.csv", bs.name));
+            let p = self.opts.out.join(format!("values_{}.csv", bs.name));
             crate::io::write_atomic(&p, text.as_bytes()).map_err(Error::io(&p))?;
         }
         Ok(())
