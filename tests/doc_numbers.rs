@@ -1234,6 +1234,11 @@ fn animated_figure8(c: &mut Claims) {
 fn crowd_pixels(c: &mut Claims) {
     let short = crowd_pixels_of(c, "dynamic2010_crowd");
     c.quotes("README.md", &short, "results/dynamic2010_crowd/frames.csv");
+    // The same crowd under spherical lights, in a glossy floor and through Sponza: the long
+    // text only.
+    crowd_pixels_of(c, "dynamic2010_crowd_shadows");
+    crowd_pixels_of(c, "dynamic2010_crowd_reflections");
+    crowd_pixels_of(c, "dynamic2010_crowd_sponza");
 }
 
 /// [`crowd_pixels`] of one animated spec's committed run: quotes its long text in
