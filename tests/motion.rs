@@ -3,7 +3,6 @@
 //! giving every frame's values bit for bit; the overlap counts of a constructed approach exact.
 
 use std::path::Path;
-use visfield::experiment::outputs::read_csv;
 use visfield::experiment::run::frames::FrameRow;
 use visfield::experiment::run::run;
 use visfield::experiment::scenes::Scenes;
@@ -11,36 +10,7 @@ use visfield::experiment::spec::Spec;
 use visfield::experiment::table::Row;
 
 mod common;
-use common::{loaded, options, tiny, ONE_FIELD};
-
-/// The tiny spec's caster, and the same with `motion` (JSON) after its transform.
-const CASTER: &str = r#""transform": { "fit": { "center": [0.5, 0.45, 0.5], "radius": 0.35 } }"#;
-
-/// The tiny spec with `motion` on its caster, `receiver_motion` on its corner and `animation`
-/// (JSON members spliced in; empty strings leave them out).
-fn animated(motion: &str, receiver_motion: &str, animation: &str) -> String {
-    let mut t = tiny(ONE_FIELD, "");
-    if !motion.is_empty() {
-        t = t.replace(CASTER, &format!("{CASTER}, \"motion\": {motion}"));
-    }
-    if !receiver_motion.is_empty() {
-        t = t.replace(
-            r#""receiver": true }"#,
-            &format!(r#""receiver": true, "motion": {receiver_motion} }}"#),
-        );
-    }
-    if !animation.is_empty() {
-        t = t.replace(
-            r#""quick": {}"#,
-            &format!(r#""animation": {animation}, "quick": {{}}"#),
-        );
-    }
-    // No field sweep: an animated spec has none.
-    t.replace(r#", "field_rays_sweep": [16, 64]"#, "")
-}
-
-const TWO_FRAMES: &str = r#"{ "frames": 2, "time_step": 0.5 }"#;
-const ORBIT: &str = r#"{ "orbit": { "axis": [0, 1, 0], "radius": 0.05, "period": 4 } }"#;
+use common::{animated, frames_of, loaded, options, tiny, ONE_FIELD, ORBIT, TWO_FRAMES};
 
 fn error_of(text: &str) -> String {
     let e = Spec::parse(text, Path::new("specs/bad.json"))
@@ -103,11 +73,6 @@ fn bad_motion_is_refused_naming_the_field_and_the_value() {
         ),
         (
             r#""reference": {"#,
-            r#""backends": ["cpu", "gpu"], "reference": {"#,
-            "`backends`: an animated spec runs on the CPU only",
-        ),
-        (
-            r#""reference": {"#,
             r#""methods": [{"method": "raycast"}], "reference": {"#,
             "`methods`: an animated spec measures its per-frame methods",
         ),
@@ -159,15 +124,6 @@ fn a_path_leaving_the_range_is_refused_when_the_scene_is_built() {
         };
         assert!(e.contains(field) && e.contains(expected), "{e}");
     }
-}
-
-fn frames_of(dir: &Path, text: &str, name: &str) -> Vec<FrameRow> {
-    let ls = loaded(dir, text);
-    let out = dir.join(name);
-    let report = run(&ls, &options(out.clone())).unwrap();
-    let rows: Vec<FrameRow> = read_csv(&out.join("frames.csv")).unwrap();
-    assert_eq!(rows, report.frames);
-    rows
 }
 
 /// An animation of one frame with no motion is the static scene: the field methods' values

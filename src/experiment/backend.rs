@@ -12,8 +12,8 @@
 
 use super::backend_gpu::{GpuBackend, GpuQuantity};
 use super::spec::Backend;
-use super::Result;
-use crate::field::scene::FieldScene;
+use super::{Error, Result};
+use crate::field::scene::{FieldInstance, FieldScene};
 use crate::gpu::AdapterPreference;
 use crate::render::estimator::{Estimator, Points};
 use crate::sampling::rays::RaySet;
@@ -65,6 +65,16 @@ pub trait Eval {
     /// Host time of the preparation (GPU: pack, upload, BVH build, compile); `None` on the CPU,
     /// which reads the fields and the tracer in place.
     fn setup_s(&self) -> Option<f64>;
+    /// Moves the prepared fields' instances to `instances`' transforms (the same fields, instance
+    /// by instance), for the next [`Self::estimate`]: what a frame of rigid motion costs a field
+    /// kernel. Refused where nothing prepared can move (a ray caster's BVH is rebuilt instead).
+    fn place(&self, instances: &[FieldInstance]) -> Result<()> {
+        let _ = instances;
+        Err(Error::invalid(
+            "place",
+            "this evaluation holds no field instances to move",
+        ))
+    }
 }
 
 /// A place where estimates are computed.

@@ -22,7 +22,7 @@
 use super::backend::{Casters, ComputeBackend, Estimate, Eval, Quantity};
 use super::spec::Backend;
 use super::Result;
-use crate::field::scene::FieldScene;
+use crate::field::scene::{FieldInstance, FieldScene};
 use crate::gpu::{
     AdapterPreference, FieldGpuOptions, FieldLayout, GpuContext, GpuError, GpuTiming, GpuTracer,
 };
@@ -84,6 +84,8 @@ pub struct KernelEval<K, O> {
     pub run: KernelEntry<K, O>,
     /// The kernel's preparation time (pack, upload, compile).
     pub setup: fn(&K) -> std::time::Duration,
+    /// Moves the kernel's instances (its `place`).
+    pub place: fn(&K, &[FieldInstance]) -> std::result::Result<(), GpuError>,
 }
 
 /// A field kernel's entry point, as [`KernelEval`] calls it.
@@ -98,6 +100,10 @@ impl<K, O> Eval for KernelEval<K, O> {
 
     fn setup_s(&self) -> Option<f64> {
         Some((self.setup)(&self.kernel).as_secs_f64())
+    }
+
+    fn place(&self, instances: &[FieldInstance]) -> Result<()> {
+        Ok((self.place)(&self.kernel, instances)?)
     }
 }
 

@@ -257,9 +257,9 @@ impl Validator<'_> {
     /// The frames and every instance's motion: a motion only with `animation`; frames in
     /// 1..=[`MAX_FRAMES`], a positive finite time step, known per-frame methods, each named
     /// once; each motion's own values ([`crate::geometry::motion::Motion::problem`]). An
-    /// animated spec runs on the CPU and writes `frames.csv`, so the keys of the static table
-    /// (`methods`, `paper`, `thresholds`, `reference.field_rays_sweep`, the "gpu" backend) are
-    /// refused in it.
+    /// animated spec writes `frames.csv`, so the keys of the static table (`methods`, `paper`,
+    /// `thresholds`, `reference.field_rays_sweep`) are refused in it; its "gpu" backend adds the
+    /// GPU twins of its methods ([`super::dynamic::gpu_movers`]).
     fn animation(&self, s: &Spec, p: &Paths) -> Result<(), SpecError> {
         let motions = s.scenes.iter().enumerate().flat_map(|(i, sc)| {
             let here = format!("{}[{i}]", p.scenes);
@@ -316,9 +316,6 @@ impl Validator<'_> {
         }
         let refuse =
             |field: &str, why: &str| Err(self.err(field, format!("an animated spec {why}")));
-        if s.backends.contains(&Backend::Gpu) {
-            return refuse(p.backends, "runs on the CPU only: drop \"gpu\"");
-        }
         if !s.methods.is_empty() {
             return refuse(
                 "methods",

@@ -24,10 +24,12 @@
 //! `win0`, `win1`, … (storage layout) or `field_tex` (texture layout).
 
 use super::context::{entry, storage_layout_entry, GpuContext};
-use super::field_data::{field_words, FieldInstanceGpu, PackedFields};
+use super::field_data::{field_words, placed, FieldInstanceGpu, PackedFields};
 use super::texture::FieldTexture;
 use super::GpuError;
 use crate::field::scene::FieldInstance;
+use crate::field::VisibilityField;
+use std::sync::Arc;
 
 /// The bind group the field bindings occupy; group 0 is the kernel's own.
 pub(crate) const FIELD_GROUP: u32 = 1;
@@ -162,6 +164,10 @@ pub(crate) struct FieldBinding {
     field_bytes: u64,
     group_layout: wgpu::BindGroupLayout,
     bind_group: wgpu::BindGroup,
+    /// The instance records as uploaded, and each instance's field: what [`Self::place`]
+    /// moves and checks.
+    records: Vec<FieldInstanceGpu>,
+    instance_fields: Vec<Arc<VisibilityField>>,
 }
 
 impl FieldBinding {
@@ -200,7 +206,10 @@ impl FieldBinding {
             layout: &group_layout,
             entries: &resources.entries(),
         });
+        let instance_fields = instances.iter().map(|i| i.field.clone()).collect();
         Ok(FieldBinding {
+            records: packed.instances.clone(),
+            instance_fields,
             resources,
             instance_count: packed.instances.len() as u32,
             prelude,
@@ -245,6 +254,33 @@ impl FieldBinding {
     /// The bind group of group [`FIELD_GROUP`].
     pub fn bind_group(&self) -> &wgpu::BindGroup {
         &self.bind_group
+    }
+
+    /// Moves the bound instances to `instances`' transforms (the same fields, instance by
+    /// instance, as at [`Self::new`]): their records are rewritten in place on the device, the
+    /// fields stay where they are. What a moving rigid object costs the field kernels per frame.
+    ///
+    /// Errors: [`GpuError::Invalid`] for another instance count or another field at an index.
+    pub fn place(&self, ctx: &GpuContext, instances: &[FieldInstance]) -> Result<(), GpuError> {
+        if instances.len() != self.records.len() {
+            return Err(GpuError::Invalid(format!(
+                "{} instances placed on {} bound",
+                instances.len(),
+                self.records.len()
+            )));
+        }
+        let mut records = self.records.clone();
+        for (i, (r, inst)) in records.iter_mut().zip(instances).enumerate() {
+            if !Arc::ptr_eq(&inst.field, &self.instance_fields[i]) {
+                return Err(GpuError::Invalid(format!(
+                    "instance {i} placed with another field than the one bound"
+                )));
+            }
+            *r = placed(inst, *r);
+        }
+        ctx.queue
+            .write_buffer(&self.resources.instances, 0, bytemuck::cast_slice(&records));
+        Ok(())
     }
 
     /// Field instances bound.

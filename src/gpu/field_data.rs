@@ -217,21 +217,7 @@ impl PackedFields {
         let instances = instances
             .iter()
             .zip(&field_of_instance)
-            .map(|(inst, &fi)| {
-                let tr = &inst.transform;
-                let q = tr.rotation.inverse();
-                let b = &inst.field.bounds;
-                FieldInstanceGpu {
-                    rotation: [q.x, q.y, q.z, q.w],
-                    translation: tr.translation.to_array(),
-                    scale: tr.scale,
-                    world_center: inst.world_center.to_array(),
-                    world_radius: inst.world_radius,
-                    model_center: b.center.to_array(),
-                    model_radius: b.radius,
-                    ..records[fi]
-                }
-            })
+            .map(|(inst, &fi)| placed(inst, records[fi]))
             .collect();
         Ok(PackedFields {
             instances,
@@ -247,6 +233,25 @@ impl PackedFields {
         for (inst, &fi) in self.instances.iter_mut().zip(&self.field_of_instance) {
             inst.data_base = base_of_field[fi];
         }
+    }
+}
+
+/// `record` (a field's instance record) placed by `inst`'s transform: the world-to-model
+/// rotation, translation, scale and the world and model bounding spheres; the field's own
+/// entries kept.
+pub(super) fn placed(inst: &FieldInstance, record: FieldInstanceGpu) -> FieldInstanceGpu {
+    let tr = &inst.transform;
+    let q = tr.rotation.inverse();
+    let b = &inst.field.bounds;
+    FieldInstanceGpu {
+        rotation: [q.x, q.y, q.z, q.w],
+        translation: tr.translation.to_array(),
+        scale: tr.scale,
+        world_center: inst.world_center.to_array(),
+        world_radius: inst.world_radius,
+        model_center: b.center.to_array(),
+        model_radius: b.radius,
+        ..record
     }
 }
 

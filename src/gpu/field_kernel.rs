@@ -291,6 +291,11 @@ impl<'a> FieldKernel<'a> {
         )
     }
 
+    /// Moves the bound instances to `instances`' transforms ([`FieldBinding::place`]).
+    pub fn place(&self, instances: &[FieldInstance]) -> Result<(), GpuError> {
+        self.field.place(self.ctx, instances)
+    }
+
     /// Rays per invocation the next call starts with.
     pub fn rays_per_invocation(&self) -> u32 {
         self.rays_per_invocation

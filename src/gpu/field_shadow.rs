@@ -66,6 +66,12 @@ impl<'a> FieldShadowKernel<'a> {
         })
     }
 
+    /// Moves the instances to `instances`' transforms, the fields staying on the device (the
+    /// same fields, instance by instance, as at `new`): a moving rigid object's per-frame cost.
+    pub fn place(&self, instances: &[FieldInstance]) -> Result<(), GpuError> {
+        self.core.place(instances)
+    }
+
     /// Host time of packing, uploading and compiling in [`Self::new`].
     pub fn setup_time(&self) -> Duration {
         self.setup

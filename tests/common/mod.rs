@@ -203,3 +203,50 @@ pub fn read_csv_maps(path: &Path) -> Vec<std::collections::HashMap<String, Strin
         })
         .collect()
 }
+
+/// The tiny spec's caster, and the same with `motion` (JSON) after its transform.
+pub const CASTER: &str =
+    r#""transform": { "fit": { "center": [0.5, 0.45, 0.5], "radius": 0.35 } }"#;
+
+/// The tiny spec with `motion` on its caster, `receiver_motion` on its corner and `animation`
+/// (JSON members spliced in; empty strings leave them out).
+pub fn animated(motion: &str, receiver_motion: &str, animation: &str) -> String {
+    let mut t = tiny(ONE_FIELD, "");
+    if !motion.is_empty() {
+        t = t.replace(CASTER, &format!("{CASTER}, \"motion\": {motion}"));
+    }
+    if !receiver_motion.is_empty() {
+        t = t.replace(
+            r#""receiver": true }"#,
+            &format!(r#""receiver": true, "motion": {receiver_motion} }}"#),
+        );
+    }
+    if !animation.is_empty() {
+        t = t.replace(
+            r#""quick": {}"#,
+            &format!(r#""animation": {animation}, "quick": {{}}"#),
+        );
+    }
+    // No field sweep: an animated spec has none.
+    t.replace(r#", "field_rays_sweep": [16, 64]"#, "")
+}
+
+/// Two frames half a second apart, and a small orbit of the caster about its own centre.
+pub const TWO_FRAMES: &str = r#"{ "frames": 2, "time_step": 0.5 }"#;
+pub const ORBIT: &str = r#"{ "orbit": { "axis": [0, 1, 0], "radius": 0.05, "period": 4 } }"#;
+
+/// The animated spec `text` run into `dir/name`: its `frames.csv`, read back (equal to the
+/// run's report).
+pub fn frames_of(
+    dir: &Path,
+    text: &str,
+    name: &str,
+) -> Vec<visfield::experiment::run::frames::FrameRow> {
+    let ls = loaded(dir, text);
+    let out = dir.join(name);
+    let report = visfield::experiment::run::run(&ls, &options(out.clone())).unwrap();
+    let rows: Vec<visfield::experiment::run::frames::FrameRow> =
+        visfield::experiment::outputs::read_csv(&out.join("frames.csv")).unwrap();
+    assert_eq!(rows, report.frames);
+    rows
+}

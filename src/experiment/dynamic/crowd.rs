@@ -461,7 +461,7 @@ impl Crowd {
                     query_s,
                     values: ao,
                 } = super::movers::timed(m.as_mut(), &casters, |m| {
-                    m.ao(&self.points, &self.normals, &self.rays, &self.opts)
+                    Ok(m.ao(&self.points, &self.normals, &self.rays, &self.opts))
                 })?;
                 let reference = reference.get_or_insert_with(|| ao.clone());
                 if animated && m.name() == "field" {

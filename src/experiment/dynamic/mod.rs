@@ -46,6 +46,7 @@
 
 pub mod animation;
 pub mod crowd;
+pub mod gpu_movers;
 pub mod movers;
 
 use super::fields::FieldSupply;

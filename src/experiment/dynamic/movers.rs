@@ -10,6 +10,7 @@ use crate::field::sphere_bvh::SphereBvhScene;
 use crate::field::VisibilityField;
 use crate::geometry::{Mesh, Similarity, Sphere};
 use crate::render::ao::{ao_at_points, AoOptions};
+use crate::render::estimator::{Estimator, Points};
 use crate::sampling::rays::RaySet;
 use crate::sdf::{DistanceVolume, SdfInstance, SdfScene, SdfTrace};
 use crate::trace::Tracer;
@@ -92,13 +93,13 @@ pub struct Timed {
 pub fn timed(
     mover: &mut dyn Mover,
     frame: &FrameCasters,
-    query: impl FnOnce(&dyn Mover) -> Vec<f32>,
+    query: impl FnOnce(&dyn Mover) -> crate::experiment::Result<Vec<f32>>,
 ) -> crate::experiment::Result<Timed> {
     let t = Instant::now();
     mover.update(frame)?;
     let update_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let values = query(&*mover);
+    let values = query(&*mover)?;
     Ok(Timed {
         update_s,
         query_s: t.elapsed().as_secs_f64(),
@@ -160,6 +161,26 @@ impl FrameCasters<'_> {
     }
 }
 
+/// The field instances of a frame: each instance's field (one per mesh, and its normal field
+/// where the kind reads them) placed by its transform.
+pub fn field_instances(
+    fields: &[Arc<VisibilityField>],
+    normals: &[Option<Arc<NormalField>>],
+    frame: &FrameCasters,
+) -> Vec<FieldInstance> {
+    frame
+        .instances
+        .iter()
+        .map(|&(m, t)| {
+            let f = FieldInstance::new(fields[m].clone(), t);
+            match normals.get(m).cloned().flatten() {
+                Some(n) => f.with_normals(n),
+                None => f,
+            }
+        })
+        .collect()
+}
+
 /// A method answering visibility in a moving scene.
 pub trait Mover {
     fn name(&self) -> &'static str;
@@ -173,6 +194,16 @@ pub trait Mover {
     /// [`Self::vis`]; a method that answers AO with no rays (AO fields) answers it directly.
     fn ao(&self, points: &[Vec3], normals: &[Vec3], rays: &RaySet, opts: &AoOptions) -> Vec<f32> {
         ao_at_points(self.vis(), points, normals, rays, opts)
+    }
+    /// A render kind's estimate at `at` on `rays` (an animated spec's query): `est` through
+    /// [`Self::vis`]; a method on the GPU runs its kernel instead.
+    fn estimate(
+        &self,
+        est: &dyn Estimator,
+        at: Points,
+        rays: &RaySet,
+    ) -> crate::experiment::Result<Vec<f32>> {
+        Ok(est.estimate(self.vis(), at, rays))
     }
 }
 
@@ -359,17 +390,7 @@ impl Mover for Fields {
 
     fn update(&mut self, frame: &FrameCasters) -> crate::experiment::Result<()> {
         let scene = FieldScene {
-            instances: frame
-                .instances
-                .iter()
-                .map(|&(m, t)| {
-                    let f = FieldInstance::new(self.fields[m].clone(), t);
-                    match self.normals.get(m).cloned().flatten() {
-                        Some(n) => f.with_normals(n),
-                        None => f,
-                    }
-                })
-                .collect(),
+            instances: field_instances(&self.fields, &self.normals, frame),
             options: self.options,
         };
         if self.sphere_bvh {

@@ -96,6 +96,7 @@ impl GpuQuantity for AoGpu {
             opts: self.0,
             run: |k, at, rays, o| k.ao(at.points, at.normals, rays, o),
             setup: FieldAoKernel::setup_time,
+            place: FieldAoKernel::place,
         }))
     }
 

@@ -215,6 +215,7 @@ impl GpuQuantity for ReflectGpu {
             opts: self.0.clone(),
             run: |k, at, rays, o| k.reflections(at.points, at.normals, rays, o),
             setup: FieldReflectKernel::setup_time,
+            place: FieldReflectKernel::place,
         }))
     }
 

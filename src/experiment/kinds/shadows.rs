@@ -177,6 +177,7 @@ impl GpuQuantity for ShadowGpu {
             opts: self.0.clone(),
             run: |k, at, rays, o| k.light_fractions(at.points, at.normals, rays, o),
             setup: FieldShadowKernel::setup_time,
+            place: FieldShadowKernel::place,
         }))
     }
 

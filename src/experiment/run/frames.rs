@@ -16,15 +16,21 @@
 //! supplied once, before the frames. [`super::frames_write`] writes the outputs.
 
 use super::{LoadedSpec, RunOptions};
+use crate::experiment::backend::{ComputeBackend, Quantity};
 use crate::experiment::dynamic::animation::Frame;
+use crate::experiment::dynamic::gpu_movers;
 use crate::experiment::dynamic::movers::{self, FrameCasters, Mover, Timed};
 use crate::experiment::kinds::Kind;
 use crate::experiment::metrics::rms_unquantised;
 use crate::experiment::plan::cells_of;
 use crate::experiment::scenes::{BuiltScene, Scenes};
-use crate::experiment::spec::{exact_sqrt, Spec};
+use crate::experiment::spec::{exact_sqrt, Backend, Spec};
 use crate::experiment::truth_cache::{load_or_compute, TruthInputs};
 use crate::experiment::{Error, Result};
+use crate::field::lookup::LookupOptions;
+use crate::field::normals::NormalField;
+use crate::field::scene::FieldScene;
+use crate::field::VisibilityField;
 use crate::geometry::{Mesh, Similarity, Sphere};
 use crate::render::points::{EvalPoints, GBuffer, Support};
 use crate::render::primary::{gbuffer, PrimaryScene};
@@ -131,11 +137,26 @@ pub(super) fn run(
         .expect("an animated spec has its animation");
     let k = exact_sqrt(spec.render.rays_per_point)
         .ok_or_else(|| Error::invalid("render.rays_per_point", "not a perfect square"))?;
-    let (names, skipped) = methods(spec, opts)?;
+    let (mut names, skipped) = methods(spec, opts)?;
     let kind = crate::experiment::kinds::of(&spec.render);
+    let gpu = if spec.backends.contains(&Backend::Gpu) {
+        // The GPU twins of the CPU methods asked for.
+        for (cpu, twin) in [("world_rebuild", 0), ("field_every_sphere", 1)] {
+            if names.contains(&cpu) {
+                names.push(gpu_movers::NAMES[twin]);
+            }
+        }
+        Some(crate::experiment::backend::open(
+            Backend::Gpu,
+            &opts.adapter,
+        )?)
+    } else {
+        None
+    };
     let runner = SceneRunner {
         spec,
         opts,
+        gpu: gpu.as_deref(),
         kind: kind.as_ref(),
         rays: RaySet::new(k, spec.reference.seed),
         names: &names,
@@ -161,6 +182,8 @@ pub(super) fn run(
 struct SceneRunner<'a> {
     spec: &'a Spec,
     opts: &'a RunOptions,
+    /// The GPU backend, where the spec asks for it (its methods: [`gpu_movers`]).
+    gpu: Option<&'a dyn ComputeBackend>,
     kind: &'a dyn Kind,
     rays: RaySet,
     names: &'a [&'static str],
@@ -168,10 +191,16 @@ struct SceneRunner<'a> {
     dt: f64,
 }
 
-/// A field cell's methods on one scene.
+/// A field cell's methods on one scene, and its fields (per caster mesh, with its normal
+/// field where the kind reads them) for the GPU's.
 struct CellMovers {
     id: String,
+    /// A "gpu" cell: its method is the GPU's, `movers` empty.
+    gpu: bool,
     movers: Vec<Box<dyn Mover>>,
+    fields: Vec<Arc<VisibilityField>>,
+    normals: Vec<Option<Arc<NormalField>>>,
+    options: LookupOptions,
 }
 
 /// The instance each point lies on (vertices: their receiver's; pixels: the G-buffer hit's).
@@ -223,10 +252,66 @@ impl SceneRunner<'_> {
         let t = Instant::now();
         let mut cells = self.cells(scenes, s, bs, &global)?;
         let fields_s = t.elapsed().as_secs_f64();
+        let frame_instances = |fbs: &BuiltScene| -> Vec<(usize, Similarity)> {
+            (fbs.scene.casters())
+                .map(|(i, inst)| (local(bs.mesh_of[i]), inst.transform))
+                .collect()
+        };
+        // The GPU's methods: the kind's kernels as the first frame sets them up (their options;
+        // rigid motion changes none), each cell's fields packed and uploaded once, placed as in
+        // the first frame.
+        let first_setup = self.gpu.map(|_| {
+            let first = bs.at_frame(0);
+            self.kind.setup(&first, self.view(&first).as_ref())
+        });
+        let first = bs.at_frame(0);
+        let first_instances = frame_instances(&first);
+        let first_frame = FrameCasters {
+            meshes: &meshes,
+            instances: &first_instances,
+        };
+        let gpu_scenes: Vec<FieldScene> = (cells.iter())
+            .map(|c| FieldScene {
+                instances: movers::field_instances(&c.fields, &c.normals, &first_frame),
+                options: c.options,
+            })
+            .collect();
+        let t = Instant::now();
+        let mut gpu_casters: Vec<Box<dyn Mover + '_>> = Vec::new();
+        let mut gpu_cells: Vec<Vec<Box<dyn Mover + '_>>> = Vec::new();
+        if let (Some(be), Some(setup)) = (self.gpu, &first_setup) {
+            let q = Quantity {
+                estimator: setup.estimator.as_ref(),
+                gpu: setup.gpu.as_deref(),
+            };
+            let Some(kernels) = q.gpu else {
+                return Err(Error::invalid(
+                    "backends",
+                    format!("no GPU kernel computes \"{}\"", self.kind.name()),
+                ));
+            };
+            let ctx = be.gpu_context().expect("the gpu backend has a device");
+            if self.names.contains(&gpu_movers::NAMES[0]) {
+                gpu_casters.push(Box::new(gpu_movers::GpuWorldRebuild::new(ctx, kernels)));
+            }
+            for (c, scene) in cells.iter().zip(&gpu_scenes) {
+                let mut v: Vec<Box<dyn Mover + '_>> = Vec::new();
+                if c.gpu && self.names.contains(&gpu_movers::NAMES[1]) {
+                    v.push(Box::new(gpu_movers::GpuFields::new(
+                        be.fields(scene, q)?,
+                        c.fields.clone(),
+                        c.normals.clone(),
+                    )));
+                }
+                gpu_cells.push(v);
+            }
+        }
         out.precompute.push(serde_json::json!({
             "scene": bs.name,
             "ray_casters_s": raycast_precompute_s,
             "fields_s": fields_s,
+            "gpu_fields_s": self.gpu.map(|_| t.elapsed().as_secs_f64()),
+            "gpu_adapter": self.gpu.map(|be| be.adapter()),
         }));
         let mut pictures = Vec::new();
         let tris = bs.caster_triangles();
@@ -245,11 +330,7 @@ impl SceneRunner<'_> {
                     ),
                 ));
             }
-            let instances: Vec<(usize, Similarity)> = fbs
-                .scene
-                .casters()
-                .map(|(i, inst)| (local(bs.mesh_of[i]), inst.transform))
-                .collect();
+            let instances = frame_instances(&fbs);
             let spheres: Vec<(usize, Sphere)> = fbs
                 .scene
                 .casters()
@@ -264,7 +345,7 @@ impl SceneRunner<'_> {
             };
             let at = setup.points.at();
             let est = setup.estimator.as_ref();
-            let query = |m: &dyn Mover| est.estimate(m.vis(), at, &self.rays);
+            let query = |m: &dyn Mover| m.estimate(est, at, &self.rays);
             // The ray casters, the world rebuild first: the frame's reference and the tracer
             // of its converged reference.
             let mut measured: Vec<(&'static str, String, Timed, Option<u64>)> = Vec::new();
@@ -285,8 +366,18 @@ impl SceneRunner<'_> {
                 }
                 measured.push((m.name(), String::new(), r, m.bytes()));
             }
+            for m in gpu_casters.iter_mut() {
+                let r = movers::timed(m.as_mut(), &frame, query)?;
+                measured.push((m.name(), String::new(), r, m.bytes()));
+            }
             for c in cells.iter_mut() {
                 for m in c.movers.iter_mut() {
+                    let r = movers::timed(m.as_mut(), &frame, query)?;
+                    measured.push((m.name(), c.id.clone(), r, m.bytes()));
+                }
+            }
+            for (c, gpu) in cells.iter().zip(gpu_cells.iter_mut()) {
+                for m in gpu.iter_mut() {
                     let r = movers::timed(m.as_mut(), &frame, query)?;
                     measured.push((m.name(), c.id.clone(), r, m.bytes()));
                 }
@@ -401,14 +492,19 @@ impl SceneRunner<'_> {
                     }
                 }
             }
+            let options = self.kind.lookup_options(c.selection);
+            // A "gpu" cell's method is the GPU's ([`gpu_movers`], made by the caller).
+            let cpu_names: &[&str] = match c.backend {
+                Backend::Cpu => &field_names,
+                Backend::Gpu => &[],
+            };
             out.push(CellMovers {
                 id: c.id(&bs.name),
-                movers: movers::field_methods(
-                    &fields,
-                    &normals,
-                    self.kind.lookup_options(c.selection),
-                    &field_names,
-                ),
+                gpu: c.backend == Backend::Gpu,
+                movers: movers::field_methods(&fields, &normals, options, cpu_names),
+                fields,
+                normals,
+                options,
             });
         }
         Ok(out)
