@@ -2,7 +2,7 @@
 //! of the world rebuild (the GPU tracer's BVH rebuilt and uploaded each frame) and of the field
 //! testing every sphere (the fields uploaded once, the instances moved on the device each
 //! frame) against their CPU twins on the same rays, frame by frame, for AO, shadows and
-//! reflections; and the device refusing to move instances onto other fields.
+//! reflections; and a world too large for one storage binding refused by name.
 //!
 //! The bound: the GPU kernels reproduce the CPU values to the f32 differences the GPU tests
 //! bound (tests/gpu.rs, tests/gpu_shadow.rs, tests/gpu_reflect.rs: at most a ray flipped
@@ -87,15 +87,41 @@ fn gpu_rows_match_their_cpu_twins_every_frame() {
     }
 }
 
+/// A world whose triangles pass one storage binding is refused by name before the BVH is
+/// built (three vec4 a triangle), not handed to the device to fail there: what a moving
+/// crowd too large for the adapter meets every frame.
+fn a_world_past_the_binding_limit_is_refused_by_name() {
+    use visfield::gpu::{AdapterPreference, GpuContext, GpuError, GpuTracer};
+    let ctx = GpuContext::new(AdapterPreference::from_env()).unwrap();
+    let fit = (ctx.max_binding() / 48) as usize;
+    let tri = [glam::Vec3::ZERO, glam::Vec3::X, glam::Vec3::Y];
+    match GpuTracer::new(&ctx, &vec![tri; fit + 1]) {
+        Err(GpuError::TooLarge {
+            what, need, limit, ..
+        }) => {
+            assert!(what.contains("triangle vertices"), "{what}");
+            assert_eq!((need, limit), (48 * (fit as u64 + 1), ctx.max_binding()));
+        }
+        Err(e) => panic!("refused for another reason: {e}"),
+        Ok(_) => panic!("{} triangles accepted past the binding limit", fit + 1),
+    }
+}
+
 /// The harness: run where a Vulkan adapter exists, reported as ignored with the reason where
 /// none does.
 fn main() {
     common::run_gpu_trials(
         "gpu_motion",
-        &[(
-            "gpu_rows_match_their_cpu_twins_every_frame",
-            gpu_rows_match_their_cpu_twins_every_frame,
-        )],
+        &[
+            (
+                "gpu_rows_match_their_cpu_twins_every_frame",
+                gpu_rows_match_their_cpu_twins_every_frame,
+            ),
+            (
+                "a_world_past_the_binding_limit_is_refused_by_name",
+                a_world_past_the_binding_limit_is_refused_by_name,
+            ),
+        ],
         &[],
     )
 }

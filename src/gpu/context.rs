@@ -392,7 +392,7 @@ pub(crate) const WORKGROUP: u32 = 64;
 
 impl GpuContext {
     /// The largest storage binding the adapter allows.
-    pub(crate) fn max_binding(&self) -> u64 {
+    pub fn max_binding(&self) -> u64 {
         let l = &self.limits;
         l.max_storage_buffer_binding_size.min(l.max_buffer_size)
     }

@@ -11,7 +11,7 @@ use super::loop_budget::{
 };
 use super::rays::{base_directions, receivers};
 use super::reflect_rays::{lobe_directions, rays_per_point, shading};
-use super::shadow_rays::{cone_samples, light_records, lights};
+use super::shadow_rays::{check_binding, cone_samples, light_records, lights};
 use super::{GpuError, GpuTiming};
 use crate::render::ao::AoOptions;
 use crate::render::reflect::ReflectOptions;
@@ -129,6 +129,10 @@ impl<'a> GpuTracer<'a> {
         if triangles.iter().flatten().any(|v| !v.is_finite()) {
             return Err(GpuError::Invalid("triangle vertices must be finite".into()));
         }
+        // The triangles and the nodes are one storage binding each: refused by name past the
+        // adapter's limit (three vec4 a triangle: 2.8 M triangles fill lavapipe's 128 MiB),
+        // the triangles before the build, the nodes before the upload.
+        check_binding::<[f32; 4]>(ctx, "triangle vertices", triangles.len() * 3)?;
         let (lo, hi) = triangles.iter().flatten().fold(
             (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
             |(lo, hi), &v| (lo.min(v), hi.max(v)),
@@ -151,6 +155,7 @@ impl<'a> GpuTracer<'a> {
                 &mut Duration::default(),
             )
         };
+        check_binding::<CwBvhNode>(ctx, "CWBVH nodes", bvh.nodes.len())?;
         let mut tri_data: Vec<[f32; 4]> = Vec::with_capacity(bvh.primitive_indices.len() * 3);
         for &i in &bvh.primitive_indices {
             let [a, b, c] = triangles[i as usize];
