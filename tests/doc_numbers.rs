@@ -783,6 +783,7 @@ fn dynamic(c: &mut Claims) {
         println!("{text}");
     }
     c.quotes("docs/results.md", &text, from);
+    c.quotes("README.md", &text, from);
     let (lo, hi) = min_max(
         rows.iter()
             .filter(|r| r["sweep"] == "crowd")
