@@ -674,6 +674,22 @@ fn unsupported_inputs_are_refused_not_approximated() {
     // No points: an empty answer, not an error.
     let (ao, _) = kernel.ao(&[], &[], &RaySet::new(4, 1), &opts).unwrap();
     assert!(ao.is_empty());
+    // Moving the bound instance: the same field moves; another field, or another count, is
+    // refused (the device holds the first field's maps).
+    let moved = FieldInstance::new(
+        inst.field.clone(),
+        Similarity::new(Quat::IDENTITY, Vec3::X, 1.0),
+    );
+    kernel.place(std::slice::from_ref(&moved)).unwrap();
+    let other = baked(params(10, 4, Precision::U8, LayoutKind::Concentric));
+    let other = FieldInstance::new(other, Similarity::default());
+    assert!(
+        matches!(kernel.place(&[other]), Err(GpuError::Invalid(e)) if e.contains("another field"))
+    );
+    assert!(matches!(
+        kernel.place(&[moved.clone(), moved]),
+        Err(GpuError::Invalid(e)) if e.contains("2 instances placed on 1 bound")
+    ));
 }
 
 /// The ray-cast scene: the corner receiver and the placed caster (about 2800 triangles).

@@ -13,7 +13,10 @@
 //! points inside another caster's sphere), where the papers' non-penetrating assumption stops
 //! holding. The ray casters are measured once per frame; the field methods once per field cell
 //! of the spec's `fields`, each cell's fields (one per caster mesh, shared by its instances)
-//! supplied once, before the frames. [`super::frames_write`] writes the outputs.
+//! supplied once, before the frames. With the "gpu" backend, the GPU twins of the world rebuild
+//! and of the field testing every sphere run beside them ([`gpu_movers`]: the GPU tracer's
+//! world BVH rebuilt and uploaded each frame; each "gpu" field cell's fields uploaded once and
+//! its instances moved on the device each frame). [`super::frames_write`] writes the outputs.
 
 use super::{LoadedSpec, RunOptions};
 use crate::experiment::backend::{ComputeBackend, Quantity};
@@ -260,17 +263,15 @@ impl SceneRunner<'_> {
         // The GPU's methods: the kind's kernels as the first frame sets them up (their options;
         // rigid motion changes none), each cell's fields packed and uploaded once, placed as in
         // the first frame.
-        let first_setup = self.gpu.map(|_| {
-            let first = bs.at_frame(0);
-            self.kind.setup(&first, self.view(&first).as_ref())
-        });
         let first = bs.at_frame(0);
+        let first_setup = (self.gpu).map(|_| self.kind.setup(&first, self.view(&first).as_ref()));
         let first_instances = frame_instances(&first);
         let first_frame = FrameCasters {
             meshes: &meshes,
             instances: &first_instances,
         };
         let gpu_scenes: Vec<FieldScene> = (cells.iter())
+            .filter(|c| c.gpu)
             .map(|c| FieldScene {
                 instances: movers::field_instances(&c.fields, &c.normals, &first_frame),
                 options: c.options,
@@ -294,14 +295,18 @@ impl SceneRunner<'_> {
             if self.names.contains(&gpu_movers::NAMES[0]) {
                 gpu_casters.push(Box::new(gpu_movers::GpuWorldRebuild::new(ctx, kernels)));
             }
-            for (c, scene) in cells.iter().zip(&gpu_scenes) {
+            let mut scenes = gpu_scenes.iter();
+            for c in &cells {
                 let mut v: Vec<Box<dyn Mover + '_>> = Vec::new();
-                if c.gpu && self.names.contains(&gpu_movers::NAMES[1]) {
-                    v.push(Box::new(gpu_movers::GpuFields::new(
-                        be.fields(scene, q)?,
-                        c.fields.clone(),
-                        c.normals.clone(),
-                    )));
+                if c.gpu {
+                    let scene = scenes.next().expect("a scene per gpu cell");
+                    if self.names.contains(&gpu_movers::NAMES[1]) {
+                        v.push(Box::new(gpu_movers::GpuFields::new(
+                            be.fields(scene, q)?,
+                            c.fields.clone(),
+                            c.normals.clone(),
+                        )));
+                    }
                 }
                 gpu_cells.push(v);
             }
