@@ -68,8 +68,7 @@ pub trait Eval {
     /// Moves the prepared fields' instances to `instances`' transforms (the same fields, instance
     /// by instance), for the next [`Self::estimate`]: what a frame of rigid motion costs a field
     /// kernel. Refused where nothing prepared can move (a ray caster's BVH is rebuilt instead).
-    fn place(&self, instances: &[FieldInstance]) -> Result<()> {
-        let _ = instances;
+    fn place(&self, _instances: &[FieldInstance]) -> Result<()> {
         Err(Error::invalid(
             "place",
             "this evaluation holds no field instances to move",

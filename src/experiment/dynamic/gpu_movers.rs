@@ -27,8 +27,16 @@ use crate::sampling::rays::RaySet;
 use crate::visibility::Visibility;
 use std::sync::Arc;
 
-/// The GPU twins of the CPU per-frame methods, in the order their rows are written.
-pub const NAMES: [&str; 2] = ["world_rebuild@gpu", "field_every_sphere@gpu"];
+/// Each CPU per-frame method with a GPU twin, and the twin's name, in the order their rows are
+/// written.
+pub const TWINS: [(&str, &str); 2] = [
+    ("world_rebuild", WORLD_REBUILD),
+    ("field_every_sphere", FIELD_EVERY_SPHERE),
+];
+/// [`GpuWorldRebuild`]'s name.
+pub const WORLD_REBUILD: &str = "world_rebuild@gpu";
+/// [`GpuFields`]' name.
+pub const FIELD_EVERY_SPHERE: &str = "field_every_sphere@gpu";
 
 /// The GPU ray caster over the world triangles, its BVH built and uploaded every frame.
 pub struct GpuWorldRebuild<'a> {
@@ -49,7 +57,7 @@ impl<'a> GpuWorldRebuild<'a> {
 
 impl Mover for GpuWorldRebuild<'_> {
     fn name(&self) -> &'static str {
-        NAMES[0]
+        WORLD_REBUILD
     }
 
     fn update(&mut self, frame: &FrameCasters) -> Result<()> {
@@ -98,7 +106,7 @@ impl<'a> GpuFields<'a> {
 
 impl Mover for GpuFields<'_> {
     fn name(&self) -> &'static str {
-        NAMES[1]
+        FIELD_EVERY_SPHERE
     }
 
     fn update(&mut self, frame: &FrameCasters) -> Result<()> {

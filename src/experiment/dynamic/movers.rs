@@ -146,6 +146,14 @@ pub struct FrameCasters<'a> {
 }
 
 impl FrameCasters<'_> {
+    /// Per instance, `make` of its mesh's entry of `per_mesh` (a field, a volume: one per mesh,
+    /// shared by its instances) and its transform this frame.
+    pub fn place<T, I>(&self, per_mesh: &[T], make: impl Fn(&T, Similarity) -> I) -> Vec<I> {
+        (self.instances.iter())
+            .map(|&(m, t)| make(&per_mesh[m], t))
+            .collect()
+    }
+
     /// Every instance's triangles moved to world space.
     pub fn world_triangles(&self) -> Vec<[Vec3; 3]> {
         let mut out = Vec::new();
@@ -443,14 +451,10 @@ impl Mover for Sdfs {
     }
 
     fn update(&mut self, frame: &FrameCasters) -> crate::experiment::Result<()> {
-        self.scene.instances = frame
-            .instances
-            .iter()
-            .map(|&(m, transform)| SdfInstance {
-                volume: self.volumes[m].clone(),
-                transform,
-            })
-            .collect();
+        self.scene.instances = frame.place(&self.volumes, |v, transform| SdfInstance {
+            volume: v.clone(),
+            transform,
+        });
         Ok(())
     }
 
@@ -489,14 +493,10 @@ impl Mover for AoFields {
     }
 
     fn update(&mut self, frame: &FrameCasters) -> crate::experiment::Result<()> {
-        self.scene.instances = frame
-            .instances
-            .iter()
-            .map(|&(m, transform)| AoFieldInstance {
-                field: self.fields[m].clone(),
-                transform,
-            })
-            .collect();
+        self.scene.instances = frame.place(&self.fields, |f, transform| AoFieldInstance {
+            field: f.clone(),
+            transform,
+        });
         Ok(())
     }
 

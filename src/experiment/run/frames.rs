@@ -144,9 +144,9 @@ pub(super) fn run(
     let kind = crate::experiment::kinds::of(&spec.render);
     let gpu = if spec.backends.contains(&Backend::Gpu) {
         // The GPU twins of the CPU methods asked for.
-        for (cpu, twin) in [("world_rebuild", 0), ("field_every_sphere", 1)] {
+        for (cpu, twin) in gpu_movers::TWINS {
             if names.contains(&cpu) {
-                names.push(gpu_movers::NAMES[twin]);
+                names.push(twin);
             }
         }
         Some(crate::experiment::backend::open(
@@ -292,7 +292,7 @@ impl SceneRunner<'_> {
                 ));
             };
             let ctx = be.gpu_context().expect("the gpu backend has a device");
-            if self.names.contains(&gpu_movers::NAMES[0]) {
+            if self.names.contains(&gpu_movers::WORLD_REBUILD) {
                 gpu_casters.push(Box::new(gpu_movers::GpuWorldRebuild::new(ctx, kernels)));
             }
             let mut scenes = gpu_scenes.iter();
@@ -300,7 +300,7 @@ impl SceneRunner<'_> {
                 let mut v: Vec<Box<dyn Mover + '_>> = Vec::new();
                 if c.gpu {
                     let scene = scenes.next().expect("a scene per gpu cell");
-                    if self.names.contains(&gpu_movers::NAMES[1]) {
+                    if self.names.contains(&gpu_movers::FIELD_EVERY_SPHERE) {
                         v.push(Box::new(gpu_movers::GpuFields::new(
                             be.fields(scene, q)?,
                             c.fields.clone(),
