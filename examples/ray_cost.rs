@@ -3,16 +3,20 @@
 //! rays to spherical lights (`render::shadow::light_fraction`, one `occluded_many_to` call per
 //! receiver with a far end per ray), intra-object rays (vertex AO at the bunny's own vertices,
 //! every ray starting inside the caster's sphere) and reflection rays
-//! (`Visibility::surface_hit`, one ray at a time, as `render::reflect` casts them).
+//! (`render::reflect::reflected`, one `surface_hit_many` call per receiver).
 //!
 //! `cargo run --release --example ray_cost -- KIND BACKEND [STRIDE]`
 //!
 //! - KIND: `shadow` (the corner's vertices, three lights of radius 0.3 over the open side of the
-//!   corner, 4 × 4 rays per light), `intra` (the bunny's vertices, 16 × 16 AO rays) or
+//!   corner, 4 × 4 rays per light), `intra` (the bunny's vertices, 16 × 16 AO rays),
 //!   `reflect` (the corner's vertices seen from an eye, a Phong lobe of exponent 50, 4 × 4
-//!   rays).
+//!   rays) or `reflect4` (the same with 2 × 2 rays and a second bunny beside the first, the
+//!   shape of the 2010 Figure 9: four rays per point, two casters).
 //! - BACKEND: `field` (the batched field lookup, nearest), `per-ray` (the field one ray at a
-//!   time, `visibility::PerRay`), `raycast` (our ray caster), or the cost floors of
+//!   time, `visibility::PerRay`), `raycast` (our ray caster), `embree` (Embree 3 as the
+//!   `embree` method runs it: 8-wide `rtcOccluded8` packets for shadow and AO rays,
+//!   `rtcIntersect1` and the hit triangle's normal for reflection rays; `--features embree`),
+//!   or the cost floors of
 //!   `visfield::experiment::performance::floor`: `none` (every ray free: building the rays and
 //!   the caller's loop) and `sphere` (the bounding-sphere cull and exact crossing alone).
 //! - STRIDE: use every STRIDE-th receiver vertex (default 1).
@@ -21,7 +25,7 @@
 //! field's normal field once and keeps it there. The pass runs on one thread. Count only the
 //! pass with `valgrind --tool=callgrind --collect-atstart=no --toggle-collect='*ray_pass*'`.
 
-use glam::{Quat, Vec2, Vec3};
+use glam::{Quat, Vec3};
 use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering::Relaxed};
 use std::sync::Arc;
@@ -35,7 +39,7 @@ use visfield::geometry::procedural::over_corner;
 use visfield::geometry::{models, Scene};
 use visfield::render::ao::{ao_at_point, AoOptions};
 use visfield::render::receivers::Receivers;
-use visfield::render::reflect::{reflection_rays, shade, Gloss, ReflectOptions};
+use visfield::render::reflect::{reflected, Gloss, ReflectOptions, ReflectScratch};
 use visfield::render::shadow::{light_fraction, ShadowOptions, ShadowScratch, SphereLight};
 use visfield::sampling::rays::RaySet;
 use visfield::sampling::{LayoutKind, SphereKind};
@@ -48,8 +52,8 @@ const MODEL: &str = "stanford-bunny_39k";
 
 fn usage() -> ! {
     eprintln!(
-        "usage: ray_cost KIND(shadow|intra|reflect) BACKEND(field|per-ray|raycast|none|sphere) \
-         [STRIDE]"
+        "usage: ray_cost KIND(shadow|intra|reflect) \
+         BACKEND(field|per-ray|raycast|embree|none|sphere) [STRIDE]"
     );
     std::process::exit(2)
 }
@@ -59,6 +63,8 @@ enum Kind {
     Shadow,
     Intra,
     Reflect,
+    /// Reflection rays, 2 × 2 per point, two casters.
+    Reflect4,
 }
 
 /// Three lights over the corner's open side.
@@ -112,7 +118,7 @@ fn ray_pass<V: Visibility + ?Sized>(
                 .map(|i| ao_at_point(vis, i as u32, p[i], n[i], &prepared, &opts, &mut scratch))
                 .collect()
         }
-        Kind::Reflect => {
+        Kind::Reflect | Kind::Reflect4 => {
             let opts = ReflectOptions {
                 offset: AoOptions::for_scene_radius(0.9).offset,
                 eye: Vec3::new(2.5, 1.6, 2.2),
@@ -121,19 +127,13 @@ fn ray_pass<V: Visibility + ?Sized>(
                 albedo: 0.8,
                 sky: 0.2,
             };
-            let (mut squares, mut dirs) = (Vec::<Vec2>::new(), Vec::<Vec3>::new());
+            let mut sc = ReflectScratch::default();
             (0..p.len())
                 .map(|i| {
-                    let o =
-                        reflection_rays(i as u32, p[i], n[i], rays, &opts, &mut squares, &mut dirs);
-                    cast += dirs.len();
-                    let sum: f64 = dirs
-                        .iter()
-                        .map(|&d| {
-                            shade(o, d, vis.surface_hit(o, d, 0.0, f32::INFINITY), &opts) as f64
-                        })
-                        .sum();
-                    (sum / dirs.len().max(1) as f64) as f32
+                    let counted = Counted(vis, AtomicUsize::new(0));
+                    let v = reflected(&counted, i as u32, p[i], n[i], rays, &opts, &mut sc);
+                    cast += counted.1.load(Relaxed);
+                    v
                 })
                 .collect()
         }
@@ -141,7 +141,7 @@ fn ray_pass<V: Visibility + ?Sized>(
     (values, cast)
 }
 
-/// `V` counting the rays of its batched shadow queries (one add per call).
+/// `V` counting the rays of its batched shadow and reflection queries (one add per call).
 struct Counted<'a, V: ?Sized>(&'a V, AtomicUsize);
 
 impl<V: Visibility + ?Sized> Visibility for Counted<'_, V> {
@@ -167,6 +167,18 @@ impl<V: Visibility + ?Sized> Visibility for Counted<'_, V> {
     ) {
         self.1.fetch_add(dirs.len(), Relaxed);
         self.0.occluded_many_to(origin, dirs, tmin, tmaxs, out)
+    }
+
+    fn surface_hit_many(
+        &self,
+        origin: Vec3,
+        dirs: &[Vec3],
+        tmin: f32,
+        tmax: f32,
+        out: &mut [Option<SurfaceHit>],
+    ) {
+        self.1.fetch_add(dirs.len(), Relaxed);
+        self.0.surface_hit_many(origin, dirs, tmin, tmax, out)
     }
 }
 
@@ -213,6 +225,7 @@ fn main() {
         "shadow" => Kind::Shadow,
         "intra" => Kind::Intra,
         "reflect" => Kind::Reflect,
+        "reflect4" => Kind::Reflect4,
         _ => usage(),
     };
     let stride: usize = match args.get(2) {
@@ -223,7 +236,12 @@ fn main() {
         eprintln!("{e}");
         std::process::exit(1)
     });
-    let scene = over_corner(mesh, Quat::IDENTITY);
+    let mut scene = over_corner(mesh, Quat::IDENTITY);
+    if kind == Kind::Reflect4 {
+        let mut second = scene.instances[1].clone();
+        second.transform.translation += Vec3::new(0.25, 0.1, -0.3);
+        scene.instances.push(second);
+    }
     let caster = &scene.instances[1];
     // Shadow and reflection rays leave the corner; intra-object rays the bunny's surface.
     let recv = if kind == Kind::Intra {
@@ -237,7 +255,14 @@ fn main() {
     };
     let pick = |v: &[Vec3]| v.iter().copied().step_by(stride.max(1)).collect::<Vec<_>>();
     let (points, normals_at) = (pick(&recv.points), pick(&recv.normals));
-    let rays = RaySet::new(if kind == Kind::Intra { 16 } else { 4 }, 1);
+    let rays = RaySet::new(
+        match kind {
+            Kind::Intra => 16,
+            Kind::Reflect4 => 2,
+            _ => 4,
+        },
+        1,
+    );
 
     let params = FieldParams {
         sphere: SphereKind::Slater,
@@ -252,20 +277,40 @@ fn main() {
     let fs = if matches!(backend, "field" | "per-ray" | "sphere") {
         let (field, _) = load_or_bake(&dir, &caster.mesh, MODEL, params, &BakeOptions::default())
             .expect("field");
-        let mut inst = FieldInstance::new(Arc::new(field), caster.transform);
-        if kind == Kind::Reflect {
-            inst = inst.with_normals(Arc::new(normals(&dir, &caster.mesh, params)));
-        }
+        let (field, reflect) = (
+            Arc::new(field),
+            matches!(kind, Kind::Reflect | Kind::Reflect4),
+        );
+        let normals = reflect.then(|| Arc::new(normals(&dir, &caster.mesh, params)));
+        let instances = scene.instances[1..]
+            .iter()
+            .map(|c| {
+                let inst = FieldInstance::new(field.clone(), c.transform);
+                match &normals {
+                    Some(n) => inst.with_normals(n.clone()),
+                    None => inst,
+                }
+            })
+            .collect();
         Some(FieldScene {
-            instances: vec![inst],
+            instances,
             options: Default::default(),
         })
     } else {
         None
     };
     let tracer = (backend == "raycast").then(|| Tracer::new(&scene.caster_triangles()));
+    #[cfg(feature = "embree")]
+    let embree = (backend == "embree").then(|| {
+        visfield::trace::embree::EmbreeTracer::new(&scene.caster_triangles()).expect("Embree")
+    });
     let t = Instant::now();
     let (values, cast) = match (backend, &fs, &tracer) {
+        #[cfg(feature = "embree")]
+        ("embree", ..) => match &embree {
+            Some(e) => ray_pass(e, kind, &points, &normals_at, &rays),
+            None => usage(),
+        },
         ("none", ..) => ray_pass(&NoQuery, kind, &points, &normals_at, &rays),
         ("raycast", _, Some(tr)) => ray_pass(tr, kind, &points, &normals_at, &rays),
         ("field", Some(fs), _) => ray_pass(fs, kind, &points, &normals_at, &rays),

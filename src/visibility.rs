@@ -72,10 +72,34 @@ pub trait Visibility: Sync {
             *o = self.occluded(origin, d, tmin, t);
         }
     }
+
+    /// [`Self::surface_hit`] of every unit direction in `dirs` from one `origin`:
+    /// `out[i] = surface_hit(origin, dirs[i], tmin, tmax)`, bit for bit (reflection rays).
+    /// Backends override it as [`Self::occluded_many`].
+    ///
+    /// # Panics
+    /// If `dirs` and `out` differ in length.
+    fn surface_hit_many(
+        &self,
+        origin: Vec3,
+        dirs: &[Vec3],
+        tmin: f32,
+        tmax: f32,
+        out: &mut [Option<SurfaceHit>],
+    ) {
+        assert_eq!(
+            dirs.len(),
+            out.len(),
+            "surface_hit_many: dirs and out differ in length"
+        );
+        for (o, &d) in out.iter_mut().zip(dirs) {
+            *o = self.surface_hit(origin, d, tmin, tmax);
+        }
+    }
 }
 
 /// A [`Visibility`] that forwards only the per-ray queries of another, so that
-/// [`Visibility::occluded_many`] takes the trait's per-ray default: the reference that batched
+/// [`Visibility::occluded_many`] (and every batched query) takes the trait's per-ray default: the reference that batched
 /// implementations are tested and benchmarked against.
 pub struct PerRay<'a, V: ?Sized>(pub &'a V);
 

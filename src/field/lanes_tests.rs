@@ -248,3 +248,62 @@ fn the_crossings_are_the_per_ray_crossing_bit_for_bit() {
         }
     }
 }
+
+/// Short runs from anywhere in a set (a call's last few rays, which the AVX2 steps take one at
+/// a time): the cull, the rotation and the crossing of every slice of 1 to 9 rays, bit for bit
+/// against one ray at a time.
+#[test]
+fn short_runs_are_the_per_ray_steps_bit_for_bit() {
+    let (origin, center, radius) = (Vec3::new(0.3, -0.2, 0.1), Vec3::new(0.0, 0.0, 2.0), 0.7);
+    let dirs = directions(origin, center, radius);
+    let meet = MayMeetFrom {
+        f: center - origin,
+        reach: radius * (1.0 + 1e-5),
+    };
+    let from = SphereOrigin::new(origin, center, radius);
+    let q = Quat::from_euler(glam::EulerRot::YXZ, 0.7, -0.3, 1.1);
+    let skip: Vec<bool> = (0..dirs.len()).map(|i| i % 5 == 2).collect();
+    let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+    let crossing_bits = |c: Option<SphereCrossing>| {
+        c.map(|c| {
+            [
+                c.t0.to_bits() as u64,
+                c.t1.to_bits() as u64,
+                c.entry.x.to_bits(),
+                c.entry.y.to_bits(),
+                c.entry.z.to_bits(),
+            ]
+        })
+    };
+    let mut met = 0;
+    for start in (0..dirs.len() - 9).step_by(7) {
+        for n in 1..=9 {
+            let (d, s) = (&dirs[start..start + n], &skip[start..start + n]);
+            let want: Vec<u32> = (0..n as u32)
+                .filter(|&i| !s[i as usize] && meet.test(d[i as usize], 0.0))
+                .collect();
+            met += want.len();
+            for isa in isas() {
+                let mut got = vec![u32::MAX; n];
+                let kept = cull(isa, &meet, d, 0.0, s, &mut got);
+                assert_eq!(&got[..kept], &want[..], "{isa:?}, rays {start}..+{n}");
+                let mut turned = d.to_vec();
+                rotate_normalize(isa, q, &mut turned);
+                for (t, &r) in turned.iter().zip(d) {
+                    let w = (q * r).normalize();
+                    assert!(w.is_nan() || bits(*t) == bits(w), "{isa:?}, {r}");
+                }
+                let mut crossed = vec![None; n];
+                crossings(isa, &from, d, &mut crossed);
+                for (c, &r) in crossed.iter().zip(d) {
+                    assert_eq!(
+                        crossing_bits(*c),
+                        crossing_bits(from.crossing(r)),
+                        "{isa:?}, {r}"
+                    );
+                }
+            }
+        }
+    }
+    assert!(met > 1000, "{met} rays pass the cull");
+}

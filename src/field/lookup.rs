@@ -187,6 +187,13 @@ pub trait Reads: Copy + Default {
             o.prefetch(field);
         }
     }
+
+    /// These reads as the nearest selection's, where they are those (the texels a normal
+    /// field is read at); `None` for other selections.
+    #[inline]
+    fn nearest_block(_reads: &[Self]) -> Option<&[NearestRead]> {
+        None
+    }
 }
 
 /// [`Selection::Nearest`]: the map of the nearest positional sample and the texel containing
@@ -248,6 +255,11 @@ impl Reads for NearestRead {
     #[inline]
     fn of_block(isa: Isa, field: &VisibilityField, at: &[Crossed], out: &mut [Self]) {
         super::lanes::nearest_reads(isa, field, at, out);
+    }
+
+    #[inline]
+    fn nearest_block(reads: &[Self]) -> Option<&[NearestRead]> {
+        Some(reads)
     }
 }
 

@@ -22,6 +22,7 @@ pub mod normals;
 pub mod scene;
 pub mod sphere_bvh;
 pub mod storage;
+mod surface_batch;
 
 use crate::geometry::Sphere;
 use crate::sampling::{Frame, HemisphereLayout, LayoutKind, SphereKind, SpherePoints, TexelTable};

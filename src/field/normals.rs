@@ -57,8 +57,14 @@ impl NormalField {
     /// The unpacked normal at (map, texel).
     #[inline]
     pub fn get(&self, map: usize, texel: usize) -> Vec3 {
-        let [a, b] = self.data[map * self.texels + texel];
+        let [a, b] = *self.cell(map, texel);
         unpack_normal([a as u32, b as u32], self.bits)
+    }
+
+    /// The packed normal at (map, texel).
+    #[inline]
+    pub fn cell(&self, map: usize, texel: usize) -> &[u16; 2] {
+        &self.data[map * self.texels + texel]
     }
 
     /// Bytes of the packed normals as a renderer stores them: 2 × `bits` / 8 per texel (the

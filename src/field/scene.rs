@@ -28,7 +28,7 @@ pub struct FieldInstance {
     /// [`Self::with_normals`].
     pub normals: Option<Arc<NormalField>>,
     /// `transform.rotation.inverse()` (the same value `Similarity::to_local_point` computes).
-    inv_rotation: Quat,
+    pub(super) inv_rotation: Quat,
     /// The part of [`Self::may_meet`]'s margin that does not depend on the ray.
     margin_base: f32,
 }
@@ -152,7 +152,7 @@ impl FieldInstance {
 
     /// Bit-identical to `transform.to_local_point(origin)`.
     #[inline]
-    fn local_origin(&self, origin: Vec3) -> Vec3 {
+    pub(super) fn local_origin(&self, origin: Vec3) -> Vec3 {
         let tr = &self.transform;
         self.inv_rotation * ((origin - tr.translation) / tr.scale)
     }
@@ -428,6 +428,19 @@ impl Visibility for FieldScene {
         out: &mut [bool],
     ) {
         self.occluded_many_to_on(Isa::detect(), origin, dirs, tmin, tmaxs, out);
+    }
+
+    /// Batched per origin ([`FieldScene::surface_hit_many_on`]), bit-identical to
+    /// [`Self::surface_hit`] per ray.
+    fn surface_hit_many(
+        &self,
+        origin: Vec3,
+        dirs: &[Vec3],
+        tmin: f32,
+        tmax: f32,
+        out: &mut [Option<SurfaceHit>],
+    ) {
+        self.surface_hit_many_on(Isa::detect(), origin, dirs, tmin, tmax, out);
     }
 
     /// As [`Self::hit_distance`], with the hit instance's normal field's normal.

@@ -34,6 +34,7 @@ pub mod estimator;
 pub mod image;
 pub mod points;
 pub mod primary;
+pub mod ray_lanes;
 pub mod receivers;
 pub mod reflect;
 pub mod shadow;

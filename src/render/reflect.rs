@@ -30,6 +30,7 @@
 
 use super::estimator::{Estimator, Points};
 use super::per_point;
+use super::ray_lanes::{self, Isa};
 use super::shadow::SphereLight;
 use super::truth::{converged, Truth, TruthOptions};
 use crate::sampling::rays::RaySet;
@@ -114,7 +115,7 @@ pub fn shade(origin: Vec3, dir: Vec3, hit: Option<SurfaceHit>, opts: &ReflectOpt
 }
 
 /// The reflection directions of one point into `dirs` (see the module docs); returns the ray
-/// origin.
+/// origin. `squares` is a buffer for the point's square samples.
 pub fn reflection_rays(
     point_index: u32,
     point: Vec3,
@@ -122,6 +123,91 @@ pub fn reflection_rays(
     rays: &RaySet,
     opts: &ReflectOptions,
     squares: &mut Vec<Vec2>,
+    dirs: &mut Vec<Vec3>,
+) -> Vec3 {
+    let mut lobe = Vec::new();
+    if let Gloss::Phong { exponent } = opts.gloss {
+        rays.fill_square(point_index, squares);
+        lobe.extend(squares.iter().map(|&u| square_to_phong(u, exponent)));
+    }
+    lobe_rays_on(
+        Isa::detect(),
+        point_index,
+        point,
+        normal,
+        rays,
+        opts,
+        &lobe,
+        dirs,
+    )
+}
+
+/// Reused buffers of [`reflect_at_points`], and the Phong lobe's directions of the last ray
+/// set and exponent they served (the same for every point of a set without jitter).
+#[derive(Default)]
+pub struct ReflectScratch {
+    squares: Vec<Vec2>,
+    /// [`square_to_phong`] of each square, in the lobe's frame.
+    lobe: Vec<Vec3>,
+    /// The set and the exponent's bits whose (unjittered) lobe `lobe` holds.
+    lobe_of: Option<(RaySet, u32)>,
+    dirs: Vec<Vec3>,
+    hits: Vec<Option<SurfaceHit>>,
+}
+
+/// [`reflection_rays`] into `sc.dirs`, the lobe's directions made once per ray set and
+/// exponent (per point when jittered): the same rays bit for bit.
+pub(super) fn reflection_rays_in(
+    isa: Isa,
+    point_index: u32,
+    point: Vec3,
+    normal: Vec3,
+    rays: &RaySet,
+    opts: &ReflectOptions,
+    sc: &mut ReflectScratch,
+) -> Vec3 {
+    if let Gloss::Phong { exponent } = opts.gloss {
+        let key = (*rays, exponent.to_bits());
+        if rays.jitter || sc.lobe_of != Some(key) {
+            rays.fill_square(point_index, &mut sc.squares);
+            sc.lobe.clear();
+            sc.lobe
+                .extend(sc.squares.iter().map(|&u| square_to_phong(u, exponent)));
+            sc.lobe_of = (!rays.jitter).then_some(key);
+        }
+    }
+    lobe_rays_on(
+        isa,
+        point_index,
+        point,
+        normal,
+        rays,
+        opts,
+        &sc.lobe,
+        &mut sc.dirs,
+    )
+}
+
+impl ReflectScratch {
+    #[cfg(test)]
+    /// The directions the last point left here.
+    pub(super) fn dirs(&self) -> &[Vec3] {
+        &self.dirs
+    }
+}
+
+/// The reflection rays of one point from its lobe directions `lobe` (the point's
+/// [`square_to_phong`] of each square; unread for a mirror), eight at a time
+/// ([`ray_lanes::lobe_rays`]); returns the ray origin.
+#[allow(clippy::too_many_arguments)]
+fn lobe_rays_on(
+    isa: Isa,
+    point_index: u32,
+    point: Vec3,
+    normal: Vec3,
+    rays: &RaySet,
+    opts: &ReflectOptions,
+    lobe: &[Vec3],
     dirs: &mut Vec<Vec3>,
 ) -> Vec3 {
     let origin = point + opts.offset * normal;
@@ -134,25 +220,17 @@ pub fn reflection_rays(
                 dirs.push(r);
             }
         }
-        Gloss::Phong { exponent } => {
-            let (s, c) = rays.rotation(point_index);
-            rays.fill_square(point_index, squares);
+        Gloss::Phong { .. } => {
+            let rotation = rays.rotation(point_index);
             let frame = Frame::from_normal(r);
-            for &u in squares.iter() {
-                let l = square_to_phong(u, exponent);
-                let l = Vec3::new(c * l.x - s * l.y, s * l.x + c * l.y, l.z);
-                let dir = frame.to_world(l).normalize();
-                if normal.dot(dir) > 0.0 {
-                    dirs.push(dir);
-                }
-            }
+            ray_lanes::lobe_rays(isa, lobe, rotation, &frame, normal, dirs);
         }
     }
     origin
 }
 
 /// The reflected radiance at every point (rayon over points; the same bits on any thread
-/// count).
+/// count). Each point's rays go to [`Visibility::surface_hit_many`] together.
 ///
 /// # Panics
 /// If `points` and `normals` differ in length, or a field backend lacks its normal fields.
@@ -167,18 +245,36 @@ pub fn reflect_at_points<V: Visibility + ?Sized>(
         "reflect_at_points",
         points,
         normals,
-        |(squares, dirs): &mut (Vec<Vec2>, Vec<Vec3>), i, p, n| {
-            let o = reflection_rays(i, p, n, rays, opts, squares, dirs);
-            if dirs.is_empty() {
-                return 0.0;
-            }
-            let sum: f64 = dirs
-                .iter()
-                .map(|&d| shade(o, d, vis.surface_hit(o, d, 0.0, f32::INFINITY), opts) as f64)
-                .sum();
-            (sum / dirs.len() as f64) as f32
-        },
+        |sc: &mut ReflectScratch, i, p, n| reflected(vis, i, p, n, rays, opts, sc),
     )
+}
+
+/// The reflected radiance at one point (see the module docs), its rays through
+/// [`Visibility::surface_hit_many`].
+#[inline]
+pub fn reflected<V: Visibility + ?Sized>(
+    vis: &V,
+    point_index: u32,
+    point: Vec3,
+    normal: Vec3,
+    rays: &RaySet,
+    opts: &ReflectOptions,
+    sc: &mut ReflectScratch,
+) -> f32 {
+    let o = reflection_rays_in(Isa::detect(), point_index, point, normal, rays, opts, sc);
+    if sc.dirs.is_empty() {
+        return 0.0;
+    }
+    sc.hits.clear();
+    sc.hits.resize(sc.dirs.len(), None);
+    vis.surface_hit_many(o, &sc.dirs, 0.0, f32::INFINITY, &mut sc.hits);
+    let sum: f64 = sc
+        .dirs
+        .iter()
+        .zip(&sc.hits)
+        .map(|(&d, &h)| shade(o, d, h, opts) as f64)
+        .sum();
+    (sum / sc.dirs.len() as f64) as f32
 }
 
 /// The reflected radiance of a glossy receiver at each point (Gaitatzes et al. 2010, §4.2):

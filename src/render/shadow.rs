@@ -37,6 +37,7 @@
 
 use super::estimator::{Estimator, Points};
 use super::per_point;
+use super::ray_lanes::{self, DiskSamples, Isa, ShadowRays};
 use super::truth::{converged, Truth, TruthOptions};
 use crate::sampling::rays::RaySet;
 use crate::sampling::warp::square_to_concentric_disk;
@@ -117,7 +118,8 @@ pub struct LightCone {
     pub weight_scale: f64,
     /// Radius 0: one ray, along the axis, to the centre.
     pub point: bool,
-    frame: Frame,
+    /// The frame about the axis the cone's directions are taken to the world by.
+    pub frame: Frame,
 }
 
 impl LightCone {
@@ -179,19 +181,45 @@ impl LightCone {
     }
 }
 
-/// Reused buffers of [`light_fraction`].
+/// Reused buffers of [`light_fraction`], and the disk samples of the last ray set they served
+/// (the same for every point of a set without jitter).
 #[derive(Default)]
 pub struct ShadowScratch {
     squares: Vec<Vec2>,
-    dirs: Vec<Vec3>,
-    tmaxs: Vec<f32>,
-    weights: Vec<f64>,
+    disk: DiskSamples,
+    /// The set whose (unjittered) samples `disk` holds.
+    disk_of: Option<RaySet>,
+    rays: ShadowRays,
     blocked: Vec<bool>,
 }
 
-/// The shadow rays of one point into `sc` (directions, far ends, weights), every light's, in
-/// light order; returns the ray origin.
+impl ShadowScratch {
+    #[cfg(test)]
+    /// The shadow rays the last point left here.
+    pub(super) fn rays(&self) -> &ShadowRays {
+        &self.rays
+    }
+}
+
+/// The shadow rays of one point into `sc.rays` (directions, far ends, weights), every light's,
+/// in light order; returns the ray origin. The disk points of the stratified squares are made
+/// once per ray set (per point when jittered) and each light's rays eight at a time
+/// ([`ray_lanes::cone_rays`]): the rays of [`LightCone::direction`] and
+/// [`LightCone::far_end`] of each square, bit for bit.
 fn shadow_rays(
+    point_index: u32,
+    point: Vec3,
+    normal: Vec3,
+    rays: &RaySet,
+    opts: &ShadowOptions,
+    sc: &mut ShadowScratch,
+) -> Vec3 {
+    shadow_rays_on(Isa::detect(), point_index, point, normal, rays, opts, sc)
+}
+
+/// [`shadow_rays`] on the instruction set `isa` (tests compare them).
+pub(super) fn shadow_rays_on(
+    isa: Isa,
     point_index: u32,
     point: Vec3,
     normal: Vec3,
@@ -201,28 +229,28 @@ fn shadow_rays(
 ) -> Vec3 {
     let origin = point + opts.offset * normal;
     let (s, c) = rays.rotation(point_index);
-    rays.fill_square(point_index, &mut sc.squares);
-    sc.dirs.clear();
-    sc.tmaxs.clear();
-    sc.weights.clear();
+    if rays.jitter || sc.disk_of != Some(*rays) {
+        rays.fill_square(point_index, &mut sc.squares);
+        sc.disk.fill(&sc.squares);
+        sc.disk_of = (!rays.jitter).then_some(*rays);
+    }
+    sc.rays.clear();
+    let cells = sc.disk.len();
     for light in &opts.lights {
-        let Some(cone) = LightCone::new(light, origin, sc.squares.len()) else {
+        let Some(cone) = LightCone::new(light, origin, cells) else {
             continue;
         };
-        let samples = if cone.point {
-            1.min(sc.squares.len())
-        } else {
-            sc.squares.len()
-        };
-        for &u in &sc.squares[..samples] {
-            let dir = cone.direction(u, s, c);
+        if !cone.point {
+            ray_lanes::cone_rays(isa, &sc.disk, &cone, (s, c), normal, &mut sc.rays);
+        } else if cells > 0 {
+            // One ray, along the axis.
+            let dir = cone.axis;
             let cos_n = normal.dot(dir);
-            if cos_n <= 0.0 {
-                continue;
+            if cos_n > 0.0 || cos_n.is_nan() {
+                sc.rays.dirs.push(dir);
+                sc.rays.tmaxs.push(cone.far_end(dir));
+                sc.rays.weights.push(cone.weight_scale * cos_n as f64);
             }
-            sc.dirs.push(dir);
-            sc.tmaxs.push(cone.far_end(dir));
-            sc.weights.push(cone.weight_scale * cos_n as f64);
         }
     }
     origin
@@ -241,14 +269,15 @@ pub fn light_fraction<V: Visibility + ?Sized>(
 ) -> f32 {
     let sc = scratch;
     let origin = shadow_rays(point_index, point, normal, rays, opts, sc);
-    if sc.dirs.is_empty() {
+    let r = &sc.rays;
+    if r.dirs.is_empty() {
         return 1.0;
     }
     sc.blocked.clear();
-    sc.blocked.resize(sc.dirs.len(), false);
-    vis.occluded_many_to(origin, &sc.dirs, 0.0, &sc.tmaxs, &mut sc.blocked);
+    sc.blocked.resize(r.dirs.len(), false);
+    vis.occluded_many_to(origin, &r.dirs, 0.0, &r.tmaxs, &mut sc.blocked);
     let (mut lit, mut total) = (0.0f64, 0.0f64);
-    for (&w, &b) in sc.weights.iter().zip(&sc.blocked) {
+    for (&w, &b) in r.weights.iter().zip(&sc.blocked) {
         total += w;
         if !b {
             lit += w;
@@ -299,7 +328,7 @@ pub fn unshadowed_light(
         normals,
         |sc: &mut ShadowScratch, i, p, n| {
             shadow_rays(i, p, n, rays, opts, sc);
-            sc.weights.iter().sum()
+            sc.rays.weights.iter().sum()
         },
     )
 }
