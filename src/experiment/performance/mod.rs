@@ -10,7 +10,9 @@
 //! each meets the same load on a shared machine, each timed pass right after an untimed one of
 //! the same backend (warm caches).
 //!
-//! Three sweeps, each written to `table.csv` (column `sweep`) and plotted:
+//! Three sweeps, each written to `table.csv` (column `sweep`) and plotted, for AO rays and again
+//! for the 2010 paper's shadow and reflection rays on the same casters, fields and receivers
+//! (sweeps `shadow_*` and `reflection_*`, [`secondary`]):
 //! - `triangles`: real models from 3.7k to 269k triangles, one field shape (4226 × 32² u8);
 //! - `field_size`: one caster, fields from tens of KiB (in L2) to tens of MiB (beyond L3);
 //! - `entering`: one caster and field, each vertex's rays drawn so that a set share of them
@@ -18,6 +20,7 @@
 
 pub mod floor;
 pub mod plots;
+mod secondary;
 
 use super::fields::FieldSupply;
 use super::scenes::{mesh_sha256, LoadedMesh};
@@ -35,7 +38,7 @@ use crate::trace::Tracer;
 use crate::visibility::Visibility;
 use floor::{NoQuery, SphereCull};
 use glam::{Quat, Vec3};
-use rayon::prelude::*;
+use secondary::{RayKind, Secondary};
 use serde::Serialize;
 use std::path::Path;
 use std::sync::Arc;
@@ -44,7 +47,8 @@ use std::time::Instant;
 /// One backend's time on one sweep point.
 #[derive(Clone, Debug, Serialize)]
 pub struct PerfRow {
-    /// `triangles`, `field_size` or `entering`.
+    /// `triangles`, `field_size` or `entering` (vertex AO rays); the same prefixed by
+    /// `shadow_` or `reflection_` for those rays ([`secondary`]).
     pub sweep: &'static str,
     pub caster: String,
     pub triangles: usize,
@@ -229,47 +233,51 @@ fn time_interleaved(
     timed
 }
 
-/// Rows of every backend on the same vertex-AO rays.
-#[allow(clippy::too_many_arguments)]
-fn measure_ao(
-    sweep: &'static str,
-    caster: &str,
+/// Where a sweep point is: its caster, its field and the share of rays entering the sphere.
+struct At<'a> {
+    caster: &'a str,
     triangles: usize,
-    field: (&str, u64),
+    field: (&'a str, u64),
     share: f64,
+}
+
+/// Rows of every backend on the same rays of `kind` at every receiver of `rays`.
+fn measure(
+    kind: RayKind,
+    base: &str,
+    at: &At,
     backends: &[Backend],
     rays: &Rays,
-    opts: &AoOptions,
+    (opts, sec): (&AoOptions, &Secondary),
     passes: usize,
 ) -> Vec<PerfRow> {
-    let mean_ao = |b: &Backend| {
-        let ao = ao_at_points(&*b.vis, &rays.points, &rays.normals, &rays.set, opts);
-        ao.iter().map(|&v| v as f64).sum::<f64>() / ao.len().max(1) as f64
+    let pass = |b: &Backend| match kind {
+        RayKind::Ao => {
+            let ao = ao_at_points(&*b.vis, &rays.points, &rays.normals, &rays.set, opts);
+            ao.iter().map(|&v| v as f64).sum::<f64>() / ao.len().max(1) as f64
+        }
+        RayKind::Shadow => sec.shadow_pass(&*b.vis, rays),
+        RayKind::Reflection => sec.reflection_pass(&*b.vis, rays),
     };
-    let timed = time_interleaved(passes, backends, mean_ao);
+    let timed = time_interleaved(passes, backends, pass);
     rows(
-        sweep,
-        caster,
-        triangles,
-        field,
-        share,
+        kind.sweep(base),
+        at,
         backends,
         &timed,
-        rays.count(),
+        sec.count(kind, rays),
     )
 }
 
-#[allow(clippy::too_many_arguments)]
 fn rows(
     sweep: &'static str,
-    caster: &str,
-    triangles: usize,
-    (field, field_bytes): (&str, u64),
-    share: f64,
+    at: &At,
     backends: &[Backend],
     timed: &[(f64, f64)],
     rays: u64,
 ) -> Vec<PerfRow> {
+    let (caster, triangles, (field, field_bytes), share) =
+        (at.caster, at.triangles, at.field, at.share);
     let secs_of = |name: &str| {
         backends
             .iter()
@@ -299,7 +307,7 @@ fn rows(
                 setup_s: b.setup_s,
             };
             println!(
-                "performance {sweep:<10} {caster:<20} {field:<16} {:<18} {:>8.2} Mrays/s  ({:.2}x ray casting)",
+                "performance {sweep:<21} {caster:<20} {field:<16} {:<18} {:>8.2} Mrays/s  ({:.2}x ray casting)",
                 b.name, row.mrays_s, row.vs_raycast
             );
             row
@@ -354,6 +362,38 @@ fn field_backends(fs: &FieldScene, bake_s: f64) -> Vec<Backend<'_>> {
     ]
 }
 
+/// The backends of the reflection rays: the ray casters, the field with its 16-bit normal
+/// field (baked with it, the distances those of [`field_scene`]'s), and the floor without a
+/// query.
+fn reflection_backends(
+    supply: &FieldSupply,
+    mesh: &LoadedMesh,
+    scene: &Scene,
+    shape: (usize, u32, Precision),
+) -> Result<Vec<Backend<'static>>> {
+    let (got, normals) = supply.obtain_with_normals(mesh, field_params(shape), &[16])?;
+    let fs = FieldScene {
+        instances: vec![FieldInstance::new(got.field, scene.instances[1].transform)
+            .with_normals(normals[0].1.clone())],
+        options: LookupOptions {
+            selection: Selection::Nearest,
+            ..LookupOptions::default()
+        },
+    };
+    let mut v = ray_casters(scene);
+    v.push(Backend {
+        name: "field_nearest",
+        vis: Box::new(fs),
+        setup_s: got.bake_s.unwrap_or(0.0),
+    });
+    v.push(Backend {
+        name: "floor_no_query",
+        vis: Box::new(NoQuery),
+        setup_s: 0.0,
+    });
+    Ok(v)
+}
+
 /// The scene's one caster's field, baked or read from the cache.
 fn field_scene(
     supply: &FieldSupply,
@@ -381,8 +421,8 @@ pub fn plan(quick: bool) -> String {
     let p = Profile::new(quick);
     let field = |(c, r, pr): &(usize, u32, Precision)| format!("{c}x{r}² {}", pr.name());
     format!(
-        "performance ({}): 256 AO rays at every{} corner vertex, best of {} passes, the \
-         backends taking turns, each timed pass after an untimed one, on ray casting (ours{}), the field lookup and the two floors\n  \
+        "performance ({}): 256 AO rays, 3 lights × 16 shadow rays and 16 Phong reflection rays \
+         at every{} corner vertex, best of {} passes, the backends taking turns, each timed pass after an untimed one, on ray casting (ours{}), the field lookup and the two floors\n  \
          triangles: {} with {}\n  field_size (stanford-bunny_39k): {}\n  \
          entering shares: {}",
         if quick { "quick" } else { "full" },
@@ -413,7 +453,7 @@ fn ordinal(n: usize) -> String {
     }
 }
 
-/// Runs the three sweeps into `out` (see the module docs).
+/// Runs the three sweeps of each kind of ray into `out` (see the module docs).
 pub fn run(out: &Path, quick: bool, supply: &FieldSupply) -> Result<Vec<PerfRow>> {
     crate::experiment::progress::begin_run();
     super::models_cmd::require("performance", models(quick))?;
@@ -428,6 +468,8 @@ pub fn run(out: &Path, quick: bool, supply: &FieldSupply) -> Result<Vec<PerfRow>
         .iter()
         .map(|m| caster(m))
         .collect::<Result<_>>()?;
+    let sec = Secondary::new(&opts);
+    let both = (&opts, &sec);
     for mesh in &casters {
         let scene = over_corner((*mesh.mesh).clone(), Quat::IDENTITY);
         let rays = Rays::of(&scene, prof.stride);
@@ -435,57 +477,63 @@ pub fn run(out: &Path, quick: bool, supply: &FieldSupply) -> Result<Vec<PerfRow>
             .transform
             .to_world_sphere(&mesh.mesh.bounding_sphere());
         let share = rays.entering_share(world.center, world.radius, &opts);
-        let (fs, label, bytes, bake_s) = field_scene(supply, mesh, &scene, prof.standard)?;
-        let mut all = ray_casters(&scene);
-        all.extend(field_backends(&fs, bake_s));
         let tris = mesh.mesh.triangles.len();
-        table.extend(measure_ao(
-            "triangles",
-            &mesh.label,
-            tris,
-            (&label, bytes),
-            share,
-            &all,
-            &rays,
-            &opts,
-            prof.passes,
-        ));
-        if mesh.label == "stanford-bunny_39k" {
-            for &shape in &prof.sizes {
-                let (fs, label, bytes, bake_s) = field_scene(supply, mesh, &scene, shape)?;
-                let mut all = ray_casters(&scene);
-                all.extend(field_backends(&fs, bake_s));
-                table.extend(measure_ao(
-                    "field_size",
-                    &mesh.label,
-                    tris,
-                    (&label, bytes),
-                    share,
-                    &all,
-                    &rays,
-                    &opts,
-                    prof.passes,
-                ));
+        let sizes = if mesh.label == "stanford-bunny_39k" {
+            &prof.sizes[..]
+        } else {
+            &[][..]
+        };
+        // The standard field on every caster (`triangles`), then the field sizes on one.
+        for (base, &shape) in std::iter::once(("triangles", &prof.standard))
+            .chain(sizes.iter().map(|s| ("field_size", s)))
+        {
+            let (fs, label, bytes, bake_s) = field_scene(supply, mesh, &scene, shape)?;
+            let at = At {
+                caster: &mesh.label,
+                triangles: tris,
+                field: (&label, bytes),
+                share,
+            };
+            let mut all = ray_casters(&scene);
+            all.extend(field_backends(&fs, bake_s));
+            for kind in [RayKind::Ao, RayKind::Shadow] {
+                table.extend(measure(kind, base, &at, &all, &rays, both, prof.passes));
+            }
+            let with_normals = reflection_backends(supply, mesh, &scene, shape)?;
+            table.extend(measure(
+                RayKind::Reflection,
+                base,
+                &at,
+                &with_normals,
+                &rays,
+                both,
+                prof.passes,
+            ));
+            if base != "triangles" || mesh.label != "stanford-bunny_39k" {
+                continue;
             }
             // The `triangles` sweep's backends: the same caster and field.
+            let far = |o: Vec3| o.distance(world.center) + 2.0 * world.radius;
+            let tmax = opts.max_distance.unwrap_or(f32::INFINITY);
             for &p in &prof.shares {
                 let dirs = entering_rays(&rays, world.center, world.radius, &opts, p);
-                let timed =
-                    time_interleaved(prof.passes, &all, |b| free_share(&*b.vis, &dirs, &opts));
                 let n = dirs.iter().map(|d| d.1.len() as u64).sum();
                 // The share drawn: round(p · 256) of each receiver's 256 rays.
                 let k = rays.set.len() as f64;
-                let drawn = (p * k).round() / k;
-                table.extend(rows(
-                    "entering",
-                    &mesh.label,
-                    tris,
-                    (&label, bytes),
-                    drawn,
-                    &all,
-                    &timed,
-                    n,
-                ));
+                let at = At {
+                    share: (p * k).round() / k,
+                    ..at
+                };
+                for (kind, backends) in [
+                    (RayKind::Ao, &all),
+                    (RayKind::Shadow, &all),
+                    (RayKind::Reflection, &with_normals),
+                ] {
+                    let timed = time_interleaved(prof.passes, backends, |b| {
+                        secondary::entering_pass(kind, &*b.vis, &dirs, tmax, far)
+                    });
+                    table.extend(rows(kind.sweep("entering"), &at, backends, &timed, n));
+                }
             }
         }
     }
@@ -540,19 +588,4 @@ fn entering_rays(
             Some((origin, picked))
         })
         .collect()
-}
-
-/// The share of `dirs` that `vis` answers free, over all receivers in parallel.
-fn free_share(vis: &dyn Visibility, dirs: &[(Vec3, Vec<Vec3>)], opts: &AoOptions) -> f64 {
-    let tmax = opts.max_distance.unwrap_or(f32::INFINITY);
-    let free: usize = dirs
-        .par_iter()
-        .map(|(o, d)| {
-            let mut out = vec![false; d.len()];
-            vis.occluded_many(*o, d, 0.0, tmax, &mut out);
-            out.iter().filter(|&&b| !b).count()
-        })
-        .sum();
-    let total: usize = dirs.iter().map(|d| d.1.len()).sum();
-    free as f64 / total.max(1) as f64
 }

@@ -86,9 +86,30 @@ fn backends<'a>(rows: &'a [PlotRow], sweep: &str) -> Vec<&'a str> {
     names
 }
 
-/// The three figures, by file name (`caches`: the machine's cache sizes, for the field-size
-/// plot's title, when drawn by the run).
-pub fn figures(rows: &[PlotRow], caches: Option<&str>) -> Vec<(&'static str, Figure)> {
+/// The kinds of ray: their sweeps' prefix, their plots' and their titles' names.
+const RAYS: [(&str, &str); 3] = [
+    ("", "Vertex AO rays"),
+    ("shadow_", "Shadow rays"),
+    ("reflection_", "Reflection rays"),
+];
+
+/// The three figures of each kind of ray, by file name (`caches`: the machine's cache sizes,
+/// for the field-size plot's title, when drawn by the run).
+pub fn figures(rows: &[PlotRow], caches: Option<&str>) -> Vec<(String, Figure)> {
+    RAYS.iter()
+        .flat_map(|&(prefix, what)| figures_of(rows, prefix, what, caches))
+        .collect()
+}
+
+/// The three figures of the sweeps named `prefix` + `triangles`, `field_size`, `entering`.
+fn figures_of(
+    rows: &[PlotRow],
+    prefix: &str,
+    what: &str,
+    caches: Option<&str>,
+) -> Vec<(String, Figure)> {
+    let named = |base: &str| format!("{prefix}{base}");
+    let file = |base: &str| format!("growth_{prefix}{base}.png");
     let axes = |title: String, x: &str, log_x: bool| Axes {
         title,
         x_label: x.to_string(),
@@ -108,7 +129,7 @@ pub fn figures(rows: &[PlotRow], caches: Option<&str>) -> Vec<(&'static str, Fig
     let mut out = Vec::new();
 
     // Caster triangles: points per backend, never joined across models.
-    let sweep = "triangles";
+    let sweep = &*named("triangles");
     let tri: Vec<Styled> = backends(rows, sweep)
         .iter()
         .enumerate()
@@ -139,10 +160,10 @@ pub fn figures(rows: &[PlotRow], caches: Option<&str>) -> Vec<(&'static str, Fig
     let names: Vec<String> = models.iter().map(|(t, m)| format!("{m} {t}")).collect();
     if !tri.iter().all(|s| s.series.points.is_empty()) {
         out.push((
-            "growth_triangles.png",
+            file("triangles"),
             one(
                 axes(
-                    format!("Vertex AO rays against caster triangles{field}"),
+                    format!("{what} against caster triangles{field}"),
                     "caster triangles (log; each a different model)",
                     true,
                 ),
@@ -157,7 +178,7 @@ pub fn figures(rows: &[PlotRow], caches: Option<&str>) -> Vec<(&'static str, Fig
 
     // Field size: a line per precision for the field's lookups; the backends that read no
     // field (ray casters, floors) as points, repeats on the same rays.
-    let sweep = "field_size";
+    let sweep = &*named("field_size");
     let mut precisions: Vec<&str> = rows
         .iter()
         .filter(|r| r.sweep == sweep)
@@ -213,10 +234,10 @@ pub fn figures(rows: &[PlotRow], caches: Option<&str>) -> Vec<(&'static str, Fig
         .map_or(String::new(), |c| format!(" ({c})"));
     if !size.is_empty() {
         out.push((
-            "growth_field_size.png",
+            file("field_size"),
             one(
                 axes(
-                    format!("Against field size{caches}"),
+                    format!("{what} against field size{caches}"),
                     &format!("{caster}field storage, MB (10⁶ bytes; log)"),
                     true,
                 ),
@@ -227,7 +248,7 @@ pub fn figures(rows: &[PlotRow], caches: Option<&str>) -> Vec<(&'static str, Fig
     }
 
     // The share of rays entering the caster's sphere.
-    let sweep = "entering";
+    let sweep = &*named("entering");
     let enter: Vec<Styled> = backends(rows, sweep)
         .iter()
         .enumerate()
@@ -246,10 +267,10 @@ pub fn figures(rows: &[PlotRow], caches: Option<&str>) -> Vec<(&'static str, Fig
         .collect();
     if !enter.is_empty() {
         out.push((
-            "growth_entering.png",
+            file("entering"),
             one(
                 axes(
-                    "Against the share of rays entering the caster's sphere".into(),
+                    format!("{what} against the share entering the caster's sphere"),
                     "share of rays entering the bounding sphere",
                     false,
                 ),
