@@ -65,7 +65,7 @@ mod imp {
     use visfield::sampling::Frame;
     use visfield::trace::embree::{EmbreeRays, EmbreeTracer};
     use visfield::trace::Tracer;
-    use visfield::visibility::Visibility;
+    use visfield::visibility::{SurfaceHit, Visibility};
 
     /// The AO rays of a scene's receivers, as the renderers cast them: origin offset along
     /// the normal by the receiver's instance epsilon, k² directions per point.
@@ -258,7 +258,7 @@ mod imp {
                 .expect("Embree device")
                 .with_rays(EmbreeRays::Packet8);
             let rays = ao_rays(&scene, 16, 1);
-            let mut n = 0usize;
+            let (mut n, mut hits) = (0usize, 0usize);
             for (i, (o, dirs)) in rays.origins.iter().zip(&rays.dirs).enumerate() {
                 // A count that is not a multiple of 8 leaves the last packet part-masked.
                 let dirs = &dirs[..dirs.len() - i % 8];
@@ -280,9 +280,38 @@ mod imp {
                 for (j, &d) in dirs.iter().enumerate() {
                     assert_eq!(a[j], single.occluded(*o, d, 0.0, tmaxs[j]), "{name}");
                 }
-                n += 2 * dirs.len();
+                // Closest hits (reflection rays), unbounded and ending halfway.
+                for tmax in [f32::INFINITY, 0.5] {
+                    let (mut a, mut b) = (vec![None; dirs.len()], vec![None; dirs.len()]);
+                    single.surface_hit_many(*o, dirs, 0.0, tmax, &mut a);
+                    packets.surface_hit_many(*o, dirs, 0.0, tmax, &mut b);
+                    let bits = |h: &[Option<SurfaceHit>]| -> Vec<Option<[u32; 4]>> {
+                        h.iter()
+                            .map(|h| {
+                                h.map(|h| {
+                                    [
+                                        h.t.to_bits(),
+                                        h.normal.x.to_bits(),
+                                        h.normal.y.to_bits(),
+                                        h.normal.z.to_bits(),
+                                    ]
+                                })
+                            })
+                            .collect()
+                    };
+                    assert_eq!(bits(&a), bits(&b), "{name}: point {i}, surface_hit_many");
+                    for (j, &d) in dirs.iter().enumerate() {
+                        let one = single.surface_hit(*o, d, 0.0, tmax);
+                        assert_eq!(bits(&a[j..=j]), bits(&[one]), "{name}");
+                    }
+                    hits += a.iter().flatten().count();
+                }
+                n += 4 * dirs.len();
             }
-            eprintln!("{name}: {n} rays, packets == single rays on every one");
+            assert!(hits > 0, "{name}: no closest hit to compare");
+            eprintln!(
+                "{name}: {n} rays ({hits} closest hits), packets == single rays on every one"
+            );
         }
     }
 

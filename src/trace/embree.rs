@@ -184,17 +184,18 @@ pub(super) unsafe fn triangle_scene(
     }
 }
 
-/// How [`Visibility::occluded_many`] and [`Visibility::occluded_many_to`] cast their rays.
+/// How [`Visibility::occluded_many`], [`Visibility::occluded_many_to`] and
+/// [`Visibility::surface_hit_many`] cast their rays.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum EmbreeRays {
-    /// One `rtcOccluded1` per ray.
+    /// One `rtcOccluded1` (`rtcIntersect1`) per ray.
     Single,
-    /// 8-wide packets (`rtcOccluded8`, the last one masked).
+    /// 8-wide packets (`rtcOccluded8`, `rtcIntersect8`; the last one masked).
     Packet8,
 }
 
 /// Embree 3 over a fixed set of world-space triangles: closest hit (`rtcIntersect1`) and any
-/// hit (`rtcOccluded1`, and 8-wide packets for many rays from one origin).
+/// hit (`rtcOccluded1`), and 8-wide packets of either for many rays from one origin.
 ///
 /// Queries as [`super::Tracer`]'s: `origin` finite, `dir` finite and non-zero (`t` in units of
 /// its length), `0 <= tmin`; triangles hit from either side.
@@ -448,6 +449,56 @@ impl Committed {
         self.any_hits(rays, origin, dirs, tmin, |i| tmaxs[i], out);
     }
 
+    /// The closest hit of each ray from `origin` along `dirs[i]` within [tmin, tmax]:
+    /// `found(i, t, primID)`, one `rtcIntersect1` per ray or through 8-wide `rtcIntersect8`
+    /// packets as `rays` says; rays without a hit are not reported.
+    pub fn closest_hits(
+        &self,
+        rays: EmbreeRays,
+        origin: Vec3,
+        dirs: &[Vec3],
+        tmin: f32,
+        tmax: f32,
+        mut found: impl FnMut(usize, f32, u32),
+    ) {
+        if rays == EmbreeRays::Single {
+            for (i, &d) in dirs.iter().enumerate() {
+                if let Some(rh) = self.intersect(origin, d, tmin, tmax) {
+                    found(i, rh.ray.tfar, rh.hit.primID);
+                }
+            }
+            return;
+        }
+        for (c, dirs) in dirs.chunks(8).enumerate() {
+            let mut packet = sys::RTCRayHit8::default();
+            packet.ray.mask = [u32::MAX; 8];
+            packet.hit.geomID = [sys::RTC_INVALID_GEOMETRY_ID; 8];
+            packet.hit.instID = [[sys::RTC_INVALID_GEOMETRY_ID; 8]];
+            let mut valid = sys::Valid8([0; 8]);
+            for (j, &d) in dirs.iter().enumerate() {
+                if !self.live(origin, d, tmin, tmax) {
+                    continue;
+                }
+                valid.0[j] = -1;
+                let r = &mut packet.ray;
+                (r.org_x[j], r.org_y[j], r.org_z[j]) = (origin.x, origin.y, origin.z);
+                (r.dir_x[j], r.dir_y[j], r.dir_z[j]) = (d.x, d.y, d.z);
+                (r.tnear[j], r.tfar[j]) = (tmin, tmax);
+            }
+            if valid.0.iter().all(|&v| v == 0) {
+                continue;
+            }
+            let mut ctx = sys::RTCIntersectContext::new(sys::RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT);
+            // SAFETY: a committed scene, an aligned valid mask and packet.
+            unsafe { sys::rtcIntersect8(valid.0.as_ptr(), self.scene, &mut ctx, &mut packet) };
+            for j in 0..dirs.len() {
+                if valid.0[j] != 0 && packet.hit.geomID[j] != sys::RTC_INVALID_GEOMETRY_ID {
+                    found(8 * c + j, packet.ray.tfar[j], packet.hit.primID[j]);
+                }
+            }
+        }
+    }
+
     /// `out[i] = any_hit(origin, dirs[i], tmin, tmax(i))`, one call per ray or through 8-wide
     /// packets as `rays` says.
     fn any_hits(
@@ -538,6 +589,31 @@ impl Visibility for EmbreeTracer {
     fn occluded_many(&self, origin: Vec3, dirs: &[Vec3], tmin: f32, tmax: f32, out: &mut [bool]) {
         self.q()
             .occluded_many(self.rays, origin, dirs, tmin, tmax, out);
+    }
+
+    /// Reflection rays: 8-wide `rtcIntersect8` packets in packet mode, the hit triangle's
+    /// normal as [`Self::surface_hit`]'s.
+    fn surface_hit_many(
+        &self,
+        origin: Vec3,
+        dirs: &[Vec3],
+        tmin: f32,
+        tmax: f32,
+        out: &mut [Option<SurfaceHit>],
+    ) {
+        assert_eq!(
+            dirs.len(),
+            out.len(),
+            "surface_hit_many: dirs and out differ in length"
+        );
+        out.fill(None);
+        self.q()
+            .closest_hits(self.rays, origin, dirs, tmin, tmax, |i, t, triangle| {
+                out[i] = Some(SurfaceHit {
+                    t,
+                    normal: self.normals[triangle as usize],
+                });
+            });
     }
 
     fn occluded_many_to(

@@ -115,6 +115,28 @@ pub struct RTCRay8 {
     pub flags: [c_uint; 8],
 }
 
+/// `struct RTCHit8` (structure of arrays, 32-byte aligned; one instance level).
+#[repr(C, align(32))]
+#[derive(Clone, Copy, Default)]
+pub struct RTCHit8 {
+    pub Ng_x: [f32; 8],
+    pub Ng_y: [f32; 8],
+    pub Ng_z: [f32; 8],
+    pub u: [f32; 8],
+    pub v: [f32; 8],
+    pub primID: [c_uint; 8],
+    pub geomID: [c_uint; 8],
+    pub instID: [[c_uint; 8]; 1],
+}
+
+/// `struct RTCRayHit8`.
+#[repr(C, align(32))]
+#[derive(Clone, Copy, Default)]
+pub struct RTCRayHit8 {
+    pub ray: RTCRay8,
+    pub hit: RTCHit8,
+}
+
 /// The packets' valid mask: -1 active, 0 inactive (32-byte aligned as the header asks).
 #[repr(C, align(32))]
 #[derive(Clone, Copy, Default)]
@@ -160,6 +182,12 @@ extern "C" {
         rayhit: *mut RTCRayHit,
     );
     pub fn rtcOccluded1(scene: RTCScene, context: *mut RTCIntersectContext, ray: *mut RTCRay);
+    pub fn rtcIntersect8(
+        valid: *const c_int,
+        scene: RTCScene,
+        context: *mut RTCIntersectContext,
+        rayhit: *mut RTCRayHit8,
+    );
     pub fn rtcOccluded8(
         valid: *const c_int,
         scene: RTCScene,
@@ -179,4 +207,9 @@ const _: () = {
     assert!(std::mem::size_of::<RTCRay8>() == 384);
     assert!(std::mem::align_of::<RTCRay8>() == 32);
     assert!(std::mem::offset_of!(RTCRay8, tfar) == 256);
+    assert!(std::mem::size_of::<RTCHit8>() == 256);
+    assert!(std::mem::offset_of!(RTCHit8, primID) == 160);
+    assert!(std::mem::offset_of!(RTCHit8, geomID) == 192);
+    assert!(std::mem::size_of::<RTCRayHit8>() == 640);
+    assert!(std::mem::offset_of!(RTCRayHit8, hit) == 384);
 };
