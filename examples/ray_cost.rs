@@ -39,14 +39,15 @@ use visfield::geometry::procedural::over_corner;
 use visfield::geometry::{models, Scene};
 use visfield::render::ao::{ao_at_point, AoOptions};
 use visfield::render::receivers::Receivers;
-use visfield::render::reflect::{reflected, Gloss, ReflectOptions, ReflectScratch};
-use visfield::render::shadow::{light_fraction, ShadowOptions, ShadowScratch, SphereLight};
+use visfield::render::reflect::{reflected, ReflectScratch};
+use visfield::render::shadow::{light_fraction, ShadowScratch};
 use visfield::sampling::rays::RaySet;
 use visfield::sampling::{LayoutKind, SphereKind};
 use visfield::trace::Tracer;
 use visfield::visibility::{PerRay, SurfaceHit, Visibility};
 
 use visfield::experiment::performance::floor::{NoQuery, SphereCull};
+use visfield::experiment::performance::secondary::Secondary;
 
 const MODEL: &str = "stanford-bunny_39k";
 
@@ -67,21 +68,6 @@ enum Kind {
     Reflect4,
 }
 
-/// Three lights over the corner's open side.
-fn lights() -> Vec<SphereLight> {
-    [
-        Vec3::new(1.8, 2.0, 1.2),
-        Vec3::new(1.2, 1.9, 2.0),
-        Vec3::new(2.2, 1.5, 2.2),
-    ]
-    .map(|center| SphereLight {
-        center,
-        radius: 0.3,
-        intensity: 1.0,
-    })
-    .to_vec()
-}
-
 /// One pass of `kind`'s rays at every point, on this thread (what callgrind's
 /// `--toggle-collect` names); returns the per-point values and the rays cast.
 #[inline(never)]
@@ -95,10 +81,8 @@ fn ray_pass<V: Visibility + ?Sized>(
     let mut cast = 0;
     let values = match kind {
         Kind::Shadow => {
-            let opts = ShadowOptions {
-                offset: AoOptions::for_scene_radius(0.9).offset,
-                lights: lights(),
-            };
+            // `experiment performance`'s shadow rays.
+            let opts = Secondary::new(&AoOptions::for_scene_radius(0.9)).shadow;
             let mut sc = ShadowScratch::default();
             (0..p.len())
                 .map(|i| {
@@ -119,14 +103,8 @@ fn ray_pass<V: Visibility + ?Sized>(
                 .collect()
         }
         Kind::Reflect | Kind::Reflect4 => {
-            let opts = ReflectOptions {
-                offset: AoOptions::for_scene_radius(0.9).offset,
-                eye: Vec3::new(2.5, 1.6, 2.2),
-                gloss: Gloss::Phong { exponent: 50.0 },
-                lights: lights(),
-                albedo: 0.8,
-                sky: 0.2,
-            };
+            // `experiment performance`'s reflection rays.
+            let opts = Secondary::new(&AoOptions::for_scene_radius(0.9)).reflect;
             let mut sc = ReflectScratch::default();
             (0..p.len())
                 .map(|i| {

@@ -173,13 +173,13 @@ fn the_quick_performance_run_writes_every_sweep_with_exact_shares() {
         memory_limit: 1 << 30,
     };
     let rows: Vec<PerfRow> = run(&out.path().join("perf"), true, &supply).unwrap();
-    for f in [
-        "table.csv",
-        "run.json",
-        "growth_triangles.png",
-        "growth_field_size.png",
-        "growth_entering.png",
-    ] {
+    for ray in ["", "shadow_", "reflection_"] {
+        for sweep in ["triangles", "field_size", "entering"] {
+            let f = format!("growth_{ray}{sweep}.png");
+            assert!(out.path().join("perf").join(&f).is_file(), "{f}");
+        }
+    }
+    for f in ["table.csv", "run.json"] {
         assert!(out.path().join("perf").join(f).is_file(), "{f}");
     }
     let count = |sweep: &str| rows.iter().filter(|r| r.sweep == sweep).count();
@@ -197,27 +197,55 @@ fn the_quick_performance_run_writes_every_sweep_with_exact_shares() {
         assert!(backends.contains(&b), "{b} missing from {backends:?}");
     }
     let per = backends.len();
-    assert_eq!(
-        (count("triangles"), count("field_size"), count("entering")),
-        (2 * per, 2 * per, 3 * per)
-    );
+    // Shadow rays on every backend; reflection rays without the sphere-cull floor (it has no
+    // batched closest hit).
+    for (ray, n) in [("", per), ("shadow_", per), ("reflection_", per - 1)] {
+        let of = |s: &str| count(&format!("{ray}{s}"));
+        assert_eq!(
+            (of("triangles"), of("field_size"), of("entering")),
+            (2 * n, 2 * n, 3 * n),
+            "{ray}"
+        );
+    }
+    // 3 lights × 16 shadow rays and 16 reflection rays a receiver at most (those below a
+    // receiver's horizon are not cast).
+    let receivers = |r: &PerfRow| {
+        rows.iter()
+            .find(|a| a.sweep == "triangles" && a.caster == r.caster)
+            .map(|a| a.rays / 256)
+            .unwrap()
+    };
     for r in &rows {
         assert!(
             r.seconds > 0.0 && r.mrays_s.is_finite() && r.rays > 0,
             "{r:?}"
         );
+        if r.sweep.starts_with("shadow_") && !r.sweep.ends_with("entering") {
+            assert!(r.rays <= receivers(r) * 48, "{r:?}");
+            assert!(r.free_share > 0.0 && r.free_share <= 1.0, "{r:?}");
+        }
+        if r.sweep.starts_with("reflection_") && !r.sweep.ends_with("entering") {
+            assert!(r.rays <= receivers(r) * 16, "{r:?}");
+        }
+        // Where `free_share` is a share of rays (AO; every entering sweep): the floors' exact
+        // answers. Shadow sweeps answer a light fraction, reflection sweeps a radiance.
+        let ray_share =
+            ["triangles", "field_size"].contains(&r.sweep) || r.sweep.ends_with("entering");
         match r.backend {
-            // Nothing is ever occluded.
-            "floor_no_query" => assert_eq!(r.free_share, 1.0, "{r:?}"),
-            // Occluded exactly where the ray enters the sphere ahead.
-            "floor_sphere_cull" => {
+            // Nothing is ever occluded: every ray free, every point fully lit.
+            "floor_no_query" if !r.sweep.starts_with("reflection_") || ray_share => {
+                assert_eq!(r.free_share, 1.0, "{r:?}")
+            }
+            // Occluded exactly where the ray enters the sphere ahead (the entering shadow
+            // rays end past the sphere).
+            "floor_sphere_cull" if ray_share => {
                 let entering = (r.entering_share * r.rays as f64).round();
                 let free = (r.free_share * r.rays as f64).round();
                 assert_eq!(entering + free, r.rays as f64, "{r:?}");
             }
             _ => {}
         }
-        if r.sweep == "entering" && r.entering_share == 0.0 {
+        if r.sweep.ends_with("entering") && r.entering_share == 0.0 {
             // No ray reaches the caster: every backend answers every ray free.
             assert_eq!(r.free_share, 1.0, "{r:?}");
         }

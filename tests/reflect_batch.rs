@@ -11,6 +11,8 @@
 //! (intra-object) and from the caster's surface; far ends at infinity and about the middle of
 //! the hits.
 
+mod common;
+use common::batch_rays::{directions, origins};
 use glam::{Quat, Vec3};
 use std::sync::Arc;
 use visfield::field::bake::{bake_mesh_with_normals, BakeOptions};
@@ -20,7 +22,6 @@ use visfield::field::scene::{FieldInstance, FieldScene};
 use visfield::field::{FieldParams, Precision, Selection, VisibilityField};
 use visfield::geometry::procedural::{supershape, Supershape};
 use visfield::geometry::{Mesh, Similarity};
-use visfield::sampling::rays::seeded_sphere_direction;
 use visfield::sampling::{LayoutKind, SphereKind};
 use visfield::simd::Isa;
 use visfield::visibility::{SurfaceHit, Visibility};
@@ -81,48 +82,6 @@ fn scene((field, normals): &Baked, several: bool, selection: Selection) -> Field
     }
 }
 
-/// `RAYS` unit directions from `origin`: random ones, and toward the first instance's sphere,
-/// around its outline as seen from the origin (radii 1 ± 2e-4 in steps of 1e-6) and inside it.
-fn directions(scene: &FieldScene, origin: Vec3, seed: u64) -> Vec<Vec3> {
-    let (c, r) = (
-        scene.instances[0].world_center,
-        scene.instances[0].world_radius,
-    );
-    let to = (c - origin).normalize_or(Vec3::Z);
-    let dist = (c - origin).length();
-    (0..RAYS as u64)
-        .map(|i| {
-            let side = seeded_sphere_direction(i, seed + 1)
-                .reject_from_normalized(to)
-                .normalize_or(to.any_orthonormal_vector());
-            match i % 4 {
-                0 => seeded_sphere_direction(i, seed),
-                1 if dist > r => {
-                    let k = 1.0 + 1e-6 * ((i / 4 % 401) as f32 - 200.0);
-                    (c + k * r * side - origin).normalize()
-                }
-                _ => (c + r * 0.95 * seeded_sphere_direction(i, seed + 2) - origin).normalize(),
-            }
-        })
-        .collect()
-}
-
-/// Origins around the first instance (outside and inside its sphere), far away, and on its
-/// surface (the caster's vertices pushed out by 1e-3 R: intra-object rays).
-fn origins(scene: &FieldScene, mesh: &Mesh) -> Vec<Vec3> {
-    let inst = &scene.instances[0];
-    let (c, r) = (inst.world_center, inst.world_radius);
-    let mut v: Vec<Vec3> = (0..6u64)
-        .map(|i| c + 3.0 * r * seeded_sphere_direction(i, 3) * ((1 + i % 3) as f32 / 3.0))
-        .collect();
-    v.push(c + 300.0 * r * seeded_sphere_direction(7, 4));
-    v.extend((0..mesh.positions.len()).step_by(499).map(|j| {
-        let p = inst.transform.to_world_point(mesh.positions[j]);
-        p + 1e-3 * r * (p - c).normalize_or_zero()
-    }));
-    v
-}
-
 fn bits(h: Option<SurfaceHit>) -> Option<(u32, [u32; 3])> {
     h.map(|h| (h.t.to_bits(), h.normal.to_array().map(f32::to_bits)))
 }
@@ -138,7 +97,7 @@ struct Tally {
 /// Asserts `surface_hit_many_on` == per-ray `surface_hit` for every instruction set and block.
 fn compare(scene: &FieldScene, origins: &[Vec3], tally: &mut Tally) {
     for (k, &origin) in origins.iter().enumerate() {
-        let dirs = directions(scene, origin, 10 * k as u64);
+        let dirs = directions(scene, origin, 10 * k as u64, RAYS);
         // A far end about the middle of this origin's hits, and none.
         let mut ts: Vec<f32> = dirs
             .iter()

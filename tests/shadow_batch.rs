@@ -8,6 +8,8 @@
 //! surface; the far ends lie before, exactly at, one ulp either side of and past each ray's
 //! field hit (`hit_distance`), at the sphere's entry and exit, at 0 and at infinity.
 
+mod common;
+use common::batch_rays::{directions, origins};
 use glam::{Quat, Vec3};
 use std::sync::Arc;
 use visfield::field::bake::{bake, BakeOptions};
@@ -16,7 +18,6 @@ use visfield::field::scene::{FieldInstance, FieldScene};
 use visfield::field::{FieldParams, Precision, Selection, VisibilityField};
 use visfield::geometry::procedural::{supershape, Supershape};
 use visfield::geometry::{Mesh, Similarity};
-use visfield::sampling::rays::seeded_sphere_direction;
 use visfield::sampling::{LayoutKind, SphereKind};
 use visfield::simd::Isa;
 use visfield::visibility::Visibility;
@@ -68,32 +69,6 @@ fn scene(field: &Arc<VisibilityField>, several: bool, selection: Selection) -> F
     }
 }
 
-/// `RAYS` unit directions from `origin`: random ones, and toward the first instance's sphere,
-/// around its outline as seen from the origin (radii 1 ± 2e-4 in steps of 1e-6) and inside it.
-fn directions(scene: &FieldScene, origin: Vec3, seed: u64) -> Vec<Vec3> {
-    let (c, r) = (
-        scene.instances[0].world_center,
-        scene.instances[0].world_radius,
-    );
-    let to = (c - origin).normalize_or(Vec3::Z);
-    let dist = (c - origin).length();
-    (0..RAYS as u64)
-        .map(|i| {
-            let side = seeded_sphere_direction(i, seed + 1)
-                .reject_from_normalized(to)
-                .normalize_or(to.any_orthonormal_vector());
-            match i % 4 {
-                0 => seeded_sphere_direction(i, seed),
-                1 if dist > r => {
-                    let k = 1.0 + 1e-6 * ((i / 4 % 401) as f32 - 200.0);
-                    (c + k * r * side - origin).normalize()
-                }
-                _ => (c + r * 0.95 * seeded_sphere_direction(i, seed + 2) - origin).normalize(),
-            }
-        })
-        .collect()
-}
-
 /// The far end of ray `i`: around its per-ray field hit `hit`, else around its world-sphere
 /// crossing, else anything.
 fn far_end(i: usize, hit: Option<f32>, sphere: Option<(f32, f32)>) -> f32 {
@@ -127,7 +102,7 @@ struct Tally {
 /// Asserts `occluded_many_to_on` == per-ray `occluded` for every instruction set and block.
 fn compare(scene: &FieldScene, origins: &[Vec3], tally: &mut Tally) {
     for (k, &origin) in origins.iter().enumerate() {
-        let dirs = directions(scene, origin, 10 * k as u64);
+        let dirs = directions(scene, origin, 10 * k as u64, RAYS);
         let first = &scene.instances[0];
         let tmaxs: Vec<f32> = dirs
             .iter()
@@ -181,22 +156,6 @@ fn compare(scene: &FieldScene, origins: &[Vec3], tally: &mut Tally) {
             }
         }
     }
-}
-
-/// Origins around the first instance (outside and inside its sphere), far away, and on its
-/// surface (the caster's vertices pushed out by 1e-3 R: intra-object rays).
-fn origins(scene: &FieldScene, mesh: &Mesh) -> Vec<Vec3> {
-    let inst = &scene.instances[0];
-    let (c, r) = (inst.world_center, inst.world_radius);
-    let mut v: Vec<Vec3> = (0..6u64)
-        .map(|i| c + 3.0 * r * seeded_sphere_direction(i, 3) * ((1 + i % 3) as f32 / 3.0))
-        .collect();
-    v.push(c + 300.0 * r * seeded_sphere_direction(7, 4));
-    v.extend((0..mesh.positions.len()).step_by(499).map(|j| {
-        let p = inst.transform.to_world_point(mesh.positions[j]);
-        p + 1e-3 * r * (p - c).normalize_or_zero()
-    }));
-    v
 }
 
 #[test]

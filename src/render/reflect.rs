@@ -127,8 +127,7 @@ pub fn reflection_rays(
 ) -> Vec3 {
     let mut lobe = Vec::new();
     if let Gloss::Phong { exponent } = opts.gloss {
-        rays.fill_square(point_index, squares);
-        lobe.extend(squares.iter().map(|&u| square_to_phong(u, exponent)));
+        phong_lobe(rays, point_index, exponent, squares, &mut lobe);
     }
     lobe_rays_on(
         Isa::detect(),
@@ -140,6 +139,20 @@ pub fn reflection_rays(
         &lobe,
         dirs,
     )
+}
+
+/// The Phong lobe's directions of point `point_index`'s squares (in the lobe's frame) into
+/// `lobe`, its squares into `squares`.
+fn phong_lobe(
+    rays: &RaySet,
+    point_index: u32,
+    exponent: f32,
+    squares: &mut Vec<Vec2>,
+    lobe: &mut Vec<Vec3>,
+) {
+    rays.fill_square(point_index, squares);
+    lobe.clear();
+    lobe.extend(squares.iter().map(|&u| square_to_phong(u, exponent)));
 }
 
 /// Reused buffers of [`reflect_at_points`], and the Phong lobe's directions of the last ray
@@ -169,10 +182,7 @@ pub(super) fn reflection_rays_in(
     if let Gloss::Phong { exponent } = opts.gloss {
         let key = (*rays, exponent.to_bits());
         if rays.jitter || sc.lobe_of != Some(key) {
-            rays.fill_square(point_index, &mut sc.squares);
-            sc.lobe.clear();
-            sc.lobe
-                .extend(sc.squares.iter().map(|&u| square_to_phong(u, exponent)));
+            phong_lobe(rays, point_index, exponent, &mut sc.squares, &mut sc.lobe);
             sc.lobe_of = (!rays.jitter).then_some(key);
         }
     }

@@ -1,6 +1,8 @@
 //! Helpers shared by the integration tests: the tiny procedural spec and its run options.
 #![allow(dead_code)]
 
+pub mod batch_rays;
+
 use std::path::{Path, PathBuf};
 use visfield::experiment::fields::FieldSupply;
 use visfield::experiment::run::{LoadedSpec, RunOptions};

@@ -20,7 +20,7 @@
 
 pub mod floor;
 pub mod plots;
-mod secondary;
+pub mod secondary;
 
 use super::fields::FieldSupply;
 use super::scenes::{mesh_sha256, LoadedMesh};
@@ -67,7 +67,9 @@ pub struct PerfRow {
     pub vs_raycast: f64,
     /// Over Embree's, where it ran.
     pub vs_embree: Option<f64>,
-    /// Share of the rays answered free (the AO): equal for every exact backend.
+    /// The pass's answer: the share of the rays answered free on the AO sweeps and every
+    /// `entering` sweep, the mean light fraction on the shadow sweeps, the mean reflected
+    /// radiance on the reflection sweeps; equal for every exact backend.
     pub free_share: f64,
     /// Preparation before the timed passes (BVH build; field bake or cache read), seconds.
     pub setup_s: f64,

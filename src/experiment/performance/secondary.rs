@@ -56,8 +56,8 @@ impl RayKind {
     }
 }
 
-/// Three lights over the corner's open side.
-fn lights() -> Vec<SphereLight> {
+/// Three lights over the corner's open side (radius 0.3; also `examples/ray_cost.rs`'s).
+pub fn lights() -> Vec<SphereLight> {
     [
         Vec3::new(1.8, 2.0, 1.2),
         Vec3::new(1.2, 1.9, 2.0),
@@ -71,7 +71,7 @@ fn lights() -> Vec<SphereLight> {
     .to_vec()
 }
 
-/// The options and ray sets of the shadow and reflection passes.
+/// The options and ray sets of the shadow and reflection passes (also `examples/ray_cost.rs`'s).
 pub struct Secondary {
     pub shadow: ShadowOptions,
     pub reflect: ReflectOptions,
@@ -80,6 +80,7 @@ pub struct Secondary {
 }
 
 impl Secondary {
+    /// The passes' options, their ray origins offset as `ao`'s.
     pub fn new(ao: &AoOptions) -> Secondary {
         Secondary {
             shadow: ShadowOptions {
@@ -99,7 +100,7 @@ impl Secondary {
     }
 
     /// The mean light fraction over the receivers (the pass's answer).
-    pub fn shadow_pass(&self, vis: &dyn Visibility, rays: &Rays) -> f64 {
+    pub(super) fn shadow_pass(&self, vis: &dyn Visibility, rays: &Rays) -> f64 {
         mean(&shadow_at_points(
             vis,
             &rays.points,
@@ -110,7 +111,7 @@ impl Secondary {
     }
 
     /// The mean reflected radiance over the receivers.
-    pub fn reflection_pass(&self, vis: &dyn Visibility, rays: &Rays) -> f64 {
+    pub(super) fn reflection_pass(&self, vis: &dyn Visibility, rays: &Rays) -> f64 {
         mean(&reflect_at_points(
             vis,
             &rays.points,
@@ -121,7 +122,7 @@ impl Secondary {
     }
 
     /// The rays each pass casts (the same for every backend), counted through [`Counted`].
-    pub fn count(&self, kind: RayKind, rays: &Rays) -> u64 {
+    pub(super) fn count(&self, kind: RayKind, rays: &Rays) -> u64 {
         let counted = Counted(super::floor::NoQuery, AtomicU64::new(0));
         match kind {
             RayKind::Ao => return rays.count(),
@@ -139,7 +140,7 @@ fn mean(v: &[f32]) -> f64 {
 /// The `entering` sweep's rays through `kind`'s query: the share of rays answered free
 /// (unoccluded, or without a hit), over all receivers in parallel. Shadow rays end at
 /// `far(origin)`.
-pub fn entering_pass(
+pub(super) fn entering_pass(
     kind: RayKind,
     vis: &dyn Visibility,
     dirs: &[(Vec3, Vec<Vec3>)],
