@@ -1203,8 +1203,8 @@ fn secondary_rays(c: &mut Claims) {
         ratio("reflections2010_figure9", "cpu"),
     );
     let text = format!(
-        "over GPU ray casting {:.1}× and {:.1}× on Figures 7 and 8's quick runs against the \
-         CPU's {:.1}× and {:.1}×, and {:.1}–{:.1}× against {:.1}–{:.1}× on Figure 9's",
+        "over GPU ray casting {:.1}× and {:.1}× on Figures 7 and 8 against the CPU's {:.1}× and \
+         {:.1}×, and {:.1}–{:.1}× against {:.1}–{:.1}× on Figure 9.",
         g7.0, g8.0, c7.0, c8.0, g9.0, g9.1, c9.0, c9.1
     );
     c.quotes(
