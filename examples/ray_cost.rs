@@ -27,7 +27,6 @@
 
 use glam::{Quat, Vec3};
 use std::path::Path;
-use std::sync::atomic::{AtomicUsize, Ordering::Relaxed};
 use std::sync::Arc;
 use std::time::Instant;
 use visfield::field::bake::{bake_mesh_with_normals, BakeOptions};
@@ -44,10 +43,10 @@ use visfield::render::shadow::{light_fraction, ShadowScratch};
 use visfield::sampling::rays::RaySet;
 use visfield::sampling::{LayoutKind, SphereKind};
 use visfield::trace::Tracer;
-use visfield::visibility::{PerRay, SurfaceHit, Visibility};
+use visfield::visibility::{PerRay, Visibility};
 
 use visfield::experiment::performance::floor::{NoQuery, SphereCull};
-use visfield::experiment::performance::secondary::Secondary;
+use visfield::experiment::performance::secondary::{Counted, Secondary};
 
 const MODEL: &str = "stanford-bunny_39k";
 
@@ -86,9 +85,9 @@ fn ray_pass<V: Visibility + ?Sized>(
             let mut sc = ShadowScratch::default();
             (0..p.len())
                 .map(|i| {
-                    let counted = Counted(vis, AtomicUsize::new(0));
+                    let counted = Counted::new(vis);
                     let f = light_fraction(&counted, i as u32, p[i], n[i], rays, &opts, &mut sc);
-                    cast += counted.1.load(Relaxed);
+                    cast += counted.rays() as usize;
                     f
                 })
                 .collect()
@@ -108,56 +107,15 @@ fn ray_pass<V: Visibility + ?Sized>(
             let mut sc = ReflectScratch::default();
             (0..p.len())
                 .map(|i| {
-                    let counted = Counted(vis, AtomicUsize::new(0));
+                    let counted = Counted::new(vis);
                     let v = reflected(&counted, i as u32, p[i], n[i], rays, &opts, &mut sc);
-                    cast += counted.1.load(Relaxed);
+                    cast += counted.rays() as usize;
                     v
                 })
                 .collect()
         }
     };
     (values, cast)
-}
-
-/// `V` counting the rays of its batched shadow and reflection queries (one add per call).
-struct Counted<'a, V: ?Sized>(&'a V, AtomicUsize);
-
-impl<V: Visibility + ?Sized> Visibility for Counted<'_, V> {
-    fn occluded(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> bool {
-        self.0.occluded(origin, dir, tmin, tmax)
-    }
-
-    fn hit_distance(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<f32> {
-        self.0.hit_distance(origin, dir, tmin, tmax)
-    }
-
-    fn surface_hit(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<SurfaceHit> {
-        self.0.surface_hit(origin, dir, tmin, tmax)
-    }
-
-    fn occluded_many_to(
-        &self,
-        origin: Vec3,
-        dirs: &[Vec3],
-        tmin: f32,
-        tmaxs: &[f32],
-        out: &mut [bool],
-    ) {
-        self.1.fetch_add(dirs.len(), Relaxed);
-        self.0.occluded_many_to(origin, dirs, tmin, tmaxs, out)
-    }
-
-    fn surface_hit_many(
-        &self,
-        origin: Vec3,
-        dirs: &[Vec3],
-        tmin: f32,
-        tmax: f32,
-        out: &mut [Option<SurfaceHit>],
-    ) {
-        self.1.fetch_add(dirs.len(), Relaxed);
-        self.0.surface_hit_many(origin, dirs, tmin, tmax, out)
-    }
 }
 
 /// The normal field of `field_params` for the bunny, baked once and kept beside `ao_cost`'s

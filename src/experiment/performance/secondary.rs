@@ -123,13 +123,13 @@ impl Secondary {
 
     /// The rays each pass casts (the same for every backend), counted through [`Counted`].
     pub(super) fn count(&self, kind: RayKind, rays: &Rays) -> u64 {
-        let counted = Counted(super::floor::NoQuery, AtomicU64::new(0));
+        let counted = Counted::new(&super::floor::NoQuery);
         match kind {
             RayKind::Ao => return rays.count(),
             RayKind::Shadow => self.shadow_pass(&counted, rays),
             RayKind::Reflection => self.reflection_pass(&counted, rays),
         };
-        counted.1.load(Relaxed)
+        counted.rays()
     }
 }
 
@@ -171,10 +171,21 @@ pub(super) fn entering_pass(
     free as f64 / total.max(1) as f64
 }
 
-/// A backend counting the rays of its batched shadow and reflection queries.
-struct Counted<V>(V, AtomicU64);
+/// `V` counting the rays asked of it (also `examples/ray_cost.rs`'s).
+pub struct Counted<'a, V: ?Sized>(&'a V, AtomicU64);
 
-impl<V: Visibility> Visibility for Counted<V> {
+impl<'a, V: Visibility + ?Sized> Counted<'a, V> {
+    pub fn new(vis: &'a V) -> Self {
+        Counted(vis, AtomicU64::new(0))
+    }
+
+    /// The rays asked so far.
+    pub fn rays(&self) -> u64 {
+        self.1.load(Relaxed)
+    }
+}
+
+impl<V: Visibility + ?Sized> Visibility for Counted<'_, V> {
     fn occluded(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> bool {
         self.1.fetch_add(1, Relaxed);
         self.0.occluded(origin, dir, tmin, tmax)
