@@ -41,6 +41,7 @@ use glam::{Quat, Vec3};
 use secondary::{RayKind, Secondary};
 use serde::Serialize;
 use std::path::Path;
+use std::rc::Rc;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -204,10 +205,12 @@ impl Rays {
     }
 }
 
-/// A backend to time, with its preparation time.
+/// A backend to time, with its preparation time. The ray casters of a caster serve every
+/// field shape and kind of ray, so a backend is shared, not copied.
+#[derive(Clone)]
 struct Backend<'a> {
     name: &'static str,
-    vis: Box<dyn Visibility + 'a>,
+    vis: Rc<dyn Visibility + 'a>,
     setup_s: f64,
 }
 
@@ -325,7 +328,7 @@ fn ray_casters(scene: &Scene) -> Vec<Backend<'static>> {
     #[allow(unused_mut)]
     let mut v = vec![Backend {
         name: "raycast",
-        vis: Box::new(tracer),
+        vis: Rc::new(tracer),
         setup_s: t.elapsed().as_secs_f64(),
     }];
     #[cfg(feature = "embree")]
@@ -334,7 +337,7 @@ fn ray_casters(scene: &Scene) -> Vec<Backend<'static>> {
         match crate::trace::embree::EmbreeTracer::new(&tris) {
             Ok(e) => v.push(Backend {
                 name: "embree",
-                vis: Box::new(e),
+                vis: Rc::new(e),
                 setup_s: t.elapsed().as_secs_f64(),
             }),
             Err(e) => eprintln!("performance: Embree not timed: {e}"),
@@ -343,36 +346,48 @@ fn ray_casters(scene: &Scene) -> Vec<Backend<'static>> {
     v
 }
 
-/// The field lookup and the floors over `fs`.
-fn field_backends(fs: &FieldScene, bake_s: f64) -> Vec<Backend<'_>> {
-    vec![
+/// The ray casters `casters`, then the field lookup and the floors over `fs`.
+fn field_backends<'a>(
+    casters: &[Backend<'a>],
+    fs: &'a FieldScene,
+    bake_s: f64,
+) -> Vec<Backend<'a>> {
+    let mut v = casters.to_vec();
+    v.extend([
         Backend {
             name: "field_nearest",
-            vis: Box::new(fs.clone()),
+            vis: Rc::new(fs.clone()),
             setup_s: bake_s,
         },
         Backend {
             name: "floor_sphere_cull",
-            vis: Box::new(SphereCull(fs)),
+            vis: Rc::new(SphereCull(fs)),
             setup_s: 0.0,
         },
-        Backend {
-            name: "floor_no_query",
-            vis: Box::new(NoQuery),
-            setup_s: 0.0,
-        },
-    ]
+        no_query(),
+    ]);
+    v
 }
 
-/// The backends of the reflection rays: the ray casters, the field with its 16-bit normal
-/// field (baked with it, the distances those of [`field_scene`]'s), and the floor without a
-/// query.
-fn reflection_backends(
+/// The floor without a query ([`NoQuery`]).
+fn no_query() -> Backend<'static> {
+    Backend {
+        name: "floor_no_query",
+        vis: Rc::new(NoQuery),
+        setup_s: 0.0,
+    }
+}
+
+/// The backends of the reflection rays: the ray casters `casters`, the field with its 16-bit
+/// normal field (baked with it, the distances those of [`field_scene`]'s), and the floor
+/// without a query.
+fn reflection_backends<'a>(
+    casters: &[Backend<'a>],
     supply: &FieldSupply,
     mesh: &LoadedMesh,
     scene: &Scene,
     shape: (usize, u32, Precision),
-) -> Result<Vec<Backend<'static>>> {
+) -> Result<Vec<Backend<'a>>> {
     let (got, normals) = supply.obtain_with_normals(mesh, field_params(shape), &[16])?;
     let fs = FieldScene {
         instances: vec![FieldInstance::new(got.field, scene.instances[1].transform)
@@ -382,17 +397,13 @@ fn reflection_backends(
             ..LookupOptions::default()
         },
     };
-    let mut v = ray_casters(scene);
+    let mut v = casters.to_vec();
     v.push(Backend {
         name: "field_nearest",
-        vis: Box::new(fs),
+        vis: Rc::new(fs),
         setup_s: got.bake_s.unwrap_or(0.0),
     });
-    v.push(Backend {
-        name: "floor_no_query",
-        vis: Box::new(NoQuery),
-        setup_s: 0.0,
-    });
+    v.push(no_query());
     Ok(v)
 }
 
@@ -480,6 +491,8 @@ pub fn run(out: &Path, quick: bool, supply: &FieldSupply) -> Result<Vec<PerfRow>
             .to_world_sphere(&mesh.mesh.bounding_sphere());
         let share = rays.entering_share(world.center, world.radius, &opts);
         let tris = mesh.mesh.triangles.len();
+        // Our BVH and Embree's, built once for every field shape and kind of ray.
+        let casters = ray_casters(&scene);
         let sizes = if mesh.label == "stanford-bunny_39k" {
             &prof.sizes[..]
         } else {
@@ -496,12 +509,11 @@ pub fn run(out: &Path, quick: bool, supply: &FieldSupply) -> Result<Vec<PerfRow>
                 field: (&label, bytes),
                 share,
             };
-            let mut all = ray_casters(&scene);
-            all.extend(field_backends(&fs, bake_s));
+            let all = field_backends(&casters, &fs, bake_s);
             for kind in [RayKind::Ao, RayKind::Shadow] {
                 table.extend(measure(kind, base, &at, &all, &rays, both, prof.passes));
             }
-            let with_normals = reflection_backends(supply, mesh, &scene, shape)?;
+            let with_normals = reflection_backends(&casters, supply, mesh, &scene, shape)?;
             table.extend(measure(
                 RayKind::Reflection,
                 base,
