@@ -1,9 +1,10 @@
-//! A sample of the numbers README.md and docs/results.md quote, recomputed from the committed
-//! CSV files under results/ and looked for in the documents, so that a rerun which moves a
-//! number fails here until the text follows it. Each claim is the text as the document writes
-//! it (whitespace runs compared as one space), formatted from the files it names. With
-//! `VISFIELD_DUMP_CLAIMS=FILE` every claim is appended to FILE (document, tab, text): run once
-//! before and once after a rerun to get the old and the new text of each quoted number.
+//! A sample of the numbers README.md, docs/results.md and docs/performance.md quote, recomputed
+//! from the committed CSV files under results/ and looked for in the documents, so that a rerun
+//! which moves a number fails here until the text follows it. Each claim is the text as the
+//! document writes it (whitespace runs compared as one space), formatted from the files it
+//! names. With `VISFIELD_DUMP_CLAIMS=FILE` every claim is appended to FILE (document, tab,
+//! text): run once before and once after a rerun to get the old and the new text of each quoted
+//! number.
 
 mod common;
 
@@ -83,7 +84,7 @@ struct Claims {
 
 impl Claims {
     fn new() -> Claims {
-        let docs = ["README.md", "docs/results.md"]
+        let docs = ["README.md", "docs/results.md", "docs/performance.md"]
             .into_iter()
             .map(|d| (d, squash(&std::fs::read_to_string(root().join(d)).unwrap())))
             .collect();
@@ -1075,7 +1076,7 @@ fn secondary_rays(c: &mut Claims) {
             f(rf, "mrays_s"),
             f(rf, "vs_embree"),
         );
-        c.quotes("README.md", &text, from);
+        c.quotes("docs/performance.md", &text, from);
     }
     let (plo, phi) = min_max(casters.iter().map(|c| 100.0 * share_of_ao(c)));
     let gain = |sweep: &str| {
