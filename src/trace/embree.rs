@@ -470,21 +470,15 @@ impl Committed {
             return;
         }
         for (c, dirs) in dirs.chunks(8).enumerate() {
-            let mut packet = sys::RTCRayHit8::default();
-            packet.ray.mask = [u32::MAX; 8];
-            packet.hit.geomID = [sys::RTC_INVALID_GEOMETRY_ID; 8];
-            packet.hit.instID = [[sys::RTC_INVALID_GEOMETRY_ID; 8]];
-            let mut valid = sys::Valid8([0; 8]);
-            for (j, &d) in dirs.iter().enumerate() {
-                if !self.live(origin, d, tmin, tmax) {
-                    continue;
-                }
-                valid.0[j] = -1;
-                let r = &mut packet.ray;
-                (r.org_x[j], r.org_y[j], r.org_z[j]) = (origin.x, origin.y, origin.z);
-                (r.dir_x[j], r.dir_y[j], r.dir_z[j]) = (d.x, d.y, d.z);
-                (r.tnear[j], r.tfar[j]) = (tmin, tmax);
-            }
+            let (ray, valid) = self.packet8(origin, dirs, tmin, |_| tmax);
+            let mut packet = sys::RTCRayHit8 {
+                ray,
+                hit: sys::RTCHit8 {
+                    geomID: [sys::RTC_INVALID_GEOMETRY_ID; 8],
+                    instID: [[sys::RTC_INVALID_GEOMETRY_ID; 8]],
+                    ..Default::default()
+                },
+            };
             if valid.0.iter().all(|&v| v == 0) {
                 continue;
             }
@@ -497,6 +491,33 @@ impl Committed {
                 }
             }
         }
+    }
+
+    /// The 8-wide packet of the rays from `origin` along `dirs` (at most eight), ray j over
+    /// [tmin, tmax(j)], and its valid mask: the lanes whose query can hit ([`Self::live`]).
+    fn packet8(
+        &self,
+        origin: Vec3,
+        dirs: &[Vec3],
+        tmin: f32,
+        tmax: impl Fn(usize) -> f32,
+    ) -> (sys::RTCRay8, sys::Valid8) {
+        let mut ray = sys::RTCRay8 {
+            mask: [u32::MAX; 8],
+            ..Default::default()
+        };
+        let mut valid = sys::Valid8([0; 8]);
+        for (j, &d) in dirs.iter().enumerate() {
+            let tm = tmax(j);
+            if !self.live(origin, d, tmin, tm) {
+                continue;
+            }
+            valid.0[j] = -1;
+            (ray.org_x[j], ray.org_y[j], ray.org_z[j]) = (origin.x, origin.y, origin.z);
+            (ray.dir_x[j], ray.dir_y[j], ray.dir_z[j]) = (d.x, d.y, d.z);
+            (ray.tnear[j], ray.tfar[j]) = (tmin, tm);
+        }
+        (ray, valid)
     }
 
     /// `out[i] = any_hit(origin, dirs[i], tmin, tmax(i))`, one call per ray or through 8-wide
@@ -530,26 +551,7 @@ impl Committed {
         out: &mut [bool],
     ) {
         for (c, (dirs, out)) in dirs.chunks(8).zip(out.chunks_mut(8)).enumerate() {
-            let mut packet = sys::RTCRay8 {
-                mask: [u32::MAX; 8],
-                ..Default::default()
-            };
-            let mut valid = sys::Valid8([0; 8]);
-            for (j, &d) in dirs.iter().enumerate() {
-                let tm = tmax(8 * c + j);
-                if !self.live(origin, d, tmin, tm) {
-                    continue;
-                }
-                valid.0[j] = -1;
-                packet.org_x[j] = origin.x;
-                packet.org_y[j] = origin.y;
-                packet.org_z[j] = origin.z;
-                packet.tnear[j] = tmin;
-                packet.dir_x[j] = d.x;
-                packet.dir_y[j] = d.y;
-                packet.dir_z[j] = d.z;
-                packet.tfar[j] = tm;
-            }
+            let (mut packet, valid) = self.packet8(origin, dirs, tmin, |j| tmax(8 * c + j));
             if valid.0.iter().any(|&v| v != 0) {
                 let mut ctx =
                     sys::RTCIntersectContext::new(sys::RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT);
@@ -563,9 +565,9 @@ impl Committed {
     }
 }
 
-/// The second ray-cast backend. `occluded_many(_to)` cast per [`EmbreeTracer::rays`]; in
-/// packet mode the answers are Embree's packet kernel's, which `tests/embree.rs` checks equal
-/// to its single-ray kernel's on the test rays.
+/// The second ray-cast backend. `occluded_many(_to)` and `surface_hit_many` cast per
+/// [`EmbreeTracer::rays`]; in packet mode the answers are Embree's packet kernels', which
+/// `tests/embree.rs` checks equal to its single-ray kernels' on the test rays.
 impl Visibility for EmbreeTracer {
     #[inline]
     fn occluded(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> bool {
