@@ -387,6 +387,16 @@ impl Crowd {
         super::movers::overlaps(&spheres, &self.points, |_| None)
     }
 
+    /// The receiver points.
+    pub fn point_count(&self) -> usize {
+        self.points.len()
+    }
+
+    /// The AO rays of a frame: points × rays per point.
+    pub fn ray_count(&self) -> usize {
+        self.points.len() * self.rays.len()
+    }
+
     /// The methods of this build, each with its precompute done (per-mesh BVHs or scenes,
     /// the fields): the world rebuild first, the per-object peers last.
     pub fn movers(&self) -> Result<Vec<Box<dyn Mover>>> {
@@ -460,6 +470,7 @@ impl Crowd {
                     update_s,
                     query_s,
                     values: ao,
+                    ..
                 } = super::movers::timed(m.as_mut(), &casters, |m| {
                     Ok(m.ao(&self.points, &self.normals, &self.rays, &self.opts))
                 })?;

@@ -81,29 +81,49 @@ pub fn field_methods(
 
 /// One method on one frame: its update and its query timed apart.
 pub struct Timed {
-    /// Seconds of [`Mover::update`].
+    /// Seconds of [`Mover::update`] (a mean over [`Timed::runs`]).
     pub update_s: f64,
-    /// Seconds of the query.
+    /// Seconds of the query (a mean over [`Timed::runs`]).
     pub query_s: f64,
-    /// The query's values.
+    /// How many times the frame was updated and queried for the two means: 1, or more for a
+    /// frame shorter than [`MIN_TIMED_S`].
+    pub runs: u32,
+    /// The query's values (of the first run).
     pub values: Vec<f32>,
 }
 
-/// Brings `mover` to `frame` and answers `query` through it, each timed (all threads).
+/// The least wall time over which a frame is timed: a shorter frame (a few casters, a few
+/// thousand rays: a fraction of a millisecond) is updated and queried again until its runs
+/// add up to this, and the means are reported, so that the thread pool is awake for all of it
+/// and every thread takes part, as in a long frame. Every method is timed by the same rule.
+pub const MIN_TIMED_S: f64 = 0.05;
+
+/// Brings `mover` to `frame` and answers `query` through it, each timed (all threads); a frame
+/// shorter than [`MIN_TIMED_S`] is updated and queried again until the runs add up to it (at
+/// most 10,000 runs), and the mean of each part is reported. Updates and queries are pure
+/// functions of the frame, so the repeats answer the same values.
 pub fn timed(
     mover: &mut dyn Mover,
     frame: &FrameCasters,
-    query: impl FnOnce(&dyn Mover) -> crate::experiment::Result<Vec<f32>>,
+    query: impl Fn(&dyn Mover) -> crate::experiment::Result<Vec<f32>>,
 ) -> crate::experiment::Result<Timed> {
-    let t = Instant::now();
-    mover.update(frame)?;
-    let update_s = t.elapsed().as_secs_f64();
-    let t = Instant::now();
-    let values = query(&*mover)?;
+    let (mut update_s, mut query_s, mut runs) = (0.0, 0.0, 0u32);
+    let mut values = None;
+    while values.is_none() || (update_s + query_s < MIN_TIMED_S && runs < 10_000) {
+        let t = Instant::now();
+        mover.update(frame)?;
+        update_s += t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let v = query(&*mover)?;
+        query_s += t.elapsed().as_secs_f64();
+        runs += 1;
+        values.get_or_insert(v);
+    }
     Ok(Timed {
-        update_s,
-        query_s: t.elapsed().as_secs_f64(),
-        values,
+        update_s: update_s / runs as f64,
+        query_s: query_s / runs as f64,
+        runs,
+        values: values.expect("one run at least"),
     })
 }
 
