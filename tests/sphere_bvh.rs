@@ -199,7 +199,7 @@ fn the_tree_keeps_every_sphere_a_ray_meets_and_few_others() {
         rays += 1;
     }
     // The tree keeps more than the spheres a ray meets (its boxes are larger) but far fewer
-    // than all of them: here about 8 per ray (twice the 4 it meets) of 256.
+    // than all of them: under a sixteenth of the 256.
     assert!(
         kept >= needed && kept < rays * n / 16 && needed > rays,
         "{kept} kept, {needed} needed, of {} tests without the tree",
