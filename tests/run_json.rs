@@ -156,3 +156,62 @@ fn committed_run_jsons_hold_no_absolute_path_and_a_clean_commit() {
     }
     assert!(seen >= 20, "only {seen} run.json files under results/");
 }
+
+/// A binary run outside the tree it was built in finds its specs in the project it runs in
+/// (the nearest folder holding `experiments/`, from a folder below it), writes its field cache
+/// into that project's `cache/` (outside any project, into the per-user data folder), and
+/// stamps `run.json` with the commit it was built from, captured by the build script (before,
+/// the spec was looked for and the cache written in the build tree, and the commit and dirty
+/// state were read from the build tree at run time).
+#[test]
+fn a_binary_run_elsewhere_uses_that_project_and_its_build_commit() {
+    let dir = tempfile::tempdir().unwrap();
+    let project = dir.path().join("project");
+    let below = project.join("runs/here");
+    std::fs::create_dir_all(project.join("experiments")).unwrap();
+    std::fs::create_dir_all(&below).unwrap();
+    let spec = common::tiny(common::ONE_FIELD, "");
+    std::fs::write(project.join("experiments/tinyrun.json"), &spec).unwrap();
+    let (data, home) = (dir.path().join("xdg"), dir.path().join("home"));
+    // `experiment NAME` (a spec of the project) or `experiment run PATH`.
+    let experiment = |cwd: &std::path::Path, spec: &[&str], out: &str| {
+        let o = Command::new(env!("CARGO_BIN_EXE_experiment"))
+            .args(spec)
+            .args(["--quick", "--out", out])
+            .current_dir(cwd)
+            .env_remove("VISFIELD_CACHE")
+            .env_remove("VISFIELD_EXPERIMENTS")
+            .env_remove("VISFIELD_COMMIT")
+            .env("XDG_DATA_HOME", &data)
+            .env("HOME", &home)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let run: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(cwd.join(out).join("run.json")).unwrap())
+                .unwrap();
+        run
+    };
+    let files = |d: &std::path::Path| std::fs::read_dir(d).map_or(0, |r| r.count());
+    let run = experiment(&below, &["tinyrun"], "out");
+    assert!(files(&project.join("cache")) > 0, "the project's cache");
+    assert_eq!(files(&data), 0, "nothing in the per-user folder");
+    // Recorded relative to the project: its cache and its spec.
+    assert_eq!(run["cache"], "cache", "{run}");
+    let commit = run["meta"]["commit"].as_str().unwrap();
+    assert_eq!(commit, visfield::experiment::meta::BUILD_COMMIT);
+    let hex = commit.strip_suffix("-dirty").unwrap_or(commit);
+    assert!(
+        commit == "unknown" || (hex.len() == 40 && hex.bytes().all(|b| b.is_ascii_hexdigit())),
+        "{commit}"
+    );
+    // Outside any project: the per-user data folder's cache.
+    let outside = dir.path().join("elsewhere");
+    std::fs::create_dir_all(&outside).unwrap();
+    let spec_path = project.join("experiments/tinyrun.json");
+    experiment(&outside, &["run", spec_path.to_str().unwrap()], "out");
+    assert!(
+        files(&data.join("visfield/cache")) > 0,
+        "the per-user cache"
+    );
+}

@@ -72,6 +72,12 @@ impl AoField {
         self.stored.bytes() + 16
     }
 
+    /// [`Self::bytes`] of a field of `res`² texels a cube face stored at `precision`, before
+    /// any bake.
+    pub fn bytes_for(res: usize, precision: Precision) -> u64 {
+        Stored::bytes_for(Cube { res }.len(), precision) + 16
+    }
+
     /// The cap at model-space point `p`.
     #[inline]
     pub fn cap_at(&self, p: Vec3) -> Cap {

@@ -139,9 +139,14 @@ impl Stored {
 
     /// Exact bytes of the stored values and of what decodes them (u8: `lo` and `step`).
     pub fn bytes(&self) -> u64 {
-        let values = (self.len() * CHANNELS) as u64 * self.precision().bytes_per_value();
-        match self {
-            Stored::U8 { .. } => values + 2 * CHANNELS as u64 * 4,
+        Stored::bytes_for(self.len(), self.precision())
+    }
+
+    /// [`Self::bytes`] of `texels` texels stored at `precision`, before any is encoded.
+    pub fn bytes_for(texels: usize, precision: Precision) -> u64 {
+        let values = (texels * CHANNELS) as u64 * precision.bytes_per_value();
+        match precision {
+            Precision::U8 => values + 2 * CHANNELS as u64 * 4,
             _ => values,
         }
     }

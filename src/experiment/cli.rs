@@ -167,7 +167,8 @@ pub struct RunArgs {
     /// Print the plan (steps with their rays and bytes) and stop.
     #[arg(long)]
     pub dry_run: bool,
-    /// Field cache folder (default $VISFIELD_CACHE, else cache/ at the crate root).
+    /// Field cache folder (default $VISFIELD_CACHE, else cache/ of the project run in, the
+    /// nearest folder holding experiments/, else of ~/.local/share/visfield).
     #[arg(long)]
     pub cache: Option<PathBuf>,
     /// Do not read or write the field cache.

@@ -1,5 +1,7 @@
 //! Finding specs by name: `experiments/NAME.json`, in `$VISFIELD_EXPERIMENTS`, else
-//! `experiments/` under the current folder, else under the crate root.
+//! `experiments/` of the project the program runs in (the nearest folder holding one, from the
+//! current directory up: [`crate::io::places::project_dir`]), never the folder the binary was
+//! built in.
 
 use super::{Error, Result};
 use std::path::{Path, PathBuf};
@@ -7,16 +9,19 @@ use std::path::{Path, PathBuf};
 /// The environment variable naming the spec folder.
 pub const EXPERIMENTS_ENV: &str = "VISFIELD_EXPERIMENTS";
 
-/// The spec folder.
+/// The spec folder: `$VISFIELD_EXPERIMENTS`, else `experiments/` here (kept relative, as
+/// messages show it), else the project's; outside any project, `experiments` (whose absence
+/// the caller reports).
 pub fn experiments_dir() -> PathBuf {
+    use crate::io::places::{project_dir, PROJECT_MARK};
     if let Some(d) = std::env::var_os(EXPERIMENTS_ENV).filter(|d| !d.is_empty()) {
         return PathBuf::from(d);
     }
-    let local = Path::new("experiments");
+    let local = Path::new(PROJECT_MARK);
     if local.is_dir() {
         return local.to_path_buf();
     }
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments")
+    project_dir().map_or_else(|| local.to_path_buf(), |p| p.join(PROJECT_MARK))
 }
 
 /// Every `*.json` in the spec folder, sorted by name.

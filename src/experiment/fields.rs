@@ -1,8 +1,8 @@
 //! Field supply for a run: bake, or read from the on-disk cache, and derive precisions.
 //!
 //! The cache ([`crate::field::cache`]) holds only fields up to a size limit (default 256 MiB;
-//! the large cells of Figure 6 would fill a disk), in `$VISFIELD_CACHE`, else `cache/` at the
-//! crate root. Beside each cached field a `.bake.json` records what its bake cost, so a cache hit
+//! the large cells of Figure 6 would fill a disk), in `$VISFIELD_CACHE`, else `cache/` of the
+//! project the program runs in, else of the per-user data folder ([`crate::io::places`]). Beside each cached field a `.bake.json` records what its bake cost, so a cache hit
 //! still reports the bake time it saved.
 
 use super::progress;
@@ -22,11 +22,14 @@ use std::time::Instant;
 /// The environment variable naming the cache folder.
 pub const CACHE_ENV: &str = "VISFIELD_CACHE";
 
-/// The default cache folder: `$VISFIELD_CACHE`, else `cache/` at the crate root.
+/// The default cache folder: `$VISFIELD_CACHE`, else `cache/` of the project the program runs
+/// in (the nearest folder holding `experiments/`, from the current directory up), else
+/// `cache/` of the per-user data folder ([`crate::io::places::project_or_user`]); never the
+/// folder the binary was built in.
 pub fn default_cache_dir() -> PathBuf {
     match std::env::var_os(CACHE_ENV).filter(|v| !v.is_empty()) {
         Some(d) => PathBuf::from(d),
-        None => PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("cache"),
+        None => crate::io::places::project_or_user("cache"),
     }
 }
 

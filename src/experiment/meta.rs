@@ -9,9 +9,12 @@ use std::path::{Component, Path, PathBuf};
 /// What made a result.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct RunMeta {
-    /// `git rev-parse HEAD`, with "-dirty" when the tree has uncommitted changes to tracked files
-    /// outside `results/` (the outputs of earlier runs do not change what the code computes);
-    /// without git, `$VISFIELD_COMMIT`, else "unknown".
+    /// The commit the binary was built from ([`BUILD_COMMIT`], captured at build time): `git
+    /// rev-parse HEAD`, with "-dirty" when a tracked file the binary is built from (`src/`,
+    /// `shaders/`, `assets/`, `data/`, `Cargo.toml`, `Cargo.lock`, `build.rs`) had uncommitted
+    /// changes (docs, tests and the outputs of earlier runs do not change what the code
+    /// computes; a spec is recorded by its sha256); without git, `$VISFIELD_COMMIT`, else
+    /// "unknown".
     pub commit: String,
     /// Host name.
     pub machine: String,
@@ -86,15 +89,15 @@ impl RunMeta {
     }
 }
 
-/// `path` as a result records it: relative to the crate root when inside it (`cache`,
-/// `experiments/figure6.json`), `~/...` when under the home folder, else relative to the crate
-/// root through `..`; never absolute, so committed outputs name no machine's folders.
+/// `path` as a result records it: relative to the project the program runs in (the nearest
+/// folder holding `experiments/`, else the current directory) when inside it (`cache`,
+/// `experiments/figure6.json`), `~/...` when under the home folder, else relative to the
+/// project through `..`; never absolute, so committed outputs name no machine's folders.
 pub fn portable_path(path: &Path) -> String {
-    portable_path_from(
-        path,
-        Path::new(env!("CARGO_MANIFEST_DIR")),
-        home().as_deref(),
-    )
+    let root = crate::io::places::project_dir()
+        .or_else(|| std::env::current_dir().ok())
+        .unwrap_or_default();
+    portable_path_from(path, &root, home().as_deref())
 }
 
 fn home() -> Option<PathBuf> {
@@ -103,7 +106,7 @@ fn home() -> Option<PathBuf> {
         .filter(|h| h.is_absolute())
 }
 
-/// [`portable_path`] against a given crate root and home folder.
+/// [`portable_path`] against a given project folder and home folder.
 pub fn portable_path_from(path: &Path, root: &Path, home: Option<&Path>) -> String {
     let norm = |p: &Path| -> PathBuf {
         let abs = std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
@@ -175,37 +178,20 @@ pub fn portable_command(args: impl IntoIterator<Item = String>) -> String {
         .join(" ")
 }
 
+/// The commit this binary was built from, with `-dirty` where a tracked file it is built from
+/// (its sources, shaders and the files they embed) differed from it, as the build script
+/// (`build.rs`) found it; "unknown" where it was built without git and without
+/// `$VISFIELD_COMMIT`.
+pub const BUILD_COMMIT: &str = env!("VISFIELD_BUILD_COMMIT");
+
+/// [`BUILD_COMMIT`]: the code that runs, wherever it runs (never the state of a checkout at run
+/// time). Where the build knew no commit, `$VISFIELD_COMMIT` at run time names it (a copy of
+/// the tree without its git history, `scripts/device_pack.sh`), else "unknown".
 fn git_commit() -> String {
-    let run = |args: &[&str]| {
-        std::process::Command::new("git")
-            .args(args)
-            .current_dir(env!("CARGO_MANIFEST_DIR"))
-            .output()
-            .ok()
-            .filter(|o| o.status.success())
-            .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
-    };
-    match run(&["rev-parse", "HEAD"]) {
-        Some(c) => {
-            let dirty = run(&[
-                "status",
-                "--porcelain",
-                "--untracked-files=no",
-                "--",
-                ".",
-                ":(exclude)results",
-            ])
-            .is_some_and(|s| !s.is_empty());
-            if dirty {
-                format!("{c}-dirty")
-            } else {
-                c
-            }
-        }
-        // A copy of the tree without its git history (another machine's run of a packed build,
-        // `scripts/device_pack.sh`) names its commit through the environment.
-        None => std::env::var("VISFIELD_COMMIT").unwrap_or_else(|_| "unknown".into()),
+    if BUILD_COMMIT != "unknown" {
+        return BUILD_COMMIT.to_string();
     }
+    std::env::var("VISFIELD_COMMIT").unwrap_or_else(|_| "unknown".into())
 }
 
 fn cpu_model() -> String {

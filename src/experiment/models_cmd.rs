@@ -57,6 +57,10 @@ pub enum ModelsCommand {
         /// The folder to write into (default as above).
         #[arg(long)]
         dir: Option<std::path::PathBuf>,
+        /// Ask a mirror instead of the recorded sources: each source URL `https://HOST/PATH`
+        /// is asked as `MIRROR/HOST/PATH` (default $VISFIELD_MODELS_MIRROR).
+        #[arg(long, value_name = "URL")]
+        mirror: Option<String>,
     },
 }
 
@@ -150,13 +154,33 @@ pub fn run(cmd: ModelsCommand) -> Result<i32> {
             }
             Ok(i32::from(bad > 0))
         }
-        ModelsCommand::Fetch { names, all, dir } => {
+        ModelsCommand::Fetch {
+            names,
+            all,
+            dir,
+            mirror,
+        } => {
+            use super::models_fetch::{mirrored, FetchOptions, MIRROR_ENV};
             let chosen = entries(if all { &[] } else { &names })?;
             let explicit_dir = dir;
             let dir = explicit_dir
                 .clone()
                 .unwrap_or_else(crate::geometry::models::fetch_dir);
-            let opts = super::models_fetch::FetchOptions::default();
+            let (mirror, from) = match mirror {
+                Some(m) => (Some(m), "--mirror".to_string()),
+                None => (
+                    std::env::var(MIRROR_ENV).ok().filter(|m| !m.is_empty()),
+                    format!("${MIRROR_ENV}"),
+                ),
+            };
+            // A bad mirror fails before any model, naming where it came from.
+            if let Some(m) = &mirror {
+                mirrored("https://host/path", m).map_err(|why| Error::invalid(from, why))?;
+            }
+            let opts = FetchOptions {
+                mirror,
+                ..FetchOptions::default()
+            };
             let mut failed = Vec::new();
             for e in chosen {
                 if explicit_dir.is_none() {
@@ -172,7 +196,14 @@ pub fn run(cmd: ModelsCommand) -> Result<i32> {
                     Ok(super::models_fetch::Fetched::Present(p)) => {
                         println!("present     {}  {}", e.name, p.display())
                     }
-                    Ok(super::models_fetch::Fetched::Downloaded { path, resumed_from }) => {
+                    Ok(super::models_fetch::Fetched::Downloaded {
+                        path,
+                        resumed_from,
+                        notes,
+                    }) => {
+                        for n in notes {
+                            println!("note        {}: {n}", e.name);
+                        }
                         println!(
                             "downloaded  {}  {}{}",
                             e.name,

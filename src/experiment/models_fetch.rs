@@ -15,6 +15,13 @@
 //!   (resuming from them could only repeat the error) and the fetch fails naming both hashes.
 //! - **Bounded.** The server may not send more than the registry's size; a stalled or slow
 //!   transfer ends at the body deadline ([`FetchOptions`]).
+//! - **The real cause.** A `.part` left by an earlier fetch whose bytes, completed, fail the
+//!   sha256 is named as the corrupt one, deleted, and the download restarts from the start
+//!   (once); a transfer that fails after its last byte is not reported as ended short: its
+//!   bytes are checked, and kept where their sha256 is the registry's (the failure noted); a
+//!   local write that fails is named as such, not as the server's.
+//! - **Mirrors.** `--mirror URL` (or `$VISFIELD_MODELS_MIRROR`) asks every model of a mirror
+//!   holding the sources' files at `URL/HOST/PATH` ([`mirrored`]).
 
 use super::{Error, Result};
 use crate::geometry::models::ModelEntry;
@@ -33,6 +40,8 @@ pub struct FetchOptions {
     pub min_bytes_per_s: u64,
     /// Draw a progress bar (only shown where stderr is a terminal).
     pub progress: bool,
+    /// A mirror's base URL ([`mirrored`]): every model is asked of it instead of its source.
+    pub mirror: Option<String>,
 }
 
 impl Default for FetchOptions {
@@ -41,6 +50,7 @@ impl Default for FetchOptions {
             timeout: Duration::from_secs(30),
             min_bytes_per_s: 20 * 1024,
             progress: true,
+            mirror: None,
         }
     }
 }
@@ -51,8 +61,36 @@ pub enum Fetched {
     /// The models folder already held the file with the registry's sha256.
     Present(PathBuf),
     /// Downloaded (and extracted) into the folder; `resumed_from` bytes came from an earlier
-    /// `.part`.
-    Downloaded { path: PathBuf, resumed_from: u64 },
+    /// `.part`; `notes`, what the user should know (a corrupt partial file deleted and the
+    /// download restarted, a transfer that failed after its last byte).
+    Downloaded {
+        path: PathBuf,
+        resumed_from: u64,
+        notes: Vec<String>,
+    },
+}
+
+/// The environment variable naming a mirror (as `--mirror`).
+pub const MIRROR_ENV: &str = "VISFIELD_MODELS_MIRROR";
+
+/// `url` (`https://HOST/PATH`, as `data/models.json` records it) asked of the mirror at `base`:
+/// `BASE/HOST/PATH`. A mirror holds each file at its source's host and path below its base
+/// (the layout `wget --force-directories` writes), so one base serves every source: e.g.
+/// `https://raw.githubusercontent.com/OWNER/REPO/COMMIT/FILE` is asked as
+/// `BASE/raw.githubusercontent.com/OWNER/REPO/COMMIT/FILE`. The base must be an `http://` or
+/// `https://` URL (else the error says why); a trailing `/` is ignored.
+pub fn mirrored(url: &str, base: &str) -> std::result::Result<String, String> {
+    fn scheme(u: &str) -> Option<&str> {
+        ["https://", "http://"]
+            .iter()
+            .find_map(|s| u.strip_prefix(s))
+            .filter(|rest| !rest.is_empty())
+    }
+    if scheme(base).is_none() {
+        return Err(format!("mirror `{base}` is not an http:// or https:// URL"));
+    }
+    let rest = scheme(url).ok_or_else(|| format!("`{url}` is not an http:// or https:// URL"))?;
+    Ok(format!("{}/{rest}", base.trim_end_matches('/')))
 }
 
 /// Fetches `entry` into `dir` (see the module docs); `dir` is made if missing.
@@ -69,7 +107,7 @@ pub fn fetch_model(entry: &ModelEntry, dir: &Path, opts: &FetchOptions) -> Resul
             target.display()
         );
     }
-    let Some(url) = &entry.url else {
+    let Some(source) = &entry.url else {
         let how = entry
             .derived
             .as_deref()
@@ -84,15 +122,20 @@ pub fn fetch_model(entry: &ModelEntry, dir: &Path, opts: &FetchOptions) -> Resul
             ),
         ));
     };
+    let url = match &opts.mirror {
+        Some(base) => &mirrored(source, base).map_err(|m| Error::invalid(what.clone(), m))?,
+        None => source,
+    };
     std::fs::create_dir_all(dir).map_err(Error::io(dir))?;
     match (&entry.member, &entry.convert) {
         (None, None) => {
             let part = dir.join(format!(".{}.part", entry.file));
-            let resumed_from = download(url, &part, entry.bytes, &entry.sha256, &what, opts)?;
+            let got = download(url, &part, entry.bytes, &entry.sha256, &what, opts)?;
             std::fs::rename(&part, &target).map_err(Error::io(&target))?;
             Ok(Fetched::Downloaded {
                 path: target,
-                resumed_from,
+                resumed_from: got.resumed_from,
+                notes: got.notes,
             })
         }
         (member, _) => {
@@ -107,7 +150,7 @@ pub fn fetch_model(entry: &ModelEntry, dir: &Path, opts: &FetchOptions) -> Resul
             };
             let archive = url.rsplit('/').next().unwrap_or("archive");
             let part = dir.join(format!(".{archive}.part"));
-            let resumed_from = download(url, &part, archive_bytes, archive_sha, &what, opts)?;
+            let got = download(url, &part, archive_bytes, archive_sha, &what, opts)?;
             let archive_bytes = std::fs::read(&part).map_err(Error::io(&part))?;
             let member = member.as_deref().unwrap_or("");
             let extracted = if member.is_empty() {
@@ -136,14 +179,23 @@ pub fn fetch_model(entry: &ModelEntry, dir: &Path, opts: &FetchOptions) -> Resul
             std::fs::remove_file(&part).map_err(Error::io(&part))?;
             Ok(Fetched::Downloaded {
                 path: target,
-                resumed_from,
+                resumed_from: got.resumed_from,
+                notes: got.notes,
             })
         }
     }
 }
 
+/// What [`download`] did: the bytes resumed from, and what the user should be told.
+struct Downloaded {
+    resumed_from: u64,
+    notes: Vec<String>,
+}
+
 /// Downloads `url` into `part` until it holds `bytes` bytes whose sha256 is `sha256`, resuming
-/// from what `part` already holds; returns how many bytes were resumed from.
+/// from what `part` already holds. Where the whole differs and some of it came from an earlier
+/// `.part`, that partial file is what is wrong (the server's bytes cannot be told apart from
+/// it): it is deleted, the user told so, and the download starts again from the start, once.
 fn download(
     url: &str,
     part: &Path,
@@ -151,117 +203,197 @@ fn download(
     sha256: &str,
     what: &str,
     opts: &FetchOptions,
-) -> Result<u64> {
+) -> Result<Downloaded> {
     let at = |m: String| Error::invalid(format!("{what}: {url}"), m);
-    let mut have = std::fs::metadata(part).map(|m| m.len()).unwrap_or(0);
-    if have > bytes {
-        std::fs::remove_file(part).map_err(Error::io(part))?;
-        have = 0;
-    }
-    let resumed_from = have;
-    if have < bytes {
-        let body_deadline =
-            opts.timeout + Duration::from_secs_f64(bytes as f64 / opts.min_bytes_per_s as f64);
-        let loopback = url.starts_with("http://127.0.0.1:") || url.starts_with("http://[::1]:");
-        let mut config = ureq::Agent::config_builder()
-            .timeout_connect(Some(opts.timeout))
-            .timeout_recv_response(Some(opts.timeout))
-            .timeout_recv_body(Some(body_deadline))
-            .http_status_as_error(false);
-        if loopback {
-            config = config.proxy(None);
-        }
-        let agent: ureq::Agent = config.build().into();
-        let mut request = agent.get(url);
-        if have > 0 {
-            request = request.header("Range", format!("bytes={have}-"));
-        }
-        let response = request.call().map_err(|e| at(e.to_string()))?;
-        let status = response.status().as_u16();
-        let append = match status {
-            206 if have > 0 => true,
-            200 => false,
-            _ => {
-                return Err(at(format!(
-                    "HTTP {status}{}",
-                    if have > 0 {
-                        format!(" (the {have} bytes of {} are kept)", part.display())
-                    } else {
-                        String::new()
-                    }
-                )))
-            }
-        };
-        if !append {
+    let mut notes = Vec::new();
+    loop {
+        let mut have = std::fs::metadata(part).map(|m| m.len()).unwrap_or(0);
+        if have > bytes {
+            notes.push(format!(
+                "{}: the partial file of an earlier fetch holds {have} bytes, more than the \
+                 registry's {bytes}: deleted, the download starts from the start",
+                part.display()
+            ));
+            std::fs::remove_file(part).map_err(Error::io(part))?;
             have = 0;
         }
-        let mut file = std::fs::OpenOptions::new()
-            .create(true)
-            .write(true)
-            .append(append)
-            .truncate(!append)
-            .open(part)
-            .map_err(Error::io(part))?;
-        let bar = opts.progress.then(|| {
-            let b = super::progress::bar(bytes, what);
-            b.set_position(have);
-            b
-        });
-        let mut reader = response.into_body().into_reader();
-        let mut buf = vec![0u8; 1 << 16];
-        let outcome = loop {
-            match reader.read(&mut buf) {
-                Ok(0) => break Ok(()),
-                Ok(n) => {
-                    if have + n as u64 > bytes {
-                        break Err(format!(
-                            "the server sent more than the registry's {bytes} bytes"
-                        ));
-                    }
-                    if let Err(e) = file.write_all(&buf[..n]) {
-                        break Err(format!("{}: {e}", part.display()));
-                    }
-                    have += n as u64;
-                    if let Some(b) = &bar {
-                        b.set_position(have);
-                    }
-                }
-                Err(e) => break Err(e.to_string()),
-            }
+        let (resumed_from, late) = if have < bytes {
+            // A partial file discarded before: the error says so.
+            transfer(url, part, have, bytes, what, opts).map_err(|e| match notes.last() {
+                Some(n) => e.context(n.clone()),
+                None => e,
+            })?
+        } else {
+            (have, None)
         };
-        if let Some(b) = bar {
-            b.finish_and_clear();
+        let got = std::fs::read(part).map_err(Error::io(part))?;
+        let actual = crate::io::sha256_hex(&got);
+        if actual == sha256 {
+            notes.extend(late.map(|m| {
+                format!(
+                    "the transfer failed after the last of the registry's {bytes} bytes ({m}); \
+                     their sha256 is the registry's"
+                )
+            }));
+            return Ok(Downloaded {
+                resumed_from,
+                notes,
+            });
         }
-        file.sync_all().map_err(Error::io(part))?;
-        drop(file);
-        if let Err(m) = outcome {
-            if m.contains("more than") {
-                std::fs::remove_file(part).map_err(Error::io(part))?;
-                return Err(at(format!("{m}: refused, nothing written")));
-            }
-            return Err(at(format!(
-                "transfer ended after {have} of {bytes} bytes ({m}); `experiment models fetch` \
-                 again resumes from {}",
-                part.display()
-            )));
-        }
-        if have < bytes {
-            return Err(at(format!(
-                "transfer ended after {have} of {bytes} bytes; `experiment models fetch` again \
-                 resumes from {}",
-                part.display()
-            )));
-        }
-    }
-    let got = std::fs::read(part).map_err(Error::io(part))?;
-    let actual = crate::io::sha256_hex(&got);
-    if actual != sha256 {
         std::fs::remove_file(part).map_err(Error::io(part))?;
-        return Err(at(format!(
-            "sha256 {actual}, the registry's is {sha256}: refused, nothing written"
-        )));
+        if resumed_from > 0 {
+            let sent = match bytes - resumed_from {
+                0 => "(the whole length: nothing was asked of the server)".to_string(),
+                n => format!("and the {n} the server sent after them"),
+            };
+            notes.push(format!(
+                "{}: the partial file of an earlier fetch is corrupt: its {resumed_from} bytes \
+                 {sent} have sha256 {actual}, the registry's is {sha256}; deleted, the \
+                 download starts from the start",
+                part.display()
+            ));
+            continue;
+        }
+        let late = late.map_or(String::new(), |m| {
+            format!(" (the transfer also failed after the last byte: {m})")
+        });
+        let e = at(format!(
+            "the server's {bytes} bytes have sha256 {actual}, the registry's is {sha256}: \
+             refused, nothing written{late}"
+        ));
+        return Err(match notes.last() {
+            Some(n) => e.context(n.clone()),
+            None => e,
+        });
     }
-    Ok(resumed_from)
+}
+
+/// One request for the bytes of `url` from `have` on, written to `part` (appended where the
+/// server answers 206 to the `Range`, from the start where it answers 200) until `part` holds
+/// `bytes`; returns how many of its bytes were kept from before (0 where the server sent the
+/// whole file), and the transfer's failure after the last byte, if any (the caller checks the
+/// bytes' sha256 and tells it), which is not an error. An error where it ends short (the bytes
+/// kept for a resume) or a local write fails.
+fn transfer(
+    url: &str,
+    part: &Path,
+    mut have: u64,
+    bytes: u64,
+    what: &str,
+    opts: &FetchOptions,
+) -> Result<(u64, Option<String>)> {
+    let at = |m: String| Error::invalid(format!("{what}: {url}"), m);
+    let body_deadline =
+        opts.timeout + Duration::from_secs_f64(bytes as f64 / opts.min_bytes_per_s as f64);
+    let loopback = url.starts_with("http://127.0.0.1:") || url.starts_with("http://[::1]:");
+    let mut config = ureq::Agent::config_builder()
+        .timeout_connect(Some(opts.timeout))
+        .timeout_recv_response(Some(opts.timeout))
+        .timeout_recv_body(Some(body_deadline))
+        .http_status_as_error(false);
+    if loopback {
+        config = config.proxy(None);
+    }
+    let agent: ureq::Agent = config.build().into();
+    let mut request = agent.get(url);
+    if have > 0 {
+        request = request.header("Range", format!("bytes={have}-"));
+    }
+    let response = request.call().map_err(|e| at(e.to_string()))?;
+    let status = response.status().as_u16();
+    let append = match status {
+        206 if have > 0 => true,
+        200 => false,
+        _ => {
+            return Err(at(format!(
+                "HTTP {status}{}",
+                if have > 0 {
+                    format!(" (the {have} bytes of {} are kept)", part.display())
+                } else {
+                    String::new()
+                }
+            )))
+        }
+    };
+    if !append {
+        have = 0;
+    }
+    let kept = have;
+    let mut file = std::fs::OpenOptions::new()
+        .create(true)
+        .write(true)
+        .append(append)
+        .truncate(!append)
+        .open(part)
+        .map_err(Error::io(part))?;
+    let bar = opts.progress.then(|| {
+        let b = super::progress::bar(bytes, what);
+        b.set_position(have);
+        b
+    });
+    /// Why the body's reading stopped early.
+    enum Stop {
+        TooMuch,
+        Write(std::io::Error),
+        Read(String),
+    }
+    let mut reader = response.into_body().into_reader();
+    let mut buf = vec![0u8; 1 << 16];
+    let outcome = loop {
+        match reader.read(&mut buf) {
+            Ok(0) => break Ok(()),
+            Ok(n) => {
+                if have + n as u64 > bytes {
+                    break Err(Stop::TooMuch);
+                }
+                if let Err(e) = file.write_all(&buf[..n]) {
+                    break Err(Stop::Write(e));
+                }
+                have += n as u64;
+                if let Some(b) = &bar {
+                    b.set_position(have);
+                }
+            }
+            Err(e) => break Err(Stop::Read(e.to_string())),
+        }
+    };
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    file.sync_all().map_err(Error::io(part))?;
+    drop(file);
+    let resume = |have: u64| {
+        format!(
+            "`experiment models fetch` again resumes from the {have} bytes of {}",
+            part.display()
+        )
+    };
+    match outcome {
+        Err(Stop::TooMuch) => {
+            std::fs::remove_file(part).map_err(Error::io(part))?;
+            Err(at(format!(
+                "the server sent more than the registry's {bytes} bytes: refused, nothing \
+                 written"
+            )))
+        }
+        Err(Stop::Write(e)) => Err(Error::invalid(
+            format!("{what}: writing {}", part.display()),
+            format!(
+                "{e}, after {have} of {bytes} bytes had arrived from {url}; {}",
+                resume(have)
+            ),
+        )),
+        Err(Stop::Read(m)) if have == bytes => Ok((kept, Some(m))),
+        Err(Stop::Read(m)) => Err(at(format!(
+            "transfer ended after {have} of {bytes} bytes ({m}); {}",
+            resume(have)
+        ))),
+        Ok(()) if have < bytes => Err(at(format!(
+            "transfer ended after {have} of {bytes} bytes: the server closed it; {}",
+            resume(have)
+        ))),
+        Ok(()) => Ok((kept, None)),
+    }
 }
 
 /// The bytes of `name` in the gzipped tar archive `tgz` (an npm package).

@@ -12,6 +12,12 @@
 //! - each precision's fields are released after its cells are evaluated, the group's f32
 //!   source after the group, so at most one group's fields are alive at a time.
 //!
+//! Per scene, each method setting's precompute ([`Step::Precompute`]: an AO field's or a
+//! distance volume's bake with its rays as configured and the bytes it keeps, a world BVH)
+//! comes before the setting's evaluation, and its peak bytes are held against the memory
+//! limit when the plan is made, before any step runs (dry run included). An animated spec's
+//! fields, kept for all its frames, are checked the same way ([`check_animated_fields`]).
+//!
 //! Only what the render kind declares ([`super::kinds::Needs`]) is planned: a G-buffer where it
 //! has an image, normal fields where it reads them (reflections), a GPU device
 //! only where a cell's backend is "gpu".
@@ -181,6 +187,17 @@ pub enum Step {
         to: Precision,
         bytes: u64,
     },
+    /// What the method step after it precomputes on the scene (a bake, a BVH:
+    /// [`super::methods::Precompute`]): listed with its rays and the bytes it keeps, and held
+    /// against the memory limit when the plan is made. The [`Step::Method`] that follows runs
+    /// it.
+    Precompute {
+        scene: usize,
+        setting: usize,
+        what: String,
+        rays: u64,
+        bytes: u64,
+    },
     /// A method's setting on a scene (`setting`: index into [`Plan::methods`]): its
     /// precompute, then the kind through it on every seed.
     Method {
@@ -252,11 +269,16 @@ impl Plan {
             let rays = kind.max_points(&scenes.scenes[s])
                 * kind.rays_cast_per_point()
                 * spec.reference.seeds as u64;
-            steps.extend((0..methods.len()).map(|setting| Step::Method {
-                scene: s,
-                setting,
-                rays,
-            }));
+            for (setting, m) in settings.iter().enumerate() {
+                if let Some(step) = precompute_step(&scenes.scenes[s], s, setting, m, limits)? {
+                    steps.push(step);
+                }
+                steps.push(Step::Method {
+                    scene: s,
+                    setting,
+                    rays,
+                });
+            }
         }
         let mut groups = GroupPlanner {
             cells: &cells,
@@ -370,6 +392,21 @@ impl Plan {
                 0,
                 Some(*bytes),
             ),
+            Step::Precompute {
+                scene,
+                setting,
+                what,
+                rays,
+                bytes,
+            } => (
+                format!(
+                    "precompute {} on {}: {what}",
+                    self.methods[*setting],
+                    sc(*scene)
+                ),
+                *rays,
+                Some(*bytes),
+            ),
             Step::Method {
                 scene,
                 setting,
@@ -438,10 +475,11 @@ impl Plan {
             let note = match step {
                 Step::Bake { normals: true, .. } => "bake (fields with normals: not cached)",
                 Step::Bake { mesh, params, .. } => cached(*mesh, params),
+                Step::Precompute { rays: 1.., .. } => "bake, or the method's cache",
                 _ => "",
             };
             let (what, rays, bytes) = self.step_line(step, scenes);
-            if let Step::Bake { rays, .. } = step {
+            if let Step::Bake { rays, .. } | Step::Precompute { rays, .. } = step {
                 bake_rays += rays;
             }
             total_rays += rays;
@@ -463,6 +501,51 @@ impl Plan {
         out
     }
 }
+
+/// The step listing what method setting `setting` (`m`) precomputes on scene `s` (`bs`), if
+/// the method can say ([`super::methods::Method::precompute`]); refused, naming the setting,
+/// the scene and the flag, where its peak bytes pass the memory limit, or where the
+/// precompute could not run.
+fn precompute_step(
+    bs: &super::scenes::BuiltScene,
+    s: usize,
+    setting: usize,
+    m: &super::methods::Setting,
+    limits: PlanLimits,
+) -> Result<Option<Step>> {
+    let at = || format!("methods \"{}\" on scene {}", m.label(), bs.name);
+    let Some(p) = m
+        .method
+        .precompute(bs)
+        .map_err(|why| Error::invalid(at(), why))?
+    else {
+        return Ok(None);
+    };
+    if p.peak_bytes > limits.memory_limit {
+        return Err(Error::invalid(
+            at(),
+            format!(
+                "its precompute ({}) keeps {} and needs {} at its peak, over the memory limit \
+                 of {} (--max-memory-mib)",
+                p.what,
+                ByteSize(p.bytes),
+                ByteSize(p.peak_bytes),
+                ByteSize(limits.memory_limit)
+            ),
+        ));
+    }
+    Ok(Some(Step::Precompute {
+        scene: s,
+        setting,
+        what: p.what,
+        rays: p.rays,
+        bytes: p.bytes,
+    }))
+}
+
+/// The planner's bound on the bytes of a BVH over one triangle, the triangle included (the
+/// scene's state holds two: [`scene_state_bytes`]; a method's world BVH one).
+pub const BVH_BYTES_PER_TRIANGLE: u64 = 128;
 
 /// `k` with `k² = n`, or the error naming the spec field.
 fn square_root(n: u32, field: &str) -> Result<u32> {
@@ -494,6 +577,48 @@ pub fn check_scene_memory(spec: &Spec, scenes: &Scenes, limits: PlanLimits) -> R
     Ok(())
 }
 
+/// The bytes an animated spec keeps for scene `s` while its frames run: each of the scene's
+/// field cells' fields, one per caster mesh (with its normal field where the kind reads one),
+/// supplied once before the first frame; 0 where `animation.methods` names no field method.
+pub fn animated_field_bytes(spec: &Spec, scenes: &Scenes, s: usize) -> u64 {
+    let asked = spec.animation.as_ref().and_then(|a| a.methods.as_ref());
+    if !asked.is_none_or(|m| m.iter().any(|m| m.starts_with("field"))) {
+        return 0;
+    }
+    let meshes = scenes.scenes[s].caster_meshes().len() as u64;
+    cells_of(spec)
+        .iter()
+        .filter(|c| c.scene == s)
+        .map(|c| {
+            let normals = c
+                .normal_bits
+                .map_or(0, |_| normal_field_bytes(&c.geometry(), 1));
+            (c.params.storage_bytes() + normals).saturating_mul(meshes)
+        })
+        .fold(0, u64::saturating_add)
+}
+
+/// Checks every scene's [`animated_field_bytes`] against the memory limit, naming the scene,
+/// its bytes and the flag: the runner calls it for an animated spec before any work, dry run
+/// included.
+pub fn check_animated_fields(spec: &Spec, scenes: &Scenes, limits: PlanLimits) -> Result<()> {
+    for (s, bs) in scenes.scenes.iter().enumerate() {
+        let bytes = animated_field_bytes(spec, scenes, s);
+        if bytes > limits.memory_limit {
+            return Err(Error::invalid(
+                format!("scenes[{s}] ({})", bs.name),
+                format!(
+                    "an animated spec keeps every field cell's fields of a scene for all its \
+                     frames: {} ({bytes} bytes), over the memory limit of {} (--max-memory-mib)",
+                    ByteSize(bytes),
+                    ByteSize(limits.memory_limit)
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// A conservative estimate of the bytes a scene's state takes while its cells run, apart from
 /// the fields (which the plan counts step by step): two BVHs over its triangles (primary
 /// visibility and the casters: 128 bytes a triangle each, the triangles included), the
@@ -510,7 +635,7 @@ pub fn scene_state_bytes(spec: &Spec, scenes: &Scenes, kind: &dyn Kind, s: usize
     let values =
         2 * r.seeds as u64 + r.raycast_sweep.len() as u64 + r.field_rays_sweep.len() as u64 + 2;
     let per_point = 45 + 8 + 4 * values;
-    (2 * 128u64)
+    (2 * BVH_BYTES_PER_TRIANGLE)
         .saturating_mul(triangles)
         .saturating_add(gbuffer)
         .saturating_add(points.saturating_mul(per_point))

@@ -9,6 +9,7 @@
 use super::spec::{MeshSource, Spec, SpecError, TransformSpec};
 use super::user_mesh::{self, FileRecord};
 use super::{Error, Result};
+use crate::geometry::motion::Pose;
 use crate::geometry::procedural::{self, Supershape};
 use crate::geometry::rebase::{
     centred_mesh, extent_problem, rebase, rebase_origin, spheres_extent_problem, to_frame,
@@ -313,14 +314,19 @@ fn frame_placements(
 ) -> FramePlacements {
     let model: Vec<crate::geometry::Sphere> =
         instances.iter().map(|p| p.mesh.bounding_sphere()).collect();
+    // Each moving instance's poses over the run, in one pass (a walk steps once a frame).
+    let poses: Vec<Option<Vec<Pose>>> = instances
+        .iter()
+        .zip(motions)
+        .zip(&model)
+        .map(|((p, m), s)| m.map(|m| m.poses(frames, dt, &p.placement, s.center)))
+        .collect();
     let mut placed = Vec::with_capacity(frames as usize * instances.len());
     let mut spheres = Vec::with_capacity(placed.capacity());
-    for f in 0..frames {
-        for ((p, m), s) in instances.iter().zip(motions).zip(&model) {
-            let q = match m {
-                Some(m) => m
-                    .pose(f, dt, &p.placement, s.center)
-                    .apply(&p.placement, s.center),
+    for f in 0..frames as usize {
+        for ((p, poses), s) in instances.iter().zip(&poses).zip(&model) {
+            let q = match poses {
+                Some(poses) => poses[f].apply(&p.placement, s.center),
                 None => p.placement,
             };
             spheres.push((q.to_world_point(s.center), s.radius as f64 * q.scale as f64));
@@ -341,8 +347,11 @@ impl FramePlacements {
     /// a static scene is in [`Scenes::build`], on its bounding spheres: its distance from the
     /// spec's origin over its extent ([`spheres_extent_problem`]), every sphere within
     /// ±[`MAX_WORLD_COORDINATE`] of the frame's origin, each instance at least
-    /// [`MIN_INSTANCE_TO_SCENE`] of the frame's extent; refused naming the instance's motion
-    /// (or transform) and the frame (`at(field, message)`).
+    /// [`MIN_INSTANCE_TO_SCENE`] of the frame's extent; refused naming the frame and the
+    /// instance's motion (or transform), or, where a still instance fails only because another
+    /// moved (a caster flying away leaves the receiver small in a wide frame, or out of range
+    /// of the frame's origin), the motion of the instance moved farthest from its placement,
+    /// naming the failing instance in the message (`at(field, message)`).
     fn rebased(
         &self,
         instances: &[PlacedMesh],
@@ -356,6 +365,20 @@ impl FramePlacements {
                 "instances[{i}].{}",
                 if moving { "motion" } else { "transform" }
             )
+        };
+        // Where each instance's placement puts its centre, unmoved.
+        let unmoved: Vec<DVec3> = instances
+            .iter()
+            .map(|p| p.placement.to_world_point(p.mesh.bounding_sphere().center))
+            .collect();
+        let moved = |i: usize, spheres: &[(DVec3, f64)]| (spheres[i].0 - unmoved[i]).length();
+        // The instance to blame for instance `i`'s failure at a frame of `spheres`: `i` itself
+        // where it moves or nothing else has, else the instance moved farthest.
+        let blame = |i: usize, spheres: &[(DVec3, f64)]| -> Option<usize> {
+            let j = (0..n)
+                .filter(|&j| specs[j].motion.is_some())
+                .max_by(|&a, &b| moved(a, spheres).total_cmp(&moved(b, spheres)))?;
+            (j != i && specs[i].motion.is_none() && moved(j, spheres) > 0.0).then_some(j)
         };
         let mut frames = Vec::new();
         for (f, (placed, spheres)) in self
@@ -377,27 +400,53 @@ impl FramePlacements {
             for (i, &(c, r)) in rel.iter().enumerate() {
                 let reach = c.abs().max_element() + r;
                 if reach.is_nan() || reach > MAX_WORLD_COORDINATE as f64 {
-                    return Err(at(
-                        field(i),
-                        format!(
-                            "at frame {f} puts its bounding sphere (centre {c}, radius {r:e}) past \
-                             ±{MAX_WORLD_COORDINATE:e}, the f32 range in which the geometry's \
-                             squares and cross products stay finite (coordinates in the frame's \
-                             rebased frame)"
+                    let range = format!(
+                        "past ±{MAX_WORLD_COORDINATE:e}, the f32 range in which the geometry's \
+                         squares and cross products stay finite (coordinates in the frame's \
+                         rebased frame)"
+                    );
+                    return Err(match blame(i, spheres) {
+                        None => at(
+                            field(i),
+                            format!(
+                                "at frame {f} puts its bounding sphere (centre {c}, radius \
+                                 {r:e}) {range}"
+                            ),
                         ),
-                    ));
+                        Some(j) => at(
+                            field(j),
+                            format!(
+                                "at frame {f} moves it {:e} from its placement, which puts the \
+                                 bounding sphere of instances[{i}] (centre {c}, radius {r:e}) \
+                                 {range}",
+                                moved(j, spheres)
+                            ),
+                        ),
+                    });
                 }
             }
             for (i, &(_, r)) in rel.iter().enumerate() {
                 if r < half * MIN_INSTANCE_TO_SCENE as f64 {
-                    return Err(at(
-                        field(i),
-                        format!(
-                            "at frame {f}: an instance of radius {r:e} in a frame of half-extent \
-                             {half:e}: below 2⁻²¹ of it, the resolution at which the ray \
-                             casters' BVH builders order triangles"
+                    let resolution = "below 2⁻²¹ of it, the resolution at which the ray casters' \
+                                      BVH builders order triangles";
+                    return Err(match blame(i, spheres) {
+                        None => at(
+                            field(i),
+                            format!(
+                                "at frame {f}: an instance of radius {r:e} in a frame of \
+                                 half-extent {half:e}: {resolution}"
+                            ),
                         ),
-                    ));
+                        Some(j) => at(
+                            field(j),
+                            format!(
+                                "at frame {f} moves it {:e} from its placement, spreading the \
+                                 frame to a half-extent of {half:e}: instances[{i}], of radius \
+                                 {r:e}, is {resolution}",
+                                moved(j, spheres)
+                            ),
+                        ),
+                    });
                 }
             }
             frames.push(FrameTransforms {

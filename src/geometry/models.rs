@@ -13,8 +13,13 @@
 //! 1. `$VISFIELD_MODELS/` (a folder), when the variable is set;
 //! 2. the per-user data folder, [`user_models_dir`] (`$XDG_DATA_HOME/visfield/models`, else
 //!    `~/.local/share/visfield/models`; `%APPDATA%\visfield\models` on Windows);
-//! 3. `data/models/` under the crate root, then under the current directory;
-//! 4. `../shared/models/` relative to the crate root, then to the current directory.
+//! 3. `data/models/` of the project the program runs in (the nearest folder holding
+//!    `experiments/`, from the current directory up: [`crate::io::places::project_dir`]), then
+//!    under the current directory;
+//! 4. `../shared/models/` relative to the project, then to the current directory.
+//!
+//! No folder comes from where the binary was built: a binary built in one checkout and run in
+//! another searches the other.
 //!
 //! `experiment models fetch` writes into the first of 1–3 that can be named
 //! ([`fetch_dir`]), so that every later search finds what it fetched.
@@ -273,7 +278,7 @@ pub fn load_model(name: &str) -> Result<Mesh, ModelError> {
 
 /// The default model folders, in search order (see the module docs), without duplicates.
 pub fn search_dirs() -> Vec<PathBuf> {
-    let crate_root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let project = crate::io::places::project_dir();
     let cwd = std::env::current_dir().ok();
     let mut dirs = Vec::new();
     if let Some(d) = env_models_dir() {
@@ -283,9 +288,8 @@ pub fn search_dirs() -> Vec<PathBuf> {
         dirs.push(d);
     }
     for rel in ["data/models", "../shared/models"] {
-        dirs.push(crate_root.join(rel));
-        if let Some(cwd) = &cwd {
-            dirs.push(cwd.join(rel));
+        for base in [&project, &cwd].into_iter().flatten() {
+            dirs.push(base.join(rel));
         }
     }
     let mut unique: Vec<PathBuf> = Vec::new();
@@ -339,25 +343,19 @@ pub fn env_models_dir() -> Option<PathBuf> {
 /// `$HOME/.local/share/visfield/models` (`%APPDATA%\visfield\models` on Windows); `None` when
 /// none of those variables is set to an absolute path.
 pub fn user_models_dir() -> Option<PathBuf> {
-    let var = |name: &str| {
-        std::env::var_os(name)
-            .map(PathBuf::from)
-            .filter(|p| p.is_absolute())
-    };
-    let base = if cfg!(windows) {
-        var("APPDATA")
-    } else {
-        var("XDG_DATA_HOME").or_else(|| var("HOME").map(|h| h.join(".local/share")))
-    };
-    base.map(|b| b.join("visfield").join("models"))
+    crate::io::places::user_data_dir().map(|d| d.join("models"))
 }
 
 /// Where `experiment models fetch` writes: `$VISFIELD_MODELS`, else the per-user folder, else
-/// `data/models/` under the crate root.
+/// `data/models/` of the project the program runs in (else of the current directory).
 pub fn fetch_dir() -> PathBuf {
     env_models_dir()
         .or_else(user_models_dir)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("data/models"))
+        .unwrap_or_else(|| {
+            crate::io::places::project_dir()
+                .unwrap_or_default()
+                .join("data/models")
+        })
 }
 
 /// Streaming SHA-256 of a file (lower-case hex), cached per (path, size, mtime).

@@ -209,9 +209,57 @@ fn angle_of_turns(turns: f64) -> f64 {
     TAU * turns.rem_euclid(1.0)
 }
 
+/// Where `t` lies between key times `a < t < b`, as a fraction in [0, 1]. The span `b − a` of
+/// two finite times overflows past f64's range (keys at ±1e308); it is then taken over the
+/// halves, which are exact at such magnitudes, so that no finite keys give an infinite span (and
+/// a fraction of 0: a key never left).
+fn key_fraction(t: f64, a: f64, b: f64) -> f64 {
+    let span = b - a;
+    if span.is_finite() {
+        (t - a) / span
+    } else {
+        (0.5 * t - 0.5 * a) / (0.5 * b - 0.5 * a)
+    }
+}
+
 impl Keyframe {
     fn rotation(&self) -> DQuat {
         euler(self.rotate_deg)
+    }
+}
+
+/// A walk's steps at one time step: step `i` (frames 1, 2, …) is `speed × dt` along a seeded
+/// direction, on the sphere or in the plane across `plane_normal`.
+struct WalkSteps {
+    length: f64,
+    seed: u64,
+    /// Two unit vectors spanning the plane of the steps (none: any direction).
+    plane: Option<(DVec3, DVec3)>,
+}
+
+impl WalkSteps {
+    fn new(w: &Walk, dt: f64) -> WalkSteps {
+        WalkSteps {
+            length: w.speed * dt,
+            seed: w.seed,
+            plane: w.plane_normal.and_then(DVec3::try_normalize).map(|n| {
+                let e1 = n.any_orthonormal_vector();
+                (e1, n.cross(e1))
+            }),
+        }
+    }
+
+    /// The step into frame `i` (from frame i − 1).
+    fn step(&self, i: u32) -> DVec3 {
+        let i = i as usize;
+        let dir = match self.plane {
+            Some((e1, e2)) => {
+                let a = TAU * seeded_unit(i, self.seed) as f64;
+                a.cos() * e1 + a.sin() * e2
+            }
+            None => seeded_direction(i, self.seed),
+        };
+        self.length * dir
     }
 }
 
@@ -238,7 +286,7 @@ impl Motion {
         }
         let i = keys.partition_point(|k| k.time <= t) - 1;
         let (a, b) = (&keys[i], &keys[i + 1]);
-        let u = (t - a.time) / (b.time - a.time);
+        let u = key_fraction(t, a.time, b.time);
         (
             a.rotation().slerp(b.rotation(), u),
             a.translate.lerp(b.translate, u),
@@ -249,8 +297,51 @@ impl Motion {
     /// whose mesh's bounding sphere has model-space centre `model_centre`. Every point the
     /// paths name is taken relative to the placed centre c as `(translation − P) + rest`, the
     /// large translation apart, so that a scene translated as a whole (its points with it)
-    /// gets the same displacements.
+    /// gets the same displacements. A walk's first `frame` steps are summed here: over a run,
+    /// [`Self::poses`] steps it once a frame.
     pub fn pose(&self, frame: u32, dt: f64, placement: &Placement, model_centre: Vec3) -> Pose {
+        let walked = self.walk.as_ref().map(|w| {
+            let steps = WalkSteps::new(w, dt);
+            (1..=frame).fold(DVec3::ZERO, |sum, i| sum + steps.step(i))
+        });
+        self.pose_walked(frame, dt, placement, model_centre, walked)
+    }
+
+    /// [`Self::pose`] at frames `0..frames`, the walk's steps summed once over the run (each
+    /// frame's sum is the previous one plus one step, as [`Self::pose`] sums them): O(frames)
+    /// in all, where a pose per frame costs O(frames²).
+    pub fn poses(
+        &self,
+        frames: u32,
+        dt: f64,
+        placement: &Placement,
+        model_centre: Vec3,
+    ) -> Vec<Pose> {
+        let steps = self.walk.as_ref().map(|w| WalkSteps::new(w, dt));
+        let mut walked = DVec3::ZERO;
+        (0..frames)
+            .map(|f| {
+                let w = steps.as_ref().map(|s| {
+                    if f > 0 {
+                        walked += s.step(f);
+                    }
+                    walked
+                });
+                self.pose_walked(f, dt, placement, model_centre, w)
+            })
+            .collect()
+    }
+
+    /// The pose at frame `frame`, given the sum of its walk's steps to that frame (none: no
+    /// walk); the walk's sum is added after the other paths' displacements.
+    fn pose_walked(
+        &self,
+        frame: u32,
+        dt: f64,
+        placement: &Placement,
+        model_centre: Vec3,
+        walked: Option<DVec3>,
+    ) -> Pose {
         let t = frame as f64 * dt;
         let rest = placement.offset
             + placement.scale as f64 * (placement.rotation * model_centre).as_dvec3();
@@ -287,22 +378,8 @@ impl Motion {
                 rotation = turned * rotation;
             }
         }
-        if let Some(w) = &self.walk {
-            let step = w.speed * dt;
-            let plane = w.plane_normal.and_then(DVec3::try_normalize).map(|n| {
-                let e1 = n.any_orthonormal_vector();
-                (e1, n.cross(e1))
-            });
-            for i in 1..=frame as usize {
-                let dir = match plane {
-                    Some((e1, e2)) => {
-                        let a = TAU * seeded_unit(i, w.seed) as f64;
-                        a.cos() * e1 + a.sin() * e2
-                    }
-                    None => seeded_direction(i, w.seed),
-                };
-                displacement += step * dir;
-            }
+        if let Some(w) = walked.filter(|_| frame > 0) {
+            displacement += w;
         }
         Pose {
             rotation,
@@ -330,11 +407,13 @@ impl Motion {
     }
 
     /// What is wrong with this motion over `frames` frames of `dt` seconds, if anything: (its
-    /// field below the instance's `motion`, why). Every value must be finite, every axis of
-    /// non-zero length, keyframe times strictly increasing, a period non-zero, a speed and a
-    /// radius at least 0, and every point and reach within ±`max` (the spec coordinates'
-    /// range); a motion names at least one path, a pivot goes with keyframes, and an orbit
-    /// about the instance's own centre needs a radius.
+    /// field below the instance's `motion`, why). Every value must be finite, and so must
+    /// what the poses form from it over the animation (an orbit's turns t / period, a
+    /// tumble's angle, a walk's step speed · dt); every axis of non-zero length, keyframe
+    /// times strictly increasing, a period non-zero, a speed and a radius at least 0, and
+    /// every point and reach within ±`max` (the spec coordinates' range); a motion names at
+    /// least one path, a pivot goes with keyframes, and an orbit about the instance's own
+    /// centre needs a radius. Keyframes any distance apart are accepted ([`key_fraction`]).
     pub fn problem(&self, frames: u32, dt: f64, max: f64) -> Option<(String, String)> {
         let bad = |field: &str, message: String| Some((field.to_string(), message));
         let point = |field: &str, p: DVec3| {
@@ -398,6 +477,8 @@ impl Motion {
                 return Some(e);
             }
         }
+        // The last frame's time, as [`Self::pose`] forms it (`frame · dt`).
+        let end = frames.saturating_sub(1) as f64 * dt;
         if let Some(o) = &self.orbit {
             if let Some(e) = axis("orbit.axis", o.axis) {
                 return Some(e);
@@ -426,11 +507,23 @@ impl Motion {
                     format!("{} must be finite and not 0", o.period),
                 );
             }
+            // The turns t / period at the last frame: a period so short that they overflow
+            // would turn every pose's angle (and the scene's bounds) to NaN.
+            let turns = end / o.period;
+            if !turns.is_finite() {
+                return bad(
+                    "orbit.period",
+                    format!(
+                        "{:e} s makes {turns} turns over the animation's {end} s: the turns \
+                         must be finite",
+                        o.period
+                    ),
+                );
+            }
             if !o.phase_deg.is_finite() {
                 return bad("orbit.phase_deg", format!("{} must be finite", o.phase_deg));
             }
         }
-        let end = dt * frames.saturating_sub(1) as f64;
         if let Some(tu) = &self.tumble {
             if !(tu.rate_deg * end).is_finite() {
                 return bad(
@@ -447,6 +540,16 @@ impl Motion {
                 return bad(
                     "walk.speed",
                     format!("{} must be at least 0 and finite", w.speed),
+                );
+            }
+            let step = w.speed * dt;
+            if !step.is_finite() {
+                return bad(
+                    "walk.speed",
+                    format!(
+                        "{:e} makes a step of {step} over a time step of {dt:e} s: it must be finite",
+                        w.speed
+                    ),
                 );
             }
             if let Some(e) = w.plane_normal.and_then(|n| axis("walk.plane_normal", n)) {

@@ -294,3 +294,191 @@ fn a_move_by_a_multiple_of_the_step_keeps_the_coordinates() {
     .apply(&p, M);
     assert_eq!(moved.relative_to(shift), p.relative_to(DVec3::ZERO));
 }
+
+/// Keys at ±1e308 are finite, increasing and accepted; their span overflows f64. Halfway in
+/// time the translation is halfway (before, the infinite span made every fraction 0: the
+/// instance held the first key at every frame).
+#[test]
+fn keys_at_the_ends_of_f64_still_interpolate() {
+    let m = |a: f64, b: f64| Motion {
+        keyframes: vec![
+            Keyframe {
+                time: a,
+                translate: DVec3::ZERO,
+                rotate_deg: DVec3::ZERO,
+            },
+            Keyframe {
+                time: b,
+                translate: DVec3::new(2.0, 0.0, -4.0),
+                rotate_deg: DVec3::new(0.0, 90.0, 0.0),
+            },
+        ],
+        ..Motion::default()
+    };
+    let p = placement(DVec3::ZERO);
+    for (a, b) in [(-1e308, 1e308), (-f64::MAX, f64::MAX)] {
+        assert!((b - a).is_infinite());
+        assert!(m(a, b).problem(3, 1.0, 1e18).is_none(), "accepted");
+        // Frames 0–2 lie within a few units of the middle: u = 1/2 to 1e-300.
+        for f in 0..3 {
+            let pose = m(a, b).pose(f, 1.0, &p, M);
+            close(pose.displacement, DVec3::new(1.0, 0.0, -2.0), 1e-12);
+            let angle = pose.rotation.to_axis_angle().1;
+            assert!((angle - 45f64.to_radians()).abs() < 1e-12, "{angle}");
+        }
+    }
+    // A quarter of the way: t = 0 between −0.5e308 and 1.5e308.
+    let q = m(-0.5e308, 1.5e308).pose(0, 1.0, &p, M).displacement;
+    close(q, DVec3::new(0.5, 0.0, -1.0), 1e-12);
+    // Finite spans keep their formula bit for bit.
+    assert_eq!(key_fraction(0.3, 0.1, 0.7), (0.3 - 0.1) / (0.7 - 0.1));
+}
+
+/// The walk's displacement at `frame` as every pose once formed it: the other paths'
+/// displacement `before`, then each step from frame 1 added to it in turn.
+fn walked_from_scratch(before: DVec3, w: &Walk, frame: u32, dt: f64) -> DVec3 {
+    let step = w.speed * dt;
+    let plane = w.plane_normal.and_then(DVec3::try_normalize).map(|n| {
+        let e1 = n.any_orthonormal_vector();
+        (e1, n.cross(e1))
+    });
+    let mut displacement = before;
+    for i in 1..=frame as usize {
+        let dir = match plane {
+            Some((e1, e2)) => {
+                let a = TAU * seeded_unit(i, w.seed) as f64;
+                a.cos() * e1 + a.sin() * e2
+            }
+            None => seeded_direction(i, w.seed),
+        };
+        displacement += step * dir;
+    }
+    displacement
+}
+
+/// [`Motion::poses`] steps a walk once a frame: its poses equal [`Motion::pose`]'s at every
+/// frame and, for a walk (with a tumble and keys turning about the centre, which displace
+/// nothing), the former per-frame sum bit for bit; beside an orbit, the walk's sum is added
+/// as a whole, within rounding of the former running sum.
+#[test]
+fn poses_over_a_run_equal_the_per_frame_sums() {
+    let p = placement(DVec3::new(3.0, -1.0, 0.5));
+    let walk = |plane_normal| Walk {
+        speed: 0.7,
+        seed: 11,
+        plane_normal,
+    };
+    let keys = vec![
+        Keyframe {
+            time: 0.0,
+            translate: DVec3::ZERO,
+            rotate_deg: DVec3::ZERO,
+        },
+        Keyframe {
+            time: 9.0,
+            translate: DVec3::ZERO,
+            rotate_deg: DVec3::new(10.0, 80.0, -20.0),
+        },
+    ];
+    let (frames, dt) = (300, 0.05);
+    for n in [None, Some(DVec3::new(0.0, 0.0, 2.0))] {
+        let alone = Motion {
+            walk: Some(walk(n)),
+            ..Motion::default()
+        };
+        let turning = Motion {
+            keyframes: keys.clone(),
+            tumble: Some(Tumble {
+                rate_deg: 25.0,
+                axis: None,
+                seed: 3,
+            }),
+            ..alone.clone()
+        };
+        for m in [&alone, &turning] {
+            let poses = m.poses(frames, dt, &p, M);
+            assert_eq!(poses.len(), frames as usize);
+            for f in [0, 1, 2, 17, 150, frames - 1] {
+                let still = Motion {
+                    walk: None,
+                    ..m.clone()
+                };
+                let before = if still.is_empty() {
+                    Pose::IDENTITY
+                } else {
+                    still.pose(f, dt, &p, M)
+                };
+                assert_eq!(before.displacement, DVec3::ZERO);
+                let old = Pose {
+                    rotation: before.rotation,
+                    displacement: walked_from_scratch(DVec3::ZERO, &walk(n), f, dt),
+                };
+                assert_eq!(poses[f as usize], old, "frame {f}");
+                assert_eq!(poses[f as usize], m.pose(f, dt, &p, M), "frame {f}");
+            }
+        }
+        let orbiting = Motion {
+            orbit: Some(Orbit {
+                center: Some(DVec3::new(1.0, 0.0, 0.0)),
+                axis: DVec3::Y,
+                radius: None,
+                period: 2.0,
+                phase_deg: 0.0,
+                turn: false,
+            }),
+            ..alone.clone()
+        };
+        let poses = orbiting.poses(frames, dt, &p, M);
+        for f in [0, 1, 150, frames - 1] {
+            let still = Motion {
+                walk: None,
+                ..orbiting.clone()
+            };
+            let before = still.pose(f, dt, &p, M).displacement;
+            let old = walked_from_scratch(before, &walk(n), f, dt);
+            assert_eq!(poses[f as usize], orbiting.pose(f, dt, &p, M));
+            close(poses[f as usize].displacement, old, 1e-13);
+        }
+    }
+}
+
+/// Values each finite whose use over the animation is not (an orbit's turns, a walk's step)
+/// are refused naming the field.
+#[test]
+fn scalars_whose_use_overflows_are_refused_naming_the_field() {
+    let orbit = |period| Motion {
+        orbit: Some(Orbit {
+            center: None,
+            axis: DVec3::Y,
+            radius: Some(0.1),
+            period,
+            phase_deg: 0.0,
+            turn: false,
+        }),
+        ..Motion::default()
+    };
+    for period in [5e-324, -5e-324, 1e-308] {
+        let (field, why) = orbit(period).problem(3, 1.0, 1e18).expect("refused");
+        assert_eq!(field, "orbit.period", "{why}");
+        assert!(why.contains("turns"), "{why}");
+    }
+    // The shortest period whose turns stay finite is accepted, and its poses are finite.
+    let m = orbit(1e-300);
+    assert!(m.problem(3, 1.0, 1e18).is_none());
+    for f in 0..3 {
+        assert!(m
+            .pose(f, 1.0, &placement(DVec3::ZERO), M)
+            .displacement
+            .is_finite());
+    }
+    let walk = Motion {
+        walk: Some(Walk {
+            speed: 1e300,
+            seed: 0,
+            plane_normal: None,
+        }),
+        ..Motion::default()
+    };
+    let (field, why) = walk.problem(2, 1e10, 1e18).expect("refused");
+    assert_eq!(field, "walk.speed", "{why}");
+}

@@ -1,6 +1,7 @@
 //! Small I/O helpers shared by every module: atomic writes, hashing and the caches' container.
 
 mod cache;
+pub mod places;
 
 pub use cache::{read_cache, write_cache, CacheError, CacheFile};
 

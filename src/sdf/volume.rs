@@ -31,12 +31,17 @@ impl DistanceVolume {
     /// The most samples along the longest side.
     pub const MAX_RES: usize = 512;
 
-    /// Bakes `triangles` at `res` samples along the longest side of their box grown by
-    /// `margin` voxels on every side, in f32.
+    /// The bake's grid for `triangles` at `res` and `margin`, without baking: its first
+    /// sample's position, its voxel and its samples per axis (the volume's size is known
+    /// before any work: [`Self::samples_for`]).
     ///
     /// # Errors
-    /// No triangles, a non-finite vertex, `res` outside 4..=[`Self::MAX_RES`], or a flat box.
-    pub fn bake(triangles: &[[Vec3; 3]], res: usize, margin: usize) -> Result<Self, SdfError> {
+    /// As [`Self::bake`].
+    pub fn grid(
+        triangles: &[[Vec3; 3]],
+        res: usize,
+        margin: usize,
+    ) -> Result<(Vec3, f32, [usize; 3]), SdfError> {
         if triangles.is_empty() {
             return Err(SdfError::Invalid("no triangles to bake".into()));
         }
@@ -68,6 +73,32 @@ impl DistanceVolume {
             .as_uvec3()
             .to_array()
             .map(|n| (n as usize + 1 + margin).clamp(2, Self::MAX_RES));
+        Ok((lo, voxel, dims))
+    }
+
+    /// The samples a bake of `triangles` at `res` and `margin` holds ([`Self::grid`]).
+    ///
+    /// # Errors
+    /// As [`Self::bake`].
+    pub fn samples_for(
+        triangles: &[[Vec3; 3]],
+        res: usize,
+        margin: usize,
+    ) -> Result<u64, SdfError> {
+        let (_, _, dims) = Self::grid(triangles, res, margin)?;
+        Ok(dims.iter().map(|&n| n as u64).product())
+    }
+
+    /// Sign rays each sample casts in a bake.
+    pub const SIGN_RAYS_PER_SAMPLE: u64 = SIGN_RAYS.len() as u64;
+
+    /// Bakes `triangles` at `res` samples along the longest side of their box grown by
+    /// `margin` voxels on every side ([`Self::grid`]), in f32.
+    ///
+    /// # Errors
+    /// No triangles, a non-finite vertex, `res` outside 4..=[`Self::MAX_RES`], or a flat box.
+    pub fn bake(triangles: &[[Vec3; 3]], res: usize, margin: usize) -> Result<Self, SdfError> {
+        let (lo, voxel, dims) = Self::grid(triangles, res, margin)?;
         let closest = ClosestPoints::new(triangles);
         let tracer = Tracer::new(triangles);
         let [nx, ny, _] = dims;

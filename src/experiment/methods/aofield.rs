@@ -19,11 +19,14 @@
 //! counts the whole occluder at any distance), and a scene with an instance that is both caster
 //! and receiver (an AO field does not model an occluder's occlusion of itself).
 
-use super::{Answer, GpuMethod, Method, MethodContext, MethodEntry, MethodOptions, Prepared};
+use super::{
+    Answer, GpuMethod, Method, MethodContext, MethodEntry, MethodOptions, Precompute, Prepared,
+};
 use crate::aofield::cache::{load_or_bake, Outcome};
 use crate::aofield::{AoField, AoFieldInstance, AoFieldScene, BakeParams, Inside, Precision};
 use crate::experiment::backend::{Estimate, Eval};
 use crate::experiment::kinds::Kind;
+use crate::experiment::scenes::BuiltScene;
 use crate::experiment::spec::{Spec, SpecError};
 use crate::experiment::validate::Validator;
 use crate::experiment::{Error, Result};
@@ -245,6 +248,29 @@ impl Method for AoFieldMethod {
     /// The kernel answers every kind the CPU answers ([`Method::refuses`]).
     fn refuses_on_gpu(&self, _kind: &dyn Kind) -> Option<String> {
         None
+    }
+
+    /// One field per distinct caster mesh: `6 · res²` texels × `radial_samples` × `rays` rays
+    /// cast, the stored fields kept ([`AoField::bytes_for`]), and at the peak the bake's f32
+    /// fit of one mesh twice over (its per-texel fits, then the fitted field it is stored from).
+    fn precompute(&self, scene: &BuiltScene) -> std::result::Result<Option<Precompute>, String> {
+        let meshes = super::caster_mesh_triangles(scene).len() as u64;
+        let p = &self.params;
+        let texels = 6 * (p.res as u64).pow(2);
+        let fit = 2 * crate::aofield::storage::Stored::bytes_for(texels as usize, Precision::F32);
+        let bytes = meshes * AoField::bytes_for(p.res, self.precision);
+        Ok(Some(Precompute {
+            what: format!(
+                "bake {meshes} AO field(s): 6 × {}² texels × {} samples × {} rays ({})",
+                p.res,
+                p.radial_samples,
+                p.rays,
+                self.precision.name()
+            ),
+            rays: meshes * texels * p.radial_samples as u64 * u64::from(p.rays),
+            bytes,
+            peak_bytes: bytes + if meshes > 0 { fit } else { 0 },
+        }))
     }
 
     fn prepare(&self, ctx: &MethodContext) -> Result<Prepared> {

@@ -41,6 +41,14 @@ impl Method for Embree {
         ENTRY.name
     }
 
+    /// Embree's scene over every caster triangle, bounded as our BVH is.
+    fn precompute(
+        &self,
+        scene: &crate::experiment::scenes::BuiltScene,
+    ) -> std::result::Result<Option<super::Precompute>, String> {
+        Ok(Some(super::raycast::world_bvh(scene)))
+    }
+
     fn unavailable(&self) -> Option<String> {
         (!cfg!(feature = "embree")).then(|| {
             "this build has no Embree (build with --features embree; needs libembree-dev)".into()

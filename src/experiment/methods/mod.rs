@@ -64,6 +64,40 @@ pub enum Answer {
     Direct(Box<dyn Estimator + Send>),
 }
 
+/// What a method's precompute on one scene will cost, known from the spec and the built scene
+/// before any work ([`Method::precompute`]): the plan's line for it, and what the memory limit
+/// (`--max-memory-mib`) is held against, dry run included.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Precompute {
+    /// What it builds, for the plan ("bake 1 AO field(s): 6 × 32² texels × 12 samples × 256
+    /// rays").
+    pub what: String,
+    /// Rays its bakes cast (0: none), where the cache serves nothing.
+    pub rays: u64,
+    /// Bytes it keeps and answers from ([`Prepared::bytes`], where the method reports them).
+    pub bytes: u64,
+    /// The most bytes alive at once while it runs (at least `bytes`).
+    pub peak_bytes: u64,
+}
+
+/// Each distinct caster mesh of `scene` (one per mesh, as the methods bake them, in the order
+/// of their first instance) as its model-space triangles.
+pub fn caster_mesh_triangles(scene: &BuiltScene) -> Vec<Vec<[Vec3; 3]>> {
+    let mut seen = Vec::new();
+    let mut out = Vec::new();
+    for (i, inst) in scene.scene.casters() {
+        if !seen.contains(&scene.mesh_of[i]) {
+            seen.push(scene.mesh_of[i]);
+            out.push(
+                (0..inst.mesh.triangle_count())
+                    .map(|t| inst.mesh.triangle(t))
+                    .collect(),
+            );
+        }
+    }
+    out
+}
+
 /// A method prepared on one scene.
 pub struct Prepared {
     pub answer: Answer,
@@ -136,6 +170,13 @@ pub trait Method: Send + Sync {
     }
     /// Its precompute on one scene (timed by the runner: the row's `precompute_s`).
     fn prepare(&self, ctx: &MethodContext) -> Result<Prepared>;
+    /// What [`Self::prepare`] will cost on `scene` ([`Precompute`]), from the spec and the
+    /// built scene alone: the planner lists it and refuses it over the memory limit before
+    /// any work. None where the method cannot say; an error (why) where the precompute would
+    /// fail.
+    fn precompute(&self, _scene: &BuiltScene) -> std::result::Result<Option<Precompute>, String> {
+        Ok(None)
+    }
 }
 
 impl dyn Method {

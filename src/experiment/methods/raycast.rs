@@ -4,7 +4,8 @@
 //! the reference's rays. Its values are the reference's, ray for ray (its same-ray errors are
 //! zero by construction); the row is its cost with the BVH build counted, beside the others.
 
-use super::{Answer, Method, MethodContext, MethodEntry, MethodOptions, Prepared};
+use super::{Answer, Method, MethodContext, MethodEntry, MethodOptions, Precompute, Prepared};
+use crate::experiment::scenes::BuiltScene;
 use crate::experiment::spec::{Spec, SpecError};
 use crate::experiment::validate::Validator;
 use crate::experiment::Result;
@@ -40,6 +41,11 @@ impl Method for Raycast {
         ENTRY.name
     }
 
+    /// The world BVH over every caster triangle, at the planner's bytes a triangle.
+    fn precompute(&self, scene: &BuiltScene) -> std::result::Result<Option<Precompute>, String> {
+        Ok(Some(world_bvh(scene)))
+    }
+
     fn prepare(&self, ctx: &MethodContext) -> Result<Prepared> {
         let tracer = Tracer::new(ctx.triangles);
         Ok(Prepared {
@@ -49,5 +55,19 @@ impl Method for Raycast {
             answer: Answer::Rays(Box::new(tracer)),
             gpu: None,
         })
+    }
+}
+
+/// A world BVH over every caster triangle of `scene` (ours or Embree's) as a precompute: no
+/// ray, about [`crate::experiment::plan::BVH_BYTES_PER_TRIANGLE`] a triangle (the planner's
+/// bound, the triangles included).
+pub fn world_bvh(scene: &BuiltScene) -> Precompute {
+    let triangles = scene.caster_triangles() as u64;
+    let bytes = triangles.saturating_mul(crate::experiment::plan::BVH_BYTES_PER_TRIANGLE);
+    Precompute {
+        what: format!("build a world BVH over {triangles} caster triangles (bytes: about)"),
+        rays: 0,
+        bytes,
+        peak_bytes: bytes,
     }
 }

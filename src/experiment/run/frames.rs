@@ -444,8 +444,8 @@ impl SceneRunner<'_> {
     }
 
     /// The field methods of every field cell of scene `s`, each cell's fields supplied once
-    /// (one per caster mesh, `global`: the meshes' indices in `scenes`), refused where all of
-    /// them together pass the memory limit.
+    /// (one per caster mesh, `global`: the meshes' indices in `scenes`; their bytes were held
+    /// against the memory limit before any work, `plan::check_animated_fields`).
     fn cells(
         &self,
         scenes: &Scenes,
@@ -465,20 +465,6 @@ impl SceneRunner<'_> {
             .collect();
         if field_names.is_empty() {
             return Ok(Vec::new());
-        }
-        let bytes: u64 = cells
-            .iter()
-            .map(|c| c.params.storage_bytes() * global.len() as u64)
-            .sum();
-        let limit = self.opts.supply.memory_limit;
-        if bytes > limit {
-            return Err(Error::invalid(
-                format!("scene {}", bs.name),
-                format!(
-                    "an animated spec keeps every field cell's fields of a scene for all its \
-                     frames: {bytes} bytes, past the memory limit of {limit} (--max-memory-mib)"
-                ),
-            ));
         }
         let mut out = Vec::new();
         for c in cells {

@@ -215,6 +215,8 @@ fn run_checked(
     crate::experiment::plan::check_scene_memory(spec, &scenes, limits)
         .context(|| ls.path.display().to_string())?;
     if spec.animation.is_some() {
+        crate::experiment::plan::check_animated_fields(spec, &scenes, limits)
+            .context(|| ls.path.display().to_string())?;
         return run_animated(ls, opts, spec, &scenes, started);
     }
     let plan = Plan::new_shard(spec, &scenes, limits, opts.shard)
@@ -290,13 +292,24 @@ fn run_animated(
     }
     let frames = spec.animation.as_ref().map_or(1, |a| a.frames);
     let cells = crate::experiment::plan::cells_of(spec).len();
+    let kept: Vec<String> = (0..scenes.scenes.len())
+        .map(|s| {
+            let bytes = crate::experiment::plan::animated_field_bytes(spec, scenes, s);
+            format!(
+                "{} {}",
+                scenes.scenes[s].name,
+                crate::field::ByteSize(bytes)
+            )
+        })
+        .collect();
     let plan_text = format!(
         "{}: {} scene(s) x {frames} frame(s): the ray casters once a frame, the field methods \
          once a frame per field cell ({cells} cell(s) over all scenes), {} rays per point, each \
-         frame's converged reference\n",
+         frame's converged reference; fields kept for every frame: {}\n",
         ls.name,
         scenes.scenes.len(),
-        spec.render.rays_per_point
+        spec.render.rays_per_point,
+        kept.join(", ")
     );
     let report = |frames: Vec<frames::FrameRow>| RunReport {
         name: ls.name.clone(),

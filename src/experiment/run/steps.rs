@@ -204,6 +204,8 @@ impl<'a> Runner<'a> {
                         .any(|(lm, lp)| lm == m && Geometry::of(lp) == *g)
                 });
             }
+            // Listed and checked by the planner; run by the method's step.
+            Step::Precompute { .. } => {}
             Step::Method { scene, setting, .. } => self.method(*scene, *setting)?,
             Step::Lookup { cell, .. } => self.lookup(*cell)?,
         }

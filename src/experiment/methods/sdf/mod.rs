@@ -29,8 +29,9 @@
 mod cone;
 mod gpu;
 
-use super::{Answer, Method, MethodContext, MethodEntry, MethodOptions, Prepared};
+use super::{Answer, Method, MethodContext, MethodEntry, MethodOptions, Precompute, Prepared};
 use crate::experiment::kinds::Kind;
+use crate::experiment::scenes::BuiltScene;
 use crate::experiment::spec::{Spec, SpecError};
 use crate::experiment::validate::Validator;
 use crate::experiment::{Error, Result};
@@ -319,6 +320,38 @@ impl Method for Sdf {
             }
             Query::Cone => cone::refusal(kind),
         }
+    }
+
+    /// One volume per distinct caster mesh, sized by the bake's own grid
+    /// ([`DistanceVolume::grid`]): its samples at the stored precision kept, the sign rays
+    /// cast, and at the peak the f32 volume each bake (or cached f32 load) makes before a
+    /// lower precision is stored.
+    fn precompute(&self, scene: &BuiltScene) -> std::result::Result<Option<Precompute>, String> {
+        let meshes = super::caster_mesh_triangles(scene);
+        let (mut samples, mut largest) = (0u64, 0u64);
+        for tris in &meshes {
+            let n = DistanceVolume::samples_for(tris, self.res, self.margin)
+                .map_err(|e| e.to_string())?;
+            samples += n;
+            largest = largest.max(n);
+        }
+        let bytes = samples * self.precision.bytes_per_sample() as u64;
+        let transient = match self.precision {
+            Precision::F32 => 0,
+            _ => largest * Precision::F32.bytes_per_sample() as u64,
+        };
+        Ok(Some(Precompute {
+            what: format!(
+                "bake {} distance volume(s) at res {}: {samples} samples ({}), {} sign rays each",
+                meshes.len(),
+                self.res,
+                self.precision.name(),
+                DistanceVolume::SIGN_RAYS_PER_SAMPLE
+            ),
+            rays: samples * DistanceVolume::SIGN_RAYS_PER_SAMPLE,
+            bytes,
+            peak_bytes: bytes + transient,
+        }))
     }
 
     fn prepare(&self, ctx: &MethodContext) -> Result<Prepared> {
