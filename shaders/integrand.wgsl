@@ -1,23 +1,18 @@
-// What every field kernel shares (src/gpu/field_kernel.rs): the parameter header, the receivers
-// and the output words, bindings 0-2 of the kernel's own group; a kernel's own inputs follow
-// from binding 3 (FIRST_OWN_BINDING). `tables`, `mesh`, `instances` and the stored distances are
-// the field group's (src/gpu/field_binding.rs). The per-object peers' kernels (SDF, AO fields)
-// share this header and bind everything of theirs in group 0.
+// The integrand layer's header (src/gpu/integrand.rs), group 0 of every kernel: the parameter
+// header, the receivers (shaders/receiver.wgsl) and the output words at bindings 0-2, then the
+// integrand's own inputs from binding 3 (FIRST_OWN_BINDING). The visibility is group 1 (its own
+// header and data; src/gpu/visibility.rs): it defines `occluded` and, where it answers closest
+// hits, `surface_hit`. The direct estimators (SDF cones, AO fields) share this group too.
 
-// Mirrors `KernelParamsGpu` (src/gpu/field_kernel.rs), 64 bytes.
+// Mirrors `IntegrandParamsGpu` (src/gpu/integrand.rs), 48 bytes.
 struct Params {
-    // Receiver points in this dispatch.
+    // Receiver points (ray queries: rays) in this dispatch.
     point_count: u32,
     // Rays per point (AO: the base directions in `dirs`; shadows: per light, the cone samples
-    // in `samples`; reflections: 1 for the mirror, k^2 for a Phong lobe).
+    // in `samples`; reflections: 1 for the mirror, k^2 for a Phong lobe; cones: cones).
     rays_per_point: u32,
-    // Field instances.
-    instance_count: u32,
     // Invocations per row of the dispatch grid (i = gid.x + gid.y * row_stride).
     row_stride: u32,
-    // Selection (SELECT_NEAREST, SELECT_INTERPOLATED); the AO kernels read the pipeline's
-    // constant AO_SELECTION, which the host sets to the same.
-    selection: u32,
     // Rays one invocation traces.
     rays_per_invocation: u32,
     // Invocations per point.
@@ -26,22 +21,22 @@ struct Params {
     completion_trips: u32,
     // Ray origin offset along the normal.
     origin_offset: f32,
-    // Intra-object bias: a fraction of 2R, or the scale of the field's own tolerance.
-    intra_bias: f32,
-    // 1 when `intra_bias` scales the field's own tolerance (`IntraBias::Auto`), else 0.
-    intra_auto: u32,
-    // AO: the largest hit distance.
+    // AO and cones: the largest hit distance.
     tmax: f32,
     // Shadows: the lights.
     light_count: u32,
-    // SDF kernels: steps per ray, cone and volume (`SdfTrace::max_steps`).
-    max_steps: u32,
-    // SDF cone kernels: a cone's least step, a share of its radius (`ConeTrace::step`).
-    cone_step: f32,
-    // SDF cone AO: tan of the cones' common half-angle (`ConeSet::tan_half`).
-    cone_tan: f32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
-@group(0) @binding(1) var<storage, read> receivers: array<Receiver>;
 @group(0) @binding(2) var<storage, read_write> out: array<u32>;
+
+// A visibility's closest hit (`surface_hit`): hit, its distance along the ray and the
+// unoriented unit normal there.
+struct SurfaceHit {
+    hit: bool,
+    t: f32,
+    normal: vec3<f32>,
+}

@@ -1,34 +1,29 @@
-// Glossy reflections by ray casting (Gaitatzes, Andreadis, Papaioannou, Chrysanthou, WSCG 2010,
-// §4.2; the reference the field lookup is compared with): as shaders/field_reflect.wgsl, each
-// reflection ray a closest-hit query of the CWBVH (shaders/bvh.wgsl) from the offset origin,
-// the hit shaded with the triangle's unit geometric normal (v1 - v0) x (v2 - v0), as the CPU
-// tracer's `Hit::normal`. `receivers` holds the points (binding 6, shaders/bvh.wgsl), `lights`
-// the lights (binding 8, shaders/bvh_shadow.wgsl), `params.rays_per_point` the rays per point;
-// each invocation writes the f32 sum of its kept rays' radiance and their count, or CUT_SHORT
-// first when the driver cut its loops short.
+// Glossy reflections, the integrand (Gaitatzes, Andreadis, Papaioannou, Chrysanthou, WSCG 2010,
+// §4.2), written once against any visibility's `surface_hit` (src/gpu/visibility.rs): each
+// invocation takes one receiver point and a run of its reflection rays
+// (shaders/reflect_rays.wgsl), finds each ray's closest hit from the offset origin, shades it
+// with the hit's unoriented normal (`sky` on a miss), and writes the f32 sum of its kept rays'
+// radiance and their count; the host adds up a point's runs in f64 and divides. An invocation
+// whose loops the driver cut short writes CUT_SHORT first instead (shaders/loop_budget.wgsl).
 
-@group(0) @binding(9) var<storage, read> lobe: array<vec4<f32>>;
-@group(0) @binding(10) var<storage, read> shading: Shading;
+@group(0) @binding(3) var<storage, read> lobe: array<vec4<f32>>;
+@group(0) @binding(4) var<storage, read> lights: array<Light>;
+@group(0) @binding(5) var<storage, read> shading: Shading;
 
-// The radiance ray origin + t dir brings back (t >= 0): the closest triangle shaded, or `sky`.
-fn traced_radiance(origin: vec3<f32>, dir: vec3<f32>) -> f32 {
-    let h = trace_ray(origin, dir, 0.0, 3.4028235e38, false);
-    if h.id == 0xffffffffu {
+// The radiance ray origin + t dir brings back (t >= 0): the closest hit shaded, or `sky`.
+fn radiance(origin: vec3<f32>, dir: vec3<f32>) -> f32 {
+    let h = surface_hit(origin, dir, 3.4028235e38);
+    if !h.hit {
         return shading.sky;
     }
-    let v0 = tris[3u * h.id].xyz;
-    let v1 = tris[3u * h.id + 1u].xyz;
-    let v2 = tris[3u * h.id + 2u].xyz;
-    let c = cross(v1 - v0, v2 - v0);
-    let n = c * (1.0 / sqrt(dot(c, c)));
-    return shade_hit(origin, dir, h.t, n);
+    return shade_hit(origin, dir, h.t, h.normal);
 }
 
 @compute @workgroup_size(64)
 fn reflect_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x + gid.y * params.row_stride;
     let per_point = params.invocations_per_point;
-    if i >= params.ray_count * per_point {
+    if i >= params.point_count * per_point {
         return;
     }
     let first = (i % per_point) * params.rays_per_invocation;
@@ -44,7 +39,7 @@ fn reflect_main(@builtin(global_invocation_id) gid: vec3<u32>) {
             continue;
         }
         kept += 1.0;
-        sum += traced_radiance(b.origin, ray.xyz);
+        sum += radiance(b.origin, ray.xyz);
     }
     let done = loops_completed(params.completion_trips);
     out[2u * i] = select(CUT_SHORT, bitcast<u32>(sum), done);

@@ -1,21 +1,23 @@
-// Soft shadows from spherical lights by ray casting (Gaitatzes, Andreadis, Papaioannou,
-// Chrysanthou, WSCG 2010, §4.2; the reference the field lookup is compared with): as
-// shaders/field_shadow.wgsl, each shadow ray an any-hit query of the CWBVH (shaders/bvh.wgsl)
-// from the offset origin to the near side of its light. `receivers` holds the points
-// (binding 6, shaders/bvh.wgsl); each invocation writes the f32 weight of its unblocked rays
-// and of all its rays, or CUT_SHORT first when the driver cut its loops short.
+// Soft shadows from spherical lights, the integrand (Gaitatzes, Andreadis, Papaioannou,
+// Chrysanthou, WSCG 2010, §4.2), written once against any visibility's `occluded`
+// (src/gpu/visibility.rs): each invocation takes one receiver point and a run of its shadow
+// rays (light-major: ray r is sample r % cells of light r / cells, shaders/shadow_rays.wgsl),
+// tests each from the offset origin up to the ray's own far end (the near side of its light),
+// and writes the f32 weight of its unblocked rays and of all its rays; the host adds up a
+// point's runs in f64 and divides. An invocation whose loops the driver cut short writes
+// CUT_SHORT first instead (shaders/loop_budget.wgsl).
 
-@group(0) @binding(7) var<storage, read> samples: array<ConeSample>;
-@group(0) @binding(8) var<storage, read> lights: array<Light>;
+@group(0) @binding(3) var<storage, read> samples: array<ConeSample>;
+@group(0) @binding(4) var<storage, read> lights: array<Light>;
 
 @compute @workgroup_size(64)
 fn shadow_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x + gid.y * params.row_stride;
     let per_point = params.invocations_per_point;
-    if i >= params.ray_count * per_point {
+    if i >= params.point_count * per_point {
         return;
     }
-    let cells = params.cells;
+    let cells = params.rays_per_point;
     let first = (i % per_point) * params.rays_per_invocation;
     let last = min(first + params.rays_per_invocation, cells * params.light_count);
     let rc = receivers[i / per_point];
@@ -38,7 +40,7 @@ fn shadow_main(@builtin(global_invocation_id) gid: vec3<u32>) {
                 continue;
             }
             total += ray.weight;
-            if trace_ray(origin, ray.dir, 0.0, ray.tmax, true).id == 0xffffffffu {
+            if !occluded(origin, ray.dir, 0.0, ray.tmax) {
                 lit += ray.weight;
             }
         }

@@ -1,0 +1,161 @@
+// The field visibility's closest hit (src/gpu/field_visibility.rs; Gaitatzes, Andreadis,
+// Papaioannou, Chrysanthou, WSCG 2010, §4.2: a ray answered by the visibility field with a hit
+// point, and by the normal field with the normal there), compiled where the normal fields are
+// bound: the hit of each instance (the lookup of `instance_occludes`, keeping the map and
+// texel the nearest selection reads, also when the distance is interpolated), the nearest over
+// the instances, and its normal read, unpacked and turned to the world.
+
+// The normal fields: per instance k its first texel word (word 2k) and bits per component
+// (word 2k + 1), then each distinct normal field's texels, one word each (component a in the
+// low 16 bits, b in the high), maps back to back as on the host.
+@group(1) @binding(4) var<storage, read> normals: array<u32>;
+
+// One instance's answer: hit, its distance (model units) and the nearest selection's read.
+struct FieldHit {
+    hit: bool,
+    t: f32,
+    map: u32,
+    texel: u32,
+}
+
+// `VisibilityField::surface_hit` (src/field/normals.rs) of instance `inst`: the lookup of
+// `instance_occludes` (shaders/field_lookup.wgsl) line for line, keeping the distance and the
+// map and texel of the nearest selection at the point and direction read.
+fn instance_surface_hit(inst: Instance, origin: vec3<f32>, dir: vec3<f32>, tmin: f32, tmax: f32,
+                        selection: u32, intra_bias: f32, intra_auto: bool) -> FieldHit {
+    var res: FieldHit;
+    res.hit = false;
+    let ws = ray_sphere(origin, dir, inst.world_center, inst.world_radius);
+    if ws.z == 0.0 || !(ws.y >= tmin && ws.x <= tmax) {
+        return res;
+    }
+    let scale = inst.scale;
+    let o = quat_rotate(inst.rotation, (origin - inst.translation) / scale);
+    let d = normalize_exact(quat_rotate(inst.rotation, dir));
+    let lmin = tmin / scale;
+    let lmax = tmax / scale;
+    let c = inst.model_center;
+    let r = inst.model_radius;
+    let rs = ray_sphere(o, d, c, r);
+    if rs.z == 0.0 {
+        return res;
+    }
+    let t0 = rs.x;
+    let t1 = rs.y;
+    let diameter = 2.0 * r;
+    if t1 < lmin {
+        return res;
+    }
+    let inside = t0 < 0.0;
+    var u = vec3<f32>(0.0);
+    var dread = d;
+    if !inside {
+        // Outside: inter-object lookup at the entry point.
+        if t0 > lmax {
+            return res;
+        }
+        let f = o - c;
+        let l = f - dot(f, d) * d;
+        let ll = length(l);
+        let disc = (r - ll) * (r + ll);
+        if disc < 0.0 {
+            return res;
+        }
+        u = (l - sqrt(disc) * d) / r;
+    } else {
+        // Inside: intra-object test from the exit point back towards the origin.
+        let p1 = (o - c) + t1 * d;
+        let len = sqrt(dot(p1, p1));
+        if len > 0.0 {
+            u = p1 * (1.0 / len);
+        }
+        dread = -d;
+    }
+    let pbase = inst.point_base;
+    let m = lookup_nearest(inst, u);
+    let texel = lookup_texel(inst, frame_to_local(frame_from_normal(-sphere_point(pbase, m)), dread));
+    var dd = 1.0;
+    if selection == SELECT_NEAREST {
+        dd = load_distance(inst, m, texel);
+    } else {
+        dd = field_sample(inst, u, dread, SELECT_INTERPOLATED);
+    }
+    if dd >= 1.0 {
+        return res;
+    }
+    var t = 0.0;
+    if !inside {
+        t = t0 + diameter * dd;
+        if !(t >= lmin && t <= lmax) {
+            return res;
+        }
+    } else {
+        t = t1 - diameter * dd;
+        var tol = intra_bias * diameter;
+        if intra_auto {
+            tol = intra_bias * (inst.intra_positional + inst.intra_directional * t1);
+        }
+        if !(t > lmin + tol && t <= lmax) {
+            return res;
+        }
+    }
+    res.hit = true;
+    res.t = t;
+    res.map = m;
+    res.texel = texel;
+    return res;
+}
+
+// `FieldScene::surface_hit` with the normal of the hit: the nearest hit over the instances
+// (every instance the ray meets is looked up and the nearest kept, since bounding spheres may
+// overlap; ties go to the instance the host tries first: the nearer sphere entry, then the
+// lower index), its normal from the instance's normal field turned to the world.
+fn surface_hit(origin: vec3<f32>, dir: vec3<f32>, tmax: f32) -> SurfaceHit {
+    var res: SurfaceHit;
+    res.hit = false;
+    var best_t = 0.0;
+    var best_entry = 0.0;
+    var best_k = 0xffffffffu;
+    var best_word = 0u;
+    for (var k = 0u; k < field_params.instance_count; k++) {
+        let inst = instances[k];
+        let h = instance_surface_hit(inst, origin, dir, 0.0, tmax, SELECTION,
+                                     field_params.intra_bias, field_params.intra_auto != 0u);
+        if !h.hit {
+            continue;
+        }
+        let t = h.t * inst.scale;
+        let entry = max(ray_sphere(origin, dir, inst.world_center, inst.world_radius).x, 0.0);
+        if best_k == 0xffffffffu || t < best_t || (t == best_t && entry < best_entry) {
+            best_t = t;
+            best_entry = entry;
+            best_k = k;
+            let texels = inst.resolution * inst.resolution;
+            best_word = normals[normals[2u * k] + h.map * texels + h.texel];
+        }
+    }
+    if best_k == 0xffffffffu {
+        return res;
+    }
+    let inst = instances[best_k];
+    let n_model = unpack_normal(best_word, normals[2u * best_k + 1u]);
+    // The instance's model -> world rotation: the conjugate of its world -> model one.
+    let to_world = vec4<f32>(-inst.rotation.xyz, inst.rotation.w);
+    res.hit = true;
+    res.t = best_t;
+    res.normal = normalize_exact(quat_rotate(to_world, n_model));
+    return res;
+}
+
+// `unpack_normal` (src/field/normals.rs) of a texel word (component a in the low 16 bits, b in
+// the high), `bits` bits per component: the octahedral square [-1, 1]^2 to a unit vector.
+fn unpack_normal(word: u32, bits: u32) -> vec3<f32> {
+    let levels = f32((1u << bits) - 1u);
+    let ex = f32(word & 0xffffu) / levels * 2.0 - 1.0;
+    let ey = f32(word >> 16u) / levels * 2.0 - 1.0;
+    var v = vec3<f32>(ex, ey, 1.0 - abs(ex) - abs(ey));
+    let t = max(-v.z, 0.0);
+    v.x += select(t, -t, v.x >= 0.0);
+    v.y += select(t, -t, v.y >= 0.0);
+    return v * (1.0 / sqrt(dot(v, v)));
+}
