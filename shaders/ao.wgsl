@@ -17,22 +17,19 @@ fn ao_dir(frame: Frame, cs: f32, sn: f32, r: u32) -> vec3<f32> {
 
 @compute @workgroup_size(64)
 fn ao_main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x + gid.y * params.row_stride;
-    let per_point = params.invocations_per_point;
-    if i >= params.point_count * per_point {
+    let run = run_of(gid, params.rays_per_point);
+    if !run.ok {
         return;
     }
-    let first = (i % per_point) * params.rays_per_invocation;
-    let last = min(first + params.rays_per_invocation, params.rays_per_point);
-    let rc = receivers[i / per_point];
+    let rc = receivers[run.point];
     let nrm = rc.normal;
     let frame = frame_from_normal(nrm);
     let origin = rc.position + params.origin_offset * nrm;
     var free = 0u;
-    for (var r = first; r < last; r++) {
+    for (var r = run.first; r < run.last; r++) {
         if !occluded(origin, ao_dir(frame, rc.rotation_cos, rc.rotation_sin, r), 0.0, params.tmax) {
             free += 1u;
         }
     }
-    out[i] = select(CUT_SHORT, free, loops_completed(params.completion_trips));
+    out[run.i] = select(CUT_SHORT, free, loops_completed(params.completion_trips));
 }

@@ -33,6 +33,25 @@ struct Params {
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(2) var<storage, read_write> out: array<u32>;
 
+// Invocation `gid`'s run of a point's rays (a point's rays are spread over
+// `invocations_per_point` invocations): its index `i`, its point, and its rays [first, last)
+// of the point's `rays`; `ok` is false past the last point.
+struct Run {
+    ok: bool,
+    i: u32,
+    point: u32,
+    first: u32,
+    last: u32,
+}
+
+fn run_of(gid: vec3<u32>, rays: u32) -> Run {
+    let i = gid.x + gid.y * params.row_stride;
+    let per_point = params.invocations_per_point;
+    let first = (i % per_point) * params.rays_per_invocation;
+    let last = min(first + params.rays_per_invocation, rays);
+    return Run(i < params.point_count * per_point, i, i / per_point, first, last);
+}
+
 // A visibility's closest hit (`surface_hit`): hit, its distance along the ray and the
 // unoriented unit normal there.
 struct SurfaceHit {

@@ -21,19 +21,16 @@ fn radiance(origin: vec3<f32>, dir: vec3<f32>) -> f32 {
 
 @compute @workgroup_size(64)
 fn reflect_main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x + gid.y * params.row_stride;
-    let per_point = params.invocations_per_point;
-    if i >= params.point_count * per_point {
+    let run = run_of(gid, params.rays_per_point);
+    if !run.ok {
         return;
     }
-    let first = (i % per_point) * params.rays_per_invocation;
-    let last = min(first + params.rays_per_invocation, params.rays_per_point);
-    let rc = receivers[i / per_point];
+    let rc = receivers[run.point];
     let b = reflect_base(rc.position, rc.normal, params.origin_offset, shading.eye);
     let mirror = shading.mirror != 0u;
     var sum = 0.0;
     var kept = 0.0;
-    for (var r = first; r < last; r++) {
+    for (var r = run.first; r < run.last; r++) {
         let ray = reflection_ray(b, lobe[r].xyz, rc.rotation_cos, rc.rotation_sin, mirror);
         if ray.w == 0.0 {
             continue;
@@ -42,6 +39,6 @@ fn reflect_main(@builtin(global_invocation_id) gid: vec3<u32>) {
         sum += radiance(b.origin, ray.xyz);
     }
     let done = loops_completed(params.completion_trips);
-    out[2u * i] = select(CUT_SHORT, bitcast<u32>(sum), done);
-    out[2u * i + 1u] = bitcast<u32>(kept);
+    out[2u * run.i] = select(CUT_SHORT, bitcast<u32>(sum), done);
+    out[2u * run.i + 1u] = bitcast<u32>(kept);
 }

@@ -22,39 +22,33 @@ fn write_cut_short(i: u32, n: u32) {
 
 @compute @workgroup_size(64)
 fn cone_ao_main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x + gid.y * params.row_stride;
-    let per_point = params.invocations_per_point;
-    if i >= params.point_count * per_point {
+    let run = run_of(gid, params.rays_per_point);
+    if !run.ok {
         return;
     }
-    let first = (i % per_point) * params.rays_per_invocation;
-    let last = min(first + params.rays_per_invocation, params.rays_per_point);
-    let rc = receivers[i / per_point];
+    let rc = receivers[run.point];
     let nrm = rc.normal;
     let frame = frame_from_normal(nrm);
     let origin = rc.position + params.origin_offset * nrm;
-    for (var r = first; r < last; r++) {
+    for (var r = run.first; r < run.last; r++) {
         let axis = normalize_exact(frame_to_world(frame, sdf_dirs[r].xyz));
         let v = cone_scene(origin, axis, sdf.cone_tan, params.tmax);
-        out[i * params.rays_per_invocation + r - first] = bitcast<u32>(v);
+        out[run.i * params.rays_per_invocation + r - run.first] = bitcast<u32>(v);
     }
     if !loops_completed(params.completion_trips) {
-        write_cut_short(i, last - first);
+        write_cut_short(run.i, run.last - run.first);
     }
 }
 
 @compute @workgroup_size(64)
 fn cone_shadow_main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x + gid.y * params.row_stride;
-    let per_point = params.invocations_per_point;
-    if i >= params.point_count * per_point {
+    let run = run_of(gid, params.rays_per_point);
+    if !run.ok {
         return;
     }
-    let first = (i % per_point) * params.rays_per_invocation;
-    let last = min(first + params.rays_per_invocation, params.rays_per_point);
-    let rc = receivers[i / per_point];
+    let rc = receivers[run.point];
     let origin = rc.position + params.origin_offset * rc.normal;
-    for (var r = first; r < last; r++) {
+    for (var r = run.first; r < run.last; r++) {
         // `LightCone::new`'s cone; a light the host does not count (the point inside it or
         // at its centre) reads 1, unused.
         let light = sdf_dirs[r];
@@ -73,9 +67,9 @@ fn cone_shadow_main(@builtin(global_invocation_id) gid: vec3<u32>) {
             }
             v = cone_scene(origin, axis, tan, far);
         }
-        out[i * params.rays_per_invocation + r - first] = bitcast<u32>(v);
+        out[run.i * params.rays_per_invocation + r - run.first] = bitcast<u32>(v);
     }
     if !loops_completed(params.completion_trips) {
-        write_cut_short(i, last - first);
+        write_cut_short(run.i, run.last - run.first);
     }
 }

@@ -12,23 +12,20 @@
 
 @compute @workgroup_size(64)
 fn shadow_main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x + gid.y * params.row_stride;
-    let per_point = params.invocations_per_point;
-    if i >= params.point_count * per_point {
+    let cells = params.rays_per_point;
+    let run = run_of(gid, cells * params.light_count);
+    if !run.ok {
         return;
     }
-    let cells = params.rays_per_point;
-    let first = (i % per_point) * params.rays_per_invocation;
-    let last = min(first + params.rays_per_invocation, cells * params.light_count);
-    let rc = receivers[i / per_point];
+    let rc = receivers[run.point];
     let nrm = rc.normal;
     let origin = rc.position + params.origin_offset * nrm;
     var lit = 0.0;
     var total = 0.0;
-    var r = first;
-    while r < last {
+    var r = run.first;
+    while r < run.last {
         let li = r / cells;
-        let end = min((li + 1u) * cells, last);
+        let end = min((li + 1u) * cells, run.last);
         let cone = light_cone(lights[li], origin, cells);
         if !cone.outside {
             r = end;
@@ -46,6 +43,6 @@ fn shadow_main(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
     }
     let done = loops_completed(params.completion_trips);
-    out[2u * i] = select(CUT_SHORT, bitcast<u32>(lit), done);
-    out[2u * i + 1u] = bitcast<u32>(total);
+    out[2u * run.i] = select(CUT_SHORT, bitcast<u32>(lit), done);
+    out[2u * run.i + 1u] = bitcast<u32>(total);
 }

@@ -4,13 +4,14 @@
 //! The AO integrand (shaders/ao.wgsl) on the field visibility (src/gpu/field_kernel.rs, which
 //! says how it deviates from the CPU path), or by default the field's batched form of it
 //! (shaders/field_ao.wgsl: each round of rays culled against the world spheres and the rays
-//! that meet one answered by the workgroup; the same free-ray counts); the lookup is a line-by-line f32 port of `field::lookup` and
-//! `field::scene`: the Slater / lat-long nearest point (the CPU's owner table, else its cube grid's
-//! candidates, else 4 rings × 2 azimuths), the Duff frame, the three layouts' `to_texel` (the concentric one after the CPU's
-//! texel table), the interpolated selection's triangle walk and bilinear
-//! footprint. On lavapipe it reproduces the CPU AO bit for bit in the parity tests.
+//! that meet one answered by the workgroup; the same free-ray counts). The lookup is a
+//! line-by-line f32 port of `field::lookup` and `field::scene`: the Slater / lat-long nearest
+//! point (the CPU's owner table, else its cube grid's candidates, else 4 rings × 2 azimuths),
+//! the Duff frame, the three layouts' `to_texel` (the concentric one after the CPU's texel
+//! table), the interpolated selection's triangle walk and bilinear footprint. On lavapipe it
+//! reproduces the CPU AO bit for bit in the parity tests.
 //!
-//! A point's rays are spread over several invocations ([`FieldGpuOptions::rays_per_invocation`],
+//! A point's rays are spread over several invocations ([`super::FieldGpuOptions::rays_per_invocation`],
 //! halved where the driver cuts long invocations short: src/gpu/loop_budget.rs), and the
 //! receivers over several dispatches where their buffers would pass the adapter's binding
 //! limit, so any ray count and any number of points run.

@@ -10,7 +10,9 @@
 //!
 //! Deviations from the CPU path: the world-space ray–sphere test and the entry point are
 //! computed in f32 (the host uses f64), so near-tangent rays and near-ties between maps may
-//! resolve differently; instances are tried in index order (the host sorts them by entry
+//! resolve differently; the interpolated selection's walk uses an f32 edge tolerance and, when
+//! it does not settle within the host's step cap, reads the nearest map alone (the host scans
+//! every triangle); instances are tried in index order (the host sorts them by entry
 //! distance: the boolean answer and the nearest hit are the same, ties resolved alike); the
 //! shadow weights and the reflected radiance are summed in f32 within an invocation
 //! (src/gpu/shadow_rays.rs, src/gpu/reflect_rays.rs); Fibonacci point sets (no GPU nearest
