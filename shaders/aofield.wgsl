@@ -30,12 +30,13 @@ struct AoFieldInstance {
     _pad2: u32,
 }
 
-// Mirrors `AoInsideGpu` (src/gpu/aofield_kernel.rs): A₀ and p inside the hull.
+// The kernel's own header. Mirrors `AoInsideGpu` (src/gpu/aofield_kernel.rs): A₀ and p inside
+// the hull, and the instances.
 struct AoInside {
     ao: f32,
     power: f32,
-    _pad0: u32,
-    _pad1: u32,
+    instance_count: u32,
+    _pad: u32,
 }
 
 @group(0) @binding(3) var<storage, read> ao_fields: array<AoFieldRecord>;
@@ -230,7 +231,7 @@ fn aofield_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let rc = receivers[i];
     var ao = 1.0;
-    for (var k = 0u; k < params.instance_count; k++) {
+    for (var k = 0u; k < ao_inside.instance_count; k++) {
         let inst = ao_instances[k];
         let p = quat_rotate(inst.rotation, (rc.position - inst.translation) / inst.scale);
         let n = quat_rotate(inst.rotation, rc.normal);

@@ -8,52 +8,20 @@
 // through, but the reported triangle may differ from the host's on exact edge hits.
 // Node test: box entry from the ray's tmin (obvhs uses a fixed 1e-4), boxes padded on the host.
 
-// Mirrors `TraceParamsGpu` (src/gpu/tracer.rs), 48 bytes.
-struct Params {
-    // Rays (or receiver points for AO) in this dispatch.
-    ray_count: u32,
-    // AO: rays per point (the base directions in `dirs`).
-    rays_per_point: u32,
-    // Invocations per row of the dispatch grid (i = gid.x + gid.y * row_stride).
-    row_stride: u32,
+// The visibility's header (group 1). Mirrors `BvhParamsGpu` (src/gpu/tracer.rs), 16 bytes.
+struct BvhParams {
     // CWBVH nodes (0: an empty scene).
     node_count: u32,
-    // AO: ray origin offset along the normal.
-    origin_offset: f32,
-    // AO: largest hit distance.
-    tmax: f32,
-    // Shadows: lights (shaders/bvh_shadow.wgsl).
-    light_count: u32,
-    // Shadows: samples per light (k²).
-    cells: u32,
-    // AO, shadows: rays one invocation traces.
-    rays_per_invocation: u32,
-    // AO, shadows: invocations per point.
-    invocations_per_point: u32,
-    // AO, shadows: trips of the completion loop (loop_budget.wgsl).
-    completion_trips: u32,
+    _pad0: u32,
+    _pad1: u32,
     _pad2: u32,
 }
 
-// One query ray. Mirrors `RayGpu` (src/gpu/tracer.rs), 32 bytes.
-struct Ray {
-    // Origin.
-    origin: vec3<f32>,
-    // Smallest hit distance.
-    tmin: f32,
-    // Direction (unit length).
-    direction: vec3<f32>,
-    // Largest hit distance.
-    tmax: f32,
-}
-
-@group(0) @binding(0) var<uniform> params: Params;
+@group(1) @binding(0) var<uniform> bvh: BvhParams;
 // 80-byte obvhs `CwBvhNode`s as five vec4<u32> each.
-@group(0) @binding(1) var<storage, read> nodes: array<vec4<u32>>;
+@group(1) @binding(1) var<storage, read> nodes: array<vec4<u32>>;
 // Triangles in BVH order: v0 (w: original index bits), v1, v2.
-@group(0) @binding(2) var<storage, read> tris: array<vec4<f32>>;
-@group(0) @binding(3) var<storage, read> rays: array<Ray>;
-@group(0) @binding(4) var<storage, read_write> out: array<u32>;
+@group(1) @binding(2) var<storage, read> tris: array<vec4<f32>>;
 
 fn safe_inverse(x: f32) -> f32 {
     let eps = 1.1920929e-7;
@@ -168,7 +136,7 @@ struct TraceResult {
 
 fn trace_ray(o: vec3<f32>, d: vec3<f32>, tmin: f32, tmax_in: f32, any_hit: bool) -> TraceResult {
     var res = TraceResult(tmax_in, 0xffffffffu);
-    if params.node_count == 0u || tmin > tmax_in {
+    if bvh.node_count == 0u || tmin > tmax_in {
         return res;
     }
     let inv_d = vec3<f32>(safe_inverse(d.x), safe_inverse(d.y), safe_inverse(d.z));
@@ -225,63 +193,24 @@ fn trace_ray(o: vec3<f32>, d: vec3<f32>, tmin: f32, tmax_in: f32, any_hit: bool)
     return res;
 }
 
-fn original_index(id: u32) -> u32 {
-    return bitcast<u32>(tris[3u * id].w);
+// The visibility's queries (src/gpu/visibility.rs): whether any triangle meets the ray with
+// tmin <= t <= tmax, and the closest one with its unit geometric normal (v1 - v0) x (v2 - v0),
+// as the CPU tracer's `Hit::normal`.
+fn occluded(o: vec3<f32>, d: vec3<f32>, tmin: f32, tmax: f32) -> bool {
+    return trace_ray(o, d, tmin, tmax, true).id != 0xffffffffu;
 }
 
-@compute @workgroup_size(64)
-fn any_main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x + gid.y * params.row_stride;
-    if i >= params.ray_count {
-        return;
+fn surface_hit(o: vec3<f32>, d: vec3<f32>, tmax: f32) -> SurfaceHit {
+    var res: SurfaceHit;
+    let h = trace_ray(o, d, 0.0, tmax, false);
+    res.hit = h.id != 0xffffffffu;
+    if res.hit {
+        let v0 = tris[3u * h.id].xyz;
+        let v1 = tris[3u * h.id + 1u].xyz;
+        let v2 = tris[3u * h.id + 2u].xyz;
+        let c = cross(v1 - v0, v2 - v0);
+        res.t = h.t;
+        res.normal = c * (1.0 / sqrt(dot(c, c)));
     }
-    let r = rays[i];
-    let h = trace_ray(r.origin, r.direction, r.tmin, r.tmax, true);
-    out[i] = select(0u, 1u, h.id != 0xffffffffu);
-}
-
-@compute @workgroup_size(64)
-fn closest_main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x + gid.y * params.row_stride;
-    if i >= params.ray_count {
-        return;
-    }
-    let r = rays[i];
-    let h = trace_ray(r.origin, r.direction, r.tmin, r.tmax, false);
-    out[2u * i] = bitcast<u32>(h.t);
-    out[2u * i + 1u] = select(0xffffffffu, original_index(h.id), h.id != 0xffffffffu);
-}
-
-// Vertex AO by ray casting: `receivers` holds the points and `dirs` the base directions, as in
-// shaders/field_ao.wgsl. Each invocation casts one run of a point's rays and writes the number
-// of free rays, or CUT_SHORT when the driver cut its loops short (shaders/loop_budget.wgsl); the
-// host adds up a point's runs.
-@group(0) @binding(5) var<storage, read> dirs: array<vec4<f32>>;
-@group(0) @binding(6) var<storage, read> receivers: array<Receiver>;
-
-@compute @workgroup_size(64)
-fn ao_main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x + gid.y * params.row_stride;
-    let per_point = params.invocations_per_point;
-    if i >= params.ray_count * per_point {
-        return;
-    }
-    let first = (i % per_point) * params.rays_per_invocation;
-    let last = min(first + params.rays_per_invocation, params.rays_per_point);
-    let rc = receivers[i / per_point];
-    let nrm = rc.normal;
-    let cs = rc.rotation_cos;
-    let sn = rc.rotation_sin;
-    let frame = frame_from_normal(nrm);
-    let origin = rc.position + params.origin_offset * nrm;
-    var free = 0u;
-    for (var r = first; r < last; r++) {
-        let b = dirs[r].xyz;
-        let local = vec3<f32>(cs * b.x - sn * b.y, sn * b.x + cs * b.y, b.z);
-        let dir = frame_to_world(frame, local);
-        if trace_ray(origin, dir, 0.0, params.tmax, true).id == 0xffffffffu {
-            free += 1u;
-        }
-    }
-    out[i] = select(CUT_SHORT, free, loops_completed(params.completion_trips));
+    return res;
 }

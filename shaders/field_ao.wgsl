@@ -1,16 +1,10 @@
-// Vertex ambient occlusion by field lookup (Gaitatzes et al., WSCG 2008 / WSCG 2010): each
-// invocation takes one receiver point and a run of its k^2 stratified cosine rays (the host's
-// ray set: base directions in `dirs`, the point's rotation in the receiver record), loops over
-// them and over the field instances, stopping at the first occluding instance, and writes the
-// number of free rays; the host adds up a point's runs. An invocation whose loops the driver cut
-// short writes CUT_SHORT instead (shaders/loop_budget.wgsl).
+// The field visibility's batched form of the AO integrand (shaders/ao.wgsl; Gaitatzes et al.,
+// WSCG 2008 / WSCG 2010): the same rays (`ao_dir`), answered by the same lookup as the field's
+// `occluded` (shaders/field_visibility.wgsl), but shared over the workgroup (`ao_queue_main`,
+// the field AO kernel's default; `queue_rays: false` runs the integrand's `ao_main`).
 //
 // `probe_main` answers single lookups (nearest map, texel, both selections) so that the host
 // can compare every stage with the CPU path.
-
-// `params`, `receivers` and `out` are the field kernels' shared header (shaders/field_kernel.wgsl);
-// the kernel's own bindings follow (src/gpu/field_ao.rs).
-@group(0) @binding(3) var<storage, read> dirs: array<vec4<f32>>;
 
 // Rays are answered in two steps per round of AO_CHUNK rays an invocation: every invocation
 // culls its rays against the instances' world spheres and queues the ones that meet a sphere
@@ -44,7 +38,7 @@ fn meets_any_sphere(origin: vec3<f32>, dir: vec3<f32>, tmax: f32, first: Instanc
     if SINGLE_INSTANCE {
         return false;
     }
-    for (var k = 1u; k < params.instance_count; k++) {
+    for (var k = 1u; k < field_params.instance_count; k++) {
         let ws = ray_sphere(origin, dir, instances[k].world_center, instances[k].world_radius);
         if ws.z != 0.0 && ws.y >= 0.0 && ws.x <= tmax {
             return true;
@@ -56,17 +50,12 @@ fn meets_any_sphere(origin: vec3<f32>, dir: vec3<f32>, tmax: f32, first: Instanc
 fn world_dir(lid: u32, r: u32) -> vec3<f32> {
     let fx = frame_x[lid];
     let fy = frame_y[lid];
-    let frame = Frame(fx.xyz, fy.xyz, frame_z[lid]);
-    let cs = fx.w;
-    let sn = fy.w;
-    let b = dirs[r].xyz;
-    let local = vec3<f32>(cs * b.x - sn * b.y, sn * b.x + cs * b.y, b.z);
-    return frame_to_world(frame, local);
+    return ao_dir(Frame(fx.xyz, fy.xyz, frame_z[lid]), fx.w, fy.w, r);
 }
 
 @compute @workgroup_size(64)
-fn ao_main(@builtin(global_invocation_id) gid: vec3<u32>,
-           @builtin(local_invocation_index) lid: u32) {
+fn ao_queue_main(@builtin(global_invocation_id) gid: vec3<u32>,
+                 @builtin(local_invocation_index) lid: u32) {
     let i = gid.x + gid.y * params.row_stride;
     let per_point = params.invocations_per_point;
     let in_range = i < params.point_count * per_point;
@@ -109,9 +98,7 @@ fn ao_main(@builtin(global_invocation_id) gid: vec3<u32>,
         // invocation (lavapipe runs a workgroup atomic lane by lane).
         var mask = 0u;
         for (var r = first + base; r < end; r++) {
-            let b = dirs[r].xyz;
-            let local = vec3<f32>(cs * b.x - sn * b.y, sn * b.x + cs * b.y, b.z);
-            if meets_any_sphere(origin, frame_to_world(frame, local), tmax, first_instance) {
+            if meets_any_sphere(origin, ao_dir(frame, cs, sn, r), tmax, first_instance) {
                 mask |= 1u << (r - first - base);
             }
         }
@@ -134,12 +121,12 @@ fn ao_main(@builtin(global_invocation_id) gid: vec3<u32>,
             let dir = world_dir(owner, r);
             // The first instance comes from registers (read once per invocation): lavapipe
             // reads a 144-byte record lane by lane.
-            var blocked = instance_occludes(first_instance, origin, dir, 0.0, tmax, AO_SELECTION, params.intra_bias, params.intra_auto != 0u);
+            var blocked = instance_occludes(first_instance, origin, dir, 0.0, tmax, SELECTION, field_params.intra_bias, field_params.intra_auto != 0u);
             // A second inlined lookup, even never run, slows lavapipe's queue loop by a third
             // (register pressure): one-instance fields compile without it.
             if !SINGLE_INSTANCE {
-                for (var k = 1u; k < params.instance_count && !blocked; k++) {
-                    blocked = instance_occludes(instances[k], origin, dir, 0.0, tmax, AO_SELECTION, params.intra_bias, params.intra_auto != 0u);
+                for (var k = 1u; k < field_params.instance_count && !blocked; k++) {
+                    blocked = instance_occludes(instances[k], origin, dir, 0.0, tmax, SELECTION, field_params.intra_bias, field_params.intra_auto != 0u);
                 }
             }
             if blocked {
@@ -158,42 +145,6 @@ fn ao_main(@builtin(global_invocation_id) gid: vec3<u32>,
         let free = (last - first) - atomicLoad(&blocked_rays[lid]);
         out[i] = select(free, CUT_SHORT, atomicLoad(&group_cut_short) != 0u);
     }
-}
-
-// The kernel before the queue: each invocation answers its own rays (`queue_rays: false`).
-@compute @workgroup_size(64)
-fn ao_main_direct(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x + gid.y * params.row_stride;
-    let per_point = params.invocations_per_point;
-    if i >= params.point_count * per_point {
-        return;
-    }
-    let first = (i % per_point) * params.rays_per_invocation;
-    let last = min(first + params.rays_per_invocation, params.rays_per_point);
-    let rc = receivers[i / per_point];
-    let nrm = rc.normal;
-    let cs = rc.rotation_cos;
-    let sn = rc.rotation_sin;
-    let frame = frame_from_normal(nrm);
-    let origin = rc.position + params.origin_offset * nrm;
-    let tmax = params.tmax;
-    var free = 0u;
-    for (var r = first; r < last; r++) {
-        let b = dirs[r].xyz;
-        let local = vec3<f32>(cs * b.x - sn * b.y, sn * b.x + cs * b.y, b.z);
-        let dir = frame_to_world(frame, local);
-        var blocked = false;
-        for (var k = 0u; k < params.instance_count; k++) {
-            if instance_occludes(instances[k], origin, dir, 0.0, tmax, AO_SELECTION, params.intra_bias, params.intra_auto != 0u) {
-                blocked = true;
-                break;
-            }
-        }
-        if !blocked {
-            free += 1u;
-        }
-    }
-    out[i] = select(CUT_SHORT, free, loops_completed(params.completion_trips));
 }
 
 // Probe i: unit point u = receivers[i].position and model direction receivers[i].normal on the

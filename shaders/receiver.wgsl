@@ -1,4 +1,5 @@
-// A receiver point of the AO kernels. Mirrors `ReceiverGpu` (src/gpu/rays.rs), 32 bytes.
+// A receiver point of the integrands (group 0, binding 1; shaders/integrand.wgsl). Mirrors
+// `ReceiverGpu` (src/gpu/rays.rs), 32 bytes.
 struct Receiver {
     // Position (world space); the probe kernel's unit sphere position.
     position: vec3<f32>,
@@ -9,3 +10,5 @@ struct Receiver {
     // Sin of the point's rotation.
     rotation_sin: f32,
 }
+
+@group(0) @binding(1) var<storage, read> receivers: array<Receiver>;

@@ -1,6 +1,6 @@
 // Glossy reflection rays and their shading on the GPU (Gaitatzes, Andreadis, Papaioannou,
-// Chrysanthou, WSCG 2010, §4.2 and Figure 9): a port of `reflection_rays`, `shade` and
-// `unpack_normal` (src/render/reflect.rs, src/field/normals.rs), in the same f32 order.
+// Chrysanthou, WSCG 2010, §4.2 and Figure 9): a port of `reflection_rays` and `shade`
+// (src/render/reflect.rs), in the same f32 order.
 // At a receiver p with normal n seen from the eye e, r = v - 2(v.n)n with v = (p - e)/|p - e|;
 // the mirror lobe is the single ray r, the Phong lobe the host's lobe directions (the shared
 // square samples mapped by `square_to_phong` on the host: powf, cos and sin are not the GPU's)
@@ -85,17 +85,4 @@ fn shade_hit(origin: vec3<f32>, dir: vec3<f32>, t: f32, normal: vec3<f32>) -> f3
         return shading.albedo * min(lit / shading.light_total, 1.0);
     }
     return 0.0;
-}
-
-// `unpack_normal` (src/field/normals.rs) of a texel word (component a in the low 16 bits, b in
-// the high), `bits` bits per component: the octahedral square [-1, 1]^2 to a unit vector.
-fn unpack_normal(word: u32, bits: u32) -> vec3<f32> {
-    let levels = f32((1u << bits) - 1u);
-    let ex = f32(word & 0xffffu) / levels * 2.0 - 1.0;
-    let ey = f32(word >> 16u) / levels * 2.0 - 1.0;
-    var v = vec3<f32>(ex, ey, 1.0 - abs(ex) - abs(ey));
-    let t = max(-v.z, 0.0);
-    v.x += select(t, -t, v.x >= 0.0);
-    v.y += select(t, -t, v.y >= 0.0);
-    return v * (1.0 / sqrt(dot(v, v)));
 }

@@ -1,9 +1,6 @@
-// The SDF kernels' entry points (src/gpu/sdf_kernel.rs), over the volumes of
-// shaders/sdf_volume.wgsl:
-// - `sdf_ao_main`: AO by sphere tracing the host's ray set (`render::ao::ao_at_point` through
-//   `SdfScene`): each invocation takes one receiver point and a run of its k^2 stratified cosine
-//   rays (base directions in `sdf_dirs`, the point's rotation in its receiver record, as
-//   shaders/field_ao.wgsl) and writes the number of free rays; the host adds up a point's runs.
+// The SDF's direct estimators (src/gpu/sdf_kernel.rs), over the volumes of
+// shaders/sdf_volume.wgsl (its AO by sphere tracing is the AO integrand, shaders/ao.wgsl, on the
+// SDF visibility's `occluded`):
 // - `cone_ao_main`: cone-traced AO (`SdfScene::cone_ao`): each invocation takes one point and a
 //   run of the cones (axes in `sdf_dirs`, in the normal's frame) and writes each cone's
 //   visibility; the host takes the cosine-weighted mean in the CPU's order.
@@ -13,33 +10,7 @@
 // An invocation whose loops the driver cut short writes CUT_SHORT instead (in every word it
 // owns; shaders/loop_budget.wgsl).
 
-@group(0) @binding(6) var<storage, read> sdf_dirs: array<vec4<f32>>;
-
-@compute @workgroup_size(64)
-fn sdf_ao_main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x + gid.y * params.row_stride;
-    let per_point = params.invocations_per_point;
-    if i >= params.point_count * per_point {
-        return;
-    }
-    let first = (i % per_point) * params.rays_per_invocation;
-    let last = min(first + params.rays_per_invocation, params.rays_per_point);
-    let rc = receivers[i / per_point];
-    let nrm = rc.normal;
-    let cs = rc.rotation_cos;
-    let sn = rc.rotation_sin;
-    let frame = frame_from_normal(nrm);
-    let origin = rc.position + params.origin_offset * nrm;
-    var free = 0u;
-    for (var r = first; r < last; r++) {
-        let b = sdf_dirs[r].xyz;
-        let local = vec3<f32>(cs * b.x - sn * b.y, sn * b.x + cs * b.y, b.z);
-        if !sdf_occluded(origin, frame_to_world(frame, local), 0.0, params.tmax) {
-            free += 1u;
-        }
-    }
-    out[i] = select(CUT_SHORT, free, loops_completed(params.completion_trips));
-}
+@group(0) @binding(3) var<storage, read> sdf_dirs: array<vec4<f32>>;
 
 // Writes the run's words (src/gpu/loop_budget.rs, `ray_words`): word i·rays_per_invocation + j
 // is ray first + j of this invocation's point.
@@ -51,39 +22,33 @@ fn write_cut_short(i: u32, n: u32) {
 
 @compute @workgroup_size(64)
 fn cone_ao_main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x + gid.y * params.row_stride;
-    let per_point = params.invocations_per_point;
-    if i >= params.point_count * per_point {
+    let run = run_of(gid, params.rays_per_point);
+    if !run.ok {
         return;
     }
-    let first = (i % per_point) * params.rays_per_invocation;
-    let last = min(first + params.rays_per_invocation, params.rays_per_point);
-    let rc = receivers[i / per_point];
+    let rc = receivers[run.point];
     let nrm = rc.normal;
     let frame = frame_from_normal(nrm);
     let origin = rc.position + params.origin_offset * nrm;
-    for (var r = first; r < last; r++) {
+    for (var r = run.first; r < run.last; r++) {
         let axis = normalize_exact(frame_to_world(frame, sdf_dirs[r].xyz));
-        let v = cone_scene(origin, axis, params.cone_tan, params.tmax);
-        out[i * params.rays_per_invocation + r - first] = bitcast<u32>(v);
+        let v = cone_scene(origin, axis, sdf.cone_tan, params.tmax);
+        out[run.i * params.rays_per_invocation + r - run.first] = bitcast<u32>(v);
     }
     if !loops_completed(params.completion_trips) {
-        write_cut_short(i, last - first);
+        write_cut_short(run.i, run.last - run.first);
     }
 }
 
 @compute @workgroup_size(64)
 fn cone_shadow_main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x + gid.y * params.row_stride;
-    let per_point = params.invocations_per_point;
-    if i >= params.point_count * per_point {
+    let run = run_of(gid, params.rays_per_point);
+    if !run.ok {
         return;
     }
-    let first = (i % per_point) * params.rays_per_invocation;
-    let last = min(first + params.rays_per_invocation, params.rays_per_point);
-    let rc = receivers[i / per_point];
+    let rc = receivers[run.point];
     let origin = rc.position + params.origin_offset * rc.normal;
-    for (var r = first; r < last; r++) {
+    for (var r = run.first; r < run.last; r++) {
         // `LightCone::new`'s cone; a light the host does not count (the point inside it or
         // at its centre) reads 1, unused.
         let light = sdf_dirs[r];
@@ -102,9 +67,9 @@ fn cone_shadow_main(@builtin(global_invocation_id) gid: vec3<u32>) {
             }
             v = cone_scene(origin, axis, tan, far);
         }
-        out[i * params.rays_per_invocation + r - first] = bitcast<u32>(v);
+        out[run.i * params.rays_per_invocation + r - run.first] = bitcast<u32>(v);
     }
     if !loops_completed(params.completion_trips) {
-        write_cut_short(i, last - first);
+        write_cut_short(run.i, run.last - run.first);
     }
 }

@@ -3,7 +3,20 @@
 // trace (`DistanceVolume::trace`), the scene's AO query (`SdfScene::occluded`) and one cone's
 // closest-approach visibility (`sdf::cone::cone_visibility`, `SdfScene::cone_visibility`), each
 // a line-by-line port in the CPU's f32 order (src/gpu/sdf_kernel.rs says what still differs).
-// The kernel's own bindings follow the shared header's (shaders/field_kernel.wgsl).
+// The SDF visibility (group 1; src/gpu/sdf_kernel.rs): its header, the volumes, the instances
+// and the stored samples, and `occluded`, the sphere trace the AO integrand runs.
+
+// Mirrors `SdfParamsGpu` (src/gpu/sdf_kernel.rs), 16 bytes.
+struct SdfParams {
+    // Instances.
+    instance_count: u32,
+    // Steps per ray, cone and volume (`SdfTrace::max_steps`, `ConeTrace::max_steps`).
+    max_steps: u32,
+    // Cone kernels: a cone's least step, a share of its radius (`ConeTrace::step`).
+    cone_step: f32,
+    // Cone AO: tan of the cones' common half-angle (`ConeSet::tan_half`).
+    cone_tan: f32,
+}
 
 // Mirrors `SdfVolumeGpu` (src/gpu/sdf_data.rs), 80 bytes.
 struct SdfVolume {
@@ -32,9 +45,10 @@ struct SdfInstance {
     _pad2: u32,
 }
 
-@group(0) @binding(3) var<storage, read> sdf_volumes: array<SdfVolume>;
-@group(0) @binding(4) var<storage, read> sdf_instances: array<SdfInstance>;
-@group(0) @binding(5) var<storage, read> sdf_words: array<u32>;
+@group(1) @binding(0) var<uniform> sdf: SdfParams;
+@group(1) @binding(1) var<storage, read> sdf_volumes: array<SdfVolume>;
+@group(1) @binding(2) var<storage, read> sdf_instances: array<SdfInstance>;
+@group(1) @binding(3) var<storage, read> sdf_words: array<u32>;
 
 const SDF_F32: u32 = 0u;
 const SDF_F16: u32 = 1u;
@@ -127,7 +141,7 @@ fn sdf_trace(v: SdfVolume, o: vec3<f32>, d: vec3<f32>, tmin_in: f32, tmax: f32) 
         return -1.0;
     }
     var t = near;
-    for (var s = 0u; s < params.max_steps; s++) {
+    for (var s = 0u; s < sdf.max_steps; s++) {
         let r = sdf_sample(v, o + t * d);
         if r < v.hit {
             return t;
@@ -143,9 +157,9 @@ fn sdf_trace(v: SdfVolume, o: vec3<f32>, d: vec3<f32>, tmin_in: f32, tmax: f32) 
 // Whether any instance's volume stops world ray origin + t dir, t in [tmin, tmax]
 // (`SdfScene::occluded`: each instance traced in its model space along the unit direction, the
 // hit's t back in units of `dir`).
-fn sdf_occluded(origin: vec3<f32>, dir: vec3<f32>, tmin: f32, tmax: f32) -> bool {
+fn occluded(origin: vec3<f32>, dir: vec3<f32>, tmin: f32, tmax: f32) -> bool {
     let len = sqrt(dot(dir, dir));
-    for (var k = 0u; k < params.instance_count; k++) {
+    for (var k = 0u; k < sdf.instance_count; k++) {
         let inst = sdf_instances[k];
         let v = sdf_volumes[inst.volume];
         let lo = quat_rotate(inst.rotation, (origin - inst.translation) / inst.scale);
@@ -185,7 +199,7 @@ fn cone_volume(v: SdfVolume, o: vec3<f32>, axis: vec3<f32>, tan: f32, t0: f32, t
     }
     var vis = upper;
     var t = t0;
-    for (var s = 0u; s < params.max_steps; s++) {
+    for (var s = 0u; s < sdf.max_steps; s++) {
         if t > t1 {
             break;
         }
@@ -205,7 +219,7 @@ fn cone_volume(v: SdfVolume, o: vec3<f32>, axis: vec3<f32>, tan: f32, t0: f32, t
                 break;
             }
         }
-        t += max(max(d, params.cone_step * radius), eps);
+        t += max(max(d, sdf.cone_step * radius), eps);
     }
     return vis;
 }
@@ -214,7 +228,7 @@ fn cone_volume(v: SdfVolume, o: vec3<f32>, axis: vec3<f32>, tan: f32, t0: f32, t
 // (`SdfScene::cone_visibility`).
 fn cone_scene(o: vec3<f32>, axis: vec3<f32>, tan: f32, tmax: f32) -> f32 {
     var vis = 1.0;
-    for (var k = 0u; k < params.instance_count; k++) {
+    for (var k = 0u; k < sdf.instance_count; k++) {
         let inst = sdf_instances[k];
         let v = sdf_volumes[inst.volume];
         let lo = quat_rotate(inst.rotation, (o - inst.translation) / inst.scale);

@@ -866,8 +866,9 @@ fn gpu_ray_cast_ao_matches_the_cpu_and_serves_as_field_reference() {
 /// Field AO at 4096 rays per point (k = 64, the top of figure 6's field sweep): the GPU gives
 /// the CPU's answer per vertex within one 8-bit step, for both selections, with the default
 /// split of a point's rays over invocations and with all 4096 rays asked of one invocation
-/// (which lavapipe's loop budget of 65,535 iterations per invocation cannot finish: the kernel
-/// must notice and split). A subset of the receivers keeps it to seconds on lavapipe.
+/// (which a driver's loop budget may not let one invocation finish: whatever that budget, the
+/// answers are complete, the far point's every ray counted). A subset of the receivers keeps
+/// it to seconds on lavapipe.
 fn field_ao_at_4096_rays_per_point_matches_the_cpu() {
     let Some(ctx) = context() else { return };
     let rays = RaySet::new(64, 9);
@@ -919,11 +920,16 @@ fn field_ao_at_4096_rays_per_point_matches_the_cpu() {
                 let path = dump_ao(&label.replace([' ', ','], "_"), &gpu, &cpu);
                 panic!("{label}: see {}", path.display());
             }
-        }
-        // On lavapipe 4096 rays through the per-invocation kernel without the tables (about 31
-        // loop iterations each) cannot run in one invocation: the kernel must have split them.
-        if ctx.is_cpu_adapter() && rays_per_invocation == 4096 && !lookup_tables {
-            assert!(kernel.rays_per_invocation() <= 2048);
+            // Complete whatever the driver's loop budget: every one of the far point's 4096
+            // rays counted free (a run cut short and not split again would count fewer), and
+            // the split only ever shrinks from what was asked.
+            assert_eq!(gpu.len(), p.len(), "{label}");
+            assert_eq!(*gpu.last().unwrap(), 1.0, "{label}: far point");
+            let budget = kernel.rays_per_invocation();
+            assert!(
+                (1..=rays_per_invocation).contains(&budget),
+                "{label}: {budget}"
+            );
         }
     }
 }

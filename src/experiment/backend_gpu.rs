@@ -2,8 +2,8 @@
 //! lookup on the GPU, compared there with a GPU BVH ray caster): field-lookup AO through
 //! [`crate::gpu::FieldAoKernel`], field-lookup soft shadows (§4.2) through [`crate::gpu::FieldShadowKernel`],
 //! field-lookup glossy reflections (§4.2, with the normal fields) through
-//! [`crate::gpu::FieldReflectKernel`], and ray-cast AO, shadows and reflections through [`GpuTracer`] (an
-//! obvhs CWBVH in WGSL), on the rays of the CPU path (the same seeded k² cell centres, rotated
+//! [`crate::gpu::FieldReflectKernel`], and ray-cast AO, shadows and reflections on a [`GpuTracer`] (an
+//! obvhs CWBVH in WGSL; the kinds' integrands run on any [`GpuVisibility`]), on the rays of the CPU path (the same seeded k² cell centres, rotated
 //! per point by the same angles, from the same offset origins; for shadows mapped into each
 //! light's cone, for reflections into the Phong lobe about the mirror direction, as on the
 //! CPU).
@@ -25,6 +25,7 @@ use super::Result;
 use crate::field::scene::{FieldInstance, FieldScene};
 use crate::gpu::{
     AdapterPreference, FieldGpuOptions, FieldLayout, GpuContext, GpuError, GpuTiming, GpuTracer,
+    GpuVisibility,
 };
 use crate::render::estimator::Points;
 use crate::sampling::rays::RaySet;
@@ -61,8 +62,9 @@ fn out(values: Vec<f32>, t: GpuTiming) -> Estimate {
 }
 
 /// The GPU kernels of one estimator's quantity, supplied by its render kind
-/// ([`super::kinds::Setup::gpu`]): field lookup on the kernel of the quantity, and ray casting
-/// through the [`GpuTracer`] entry of the quantity, both on the CPU path's rays.
+/// ([`super::kinds::Setup::gpu`]): field lookup on the kernel of the quantity, and the
+/// quantity's integrand (src/gpu/integrand.rs) on any GPU visibility (the casters' CWBVH
+/// [`GpuTracer`] here), both on the CPU path's rays.
 pub trait GpuQuantity: Send + Sync {
     /// Packs and uploads `fields` for this quantity's field kernel (`opts`: how they are bound).
     fn fields<'s>(
@@ -71,8 +73,9 @@ pub trait GpuQuantity: Send + Sync {
         fields: &'s FieldScene,
         opts: &FieldGpuOptions,
     ) -> Result<Box<dyn Eval + 's>>;
-    /// This quantity at `at` by ray casting on `tracer`.
-    fn trace(&self, tracer: &GpuTracer, at: Points, rays: &RaySet) -> Result<Estimate>;
+    /// This quantity at `at` by its integrand on `vis` (the GPU ray caster, or any other
+    /// [`GpuVisibility`]).
+    fn trace(&self, vis: &dyn GpuVisibility, at: Points, rays: &RaySet) -> Result<Estimate>;
 }
 
 /// A field kernel prepared for one quantity: the kernel, the quantity's options and the
@@ -107,7 +110,7 @@ impl<K, O> Eval for KernelEval<K, O> {
     }
 }
 
-/// [`GpuQuantity::trace`] from a [`GpuTracer`] entry's result.
+/// [`GpuQuantity::trace`] from an integrand's result.
 pub fn traced(r: std::result::Result<(Vec<f32>, GpuTiming), GpuError>) -> Result<Estimate> {
     let (values, t) = r?;
     Ok(out(values, t))
@@ -128,7 +131,7 @@ fn quantity(q: Quantity<'_>) -> Result<&dyn GpuQuantity> {
         .ok_or_else(|| GpuError::Unsupported(format!("no GPU kernel computes \"{name}\"")).into())
 }
 
-/// Ray casting on the GPU tracer, the entry of the estimator's quantity.
+/// Ray casting on the GPU tracer, the integrand of the estimator's quantity.
 struct TraceEval<'a> {
     tracer: GpuTracer<'a>,
     quantity: &'a dyn GpuQuantity,

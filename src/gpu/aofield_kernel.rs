@@ -3,8 +3,9 @@
 //! stored precision, one invocation per receiver point evaluating every instance's cap and
 //! blending them multiplicatively (shaders/aofield.wgsl), as [`AoFieldScene::ao`].
 //!
-//! The group-0 skeleton is the field kernels' ([`KernelGroup`]), with the field records, the
-//! instances, the stored channels and the inside blend's constants as the kernel's own inputs.
+//! A direct estimator (no ray, no visibility) on the integrands' group 0 ([`KernelGroup`],
+//! src/gpu/integrand.rs), with the field records, the instances, the stored channels and its
+//! own header (the inside blend's constants and the instance count) as the kernel's own inputs.
 //! Up to the cap's solid angle Ω̃ and n·Υ̃, the kernel is the CPU's f32 code operation for
 //! operation: the model-space point and normal (glam's rotation), the cube map's face, texels
 //! and bilinear weights (`Cube::bilinear`), the channels decoded as `Stored::texel` decodes
@@ -31,8 +32,8 @@
 //! field's u8 `lo` and `step` follow its texels.
 
 use super::context::GpuContext;
-use super::field_kernel::{KernelGroup, KernelParamsGpu, HEADER_WGSL};
-use super::loop_budget::{COMPLETION_TRIPS, CUT_SHORT};
+use super::integrand::{IntegrandParamsGpu, KernelGroup, HEADER_WGSL, RECEIVER_WGSL};
+use super::loop_budget::CUT_SHORT;
 use super::rays::ReceiverGpu;
 use super::{GpuError, GpuTiming};
 use crate::aofield::storage::{Stored, CHANNELS};
@@ -86,7 +87,9 @@ const _: () = assert!(std::mem::offset_of!(AoFieldInstanceGpu, field) == 32);
 struct AoInsideGpu {
     ao: f32,
     power: f32,
-    _pad: [u32; 2],
+    /// Instances.
+    instance_count: u32,
+    _pad: u32,
 }
 const _: () = assert!(std::mem::size_of::<AoInsideGpu>() == 16);
 
@@ -201,13 +204,13 @@ impl<'a> AoFieldKernel<'a> {
         let inside = AoInsideGpu {
             ao: scene.inside.ao,
             power: scene.inside.power,
-            _pad: [0; 2],
+            instance_count: instances.len() as u32,
+            _pad: 0,
         };
         let group = KernelGroup::new(ctx, "aofield", OWN_INPUTS);
-        let mut parts = vec![include_str!("../../shaders/frame.wgsl")];
-        parts.extend_from_slice(&HEADER_WGSL);
-        parts.push(include_str!("../../shaders/aofield.wgsl"));
-        let pipeline = group.pipeline(ctx, "aofield", &parts.concat(), "aofield_main")?;
+        let mut parts = HEADER_WGSL.to_vec();
+        parts.extend([RECEIVER_WGSL, include_str!("../../shaders/aofield.wgsl")]);
+        let pipeline = group.pipeline(ctx, &parts.concat(), "aofield_main", &[])?;
         let own = [
             ctx.storage_buffer("ao fields", bytemuck::cast_slice(&fields)),
             ctx.storage_buffer("ao field instances", bytemuck::cast_slice(&instances)),
@@ -257,11 +260,7 @@ impl<'a> AoFieldKernel<'a> {
                 ..Default::default()
             })
             .collect();
-        let params = KernelParamsGpu {
-            instance_count: self.instance_count,
-            completion_trips: COMPLETION_TRIPS,
-            ..Default::default()
-        };
+        let params = IntegrandParamsGpu::new(0, 0.0);
         let own: Vec<&wgpu::Buffer> = self.own.iter().collect();
         let (words, kernel, upload) =
             self.group

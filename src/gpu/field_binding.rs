@@ -15,15 +15,14 @@
 //!   `load_element`, then frame, sphere points, layouts, lookup, lookup tables and the
 //!   layout's `load_distance` ([`FieldBinding::shader_source`]).
 //!
-//! A field kernel (AO today, [`super::FieldAoKernel`]) builds a `FieldBinding`, declares only
-//! its own bindings in group 0 and its entry points, compiles with
-//! [`FieldBinding::pipeline_layout`], and binds [`FieldBinding::bind_group`] at
-//! [`FIELD_GROUP`].
+//! The field visibility (src/gpu/field_kernel.rs) is this group with its header and, for
+//! reflections, the normal fields.
 //!
-//! Group [`FIELD_GROUP`]'s bindings: 0 `tables`, 1 `mesh`, 2 `instances`, then the windows
-//! `win0`, `win1`, … (storage layout) or `field_tex` (texture layout).
+//! Group [`FIELD_GROUP`]'s bindings: 0 the visibility's header (`field_params`), 1 `tables`,
+//! 2 `mesh`, 3 `instances`, 4 `normals` (where bound), then the windows `win0`, `win1`, …
+//! (storage layout) or `field_tex` (texture layout).
 
-use super::context::{entry, storage_layout_entry, GpuContext};
+use super::context::{entry, storage_layout_entry, uniform_layout_entry, GpuContext};
 use super::field_data::{field_words, placed, FieldInstanceGpu, PackedFields};
 use super::texture::FieldTexture;
 use super::GpuError;
@@ -31,11 +30,15 @@ use crate::field::scene::FieldInstance;
 use crate::field::VisibilityField;
 use std::sync::Arc;
 
-/// The bind group the field bindings occupy; group 0 is the kernel's own.
+/// The bind group the field bindings occupy; group 0 is the integrand's.
 pub(crate) const FIELD_GROUP: u32 = 1;
 
-/// Bindings of the field group before the stored distances (tables, mesh, instances).
-const FIRST_STORE_BINDING: u32 = 3;
+/// Storage bindings of the field group before the stored distances (tables, mesh, instances).
+const TABLE_BUFFERS: u32 = 3;
+/// The normal fields' binding (shaders/field_surface.wgsl).
+const NORMALS_BINDING: u32 = 4;
+/// The first binding of the stored distances.
+const FIRST_STORE_BINDING: u32 = 5;
 
 /// How the stored distances are bound.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
@@ -57,8 +60,8 @@ pub(crate) struct FieldBindingOptions {
     pub window_bytes: Option<u64>,
     /// Largest texture depth (texture layout); `None`: the adapter's limit.
     pub max_texture_depth: Option<u32>,
-    /// Storage buffers the kernel binds itself (group 0): the windows get what is left of the
-    /// adapter's `max_storage_buffers_per_shader_stage`.
+    /// Storage buffers the kernel binds besides the field's own (group 0, the normal fields):
+    /// the windows get what is left of the adapter's `max_storage_buffers_per_shader_stage`.
     pub kernel_storage_buffers: u32,
     /// Upload each field's owner and texel tables and read them before the ring search and
     /// the concentric map (`OWNER_TABLES`, `TEXEL_TABLES` in the WGSL lookup).
@@ -84,15 +87,18 @@ struct FieldResources {
     tables: wgpu::Buffer,
     mesh: wgpu::Buffer,
     instances: wgpu::Buffer,
+    normals: Option<wgpu::Buffer>,
     store: FieldStore,
 }
 
 impl FieldResources {
     /// Layout entries of the field group.
     fn layout_entries(&self) -> Vec<wgpu::BindGroupLayoutEntry> {
-        let mut entries: Vec<_> = (0..FIRST_STORE_BINDING)
-            .map(|b| storage_layout_entry(b, true))
-            .collect();
+        let mut entries = vec![uniform_layout_entry(0)];
+        entries.extend((1..=TABLE_BUFFERS).map(|b| storage_layout_entry(b, true)));
+        if self.normals.is_some() {
+            entries.push(storage_layout_entry(NORMALS_BINDING, true));
+        }
         match &self.store {
             FieldStore::Windows { buffers, .. } => entries.extend(
                 (0..buffers.len() as u32)
@@ -113,12 +119,16 @@ impl FieldResources {
     }
 
     /// Bind-group entries of the field group, in the order of [`Self::layout_entries`].
-    fn entries(&self) -> Vec<wgpu::BindGroupEntry<'_>> {
+    fn entries<'b>(&'b self, header: &'b wgpu::Buffer) -> Vec<wgpu::BindGroupEntry<'b>> {
         let mut entries = vec![
-            entry(0, self.tables.as_entire_binding()),
-            entry(1, self.mesh.as_entire_binding()),
-            entry(2, self.instances.as_entire_binding()),
+            entry(0, header.as_entire_binding()),
+            entry(1, self.tables.as_entire_binding()),
+            entry(2, self.mesh.as_entire_binding()),
+            entry(3, self.instances.as_entire_binding()),
         ];
+        if let Some(n) = &self.normals {
+            entries.push(entry(NORMALS_BINDING, n.as_entire_binding()));
+        }
         match &self.store {
             FieldStore::Windows { buffers, .. } => {
                 for (i, w) in buffers.iter().enumerate() {
@@ -163,7 +173,6 @@ pub(crate) struct FieldBinding {
     layout_source: &'static str,
     field_bytes: u64,
     group_layout: wgpu::BindGroupLayout,
-    bind_group: wgpu::BindGroup,
     /// The instance records as uploaded, and each instance's field: what [`Self::place`]
     /// moves and checks.
     records: Vec<FieldInstanceGpu>,
@@ -171,8 +180,8 @@ pub(crate) struct FieldBinding {
 }
 
 impl FieldBinding {
-    /// Packs `instances` (their distinct fields once each), uploads them in `opts.layout` and
-    /// makes the field group's layout and bind group.
+    /// Packs `instances` (their distinct fields once each), uploads them in `opts.layout` with
+    /// the normal fields' words `normals` where given, and makes the field group's layout.
     ///
     /// Errors: [`GpuError::Unsupported`] for fields the GPU lookup cannot read (Fibonacci point
     /// sets; mixed precisions in one texture), [`GpuError::TooLarge`] when the fields pass the
@@ -180,6 +189,7 @@ impl FieldBinding {
     pub fn new(
         ctx: &GpuContext,
         instances: &[FieldInstance],
+        normals: Option<&[u32]>,
         opts: &FieldBindingOptions,
     ) -> Result<FieldBinding, GpuError> {
         let mut packed = PackedFields::new(instances, opts.lookup_tables)?;
@@ -191,6 +201,7 @@ impl FieldBinding {
             tables: ctx.storage_buffer("tables", bytemuck::cast_slice(&packed.tables)),
             mesh: ctx.storage_buffer("sphere mesh", bytemuck::cast_slice(&packed.mesh)),
             instances: ctx.storage_buffer("instances", bytemuck::cast_slice(&packed.instances)),
+            normals: normals.map(|w| ctx.storage_buffer("normal fields", bytemuck::cast_slice(w))),
             store,
         };
         let (prelude, layout_source) = resources.prelude();
@@ -201,11 +212,6 @@ impl FieldBinding {
                 label: Some("field group"),
                 entries: &resources.layout_entries(),
             });
-        let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("field group"),
-            layout: &group_layout,
-            entries: &resources.entries(),
-        });
         let instance_fields = instances.iter().map(|i| i.field.clone()).collect();
         Ok(FieldBinding {
             records: packed.instances.clone(),
@@ -216,44 +222,41 @@ impl FieldBinding {
             layout_source,
             field_bytes,
             group_layout,
-            bind_group,
         })
     }
 
-    /// WGSL of the field lookup followed by `kernel` (the kernel's own sources, in order): the
-    /// group's declarations, the layout's element loader, frame, sphere points, layouts, the
-    /// lookup and the layout's `load_distance`.
-    pub fn shader_source(&self, kernel: &[&str]) -> String {
+    /// WGSL of the field lookup: the group's declarations, the layout's element loader,
+    /// sphere points, layouts, the lookup and the layout's `load_distance`, then the field
+    /// visibility's `occluded` and, with the normal fields, its `surface_hit`.
+    pub fn shader_source(&self) -> String {
         let mut parts = vec![
             self.prelude.as_str(),
-            include_str!("../../shaders/frame.wgsl"),
             include_str!("../../shaders/sphere_points.wgsl"),
             include_str!("../../shaders/layouts.wgsl"),
             include_str!("../../shaders/field_lookup.wgsl"),
             include_str!("../../shaders/lookup_tables.wgsl"),
             self.layout_source,
+            include_str!("../../shaders/field_visibility.wgsl"),
         ];
-        parts.extend_from_slice(kernel);
+        if self.resources.normals.is_some() {
+            parts.push(include_str!("../../shaders/field_surface.wgsl"));
+        }
         parts.concat()
     }
 
-    /// The pipeline layout of a kernel whose own bindings (group 0) are `kernel_group`.
-    pub fn pipeline_layout(
-        &self,
-        ctx: &GpuContext,
-        kernel_group: &wgpu::BindGroupLayout,
-    ) -> wgpu::PipelineLayout {
-        ctx.device
-            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("field kernel"),
-                bind_group_layouts: &[Some(kernel_group), Some(&self.group_layout)],
-                immediate_size: 0,
-            })
+    /// The layout of group [`FIELD_GROUP`].
+    pub fn layout(&self) -> &wgpu::BindGroupLayout {
+        &self.group_layout
     }
 
-    /// The bind group of group [`FIELD_GROUP`].
-    pub fn bind_group(&self) -> &wgpu::BindGroup {
-        &self.bind_group
+    /// Group [`FIELD_GROUP`] with `header` as the visibility's header.
+    pub fn bind_group(&self, ctx: &GpuContext, header: &[u8]) -> wgpu::BindGroup {
+        let header = ctx.uniform_buffer("field params", header);
+        ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("field group"),
+            layout: &self.group_layout,
+            entries: &self.resources.entries(&header),
+        })
     }
 
     /// Moves the bound instances to `instances`' transforms (the same fields, instance by
@@ -322,10 +325,10 @@ fn upload_windows(
     let window_bytes = opts.window_bytes.unwrap_or(max_binding).min(max_binding);
     let window_words = ((window_bytes / 4) / 64 * 64).max(64) as usize;
     let windows_needed = words.len().div_ceil(window_words).max(1);
-    let max_windows =
-        ctx.limits()
-            .max_storage_buffers_per_shader_stage
-            .saturating_sub(opts.kernel_storage_buffers + FIRST_STORE_BINDING) as usize;
+    let max_windows = ctx
+        .limits()
+        .max_storage_buffers_per_shader_stage
+        .saturating_sub(opts.kernel_storage_buffers + TABLE_BUFFERS) as usize;
     if windows_needed > max_windows {
         return Err(GpuError::TooLarge {
             what: format!("fields in {windows_needed} storage windows"),
@@ -375,9 +378,9 @@ fn group_prelude() -> String {
     format!(
         "// Field group (src/gpu/field_binding.rs): sphere points and 1-bit means, sphere\n\
          // triangulations, placed fields.\n\
-         @group({FIELD_GROUP}) @binding(0) var<storage, read> tables: array<vec4<f32>>;\n\
-         @group({FIELD_GROUP}) @binding(1) var<storage, read> mesh: array<vec4<u32>>;\n\
-         @group({FIELD_GROUP}) @binding(2) var<storage, read> instances: array<Instance>;\n"
+         @group({FIELD_GROUP}) @binding(1) var<storage, read> tables: array<vec4<f32>>;\n\
+         @group({FIELD_GROUP}) @binding(2) var<storage, read> mesh: array<vec4<u32>>;\n\
+         @group({FIELD_GROUP}) @binding(3) var<storage, read> instances: array<Instance>;\n"
     )
 }
 
@@ -438,7 +441,7 @@ mod tests {
     fn window_prelude_declares_every_window_once() {
         let s = group_prelude() + &window_prelude(3, 1024);
         assert!(s.contains("const WINDOW_WORDS: u32 = 1024u;"));
-        for b in 0..FIRST_STORE_BINDING + 3 {
+        for b in (1..=TABLE_BUFFERS).chain(FIRST_STORE_BINDING..FIRST_STORE_BINDING + 3) {
             let decl = format!("@group({FIELD_GROUP}) @binding({b})");
             assert_eq!(s.matches(&decl).count(), 1, "binding {b}");
         }

@@ -1,23 +1,42 @@
-//! What every field kernel shares (Gaitatzes et al., WSCG 2008 Algorithm 2 and WSCG 2010 on the
-//! GPU): the options ([`FieldGpuOptions`]), the parameter header ([`KernelParamsGpu`], twin of
-//! WGSL `Params` in shaders/field_kernel.wgsl), and the skeleton ([`FieldKernel`]): the fields
-//! in a [`FieldBinding`] (group 1), the kernel's own group 0 (params, receivers and output
-//! words at bindings 0-2, then the kernel's own read-only inputs from [`FIRST_OWN_BINDING`]),
-//! the shader source with the lookup's WGSL and the shared header, the rays-per-invocation
-//! budget, and one batched dispatch. Each quantity (`field_ao.rs`, `field_shadow.rs`,
-//! `field_reflect.rs`) supplies only its inputs, its ray loop in WGSL and how its output words
-//! become values (src/gpu/loop_budget.rs). The group-0 part alone ([`KernelGroup`], the WGSL
-//! of [`HEADER_WGSL`]) also serves the per-object peers' kernels, which bind no field.
+//! The field visibility (Gaitatzes et al., WSCG 2008 Algorithm 2 and WSCG 2010 on the GPU):
+//! the options ([`FieldGpuOptions`]) and [`FieldKernel`], a set of placed fields in a
+//! [`FieldBinding`] (group 1) with its header ([`FieldParamsGpu`], twin of WGSL `FieldParams`
+//! in shaders/field_visibility.wgsl) and the lookup's `occluded` (and, with the normal fields,
+//! `surface_hit`, shaders/field_surface.wgsl), a [`GpuVisibility`] on which the integrands of
+//! src/gpu/integrand.rs run: [`super::FieldAoKernel`] (AO, with the field's batched form of
+//! it, src/gpu/field_ao.rs), [`super::FieldShadowKernel`] (soft shadows from spherical lights,
+//! 2010 §4.2) and [`super::FieldReflectKernel`] (glossy reflections with the normal fields,
+//! 2010 §4.2), each on the CPU path's rays.
+//!
+//! Deviations from the CPU path: the world-space ray–sphere test and the entry point are
+//! computed in f32 (the host uses f64), so near-tangent rays and near-ties between maps may
+//! resolve differently; the interpolated selection's walk uses an f32 edge tolerance and, when
+//! it does not settle within the host's step cap, reads the nearest map alone (the host scans
+//! every triangle); instances are tried in index order (the host sorts them by entry
+//! distance: the boolean answer and the nearest hit are the same, ties resolved alike); the
+//! shadow weights and the reflected radiance are summed in f32 within an invocation
+//! (src/gpu/shadow_rays.rs, src/gpu/reflect_rays.rs); Fibonacci point sets (no GPU nearest
+//! query) and jittered ray sets (no shared directions) are refused with
+//! [`GpuError::Unsupported`]. Deviation from the paper: it samples "stratified points on each
+//! spherical light" without saying how; we sample the cone each light subtends, as the CPU
+//! path does.
 
-use super::context::{entry, storage_layout_entry, uniform_layout_entry, GpuContext};
+use super::context::GpuContext;
 use super::field_binding::{FieldBinding, FieldBindingOptions, FieldLayout};
-use super::loop_budget::{Dispatched, COMPLETION_TRIPS};
-use super::rays::ReceiverGpu;
-use super::GpuError;
+use super::integrand::{self, Integrand};
+use super::reflect_rays::normal_words;
+use super::shadow_rays::check_binding;
+use super::visibility::{GpuVisibility, Kernels};
+use super::{GpuError, GpuTiming};
 use crate::field::lookup::{IntraBias, LookupOptions};
 use crate::field::scene::FieldInstance;
 use crate::field::Selection;
-use std::sync::atomic::AtomicU32;
+use crate::render::reflect::ReflectOptions;
+use crate::render::shadow::ShadowOptions;
+use crate::sampling::rays::RaySet;
+use glam::Vec3;
+use std::marker::PhantomData;
+use std::time::{Duration, Instant};
 
 /// Options of the field kernels ([`super::FieldAoKernel`], [`super::FieldShadowKernel`],
 /// [`super::FieldReflectKernel`]).
@@ -36,9 +55,10 @@ pub struct FieldGpuOptions {
     /// `max_texture_dimension_3d`. Smaller depths only serve to test the tiling.
     pub max_texture_depth: Option<u32>,
     /// AO kernel: cull each round of rays against the world spheres and answer only the rays
-    /// that meet one, shared over the workgroup (WGSL `ao_main`, the default); `false`: every
-    /// invocation answers its own rays (`ao_main_direct`, kept for comparison; the answers are
-    /// the same). See docs/gpu.md, "Field kernel speed on lavapipe".
+    /// that meet one, shared over the workgroup (WGSL `ao_queue_main`, the default); `false`:
+    /// every invocation answers its own rays (the AO integrand's `ao_main`, kept for
+    /// comparison; the answers are the same). See docs/gpu.md, "Field kernel speed on
+    /// lavapipe".
     pub queue_rays: bool,
     /// Read each field's owner table (the CPU's `SpherePoints::nearest` table) and texel table
     /// on the device before the ring search and the concentric map, which remain for the cells
@@ -50,7 +70,7 @@ pub struct FieldGpuOptions {
 
 impl FieldGpuOptions {
     /// The field binding of a kernel with these options and `kernel_storage_buffers` storage
-    /// buffers of its own (every field kernel binds its fields this way).
+    /// buffers besides the field's own.
     pub(super) fn binding_options(&self, kernel_storage_buffers: u32) -> FieldBindingOptions {
         FieldBindingOptions {
             layout: self.layout,
@@ -59,12 +79,6 @@ impl FieldGpuOptions {
             kernel_storage_buffers,
             lookup_tables: self.lookup_tables,
         }
-    }
-
-    /// The rays one invocation starts with over `instances` instances: `rays_per_invocation`
-    /// shared among them, at least 1.
-    pub(super) fn start_rays_per_invocation(&self, instances: usize) -> AtomicU32 {
-        AtomicU32::new((self.rays_per_invocation / instances.max(1) as u32).max(1))
     }
 }
 
@@ -82,260 +96,224 @@ impl Default for FieldGpuOptions {
     }
 }
 
-/// Twin of WGSL `Params` (shaders/field_kernel.wgsl): one dispatch of a field kernel.
+/// Twin of WGSL `FieldParams` (shaders/field_visibility.wgsl): the visibility's header.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub(super) struct KernelParamsGpu {
-    /// Receiver points in this dispatch.
-    pub point_count: u32,
-    /// Rays per point (shadows: per light).
-    pub rays_per_point: u32,
+struct FieldParamsGpu {
     /// Field instances.
-    pub instance_count: u32,
-    /// Invocations per row of the dispatch grid.
-    pub row_stride: u32,
-    /// Selection ([`selection_code`]: 0 nearest, 1 interpolated).
-    pub selection: u32,
-    /// Rays one invocation traces.
-    pub rays_per_invocation: u32,
-    /// Invocations per point.
-    pub invocations_per_point: u32,
-    /// Trips of the completion loop ([`COMPLETION_TRIPS`]).
-    pub completion_trips: u32,
-    /// Ray origin offset along the normal.
-    pub origin_offset: f32,
+    instance_count: u32,
     /// Intra-object bias: a fraction of 2R, or the scale of the field's own tolerance.
-    pub intra_bias: f32,
+    intra_bias: f32,
     /// 1 when `intra_bias` scales the field's own tolerance ([`IntraBias::Auto`]), else 0.
-    pub intra_auto: u32,
-    /// AO: the largest hit distance.
-    pub tmax: f32,
-    /// Shadows: the lights.
-    pub light_count: u32,
-    /// SDF kernels: steps per ray, cone and volume (`SdfTrace::max_steps`).
-    pub max_steps: u32,
-    /// SDF cone kernels: a cone's least step, a share of its radius (`ConeTrace::step`).
-    pub cone_step: f32,
-    /// SDF cone AO: tan of the cones' common half-angle (`ConeSet::tan_half`).
-    pub cone_tan: f32,
+    intra_auto: u32,
+    _pad: u32,
 }
-const _: () = assert!(std::mem::size_of::<KernelParamsGpu>() == 64);
-const _: () = assert!(std::mem::offset_of!(KernelParamsGpu, selection) == 16);
-const _: () = assert!(std::mem::offset_of!(KernelParamsGpu, origin_offset) == 32);
-const _: () = assert!(std::mem::offset_of!(KernelParamsGpu, light_count) == 48);
-const _: () = assert!(std::mem::offset_of!(KernelParamsGpu, cone_tan) == 60);
+const _: () = assert!(std::mem::size_of::<FieldParamsGpu>() == 16);
 
-/// The shared bindings of a field kernel's own group (0); the fields are group
-/// [`super::field_binding::FIELD_GROUP`].
-const PARAMS_BINDING: u32 = 0;
-const RECEIVERS_BINDING: u32 = 1;
-const OUT_BINDING: u32 = 2;
-/// The first binding of a kernel's own inputs.
-pub(super) const FIRST_OWN_BINDING: u32 = 3;
-
-/// A kernel's own bind group (0): the shared header's bindings (params, receivers, output
-/// words) and the kernel's own read-only storage inputs from [`FIRST_OWN_BINDING`] on. The
-/// field kernels add the fields as group 1 ([`FieldKernel`]); the per-object peers' kernels
-/// (src/gpu/sdf_kernel.rs, src/gpu/aofield_kernel.rs) bind everything here.
-pub(super) struct KernelGroup {
-    pub layout: wgpu::BindGroupLayout,
-    label: &'static str,
+/// What a field kernel answers: its integrand and whether it binds the normal fields.
+pub trait FieldQuantity: Sync {
+    /// The integrand it runs by default.
+    const INTEGRAND: &'static Integrand;
+    /// Whether the visibility binds the normal fields (`surface_hit`).
+    const NORMALS: bool;
 }
 
-/// The shared header's WGSL, in order: the receivers, the loop budget, `Params` and the
-/// bindings of group 0.
-pub(super) const HEADER_WGSL: [&str; 3] = [
-    include_str!("../../shaders/receiver.wgsl"),
-    include_str!("../../shaders/loop_budget.wgsl"),
-    include_str!("../../shaders/field_kernel.wgsl"),
-];
+/// Vertex AO ([`super::FieldAoKernel`]).
+pub struct Ao;
+/// Soft shadows ([`FieldShadowKernel`]).
+pub struct Shadows;
+/// Glossy reflections ([`FieldReflectKernel`]).
+pub struct Reflections;
 
-impl KernelGroup {
-    /// The layout of the shared bindings and `own` read-only storage inputs.
-    pub fn new(ctx: &GpuContext, label: &'static str, own: u32) -> KernelGroup {
-        let mut entries = vec![
-            uniform_layout_entry(PARAMS_BINDING),
-            storage_layout_entry(RECEIVERS_BINDING, true),
-            storage_layout_entry(OUT_BINDING, false),
-        ];
-        entries.extend((0..own).map(|i| storage_layout_entry(FIRST_OWN_BINDING + i, true)));
-        let layout = ctx
-            .device
-            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some(label),
-                entries: &entries,
-            });
-        KernelGroup { layout, label }
-    }
-
-    /// Compiles `entry_point` of `source` for a kernel whose only group is this one.
-    pub fn pipeline(
-        &self,
-        ctx: &GpuContext,
-        name: &str,
-        source: &str,
-        entry_point: &str,
-    ) -> Result<wgpu::ComputePipeline, GpuError> {
-        let layout = ctx
-            .device
-            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some(self.label),
-                bind_group_layouts: &[Some(&self.layout)],
-                immediate_size: 0,
-            });
-        ctx.compute_pipeline_with_layout(name, source, entry_point, Some(&layout))
-    }
-
-    /// Uploads the receivers batch by batch, dispatches `threads_per_item` threads per
-    /// receiver, each writing `words_per_thread` words, with `own` bound from
-    /// [`FIRST_OWN_BINDING`] on and `fixed_groups` as groups 1, 2, …, and reads the words back,
-    /// receiver-major ([`GpuContext::run_batched`]).
-    #[allow(clippy::too_many_arguments)]
-    pub fn run(
-        &self,
-        ctx: &GpuContext,
-        pipeline: &wgpu::ComputePipeline,
-        fixed_groups: &[&wgpu::BindGroup],
-        mut params: KernelParamsGpu,
-        recv: &[ReceiverGpu],
-        own: &[&wgpu::Buffer],
-        shape: (u32, u32),
-    ) -> Result<Dispatched, GpuError> {
-        ctx.run_batched(
-            pipeline,
-            fixed_groups,
-            recv,
-            "receiver",
-            shape,
-            |part, stride, out| {
-                params.point_count = part.len() as u32;
-                params.row_stride = stride;
-                let uniform = ctx.uniform_buffer("kernel params", bytemuck::bytes_of(&params));
-                let recv_buf = ctx.storage_buffer("receivers", bytemuck::cast_slice(part));
-                let mut entries = vec![
-                    entry(PARAMS_BINDING, uniform.as_entire_binding()),
-                    entry(RECEIVERS_BINDING, recv_buf.as_entire_binding()),
-                    entry(OUT_BINDING, out.as_entire_binding()),
-                ];
-                entries.extend(
-                    own.iter()
-                        .zip(FIRST_OWN_BINDING..)
-                        .map(|(b, i)| entry(i, b.as_entire_binding())),
-                );
-                ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some(self.label),
-                    layout: &self.layout,
-                    entries: &entries,
-                })
-            },
-        )
-    }
+impl FieldQuantity for Ao {
+    const INTEGRAND: &'static Integrand = &integrand::AO;
+    const NORMALS: bool = false;
+}
+impl FieldQuantity for Shadows {
+    const INTEGRAND: &'static Integrand = &integrand::SHADOWS;
+    const NORMALS: bool = false;
+}
+impl FieldQuantity for Reflections {
+    const INTEGRAND: &'static Integrand = &integrand::REFLECTIONS;
+    const NORMALS: bool = true;
 }
 
-/// The skeleton of a field kernel: its fields bound, its group layout, its rays-per-invocation
-/// budget and its lookup options; the quantity's kernel holds one and its pipelines.
-pub(super) struct FieldKernel<'a> {
-    pub ctx: &'a GpuContext,
-    /// The kernel's own group (0).
-    group: KernelGroup,
-    pub field: FieldBinding,
-    /// Rays per invocation, as last found to fit (src/gpu/loop_budget.rs).
-    pub rays_per_invocation: AtomicU32,
+/// Field lookup over a set of field instances, uploaded once: the field visibility (see the
+/// module documentation), for the quantity `Q`.
+pub struct FieldKernel<'a, Q> {
+    pub(super) ctx: &'a GpuContext,
+    pub(super) field: FieldBinding,
+    kernels: Kernels,
+    /// AO: the workgroup ray queue (`FieldGpuOptions::queue_rays`).
+    pub(super) queue_rays: bool,
+    normal_bytes: u64,
+    setup: Duration,
+    /// Selection and intra-object bias of the lookups (may be changed between calls).
+    pub lookup: LookupOptions,
+    quantity: PhantomData<Q>,
 }
 
-impl<'a> FieldKernel<'a> {
-    /// Packs and uploads `instances` (their distinct fields once each) with room for `own`
-    /// read-only storage inputs of the kernel (bound from [`FIRST_OWN_BINDING`] on).
+/// Field-lookup soft shadows from spherical lights (2010 §4.2: every shadow ray a lookup, up
+/// to the ray's own far end, the near side of its light, as `FieldScene::occluded_many_to`).
+pub type FieldShadowKernel<'a> = FieldKernel<'a, Shadows>;
+/// Field-lookup glossy reflections (2010 §4.2: every reflection ray answered with the nearest
+/// hit over the instances, as `FieldScene::surface_hit`, its normal read from the normal field
+/// of the map and texel the nearest selection reads, bound as one more storage buffer).
+pub type FieldReflectKernel<'a> = FieldKernel<'a, Reflections>;
+
+impl<'a, Q: FieldQuantity> FieldKernel<'a, Q> {
+    /// Packs and uploads `instances` (their distinct fields once each; for reflections their
+    /// normal fields too) and compiles the kernel.
+    ///
+    /// Errors: [`GpuError::Unsupported`] for fields the GPU lookup cannot read,
+    /// [`GpuError::TooLarge`] past the adapter's storage bindings or texture size, and for
+    /// reflections [`GpuError::Invalid`] when an instance has no normal field
+    /// ([`FieldInstance::with_normals`]).
     pub fn new(
         ctx: &'a GpuContext,
         instances: &[FieldInstance],
         opts: &FieldGpuOptions,
-        label: &'static str,
-        own: u32,
     ) -> Result<Self, GpuError> {
-        // The receivers and the output are storage buffers too.
-        let field = FieldBinding::new(ctx, instances, &opts.binding_options(own + 2))?;
-        Ok(FieldKernel {
+        let start = Instant::now();
+        let words = if Q::NORMALS {
+            let words = normal_words(instances)?;
+            check_binding::<u32>(ctx, "normal field words", words.len())?;
+            Some(words)
+        } else {
+            None
+        };
+        // The integrand's inputs, receivers and output, and the normal fields.
+        let storage = Q::INTEGRAND.own + 2 + Q::NORMALS as u32;
+        let field = FieldBinding::new(
             ctx,
-            group: KernelGroup::new(ctx, label, own),
+            instances,
+            words.as_deref(),
+            &opts.binding_options(storage),
+        )?;
+        let start_rays = (opts.rays_per_invocation / instances.len().max(1) as u32).max(1);
+        let kernel = FieldKernel {
+            ctx,
             field,
-            rays_per_invocation: opts.start_rays_per_invocation(instances.len()),
+            kernels: Kernels::new(start_rays),
+            queue_rays: opts.queue_rays,
+            normal_bytes: words.map_or(0, |w| w.len() as u64 * 4),
+            setup: Duration::ZERO,
+            lookup: opts.lookup,
+            quantity: PhantomData,
+        };
+        let first = match (Q::INTEGRAND.slot == integrand::AO.slot, opts.queue_rays) {
+            (true, true) => &super::field_ao::AO_QUEUE,
+            _ => Q::INTEGRAND,
+        };
+        kernel.kernels.compiled(&kernel, first)?;
+        Ok(FieldKernel {
+            setup: start.elapsed(),
+            ..kernel
         })
     }
 
-    /// The kernel's WGSL: the lookup's, the shared header ([`HEADER_WGSL`]), then `kernel`
-    /// (the quantity's helpers and its entry points).
-    pub fn source(&self, kernel: &[&str]) -> String {
-        let mut parts = HEADER_WGSL.to_vec();
-        parts.extend_from_slice(kernel);
-        self.field.shader_source(&parts)
-    }
-
-    /// The pipeline layout: the kernel's group 0 and the fields' group 1.
-    pub fn pipeline_layout(&self) -> wgpu::PipelineLayout {
-        self.field.pipeline_layout(self.ctx, &self.group.layout)
-    }
-
-    /// Compiles `entry_point` of `source` with [`Self::pipeline_layout`].
-    pub fn pipeline(
-        &self,
-        name: &str,
-        source: &str,
-        entry_point: &str,
-    ) -> Result<wgpu::ComputePipeline, GpuError> {
-        self.ctx.compute_pipeline_with_layout(
-            name,
-            source,
-            entry_point,
-            Some(&self.pipeline_layout()),
-        )
-    }
-
-    /// Moves the bound instances to `instances`' transforms ([`FieldBinding::place`]).
+    /// Moves the instances to `instances`' transforms, the fields staying on the device (the
+    /// same fields, instance by instance, as at `new`): a moving rigid object's per-frame cost.
     pub fn place(&self, instances: &[FieldInstance]) -> Result<(), GpuError> {
         self.field.place(self.ctx, instances)
     }
 
-    /// Rays per invocation the next call starts with.
-    pub fn rays_per_invocation(&self) -> u32 {
-        self.rays_per_invocation
-            .load(std::sync::atomic::Ordering::Relaxed)
+    /// Host time of packing, uploading and compiling in [`Self::new`].
+    pub fn setup_time(&self) -> Duration {
+        self.setup
     }
 
-    /// The header of a call with `rays_per_point` rays per point from origins moved by
-    /// `origin_offset`, read with `lookup`: the instance count, the selection and intra-object
-    /// bias, the completion trips; the rest zero for the quantity and the dispatch to fill.
-    pub fn params(
+    /// Rays per invocation the next call starts with: the options' value divided by the
+    /// instance count, or less where a driver cut an earlier call's invocations short.
+    pub fn rays_per_invocation(&self) -> u32 {
+        self.kernels.rays_per_invocation(Q::INTEGRAND.slot)
+    }
+
+    /// Bytes of stored distances on the device.
+    pub fn field_bytes(&self) -> u64 {
+        self.field.field_bytes()
+    }
+
+    /// Bytes of the normal fields on the device (4 a texel: both precisions are held in a
+    /// 32-bit word); 0 without them.
+    pub fn normal_bytes(&self) -> u64 {
+        self.normal_bytes
+    }
+
+    /// Storage windows the fields occupy (storage layout), `None` for the texture layout.
+    pub fn storage_windows(&self) -> Option<usize> {
+        self.field.storage_windows()
+    }
+
+    /// Slices of the field texture (texture layout), `None` for the storage layout.
+    pub fn texture_depth(&self) -> Option<u32> {
+        self.field.texture_depth()
+    }
+}
+
+impl FieldKernel<'_, Shadows> {
+    /// The light fraction at every point (point `i` uses the square samples and rotation of
+    /// point index `i` of `rays`), as [`crate::render::shadow::shadow_at_points`] computes it
+    /// over a [`crate::field::scene::FieldScene`] of the same instances and lookup options.
+    pub fn light_fractions(
         &self,
-        lookup: &LookupOptions,
-        rays_per_point: u32,
-        origin_offset: f32,
-    ) -> KernelParamsGpu {
-        let (intra_bias, intra_auto) = intra_terms(lookup.intra_bias);
-        KernelParamsGpu {
-            rays_per_point,
+        points: &[Vec3],
+        normals: &[Vec3],
+        rays: &RaySet,
+        opts: &ShadowOptions,
+    ) -> Result<(Vec<f32>, GpuTiming), GpuError> {
+        integrand::shadows(self, points, normals, rays, opts)
+    }
+}
+
+impl FieldKernel<'_, Reflections> {
+    /// The reflected radiance at every point (point `i` uses the square samples and rotation
+    /// of point index `i` of `rays`), as [`crate::render::reflect::reflect_at_points`]
+    /// computes it over a [`crate::field::scene::FieldScene`] of the same instances and lookup
+    /// options.
+    pub fn reflections(
+        &self,
+        points: &[Vec3],
+        normals: &[Vec3],
+        rays: &RaySet,
+        opts: &ReflectOptions,
+    ) -> Result<(Vec<f32>, GpuTiming), GpuError> {
+        integrand::reflections(self, points, normals, rays, opts)
+    }
+}
+
+impl<Q: Sync> GpuVisibility for FieldKernel<'_, Q> {
+    fn context(&self) -> &GpuContext {
+        self.ctx
+    }
+
+    /// The lookup's WGSL with `SELECTION` the selection code `variant`.
+    fn wgsl(&self, variant: u32) -> String {
+        format!("const SELECTION: u32 = {variant}u;\n") + &self.field.shader_source()
+    }
+
+    fn layout(&self) -> &wgpu::BindGroupLayout {
+        self.field.layout()
+    }
+
+    fn bind_group(&self) -> wgpu::BindGroup {
+        let (intra_bias, intra_auto) = intra_terms(self.lookup.intra_bias);
+        let header = FieldParamsGpu {
             instance_count: self.field.instance_count(),
-            selection: selection_code(lookup.selection),
-            completion_trips: COMPLETION_TRIPS,
-            origin_offset,
             intra_bias,
             intra_auto,
-            ..Default::default()
-        }
+            _pad: 0,
+        };
+        self.field.bind_group(self.ctx, bytemuck::bytes_of(&header))
     }
 
-    /// Runs `pipeline` over the receivers ([`KernelGroup::run`]) with the fields as group 1.
-    pub fn run(
-        &self,
-        pipeline: &wgpu::ComputePipeline,
-        params: KernelParamsGpu,
-        recv: &[ReceiverGpu],
-        own: &[&wgpu::Buffer],
-        shape: (u32, u32),
-    ) -> Result<Dispatched, GpuError> {
-        let field_group = [self.field.bind_group()];
-        self.group
-            .run(self.ctx, pipeline, &field_group, params, recv, own, shape)
+    fn kernels(&self) -> &Kernels {
+        &self.kernels
+    }
+
+    /// The selection code ([`selection_code`]).
+    fn variant(&self) -> u32 {
+        selection_code(self.lookup.selection)
     }
 }
 
@@ -347,7 +325,7 @@ fn intra_terms(b: IntraBias) -> (f32, u32) {
     }
 }
 
-/// WGSL `selection` of a selection.
+/// WGSL `SELECTION` of a selection (SELECT_NEAREST, SELECT_INTERPOLATED).
 pub(super) fn selection_code(s: Selection) -> u32 {
     match s {
         Selection::Nearest => 0,

@@ -4,21 +4,21 @@
 //!
 //! - [`GpuContext`]: adapter choice ([`AdapterPreference`], `VISFIELD_ADAPTER`), the device
 //!   with the adapter's own limits, and [`GpuContext::adapter_label`] for result rows.
-//! - [`FieldAoKernel`]: vertex AO by field lookup (inter- and intra-object, nearest or
-//!   interpolated selection), with the CPU path's ray directions and map selection; fields
-//!   bound as storage-buffer windows or as slices of a 3D texture ([`FieldLayout`]) by the
-//!   field binding every field kernel reuses (src/gpu/field_binding.rs: packing, upload, bind
-//!   group 1 and the WGSL of the lookup).
-//! - [`FieldShadowKernel`]: soft shadows from spherical lights by field lookup (2010 §4.2), the
-//!   CPU path's shadow rays (cone samples, per-point rotation, per-ray far end at the light)
-//!   answered by the same lookup WGSL, weighted into the light fraction.
-//! - [`FieldReflectKernel`]: glossy reflections by field lookup (2010 §4.2), the CPU path's
-//!   reflection rays (mirror or Phong lobe, per-point rotation) answered by the same lookup WGSL
-//!   with the nearest hit over the instances, its normal read from the normal fields, shaded
-//!   and averaged as `render::reflect`.
+//! - One kernel skeleton, integrand × visibility: a render kind's per-point loop written once
+//!   in WGSL ([`ao`], [`shadows`], [`reflections`]; src/gpu/integrand.rs) against the queries
+//!   of any [`GpuVisibility`] (`occluded`, `surface_hit`; src/gpu/visibility.rs), joined by
+//!   WGSL concatenation into one pipeline per pair ([`Kernels`]).
+//! - [`FieldKernel`]: the field-lookup visibility (inter- and intra-object, nearest or
+//!   interpolated selection, the CPU path's map selection), with the fields bound as
+//!   storage-buffer windows or as slices of a 3D texture ([`FieldLayout`]; src/gpu/
+//!   field_binding.rs): vertex AO ([`FieldAoKernel`], with its workgroup ray queue), soft
+//!   shadows from spherical lights ([`FieldShadowKernel`], 2010 §4.2) and glossy reflections
+//!   with the normal fields ([`FieldReflectKernel`], 2010 §4.2).
 //! - [`GpuTracer`]: the GPU ray-cast reference, an obvhs CWBVH traversed in WGSL with the
-//!   watertight triangle test, so that GPU lookup is compared with GPU ray casting on the same
-//!   device (any / closest hit, AO, soft shadows, glossy reflections).
+//!   watertight triangle test, a visibility (and its own any / closest hit queries), so that
+//!   GPU lookup is compared with GPU ray casting on the same device.
+//! - [`SdfKernel`]: mesh signed distance fields, a visibility by sphere tracing, with
+//!   cone-traced AO and shadows; [`AoFieldKernel`]: AO fields, a direct estimator.
 //! - [`ReliefKernel`]: the 2005 relief caster (linear search, bisection, safety-zone skips)
 //!   over segments through the prism, for the relief experiment's GPU columns.
 //! - [`ReliefPeersKernel`]: the relief search's modern peers (cell walk, maximum mipmaps,
@@ -35,8 +35,7 @@ mod field_ao;
 mod field_binding;
 mod field_data;
 mod field_kernel;
-mod field_reflect;
-mod field_shadow;
+mod integrand;
 mod loop_budget;
 mod rays;
 mod reflect_rays;
@@ -47,19 +46,20 @@ mod sdf_kernel;
 mod shadow_rays;
 mod texture;
 mod tracer;
+mod visibility;
 
 pub use aofield_kernel::AoFieldKernel;
 pub use context::{AdapterPreference, GpuContext, ADAPTER_ENV};
 pub use field_ao::{FieldAoKernel, LookupProbe};
 pub use field_binding::FieldLayout;
 pub use field_data::FieldInstanceGpu;
-pub use field_kernel::FieldGpuOptions;
-pub use field_reflect::FieldReflectKernel;
-pub use field_shadow::FieldShadowKernel;
+pub use field_kernel::{FieldGpuOptions, FieldKernel, FieldReflectKernel, FieldShadowKernel};
+pub use integrand::{ao, reflections, shadows};
 pub use relief::ReliefKernel;
 pub use relief_peers::ReliefPeersKernel;
 pub use sdf_kernel::{SdfKernel, SDF_CONES_PER_INVOCATION, SDF_RAYS_PER_INVOCATION};
 pub use tracer::{GpuHit, GpuTracer};
+pub use visibility::{GpuVisibility, Kernels, VisibilityGroup};
 
 use std::time::Duration;
 

@@ -83,7 +83,7 @@ pub(crate) fn lobe_directions(rays: &RaySet, gloss: Gloss) -> Result<Vec<[f32; 4
 }
 
 /// The normal fields of `instances` as the field kernel reads them (WGSL `normals`,
-/// shaders/field_reflect.wgsl): per instance its first texel word and its bits per component,
+/// shaders/field_surface.wgsl): per instance its first texel word and its bits per component,
 /// then every distinct normal field once, a texel a word (a | b << 16).
 ///
 /// Errors: [`GpuError::Invalid`] naming the first instance without a normal field.

@@ -237,3 +237,16 @@ pub(super) fn cast_segments(
         },
     ))
 }
+
+impl crate::relief::view::SegmentCaster<CastParams> for ReliefKernel<'_> {
+    type Timing = GpuTiming;
+    type Error = GpuError;
+
+    fn cast_segments(
+        &self,
+        segments: &[(Vec3, Vec3)],
+        params: &CastParams,
+    ) -> Result<(Vec<Cast>, GpuTiming), GpuError> {
+        self.cast(segments, params)
+    }
+}

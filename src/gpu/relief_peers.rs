@@ -247,3 +247,16 @@ impl<'a> ReliefPeersKernel<'a> {
         })
     }
 }
+
+impl crate::relief::view::SegmentCaster<Peer> for ReliefPeersKernel<'_> {
+    type Timing = GpuTiming;
+    type Error = GpuError;
+
+    fn cast_segments(
+        &self,
+        segments: &[(Vec3, Vec3)],
+        params: &Peer,
+    ) -> Result<(Vec<Cast>, GpuTiming), GpuError> {
+        self.cast(segments, params)
+    }
+}

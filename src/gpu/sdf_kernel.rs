@@ -9,9 +9,10 @@
 //! - [`SdfKernel::cone_light_fractions`]: the cone-traced light fraction of spherical lights,
 //!   as [`SdfScene::cone_light_fraction`].
 //!
-//! The group-0 skeleton is the field kernels' ([`KernelGroup`]: the shared parameter header,
-//! receivers, output words), with the volumes, the instances, the stored samples and the
-//! directions (rays, cone axes or lights) as the kernel's own inputs. The per-ray and per-cone
+//! The volumes, the instances and the stored samples are a visibility (group 1,
+//! [`GpuVisibility`]: its header `SdfParamsGpu` and `occluded`, the sphere trace), so that AO
+//! is the AO integrand (src/gpu/integrand.rs); the cone kernels are direct estimators on the
+//! same two groups, the directions (cone axes or lights) their own input. The per-ray and per-cone
 //! arithmetic is a line-by-line port in the CPU's f32 order: the trilinear read with every
 //! precision decoded as the host decodes it (u8 through the host's table of the codes'
 //! distances), glam's rotation, `min`, `max` and normalisation, the sphere trace's box clip and
@@ -36,10 +37,12 @@
 //! point inside the light or below its horizon) is still marched, and its value unused.
 
 use super::context::GpuContext;
-use super::field_kernel::{KernelGroup, KernelParamsGpu, HEADER_WGSL};
-use super::loop_budget::{free_fractions, ray_words, COMPLETION_TRIPS};
-use super::rays::{base_directions, receivers, ReceiverGpu};
-use super::sdf_data::{pack, SdfInstanceGpu, SdfVolumeGpu};
+use super::integrand::{self, timing, Integrand, IntegrandParamsGpu, RECEIVER_WGSL};
+use super::loop_budget::ray_words;
+use super::rays::ReceiverGpu;
+use super::sdf_data::pack;
+use super::shadow_rays::check_binding;
+use super::visibility::{GpuVisibility, Kernels, VisibilityGroup};
 use super::{GpuError, GpuTiming};
 use crate::render::ao::{AoOptions, Falloff};
 use crate::sampling::rays::RaySet;
@@ -49,8 +52,32 @@ use glam::Vec3;
 use std::sync::atomic::AtomicU32;
 use std::time::{Duration, Instant};
 
-/// The kernel's own inputs: volumes, instances, sample words, directions.
-const OWN_INPUTS: u32 = 4;
+/// Twin of WGSL `SdfParams` (shaders/sdf_volume.wgsl): the visibility's header.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+struct SdfParamsGpu {
+    /// Instances.
+    instance_count: u32,
+    /// Steps per ray, cone and volume.
+    max_steps: u32,
+    /// Cone kernels: a cone's least step, a share of its radius (`ConeTrace::step`).
+    cone_step: f32,
+    /// Cone AO: tan of the cones' common half-angle (`ConeSet::tan_half`).
+    cone_tan: f32,
+}
+const _: () = assert!(std::mem::size_of::<SdfParamsGpu>() == 16);
+
+/// The cone kernels (shaders/sdf_kernel.wgsl), the cones' axes or lights at binding 3.
+const CONE_AO: Integrand = Integrand {
+    sources: &[RECEIVER_WGSL, include_str!("../../shaders/sdf_kernel.wgsl")],
+    entry: "cone_ao_main",
+    own: 1,
+    slot: 0,
+};
+const CONE_SHADOW: Integrand = Integrand {
+    entry: "cone_shadow_main",
+    ..CONE_AO
+};
 
 /// Rays one invocation of the sphere tracer starts with: a ray may take `max_steps` (256 by
 /// default) steps per volume, against lavapipe's 65,535 loop iterations per invocation; the
@@ -62,19 +89,14 @@ pub const SDF_CONES_PER_INVOCATION: u32 = 16;
 /// Instanced distance volumes on the device and the SDF kernels over them.
 pub struct SdfKernel<'a> {
     ctx: &'a GpuContext,
-    group: KernelGroup,
-    trace_ao: wgpu::ComputePipeline,
-    cone_ao: wgpu::ComputePipeline,
-    cone_shadow: wgpu::ComputePipeline,
-    volumes: wgpu::Buffer,
-    instances: wgpu::Buffer,
-    words: wgpu::Buffer,
+    /// The header, volumes, instances and samples, as group 1.
+    group: VisibilityGroup,
+    kernels: Kernels,
     instance_count: u32,
     max_steps: u32,
     sample_bytes: u64,
     setup: Duration,
-    /// Rays (sphere tracing) and cones per invocation, as last found to fit.
-    rays_per_invocation: AtomicU32,
+    /// Cones per invocation, as last found to fit.
     cones_per_invocation: AtomicU32,
 }
 
@@ -97,37 +119,30 @@ impl<'a> SdfKernel<'a> {
                 limit_name: "max_storage_buffer_binding_size",
             });
         }
-        let group = KernelGroup::new(ctx, "sdf", OWN_INPUTS);
-        let mut parts = vec![include_str!("../../shaders/frame.wgsl")];
-        parts.extend_from_slice(&HEADER_WGSL);
-        parts.push(include_str!("../../shaders/sdf_volume.wgsl"));
-        parts.push(include_str!("../../shaders/sdf_kernel.wgsl"));
-        let source = parts.concat();
-        let pipeline = |entry: &str| group.pipeline(ctx, entry, &source, entry);
-        let trace_ao = pipeline("sdf_ao_main")?;
-        let cone_ao = pipeline("cone_ao_main")?;
-        let cone_shadow = pipeline("cone_shadow_main")?;
-        Ok(SdfKernel {
+        let kernel = SdfKernel {
             ctx,
-            trace_ao,
-            cone_ao,
-            cone_shadow,
-            volumes: ctx.storage_buffer(
-                "sdf volumes",
-                bytemuck::cast_slice::<SdfVolumeGpu, u8>(&packed.volumes),
+            group: VisibilityGroup::new(
+                ctx,
+                "sdf",
+                &[
+                    bytemuck::cast_slice(&packed.volumes),
+                    bytemuck::cast_slice(&packed.instances),
+                    bytemuck::cast_slice(&packed.words),
+                ],
             ),
-            instances: ctx.storage_buffer(
-                "sdf instances",
-                bytemuck::cast_slice::<SdfInstanceGpu, u8>(&packed.instances),
-            ),
-            words: ctx.storage_buffer("sdf samples", bytemuck::cast_slice(&packed.words)),
-            group,
+            kernels: Kernels::new(SDF_RAYS_PER_INVOCATION),
             instance_count: packed.instances.len() as u32,
             max_steps: scene.trace.max_steps,
             sample_bytes: packed.sample_bytes,
-            setup: start.elapsed(),
-            rays_per_invocation: AtomicU32::new(SDF_RAYS_PER_INVOCATION),
+            setup: Duration::ZERO,
             cones_per_invocation: AtomicU32::new(SDF_CONES_PER_INVOCATION),
+        };
+        for i in [&integrand::AO, &CONE_AO, &CONE_SHADOW] {
+            kernel.kernels.compiled(&kernel, i)?;
+        }
+        Ok(SdfKernel {
+            setup: start.elapsed(),
+            ..kernel
         })
     }
 
@@ -144,36 +159,19 @@ impl<'a> SdfKernel<'a> {
 
     /// Rays per invocation the next sphere-traced AO call starts with.
     pub fn rays_per_invocation(&self) -> u32 {
-        self.rays_per_invocation
-            .load(std::sync::atomic::Ordering::Relaxed)
+        self.kernels.rays_per_invocation(integrand::AO.slot)
     }
 
-    /// The header of a call: the instances, the steps, the completion trips.
-    fn params(&self, rays_per_point: u32, origin_offset: f32, tmax: f32) -> KernelParamsGpu {
-        KernelParamsGpu {
-            rays_per_point,
+    /// The visibility's header with `cone`'s least step and tan (zero for the sphere trace)
+    /// and `max_steps` steps.
+    fn header(&self, max_steps: u32, (cone_step, cone_tan): (f32, f32)) -> wgpu::BindGroup {
+        let header = SdfParamsGpu {
             instance_count: self.instance_count,
-            completion_trips: COMPLETION_TRIPS,
-            origin_offset,
-            tmax: tmax.min(f32::MAX),
-            max_steps: self.max_steps,
-            ..Default::default()
-        }
-    }
-
-    /// A storage buffer of `what`, refused past the adapter's binding limit.
-    fn input(&self, what: &str, data: &[[f32; 4]]) -> Result<wgpu::Buffer, GpuError> {
-        let need = data.len() as u64 * 16;
-        let limit = self.ctx.max_binding();
-        if need > limit {
-            return Err(GpuError::TooLarge {
-                what: format!("{} {what}", data.len()),
-                need,
-                limit,
-                limit_name: "max_storage_buffer_binding_size",
-            });
-        }
-        Ok(self.ctx.storage_buffer(what, bytemuck::cast_slice(data)))
+            max_steps,
+            cone_step,
+            cone_tan,
+        };
+        self.group.bind(self.ctx, bytemuck::bytes_of(&header))
     }
 
     /// AO at every point by sphere tracing (point `i` uses the directions of point index `i`
@@ -188,51 +186,19 @@ impl<'a> SdfKernel<'a> {
         rays: &RaySet,
         opts: &AoOptions,
     ) -> Result<(Vec<f32>, GpuTiming), GpuError> {
-        let start = Instant::now();
         if opts.falloff != Falloff::Step {
             return Err(GpuError::Unsupported(
                 "SDF AO with a distance falloff (the kernel counts free rays)".into(),
             ));
         }
-        let base = base_directions(rays)?;
-        let recv = receivers(points, normals, rays)?;
-        let dirs = self.input("ray directions", &base)?;
-        let tmax = opts.max_distance.unwrap_or(f32::INFINITY);
-        let mut params = self.params(base.len() as u32, opts.offset, tmax);
-        let own = [&self.volumes, &self.instances, &self.words, &dirs];
-        let (ao, kernel, upload) = free_fractions(
-            &self.rays_per_invocation,
-            base.len() as u32,
-            recv.len(),
-            |per_invocation, per_point| {
-                params.rays_per_invocation = per_invocation;
-                params.invocations_per_point = per_point;
-                self.group.run(
-                    self.ctx,
-                    &self.trace_ao,
-                    &[],
-                    params,
-                    &recv,
-                    &own,
-                    (per_point, 1),
-                )
-            },
-        )?;
-        Ok((
-            ao,
-            GpuTiming {
-                kernel,
-                upload,
-                wall: start.elapsed(),
-            },
-        ))
+        integrand::ao(self, points, normals, rays, opts)
     }
 
     /// Each point's cones' visibilities, point-major (`dirs`: the cones' axes or lights).
     #[allow(clippy::too_many_arguments)]
     fn cones(
         &self,
-        pipeline: &wgpu::ComputePipeline,
+        integrand: &Integrand,
         points: &[Vec3],
         normals: &[Vec3],
         dirs: &[[f32; 4]],
@@ -257,29 +223,33 @@ impl<'a> SdfKernel<'a> {
                 ..Default::default()
             })
             .collect();
-        let buf = self.input("cones", dirs)?;
-        let mut params = KernelParamsGpu {
-            cone_step: trace.step,
-            cone_tan: tan,
-            max_steps: trace.max_steps,
-            ..self.params(dirs.len() as u32, offset, tmax)
+        check_binding::<[f32; 4]>(self.ctx, "cones", dirs.len())?;
+        let buf = self.ctx.storage_buffer("cones", bytemuck::cast_slice(dirs));
+        let params = IntegrandParamsGpu {
+            tmax: tmax.min(f32::MAX),
+            ..IntegrandParamsGpu::new(dirs.len() as u32, offset)
         };
-        let own = [&self.volumes, &self.instances, &self.words, &buf];
+        let k = self.kernels.compiled(self, integrand)?;
+        let group = self.header(trace.max_steps, (trace.step, tan));
         let (words, kernel, upload) = ray_words(
             &self.cones_per_invocation,
             dirs.len() as u32,
             recv.len(),
             |per_invocation, per_point| {
-                params.rays_per_invocation = per_invocation;
-                params.invocations_per_point = per_point;
-                self.group.run(
+                let params = IntegrandParamsGpu {
+                    rays_per_invocation: per_invocation,
+                    invocations_per_point: per_point,
+                    ..params
+                };
+                let shape = (per_point, per_invocation);
+                (k.group).run(
                     self.ctx,
-                    pipeline,
-                    &[],
+                    &k.pipeline,
+                    &[&group],
                     params,
                     &recv,
-                    &own,
-                    (per_point, per_invocation),
+                    &[&buf],
+                    shape,
                 )
             },
         )?;
@@ -308,7 +278,7 @@ impl<'a> SdfKernel<'a> {
             .map(|a| a.extend(0.0).to_array())
             .collect();
         let (v, kernel, upload) = self.cones(
-            &self.cone_ao,
+            &CONE_AO,
             points,
             normals,
             &axes,
@@ -324,14 +294,7 @@ impl<'a> SdfKernel<'a> {
                 .map(|c| cone_ao_mean(cones, c.iter().copied()))
                 .collect()
         };
-        Ok((
-            ao,
-            GpuTiming {
-                kernel,
-                upload,
-                wall: start.elapsed(),
-            },
-        ))
+        Ok((ao, timing(kernel, upload, start)))
     }
 
     /// The cone-traced light fraction of `lights` at every point (from `point + offset ·
@@ -351,7 +314,7 @@ impl<'a> SdfKernel<'a> {
             .map(|l| l.center.extend(l.radius).to_array())
             .collect();
         let (v, kernel, upload) = self.cones(
-            &self.cone_shadow,
+            &CONE_SHADOW,
             points,
             normals,
             &records,
@@ -371,13 +334,28 @@ impl<'a> SdfKernel<'a> {
                 }))
             })
             .collect();
-        Ok((
-            fractions,
-            GpuTiming {
-                kernel,
-                upload,
-                wall: start.elapsed(),
-            },
-        ))
+        Ok((fractions, timing(kernel, upload, start)))
+    }
+}
+
+impl GpuVisibility for SdfKernel<'_> {
+    fn context(&self) -> &GpuContext {
+        self.ctx
+    }
+
+    fn wgsl(&self, _: u32) -> String {
+        include_str!("../../shaders/sdf_volume.wgsl").into()
+    }
+
+    fn layout(&self) -> &wgpu::BindGroupLayout {
+        self.group.layout()
+    }
+
+    fn bind_group(&self) -> wgpu::BindGroup {
+        self.header(self.max_steps, (0.0, 0.0))
+    }
+
+    fn kernels(&self) -> &Kernels {
+        &self.kernels
     }
 }

@@ -3,10 +3,9 @@
 //! to the prism and searched with [`intersect`] (or [`exact`] for the reference; [`render_gpu`]
 //! for the GPU caster), the hit shaded with the map's normal.
 
-use super::cast::{exact, intersect, CastParams};
+use super::cast::{exact, intersect, Cast, CastParams};
 use super::height::HeightMap;
 use super::zones::SafetyZones;
-use crate::gpu::{GpuError, GpuTiming, ReliefKernel};
 use crate::render::image::GrayImage;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
@@ -169,20 +168,36 @@ pub fn render(
     assemble(view, px)
 }
 
-/// Renders `view` with the GPU caster (`kernel`, made for `map`); the hits are shaded on the
-/// host as in [`render`].
-pub fn render_gpu(
-    kernel: &ReliefKernel,
+/// A caster of a whole view's segments in one call (the GPU's relief caster and its peers,
+/// src/gpu/relief.rs and src/gpu/relief_peers.rs, implement it for their parameters `P`), so
+/// that `relief` needs nothing of `gpu`.
+pub trait SegmentCaster<P: ?Sized> {
+    /// What a call's cost is reported as.
+    type Timing;
+    /// Why a call failed.
+    type Error;
+    /// The answer on every segment `(E, X)` (prism coordinates).
+    fn cast_segments(
+        &self,
+        segments: &[(Vec3, Vec3)],
+        params: &P,
+    ) -> Result<(Vec<Cast>, Self::Timing), Self::Error>;
+}
+
+/// Renders `view` with a caster of whole views (`kernel`, made for `map`, with `params`: the
+/// GPU caster's [`CastParams`] or a peer); the hits are shaded on the host as in [`render`].
+pub fn render_gpu<P: ?Sized, K: SegmentCaster<P>>(
+    kernel: &K,
     map: &HeightMap,
     view: &View,
-    params: &CastParams,
-) -> Result<(ReliefFrame, GpuTiming), GpuError> {
+    params: &P,
+) -> Result<(ReliefFrame, K::Timing), K::Error> {
     let (w, h) = (view.width, view.height);
     let pixels: Vec<(u32, (Vec3, Vec3))> = (0..w * h)
         .filter_map(|k| view.segment(k).map(|s| (k, s)))
         .collect();
     let segments: Vec<(Vec3, Vec3)> = pixels.iter().map(|p| p.1).collect();
-    let (casts, timing) = kernel.cast(&segments, params)?;
+    let (casts, timing) = kernel.cast_segments(&segments, params)?;
     let mut px = vec![(0.0, None, 0); (w * h) as usize];
     for (&(k, (e, x)), c) in pixels.iter().zip(&casts) {
         px[k as usize] = shade_pixel(map, e, x, c.hit, c.fetches);

@@ -11,7 +11,7 @@ use super::super::validate::Validator;
 use super::super::Result;
 use super::{Columns, Kind, KindOptions, Needs, Setup};
 use crate::field::scene::FieldScene;
-use crate::gpu::{FieldAoKernel, FieldGpuOptions, GpuContext, GpuTracer};
+use crate::gpu::{FieldAoKernel, FieldGpuOptions, GpuContext, GpuVisibility};
 use crate::render::ao::{AoOptions, Falloff};
 use crate::render::estimator::{AoEstimator, Points};
 use crate::render::points::{EvalPoints, GBuffer};
@@ -81,7 +81,8 @@ impl AoRender {
     }
 }
 
-/// AO on the GPU: [`FieldAoKernel`] for field lookup, [`GpuTracer::ao`] for ray casting.
+/// AO on the GPU: [`FieldAoKernel`] for field lookup, the AO integrand ([`crate::gpu::ao`]) on
+/// any GPU visibility for ray casting.
 struct AoGpu(AoOptions);
 
 impl GpuQuantity for AoGpu {
@@ -100,8 +101,8 @@ impl GpuQuantity for AoGpu {
         }))
     }
 
-    fn trace(&self, tracer: &GpuTracer, at: Points, rays: &RaySet) -> Result<Estimate> {
-        traced(tracer.ao(at.points, at.normals, rays, &self.0))
+    fn trace(&self, vis: &dyn GpuVisibility, at: Points, rays: &RaySet) -> Result<Estimate> {
+        traced(crate::gpu::ao(vis, at.points, at.normals, rays, &self.0))
     }
 }
 

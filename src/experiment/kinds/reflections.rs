@@ -14,7 +14,7 @@ use crate::experiment::spec::{RenderSpec, Spec, SpecError};
 use crate::experiment::validate::Validator;
 use crate::experiment::Result;
 use crate::field::scene::FieldScene;
-use crate::gpu::{FieldGpuOptions, FieldReflectKernel, GpuContext, GpuTracer};
+use crate::gpu::{FieldGpuOptions, FieldReflectKernel, GpuContext, GpuVisibility};
 use crate::render::estimator::{Estimator, Points};
 use crate::render::points::{EvalPoints, GBuffer};
 use crate::render::reflect::{Gloss, ReflectOptions, ReflectionEstimator};
@@ -200,7 +200,8 @@ impl Kind for Reflections {
 }
 
 /// Reflections on the GPU: [`FieldReflectKernel`] for field lookup (it needs every instance's
-/// normal field, which the run attaches), [`GpuTracer::reflections`] for ray casting.
+/// normal field, which the run attaches), the reflection integrand ([`crate::gpu::reflections`])
+/// on any GPU visibility for ray casting.
 struct ReflectGpu(ReflectOptions);
 
 impl GpuQuantity for ReflectGpu {
@@ -219,7 +220,9 @@ impl GpuQuantity for ReflectGpu {
         }))
     }
 
-    fn trace(&self, tracer: &GpuTracer, at: Points, rays: &RaySet) -> Result<Estimate> {
-        traced(tracer.reflections(at.points, at.normals, rays, &self.0))
+    fn trace(&self, vis: &dyn GpuVisibility, at: Points, rays: &RaySet) -> Result<Estimate> {
+        traced(crate::gpu::reflections(
+            vis, at.points, at.normals, rays, &self.0,
+        ))
     }
 }

@@ -11,7 +11,7 @@ use crate::experiment::spec::{RenderSpec, Spec, SpecError};
 use crate::experiment::validate::Validator;
 use crate::experiment::Result;
 use crate::field::scene::FieldScene;
-use crate::gpu::{FieldGpuOptions, FieldShadowKernel, GpuContext, GpuTracer};
+use crate::gpu::{FieldGpuOptions, FieldShadowKernel, GpuContext, GpuVisibility};
 use crate::render::estimator::Points;
 use crate::render::points::{EvalPoints, GBuffer};
 use crate::render::shadow::{direct_light, ShadowEstimator, ShadowOptions, SphereLight};
@@ -161,8 +161,8 @@ impl Kind for Shadows {
     }
 }
 
-/// Soft shadows on the GPU: [`FieldShadowKernel`] for field lookup, [`GpuTracer::shadows`] for
-/// ray casting.
+/// Soft shadows on the GPU: [`FieldShadowKernel`] for field lookup, the shadow integrand
+/// ([`crate::gpu::shadows`]) on any GPU visibility for ray casting.
 struct ShadowGpu(ShadowOptions);
 
 impl GpuQuantity for ShadowGpu {
@@ -181,7 +181,9 @@ impl GpuQuantity for ShadowGpu {
         }))
     }
 
-    fn trace(&self, tracer: &GpuTracer, at: Points, rays: &RaySet) -> Result<Estimate> {
-        traced(tracer.shadows(at.points, at.normals, rays, &self.0))
+    fn trace(&self, vis: &dyn GpuVisibility, at: Points, rays: &RaySet) -> Result<Estimate> {
+        traced(crate::gpu::shadows(
+            vis, at.points, at.normals, rays, &self.0,
+        ))
     }
 }

@@ -29,7 +29,7 @@ pub mod maxmip;
 
 use super::cast::Cast;
 use super::height::HeightMap;
-use super::view::{assemble, shade_pixel, Pixel, ReliefFrame, View};
+use super::view::{assemble, render_gpu, shade_pixel, Pixel, ReliefFrame, SegmentCaster, View};
 pub use cone::{ConeMaps, CONE_CAP, RELAXED_AZIMUTHS, RELAXED_RINGS};
 use glam::Vec3;
 pub use maxmip::MaxMip;
@@ -216,21 +216,13 @@ pub fn render_peer(
 }
 
 /// Renders `view` with the GPU twin of `peer` (`kernel`, made for `map` and its
-/// [`PeerData`]); the hits are shaded on the host as in [`render_peer`].
-pub fn render_peer_gpu(
-    kernel: &crate::gpu::ReliefPeersKernel,
+/// [`PeerData`]; src/gpu/relief_peers.rs); the hits are shaded on the host as in
+/// [`render_peer`].
+pub fn render_peer_gpu<K: SegmentCaster<Peer>>(
+    kernel: &K,
     map: &HeightMap,
     view: &View,
     peer: &Peer,
-) -> Result<(ReliefFrame, crate::gpu::GpuTiming), crate::gpu::GpuError> {
-    let pixels: Vec<(u32, (Vec3, Vec3))> = (0..view.width * view.height)
-        .filter_map(|k| view.segment(k).map(|s| (k, s)))
-        .collect();
-    let segments: Vec<(Vec3, Vec3)> = pixels.iter().map(|p| p.1).collect();
-    let (casts, timing) = kernel.cast(&segments, peer)?;
-    let mut px: Vec<Pixel> = vec![(0.0, None, 0); (view.width * view.height) as usize];
-    for (&(k, (e, x)), c) in pixels.iter().zip(&casts) {
-        px[k as usize] = shade_pixel(map, e, x, c.hit, c.fetches);
-    }
-    Ok((assemble(view, px), timing))
+) -> Result<(ReliefFrame, K::Timing), K::Error> {
+    render_gpu(kernel, map, view, peer)
 }

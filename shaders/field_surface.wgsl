@@ -1,23 +1,14 @@
-// Glossy reflections by field lookup (Gaitatzes, Andreadis, Papaioannou, Chrysanthou, WSCG
-// 2010, §4.2: each reflection ray answered by the visibility field with a hit point, and by
-// the normal field with the normal there): each invocation takes one receiver point and a run
-// of its reflection rays (shaders/reflect_rays.wgsl), finds each ray's nearest hit over the
-// field instances (as `FieldScene::surface_hit`: every instance the ray meets is looked up and
-// the nearest hit kept, since bounding spheres may overlap), reads the normal of the map and
-// texel the nearest selection reads (also when the distance is interpolated), turns it to the
-// world, shades it, and writes the f32 sum of its kept rays' radiance and their count; the host
-// adds up a point's runs in f64 and divides. An invocation whose loops the driver cut short
-// writes CUT_SHORT first instead (shaders/loop_budget.wgsl).
+// The field visibility's closest hit (src/gpu/field_visibility.rs; Gaitatzes, Andreadis,
+// Papaioannou, Chrysanthou, WSCG 2010, §4.2: a ray answered by the visibility field with a hit
+// point, and by the normal field with the normal there), compiled where the normal fields are
+// bound: the hit of each instance (the lookup of `instance_occludes`, keeping the map and
+// texel the nearest selection reads, also when the distance is interpolated), the nearest over
+// the instances, and its normal read, unpacked and turned to the world.
 
-// `params`, `receivers` and `out` are the field kernels' shared header (shaders/field_kernel.wgsl);
-// the kernel's own bindings follow (src/gpu/field_reflect.rs).
-@group(0) @binding(3) var<storage, read> lobe: array<vec4<f32>>;
-@group(0) @binding(4) var<storage, read> lights: array<Light>;
-@group(0) @binding(5) var<storage, read> shading: Shading;
 // The normal fields: per instance k its first texel word (word 2k) and bits per component
 // (word 2k + 1), then each distinct normal field's texels, one word each (component a in the
 // low 16 bits, b in the high), maps back to back as on the host.
-@group(0) @binding(6) var<storage, read> normals: array<u32>;
+@group(1) @binding(4) var<storage, read> normals: array<u32>;
 
 // One instance's answer: hit, its distance (model units) and the nearest selection's read.
 struct FieldHit {
@@ -115,18 +106,21 @@ fn instance_surface_hit(inst: Instance, origin: vec3<f32>, dir: vec3<f32>, tmin:
     return res;
 }
 
-// The radiance ray origin + t dir brings back: the nearest hit over the instances (ties go to
-// the instance the host tries first: the nearer sphere entry, then the lower index), its
-// normal from the instance's normal field turned to the world, shaded; `sky` on a miss.
-fn field_radiance(origin: vec3<f32>, dir: vec3<f32>) -> f32 {
+// `FieldScene::surface_hit` with the normal of the hit: the nearest hit over the instances
+// (every instance the ray meets is looked up and the nearest kept, since bounding spheres may
+// overlap; ties go to the instance the host tries first: the nearer sphere entry, then the
+// lower index), its normal from the instance's normal field turned to the world.
+fn surface_hit(origin: vec3<f32>, dir: vec3<f32>, tmax: f32) -> SurfaceHit {
+    var res: SurfaceHit;
+    res.hit = false;
     var best_t = 0.0;
     var best_entry = 0.0;
     var best_k = 0xffffffffu;
     var best_word = 0u;
-    for (var k = 0u; k < params.instance_count; k++) {
+    for (var k = 0u; k < field_params.instance_count; k++) {
         let inst = instances[k];
-        let h = instance_surface_hit(inst, origin, dir, 0.0, 3.4028235e38, params.selection,
-                                     params.intra_bias, params.intra_auto != 0u);
+        let h = instance_surface_hit(inst, origin, dir, 0.0, tmax, SELECTION,
+                                     field_params.intra_bias, field_params.intra_auto != 0u);
         if !h.hit {
             continue;
         }
@@ -141,39 +135,27 @@ fn field_radiance(origin: vec3<f32>, dir: vec3<f32>) -> f32 {
         }
     }
     if best_k == 0xffffffffu {
-        return shading.sky;
+        return res;
     }
     let inst = instances[best_k];
     let n_model = unpack_normal(best_word, normals[2u * best_k + 1u]);
     // The instance's model -> world rotation: the conjugate of its world -> model one.
     let to_world = vec4<f32>(-inst.rotation.xyz, inst.rotation.w);
-    let n = normalize_exact(quat_rotate(to_world, n_model));
-    return shade_hit(origin, dir, best_t, n);
+    res.hit = true;
+    res.t = best_t;
+    res.normal = normalize_exact(quat_rotate(to_world, n_model));
+    return res;
 }
 
-@compute @workgroup_size(64)
-fn reflect_main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x + gid.y * params.row_stride;
-    let per_point = params.invocations_per_point;
-    if i >= params.point_count * per_point {
-        return;
-    }
-    let first = (i % per_point) * params.rays_per_invocation;
-    let last = min(first + params.rays_per_invocation, params.rays_per_point);
-    let rc = receivers[i / per_point];
-    let b = reflect_base(rc.position, rc.normal, params.origin_offset, shading.eye);
-    let mirror = shading.mirror != 0u;
-    var sum = 0.0;
-    var kept = 0.0;
-    for (var r = first; r < last; r++) {
-        let ray = reflection_ray(b, lobe[r].xyz, rc.rotation_cos, rc.rotation_sin, mirror);
-        if ray.w == 0.0 {
-            continue;
-        }
-        kept += 1.0;
-        sum += field_radiance(b.origin, ray.xyz);
-    }
-    let done = loops_completed(params.completion_trips);
-    out[2u * i] = select(CUT_SHORT, bitcast<u32>(sum), done);
-    out[2u * i + 1u] = bitcast<u32>(kept);
+// `unpack_normal` (src/field/normals.rs) of a texel word (component a in the low 16 bits, b in
+// the high), `bits` bits per component: the octahedral square [-1, 1]^2 to a unit vector.
+fn unpack_normal(word: u32, bits: u32) -> vec3<f32> {
+    let levels = f32((1u << bits) - 1u);
+    let ex = f32(word & 0xffffu) / levels * 2.0 - 1.0;
+    let ey = f32(word >> 16u) / levels * 2.0 - 1.0;
+    var v = vec3<f32>(ex, ey, 1.0 - abs(ex) - abs(ey));
+    let t = max(-v.z, 0.0);
+    v.x += select(t, -t, v.x >= 0.0);
+    v.y += select(t, -t, v.y >= 0.0);
+    return v * (1.0 / sqrt(dot(v, v)));
 }
