@@ -236,6 +236,13 @@ fn run_checked(
         return Ok(report(Vec::new()));
     }
     eprint!("{plan_text}");
+    if let (Some(shard), true) = (opts.shard, plan.cells.is_empty()) {
+        eprintln!(
+            "shard {}: no cells (every field group lies in another shard); writing an empty \
+             shard for `experiment merge`",
+            shard.label()
+        );
+    }
     let method_runs = methods::runnable(ls, spec, opts)?;
     let rows = staged_run(opts, |staged| {
         let mut runner = Runner::new(spec, &plan, &scenes, staged)?;
