@@ -772,7 +772,7 @@ pub fn run(cli: Cli) -> Result<i32> {
             run_one(&spec, &opts, None)?;
         }
         Command::Try { mesh, kind, opts } => {
-            let name = format!("try_{}", super::try_mesh::stem(&mesh));
+            let name = super::try_mesh::run_name(&mesh);
             let o = opts.options(&name, None)?;
             let (report, verdicts) = super::try_mesh::run(&mesh, kind, &o)?;
             if o.dry_run {
