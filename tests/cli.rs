@@ -394,3 +394,116 @@ fn plots_list_the_plots_they_draw_as_the_runs_files() {
     assert!(o.status.success(), "{}", text(&o));
     assert_eq!(std::fs::read(&run_json).unwrap(), after);
 }
+
+/// Guards the command-made results against writing into a folder no run wrote: `experiment
+/// dynamic --out DIR` once wrote straight into it (replacing the user's `table.csv`), as
+/// `performance` did; both are now refused before any work, as a spec's run is, the folder
+/// untouched; a file given as the output folder is refused and left as it is.
+#[test]
+fn dynamic_and_performance_refuse_a_folder_no_run_wrote() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("mine");
+    std::fs::create_dir_all(&out).unwrap();
+    std::fs::write(out.join("table.csv"), "my table").unwrap();
+    let file = dir.path().join("notes.txt");
+    std::fs::write(&file, "my notes").unwrap();
+    for sub in ["dynamic", "performance"] {
+        for (to, why) in [
+            (&out, ["no run.json", "--allow-nonempty-out"]),
+            (&file, ["notes.txt", "is a file"]),
+        ] {
+            let o = experiment(&[sub, "--quick", "--no-cache", "--out", to.to_str().unwrap()]);
+            let t = text(&o);
+            assert!(!o.status.success(), "{sub}: {t}");
+            assert!(why.iter().all(|w| t.contains(w)), "{sub}: {t}");
+        }
+    }
+    assert_eq!(
+        std::fs::read_to_string(out.join("table.csv")).unwrap(),
+        "my table"
+    );
+    assert_eq!(std::fs::read_dir(&out).unwrap().count(), 1);
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), "my notes");
+    // Nothing staged beside them either.
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
+}
+
+/// Guards against flags accepted and ignored: `dynamic` and `performance` (which run whole, on
+/// the CPU) once took `--shard` and `--adapter` and ran without them, `all` took `--shard` for
+/// its specs only, `check --dry-run` ran `dynamic` in full and passed a spec on no rows,
+/// `plots --dir` dropped its names and `--quick`, `--no-cache` dropped `--cache`. Each is now
+/// refused naming the flag, before anything is written.
+#[test]
+fn no_flag_is_accepted_and_ignored() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let o = out.to_str().unwrap();
+    let mut cases: Vec<(Vec<&str>, &str)> = vec![
+        (
+            vec!["dynamic", "--quick", "--out", o, "--shard", "1/2"],
+            "--shard",
+        ),
+        (
+            vec!["dynamic", "--quick", "--out", o, "--adapter", "lavapipe"],
+            "--adapter",
+        ),
+        (
+            vec!["performance", "--quick", "--out", o, "--shard", "2/2"],
+            "--shard",
+        ),
+        (
+            vec!["performance", "--quick", "--out", o, "--adapter", "auto"],
+            "--adapter",
+        ),
+        (
+            vec!["all", "--quick", "--out", o, "--shard", "1/2"],
+            "--shard",
+        ),
+        (
+            vec!["check", "--quick", "--out", o, "--dry-run"],
+            "--dry-run",
+        ),
+        (
+            vec!["check", "--quick", "--out", o, "--shard", "1/2"],
+            "--shard",
+        ),
+        (
+            vec!["check", "dynamic", "--out", o, "--adapter", "auto"],
+            "--adapter",
+        ),
+        (vec!["plots", "--dir", o, "--quick"], "--quick"),
+        (vec!["plots", "--dir", o, "figure6"], "NAMES"),
+        (
+            vec!["figure6", "--out", o, "--no-cache", "--cache", o],
+            "--cache",
+        ),
+        (
+            vec![
+                "figure6",
+                "--out",
+                o,
+                "--no-cache",
+                "--cache-limit-mib",
+                "9",
+            ],
+            "--cache-limit-mib",
+        ),
+    ];
+    if !cfg!(feature = "embree") {
+        cases.push((
+            vec!["dynamic", "--out", o, "--require-embree"],
+            "--require-embree",
+        ));
+        cases.push((
+            vec!["performance", "--out", o, "--require-embree"],
+            "--require-embree",
+        ));
+    }
+    for (args, flag) in cases {
+        let r = experiment(&args);
+        let t = text(&r);
+        assert!(!r.status.success(), "{args:?} accepted: {t}");
+        assert!(t.contains(flag), "{args:?}: {t}");
+        assert!(!out.exists(), "{args:?} wrote {}", out.display());
+    }
+}

@@ -1,7 +1,8 @@
 //! `experiment dynamic --quick`: every method on every frame of every crowd, with exact row
 //! counts, the reference's own error exactly 0, the field's error two-sided, and the overlap
 //! counts the choreography guarantees (orbits that keep neighbours' spheres apart, spheres
-//! clear of the plane).
+//! clear of the plane). The run is staged and published as a spec's is: into a folder of the
+//! user's (allowed), it keeps their files and empty folders.
 
 use visfield::experiment::dynamic::{self, crowd::Profile, FrameRow};
 use visfield::experiment::fields::FieldSupply;
@@ -14,10 +15,22 @@ fn the_quick_crowd_gives_every_method_every_frame_with_bounded_errors() {
         cache_limit: 0,
         memory_limit: 1 << 30,
     };
-    let rows: Vec<FrameRow> = dynamic::run(&out.path().join("dyn"), true, &supply).unwrap();
+    // A folder of the user's: their table.csv (once replaced), notes and an empty folder.
+    let dyn_out = out.path().join("dyn");
+    std::fs::create_dir_all(dyn_out.join("drafts")).unwrap();
+    std::fs::write(dyn_out.join("table.csv"), "my table").unwrap();
+    std::fs::write(dyn_out.join("notes.txt"), "my notes").unwrap();
+    let refused = dynamic::run(&dyn_out, true, &supply, false).unwrap_err();
+    assert!(refused.to_string().contains("no run.json"), "{refused}");
+    let rows: Vec<FrameRow> = dynamic::run(&dyn_out, true, &supply, true).unwrap();
     for f in ["table.csv", "run.json", "frame_time.png"] {
-        assert!(out.path().join("dyn").join(f).is_file(), "{f}");
+        assert!(dyn_out.join(f).is_file(), "{f}");
     }
+    let read = |f: &str| std::fs::read_to_string(dyn_out.join(f)).unwrap();
+    assert_eq!(read("table.csv.kept"), "my table");
+    assert_eq!(read("notes.txt"), "my notes");
+    assert!(dyn_out.join("drafts").is_dir());
+    assert!(read("table.csv").starts_with("sweep,"));
     let p = Profile::new(true);
     // World rebuild, two levels, the field with and without its sphere BVH, the mesh distance
     // fields and the AO fields; Embree rebuilt and instanced.

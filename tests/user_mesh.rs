@@ -275,7 +275,8 @@ fn a_registry_model_and_its_file_by_path_give_the_same_numbers() {
 }
 
 /// `experiment try` on an OBJ outside the repository: the table, images, plots and the spec,
-/// a verdict per CPU row computed from the table, and the spec reruns to the same numbers.
+/// a verdict per CPU row computed from the table, and the spec reruns to the same numbers; a
+/// refused mesh is named as given.
 fn try_writes_table_images_plots_and_a_spec_that_reruns() {
     use visfield::experiment::try_mesh::{self, TryKind};
     let dir = tempfile::tempdir().unwrap();
@@ -330,6 +331,18 @@ fn try_writes_table_images_plots_and_a_spec_that_reruns() {
     let e = try_mesh::run(&stl, TryKind::Ao, &o).unwrap_err().chain();
     assert!(e.contains("m.stl") && e.contains(".obj, .ply"), "{e}");
     assert!(!dir.path().join("stl-out").exists());
+    // A mesh refused while the run loads it is named as given, not through `OUT/spec.json`,
+    // a file that exists only once a run has finished (every refusal once named it).
+    let nan = dir.path().join("nan.obj");
+    std::fs::write(&nan, "v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n").unwrap();
+    let o = options(dir.path().join("nan-out"));
+    let e = try_mesh::run(&nan, TryKind::Ao, &o).unwrap_err().chain();
+    assert!(
+        e.starts_with(&format!("{}: ", nan.display())) && e.contains("line 3"),
+        "{e}"
+    );
+    assert!(!e.contains("spec.json") && !e.contains("nan-out"), "{e}");
+    assert!(!dir.path().join("nan-out").exists());
 }
 
 /// `experiment --help` names `try` and the file form of a spec's mesh; `experiment try --help`

@@ -2,7 +2,7 @@
 
 use super::discover;
 use super::fields::FieldSupply;
-use super::run::{LoadedSpec, RunOptions};
+use super::run::{staging, LoadedSpec, RunOptions};
 use super::spec::Backend;
 use super::{Error, Result};
 use clap::{Args, Parser, Subcommand};
@@ -131,8 +131,8 @@ pub enum Command {
         /// The quick runs' results (results/quick/NAME).
         #[arg(long)]
         quick: bool,
-        /// A run's output folder (instead of names).
-        #[arg(long)]
+        /// A run's output folder (instead of names and --quick).
+        #[arg(long, conflicts_with_all = ["names", "quick"])]
         dir: Option<PathBuf>,
     },
     /// Joins the folders of `--shard I/N` runs of one spec into the folder a single run
@@ -172,7 +172,7 @@ pub struct RunArgs {
     #[arg(long)]
     pub cache: Option<PathBuf>,
     /// Do not read or write the field cache.
-    #[arg(long)]
+    #[arg(long, conflicts_with_all = ["cache", "cache_limit_mib"])]
     pub no_cache: bool,
     /// Cache only fields up to this many MiB.
     #[arg(long, default_value_t = 256)]
@@ -252,6 +252,58 @@ impl RunArgs {
             (None, None) => default_root.join(name),
         }
     }
+}
+
+/// The checks of the flags that a command without a spec's cells or a GPU has no use for: no
+/// flag is accepted and ignored.
+impl RunArgs {
+    /// Refuses `--shard` and `--adapter` for `command` (a command-made result that runs whole,
+    /// on the CPU), and `--require-embree` in a build without Embree ([`Self::embree_built`]).
+    fn whole_cpu_run(&self, command: &str) -> Result<()> {
+        if let Some(v) = &self.shard {
+            return Err(Error::invalid(
+                "--shard",
+                format!(
+                    "`{v}`: experiment {command} runs whole (its rows are not a spec's cells); \
+                     --shard splits a spec's cells (`experiment NAME --shard I/N`)"
+                ),
+            ));
+        }
+        if let Some(a) = &self.adapter {
+            return Err(Error::invalid(
+                "--adapter",
+                format!("`{a}`: experiment {command} runs on the CPU only and opens no GPU"),
+            ));
+        }
+        self.embree_built(command)
+    }
+
+    /// Refuses `--require-embree` where this build has no Embree: `command` would run without
+    /// its rows.
+    fn embree_built(&self, command: &str) -> Result<()> {
+        if self.require_embree && !cfg!(feature = "embree") {
+            return Err(Error::invalid(
+                "--require-embree",
+                format!(
+                    "experiment {command}: this build has no Embree (build with --features \
+                     embree)"
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// `experiment performance` into `o.out`, staged and published as a spec's run is
+/// ([`staging`]): a file or a folder no run wrote refused before any work unless
+/// `--allow-nonempty-out`.
+fn performance(o: &RunOptions) -> Result<()> {
+    staging::check_ownership(&o.out, o.allow_nonempty_out)?;
+    let rows = staging::staged(&o.out, |dir| {
+        super::performance::run(dir, o.quick, &o.supply)
+    })?;
+    println!("performance: {} row(s) -> {}", rows.len(), o.out.display());
+    Ok(())
 }
 
 /// `mib` MiB in bytes, or the error naming `flag` when that overflows.
@@ -460,12 +512,45 @@ fn check(
     Ok(i32::from(!failed.is_empty()))
 }
 
+/// Refuses the flags `check` would accept and ignore: `--dry-run` (it runs the specs to compare
+/// them), and with `dynamic` among the checked names (as by default) `--shard`, and
+/// `--adapter` where `dynamic` is all it checks.
+fn check_flags(names: &[String], args: &RunArgs) -> Result<()> {
+    if args.dry_run {
+        return Err(Error::invalid(
+            "--dry-run",
+            "experiment check runs the specs to compare them; `experiment NAME --dry-run` \
+             prints a spec's plan",
+        ));
+    }
+    let dynamic = names.is_empty() || names.iter().any(|n| n == "dynamic");
+    if let (true, Some(v)) = (dynamic, &args.shard) {
+        return Err(Error::invalid(
+            "--shard",
+            format!(
+                "`{v}`: experiment dynamic, which check runs {}, runs whole; name the specs to \
+                 check a shard of them",
+                if names.is_empty() {
+                    "by default"
+                } else {
+                    "here"
+                }
+            ),
+        ));
+    }
+    if names.iter().all(|n| n == "dynamic") && !names.is_empty() {
+        return args.whole_cpu_run("dynamic");
+    }
+    Ok(())
+}
+
 /// `experiment dynamic` run under `parent` and its rows checked against the committed run
 /// ([`super::check::check_committed_dynamic`]); the failures, named.
 fn check_dynamic(args: &RunArgs, parent: &Path, committed_root: &Path) -> Result<Vec<String>> {
+    args.embree_built("dynamic")?;
     let o = args.options("dynamic", Some(parent))?;
     let t = std::time::Instant::now();
-    super::dynamic::run(&o.out, o.quick, &o.supply)?;
+    super::dynamic::run(&o.out, o.quick, &o.supply, o.allow_nonempty_out)?;
     let committed = committed_root.join("dynamic").join("table.csv");
     let theirs = match super::columns::read_csv(&committed) {
         Ok(rows) => rows,
@@ -688,7 +773,7 @@ pub fn run(cli: Cli) -> Result<i32> {
             run_one(&spec, &opts, None)?;
         }
         Command::Try { mesh, kind, opts } => {
-            let name = format!("try_{}", super::try_mesh::stem(&mesh));
+            let name = super::try_mesh::run_name(&mesh);
             let o = opts.options(&name, None)?;
             let (report, verdicts) = super::try_mesh::run(&mesh, kind, &o)?;
             if o.dry_run {
@@ -710,14 +795,16 @@ pub fn run(cli: Cli) -> Result<i32> {
             );
         }
         Command::Performance { opts } => {
+            opts.whole_cpu_run("performance")?;
             let o = opts.options("performance", None)?;
             if o.dry_run {
                 println!("{}", super::performance::plan(o.quick));
                 return Ok(0);
             }
-            super::performance::run(&o.out, o.quick, &o.supply)?;
+            performance(&o)?;
         }
         Command::Dynamic { opts } => {
+            opts.whole_cpu_run("dynamic")?;
             let o = opts.options("dynamic", None)?;
             if o.dry_run {
                 println!(
@@ -726,15 +813,28 @@ pub fn run(cli: Cli) -> Result<i32> {
                 );
                 return Ok(0);
             }
-            super::dynamic::run(&o.out, o.quick, &o.supply)?;
+            super::dynamic::run(&o.out, o.quick, &o.supply, o.allow_nonempty_out)?;
         }
         Command::Check {
             names,
             require_gpu,
             against,
             opts,
-        } => return check(&names, &opts, require_gpu, against.as_deref()),
+        } => {
+            check_flags(&names, &opts)?;
+            return check(&names, &opts, require_gpu, against.as_deref());
+        }
         Command::All { opts } => {
+            if let Some(v) = &opts.shard {
+                return Err(Error::invalid(
+                    "--shard",
+                    format!(
+                        "`{v}`: experiment all runs every result whole; run a spec's shards \
+                         with `experiment NAME --shard I/N`"
+                    ),
+                ));
+            }
+            opts.embree_built("all")?;
             for p in discover::spec_paths()? {
                 let parent = opts.out.clone();
                 run_one(&p, &opts, parent.as_deref())?;
@@ -754,10 +854,9 @@ pub fn run(cli: Cli) -> Result<i32> {
             let adapter = adapter_preference(opts.adapter.as_deref());
             super::relief::run(&root("relief"), opts.quick, Some(adapter))?;
             super::stability::run(&root("stability"))?;
-            let perf = opts.options("performance", opts.out.as_deref())?;
-            super::performance::run(&perf.out, perf.quick, &perf.supply)?;
-            let dynamic = opts.options("dynamic", opts.out.as_deref())?;
-            super::dynamic::run(&dynamic.out, dynamic.quick, &dynamic.supply)?;
+            performance(&opts.options("performance", opts.out.as_deref())?)?;
+            let d = opts.options("dynamic", opts.out.as_deref())?;
+            super::dynamic::run(&d.out, d.quick, &d.supply, d.allow_nonempty_out)?;
         }
         Command::Plots { names, quick, dir } => plots(&names, quick, dir.as_deref())?,
         Command::Merge { out, shards } => super::merge::merge(&out, &shards)?,

@@ -20,6 +20,8 @@
 //! estimator's options; no shard enters the key), so shards sharing a cache folder compute it
 //! once where they do not race, and identically where they do.
 
+use super::plan::{cells_of, Cell};
+use super::spec::Spec;
 use super::{Error, Result};
 use serde::Serialize;
 
@@ -94,6 +96,14 @@ pub fn select<T, K: PartialEq>(
         Some(s) => s.select_groups(cells, group),
         None => cells,
     }
+}
+
+/// The cells of `spec` (a profile's) that `shard` runs, in plan order (every cell without a
+/// shard): the field groups, a scene's cells of one field geometry, whose first cell lies in
+/// the shard's block. The planner's selection (`Plan::new_shard`), and what `experiment merge`
+/// checks each shard's rows against.
+pub fn cells(spec: &Spec, shard: Option<Shard>) -> Vec<Cell> {
+    select(cells_of(spec), shard, |c| (c.scene, c.geometry()))
 }
 
 #[cfg(test)]

@@ -11,7 +11,7 @@
 
 use super::outputs::read_csv;
 use super::run::{self, LoadedSpec, RunOptions, RunReport};
-use super::spec::Spec;
+use super::spec::{Spec, SpecError};
 use super::table::Row;
 use super::{Error, Result};
 use crate::geometry::MeshFormat;
@@ -100,10 +100,14 @@ pub fn spec_text(mesh: &str, label: &str, kind: TryKind) -> String {
     serde_json::to_string_pretty(&spec).expect("a JSON value serialises")
 }
 
-/// Runs `try` on `mesh` into `opts.out`; prints and returns the verdicts with the report.
+/// Runs `try` on `mesh` into `opts.out`; prints and returns the verdicts with the report. A
+/// refusal of the mesh names the mesh file ([`about_the_mesh`]).
 pub fn run(mesh: &Path, kind: TryKind, opts: &RunOptions) -> Result<(RunReport, Vec<String>)> {
     MeshFormat::of(mesh).map_err(Error::geometry("experiment try"))?;
     let mesh_abs = mesh.canonicalize().map_err(Error::io(mesh))?;
+    if !opts.dry_run {
+        super::run::staging::check_ownership(&opts.out, opts.allow_nonempty_out)?;
+    }
     let created = !opts.out.exists();
     std::fs::create_dir_all(&opts.out).map_err(Error::io(&opts.out))?;
     let result = (|| {
@@ -115,12 +119,14 @@ pub fn run(mesh: &Path, kind: TryKind, opts: &RunOptions) -> Result<(RunReport, 
         let text = spec_text(&rel.to_string_lossy(), &label, kind);
         let path = opts.out.join("spec.json");
         let ls = LoadedSpec {
-            name: format!("try_{}", stem(mesh)),
+            name: run_name(mesh),
             spec: Spec::parse(&text, &path)?,
             path,
             text,
         };
-        let report = run::run(&ls, opts)?;
+        let resolved = opts.out.join(&rel);
+        let report =
+            run::run(&ls, opts).map_err(|e| about_the_mesh(e, &ls.path, mesh, &resolved))?;
         if opts.dry_run {
             return Ok((report, Vec::new()));
         }
@@ -143,26 +149,66 @@ pub fn run(mesh: &Path, kind: TryKind, opts: &RunOptions) -> Result<(RunReport, 
     result
 }
 
-/// The mesh's file stem, reduced to the characters a spec name may hold.
-pub fn stem(mesh: &Path) -> String {
-    let s: String = mesh
+/// The name of `try`'s run on the mesh file `mesh` (its output folder's): `try_STEM`, STEM the
+/// file's stem where it is already a name (ASCII letters, digits, `_` and `-`) and the file an
+/// `.obj`; else that stem with each other character replaced by `_`, then `-` and 8 hex digits
+/// of the SHA-256 of the file name, so that no two file names share a folder (`ü.obj` and
+/// `é.obj`, `a b.obj` and `a_b.obj`, `m.obj` and `m.ply`).
+pub fn run_name(mesh: &Path) -> String {
+    let stem = mesh
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default()
+        .unwrap_or_default();
+    let clean: String = stem
         .chars()
         .map(|c| {
-            if c.is_ascii_alphanumeric() || c == '-' {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
                 c
             } else {
                 '_'
             }
         })
         .collect();
-    if s.is_empty() {
-        "mesh".into()
-    } else {
-        s
+    let obj = mesh.extension().is_some_and(|e| e == "obj");
+    if !clean.is_empty() && clean == stem && obj {
+        return format!("try_{clean}");
     }
+    let name = mesh.file_name().unwrap_or_default().as_encoded_bytes();
+    let hash = crate::io::sha256_hex(name);
+    let clean = if clean.is_empty() { "mesh" } else { &clean };
+    format!("try_{clean}-{}", &hash[..8])
+}
+
+/// An error of the run of the generated spec as an error of the mesh file: the spec
+/// (`OUT/spec.json`, written only once the run has finished) is no file of the user's, so an
+/// error it names becomes `MESH: MESSAGE`, the mesh named as given (not as the spec resolves
+/// it, `resolved`), with the spec's field where it is not the mesh's.
+fn about_the_mesh(e: Error, spec: &Path, mesh: &Path, resolved: &Path) -> Error {
+    let Error::Spec(SpecError::Invalid {
+        file,
+        field,
+        message,
+    }) = e
+    else {
+        return e;
+    };
+    if file != spec {
+        return Error::Spec(SpecError::Invalid {
+            file,
+            field,
+            message,
+        });
+    }
+    let label = mesh.file_name().unwrap_or_default().to_string_lossy();
+    let mut message = message.replace(&format!("{}: ", resolved.display()), "");
+    message = message.replace(&resolved.display().to_string(), &mesh.display().to_string());
+    if let Some(rest) = message.strip_prefix(&format!("{label}: ")) {
+        message = rest.to_string();
+    }
+    if !field.ends_with(".mesh") {
+        message = format!("in the spec `experiment try` made for it, field `{field}`: {message}");
+    }
+    Error::invalid(mesh.display().to_string(), message)
 }
 
 /// One line per field size of the table's CPU rows: "1090 × 32² u8: RMS 1.9 of 255, 4.1×
@@ -242,9 +288,39 @@ mod tests {
         }
     }
 
+    /// Guards the output folders of `try`: file names that sanitise to one stem (non-ASCII
+    /// letters, a space against `_`, one stem in two formats) once shared `try_STEM` and the
+    /// second run replaced the first's results.
     #[test]
-    fn stems_are_spec_names() {
-        assert_eq!(stem(Path::new("/x/My Mesh.v2.obj")), "My_Mesh_v2");
-        assert_eq!(stem(Path::new("/x/.obj")), "_obj");
+    fn run_names_are_names_and_no_two_files_share_one() {
+        assert_eq!(run_name(Path::new("/x/bunny_npm.obj")), "try_bunny_npm");
+        assert_eq!(run_name(Path::new("a-b.obj")), "try_a-b");
+        let files = [
+            "ü.obj",
+            "é.obj",
+            "a b.obj",
+            "a_b.obj",
+            "a.b.obj",
+            "m.obj",
+            "m.ply",
+            "m.OBJ",
+            "a-b.obj",
+            ".obj",
+            "My Mesh.v2.obj",
+            "x/ü.obj",
+        ];
+        let names: Vec<String> = files.iter().map(|f| run_name(Path::new(f))).collect();
+        let distinct: std::collections::HashSet<&String> = names.iter().collect();
+        // Only `ü.obj` and `x/ü.obj`, one file name, share a folder.
+        assert_eq!(distinct.len(), files.len() - 1, "{names:?}");
+        for n in &names {
+            assert!(
+                n.chars()
+                    .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-'),
+                "{n}"
+            );
+        }
+        assert!(names[2].starts_with("try_a_b-") && names[2].len() == "try_a_b-".len() + 8);
+        assert!(names[0].starts_with("try__-"), "{}", names[0]);
     }
 }

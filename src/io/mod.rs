@@ -1,9 +1,12 @@
-//! Small I/O helpers shared by every module: atomic writes, hashing and the caches' container.
+//! Small I/O helpers shared by every module: atomic writes, a lock between processes, hashing
+//! and the caches' container.
 
 mod cache;
+mod lock;
 pub mod places;
 
 pub use cache::{read_cache, write_cache, CacheError, CacheFile};
+pub use lock::FileLock;
 
 use std::io::Write;
 use std::path::Path;

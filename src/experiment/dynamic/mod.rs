@@ -51,6 +51,7 @@ pub mod movers;
 
 use super::fields::FieldSupply;
 use super::plot::{xy_plot, Axes, Series};
+use super::run::staging;
 use super::{Error, Result};
 use serde::Serialize;
 use std::path::Path;
@@ -98,17 +99,35 @@ pub struct FrameRow {
     pub points_in_spheres: usize,
 }
 
-/// Runs the crowd sweep into `out` (`table.csv`, `run.json`, `frame_time.png`).
-pub fn run(out: &Path, quick: bool, supply: &FieldSupply) -> Result<Vec<FrameRow>> {
+/// Runs the crowd sweep into `out` (`table.csv`, `run.json`, `frame_time.png`, …), written in
+/// a staging folder beside it and published only when whole, as a spec's run is
+/// ([`super::run::staging`]): a file at `out`, or a folder that holds files no run wrote, is
+/// refused before any work unless `allow_nonempty_out` (the folder's files are then kept).
+pub fn run(
+    out: &Path,
+    quick: bool,
+    supply: &FieldSupply,
+    allow_nonempty_out: bool,
+) -> Result<Vec<FrameRow>> {
+    staging::check_ownership(out, allow_nonempty_out)?;
     super::progress::begin_run();
     let profile = crowd::Profile::new(quick);
     super::models_cmd::require("dynamic", profile.registered())?;
-    std::fs::create_dir_all(out).map_err(Error::io(out))?;
+    staging::staged(out, |dir| write(dir, &profile, quick, supply))
+}
+
+/// The sweep's outputs, written into `out` (the staging folder).
+fn write(
+    out: &Path,
+    profile: &crowd::Profile,
+    quick: bool,
+    supply: &FieldSupply,
+) -> Result<Vec<FrameRow>> {
     let mut rows = Vec::new();
     let cache = supply.cache.as_deref();
     for &n in &profile.counts {
-        let crowd = crowd::Crowd::new(&profile, n, supply)?;
-        let (r, pictures) = crowd.frames(&profile, cache)?;
+        let crowd = crowd::Crowd::new(profile, n, supply)?;
+        let (r, pictures) = crowd.frames(profile, cache)?;
         rows.extend(r);
         animation::write(
             &out.join("crowd.png"),
@@ -117,8 +136,8 @@ pub fn run(out: &Path, quick: bool, supply: &FieldSupply) -> Result<Vec<FrameRow
             250,
         )?;
     }
-    let approach = crowd::Crowd::approach(&profile, supply, profile.gaps.clone())?;
-    let (r, pictures) = approach.frames(&profile, cache)?;
+    let approach = crowd::Crowd::approach(profile, supply, profile.gaps.clone())?;
+    let (r, pictures) = approach.frames(profile, cache)?;
     rows.extend(r);
     animation::write(
         &out.join("approach.png"),
@@ -140,7 +159,7 @@ pub fn run(out: &Path, quick: bool, supply: &FieldSupply) -> Result<Vec<FrameRow
         "profile": if quick { "quick" } else { "full" },
         "meta": meta,
         "crowd": profile.describe(),
-        "field": crowd::field_label(&profile),
+        "field": crowd::field_label(profile),
         "rows": rows.len(),
     });
     let p = out.join("run.json");

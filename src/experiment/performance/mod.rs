@@ -558,7 +558,6 @@ pub fn run(out: &Path, quick: bool, supply: &FieldSupply) -> Result<Vec<PerfRow>
     let json = out.join("run.json");
     let meta = meta.timed();
     crate::io::write_atomic(&json, meta.to_json().as_bytes()).map_err(Error::io(&json))?;
-    println!("performance: {} row(s) -> {}", table.len(), out.display());
     Ok(table)
 }
 

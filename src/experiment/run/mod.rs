@@ -238,6 +238,13 @@ fn run_checked(
         return Ok(report(Vec::new()));
     }
     eprint!("{plan_text}");
+    if let (Some(shard), true) = (opts.shard, plan.cells.is_empty()) {
+        eprintln!(
+            "shard {}: no cells (every field group lies in another shard); writing an empty \
+             shard for `experiment merge`",
+            shard.label()
+        );
+    }
     let method_runs = methods::runnable(ls, spec, opts)?;
     let rows = staged_run(opts, |staged| {
         let mut runner = Runner::new(spec, &plan, &scenes, staged)?;
@@ -259,17 +266,15 @@ fn run_checked(
 }
 
 /// Runs `work` with its outputs going to a staging folder beside `opts.out` (the options it is
-/// given), published only once it has finished; the staging folder removed on any failure.
+/// given), published only once it has finished; the staging folder removed on any failure
+/// ([`staging::staged`]).
 fn staged_run<T>(opts: &RunOptions, work: impl FnOnce(&RunOptions) -> Result<T>) -> Result<T> {
-    let staged = RunOptions {
-        out: staging::create(&opts.out)?,
-        ..opts.clone()
-    };
-    let done = work(&staged).and_then(|t| staging::publish(&staged.out, &opts.out).map(|()| t));
-    if done.is_err() {
-        let _ = std::fs::remove_dir_all(&staged.out);
-    }
-    done
+    staging::staged(&opts.out, |dir| {
+        work(&RunOptions {
+            out: dir.to_path_buf(),
+            ..opts.clone()
+        })
+    })
 }
 
 /// [`run_checked`] for an animated spec: every scene frame by frame ([`frames`]), written by

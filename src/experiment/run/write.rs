@@ -245,6 +245,11 @@ impl Runner<'_> {
             "effective_spec": spec,
         });
         write_summary(out, &summary, ls)?;
+        if rows.is_empty() && opts.shard.is_some() {
+            // An empty shard (more shards than field groups): its run.json and header-only
+            // table.csv mark it done for `experiment merge`; there is nothing to plot.
+            return Ok(rows);
+        }
         let title = format!("{}{}", ls.name, if opts.quick { " (quick)" } else { "" });
         crate::experiment::figures::draw_all(out, &title)?;
         Ok(rows)
