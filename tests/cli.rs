@@ -428,6 +428,43 @@ fn dynamic_and_performance_refuse_a_folder_no_run_wrote() {
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
 }
 
+/// Guards against `stability`, `sampling` and `relief` writing straight into a folder they never
+/// wrote (as `dynamic` once did): each is staged and published as a spec's run is, so a folder
+/// of the user's files (no run.json) or a file as `--out` is refused before any work, untouched.
+#[test]
+fn the_command_made_results_refuse_a_folder_no_run_wrote() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("mine");
+    std::fs::create_dir_all(&out).unwrap();
+    std::fs::write(out.join("cases.csv"), "my table").unwrap();
+    let file = dir.path().join("notes.txt");
+    std::fs::write(&file, "my notes").unwrap();
+    for sub in [
+        vec!["stability"],
+        vec!["sampling"],
+        vec!["relief", "--quick", "--no-gpu"],
+    ] {
+        for (to, why) in [
+            (&out, ["no run.json", "--allow-nonempty-out"]),
+            (&file, ["notes.txt", "is a file"]),
+        ] {
+            let mut args = sub.clone();
+            args.extend(["--out", to.to_str().unwrap()]);
+            let o = experiment(&args);
+            let t = text(&o);
+            assert!(!o.status.success(), "{sub:?}: {t}");
+            assert!(why.iter().all(|w| t.contains(w)), "{sub:?}: {t}");
+        }
+    }
+    assert_eq!(
+        std::fs::read_to_string(out.join("cases.csv")).unwrap(),
+        "my table"
+    );
+    assert_eq!(std::fs::read_dir(&out).unwrap().count(), 1);
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), "my notes");
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
+}
+
 /// Guards against flags accepted and ignored: `dynamic` and `performance` (which run whole, on
 /// the CPU) once took `--shard` and `--adapter` and ran without them, `all` took `--shard` for
 /// its specs only, `check --dry-run` ran `dynamic` in full and passed a spec on no rows,

@@ -38,18 +38,30 @@ pub enum Command {
         /// Output folder.
         #[arg(long, default_value = "results/sampling")]
         out: std::path::PathBuf,
+        /// Run into an output folder that holds files no earlier run wrote (no run.json); its
+        /// files are kept, never deleted.
+        #[arg(long)]
+        allow_nonempty_out: bool,
     },
     /// Stiff and extreme cases against f64 or closed-form answers (exit 1 naming any failure).
     Stability {
         /// Output folder.
         #[arg(long, default_value = "results/stability")]
         out: std::path::PathBuf,
+        /// Run into an output folder that holds files no earlier run wrote (no run.json); its
+        /// files are kept, never deleted.
+        #[arg(long)]
+        allow_nonempty_out: bool,
     },
     /// The 2005 relief caster: Tables 1–3 (skips × viewing angle, sample rate, bisections).
     Relief {
         /// Output folder.
         #[arg(long, default_value = "results/relief")]
         out: std::path::PathBuf,
+        /// Run into an output folder that holds files no earlier run wrote (no run.json); its
+        /// files are kept, never deleted.
+        #[arg(long)]
+        allow_nonempty_out: bool,
         /// 64² images and one timing per setting (for tests and CI).
         #[arg(long)]
         quick: bool,
@@ -373,6 +385,46 @@ fn list() -> Result<i32> {
 /// Every spec by default (the embedded quickstart too), or the ones named. Where no Vulkan
 /// driver is installed and no adapter was named, the specs' "gpu" rows are left out, loudly,
 /// unless `require_gpu` makes that a failure.
+/// `experiment stability` into `out`, written as a spec's run is (`run/staging.rs`): `out`
+/// checked before any work, the cases run in a staging folder beside it and published whole. A
+/// failing case is a result too: its rows are written before the error names it, so they are
+/// published; an error before any row is written publishes nothing.
+fn stability(out: &Path, allow_nonempty_out: bool) -> Result<()> {
+    staging::check_ownership(out, allow_nonempty_out)?;
+    let cases = staging::staged(out, |dir| {
+        let r = super::stability::run(dir);
+        if r.is_err() && dir.join("run.json").is_file() {
+            Ok(r)
+        } else {
+            r.map(Ok)
+        }
+    })?;
+    cases?;
+    println!("stability: written to {}", out.display());
+    Ok(())
+}
+
+/// `experiment relief` into `out`, staged and published as [`stability`] is.
+fn relief(
+    out: &Path,
+    allow_nonempty_out: bool,
+    quick: bool,
+    gpu: Option<crate::gpu::AdapterPreference>,
+) -> Result<()> {
+    staging::check_ownership(out, allow_nonempty_out)?;
+    let rows = staging::staged(out, |dir| super::relief::run(dir, quick, gpu))?;
+    println!("relief: {} row(s) -> {}", rows.len(), out.display());
+    Ok(())
+}
+
+/// `experiment sampling` into `out`, staged and published as [`stability`] is.
+fn sampling(out: &Path, allow_nonempty_out: bool) -> Result<()> {
+    staging::check_ownership(out, allow_nonempty_out)?;
+    staging::staged(out, super::sampling_report::run).map_err(|e| e.context("sampling"))?;
+    eprintln!("sampling: report written to {}", out.display());
+    Ok(())
+}
+
 fn check(
     names: &[String],
     args: &RunArgs,
@@ -757,17 +809,19 @@ pub fn run(cli: Cli) -> Result<i32> {
     match cli.command {
         Command::Quickstart { out } => super::quickstart::run(&out, false)?,
         Command::List => return list(),
-        Command::Stability { out } => {
-            super::stability::run(&out)?;
-        }
+        Command::Stability {
+            out,
+            allow_nonempty_out,
+        } => stability(&out, allow_nonempty_out)?,
         Command::Relief {
             out,
+            allow_nonempty_out,
             quick,
             adapter,
             no_gpu,
         } => {
             let gpu = (!no_gpu).then(|| adapter_preference(adapter.as_deref()));
-            super::relief::run(&out, quick, gpu)?;
+            relief(&out, allow_nonempty_out, quick, gpu)?;
         }
         Command::Run { spec, opts } => {
             run_one(&spec, &opts, None)?;
@@ -850,10 +904,10 @@ pub fn run(cli: Cli) -> Result<i32> {
             let root = |name: &str| opts.out(name, opts.out.as_deref());
             // The quickstart in the run's profile: with --quick, what `check --quick` compares.
             super::quickstart::run(&root("quickstart"), opts.quick)?;
-            super::sampling_report::run(&root("sampling")).map_err(|e| e.context("sampling"))?;
+            sampling(&root("sampling"), false)?;
             let adapter = adapter_preference(opts.adapter.as_deref());
-            super::relief::run(&root("relief"), opts.quick, Some(adapter))?;
-            super::stability::run(&root("stability"))?;
+            relief(&root("relief"), false, opts.quick, Some(adapter))?;
+            stability(&root("stability"), false)?;
             performance(&opts.options("performance", opts.out.as_deref())?)?;
             let d = opts.options("dynamic", opts.out.as_deref())?;
             super::dynamic::run(&d.out, d.quick, &d.supply, d.allow_nonempty_out)?;
@@ -869,9 +923,10 @@ pub fn run(cli: Cli) -> Result<i32> {
             run_one(&discover::find(&name)?, &parsed.opts, None)?;
         }
         Command::Models { command } => return super::models_cmd::run(command),
-        Command::Sampling { out } => {
-            super::sampling_report::run(&out).map_err(|e| e.context("sampling"))?
-        }
+        Command::Sampling {
+            out,
+            allow_nonempty_out,
+        } => sampling(&out, allow_nonempty_out)?,
     }
     Ok(0)
 }

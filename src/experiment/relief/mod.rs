@@ -536,6 +536,5 @@ pub fn run(out: &Path, quick: bool, gpu: Option<AdapterPreference>) -> Result<Ve
     let json = out.join("run.json");
     let meta = meta.timed();
     crate::io::write_atomic(&json, meta.to_json().as_bytes()).map_err(Error::io(&json))?;
-    println!("relief: {} row(s) -> {}", rows.len(), out.display());
     Ok(rows)
 }

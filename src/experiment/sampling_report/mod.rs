@@ -192,7 +192,6 @@ pub fn run(out: &Path) -> Result<()> {
     let path = out.join("run.json");
     let text = serde_json::to_string_pretty(&run).unwrap_or_default() + "\n";
     write_atomic(&path, text.as_bytes()).map_err(Error::io(&path))?;
-    eprintln!("sampling: report written to {}", out.display());
     Ok(())
 }
 
