@@ -385,13 +385,33 @@ fn list() -> Result<i32> {
 /// Every spec by default (the embedded quickstart too), or the ones named. Where no Vulkan
 /// driver is installed and no adapter was named, the specs' "gpu" rows are left out, loudly,
 /// unless `require_gpu` makes that a failure.
+/// A command's results folder as a spec's run has it: `out` refused before any work when it is
+/// a file or holds files no run wrote (unless `allow_nonempty_out`), or when it cannot be
+/// written; `work` run in a staging folder beside it and published whole
+/// ([`staging::staged`]); a folder this call created is removed again when nothing was
+/// published.
+fn staged_command<T>(
+    out: &Path,
+    allow_nonempty_out: bool,
+    work: impl FnOnce(&Path) -> Result<T>,
+) -> Result<T> {
+    staging::check_ownership(out, allow_nonempty_out)?;
+    let existed = out.exists();
+    super::run::ensure_writable(out)?;
+    let done = staging::staged(out, work);
+    if done.is_err() && !existed {
+        // Only when empty: nothing of anyone's is removed.
+        let _ = std::fs::remove_dir(out);
+    }
+    done
+}
+
 /// `experiment stability` into `out`, written as a spec's run is (`run/staging.rs`): `out`
 /// checked before any work, the cases run in a staging folder beside it and published whole. A
 /// failing case is a result too: its rows are written before the error names it, so they are
 /// published; an error before any row is written publishes nothing.
 fn stability(out: &Path, allow_nonempty_out: bool) -> Result<()> {
-    staging::check_ownership(out, allow_nonempty_out)?;
-    let cases = staging::staged(out, |dir| {
+    let cases = staged_command(out, allow_nonempty_out, |dir| {
         let r = super::stability::run(dir);
         if r.is_err() && dir.join("run.json").is_file() {
             Ok(r)
@@ -411,16 +431,17 @@ fn relief(
     quick: bool,
     gpu: Option<crate::gpu::AdapterPreference>,
 ) -> Result<()> {
-    staging::check_ownership(out, allow_nonempty_out)?;
-    let rows = staging::staged(out, |dir| super::relief::run(dir, quick, gpu))?;
+    let rows = staged_command(out, allow_nonempty_out, |dir| {
+        super::relief::run(dir, quick, gpu)
+    })?;
     println!("relief: {} row(s) -> {}", rows.len(), out.display());
     Ok(())
 }
 
 /// `experiment sampling` into `out`, staged and published as [`stability`] is.
 fn sampling(out: &Path, allow_nonempty_out: bool) -> Result<()> {
-    staging::check_ownership(out, allow_nonempty_out)?;
-    staging::staged(out, super::sampling_report::run).map_err(|e| e.context("sampling"))?;
+    staged_command(out, allow_nonempty_out, super::sampling_report::run)
+        .map_err(|e| e.context("sampling"))?;
     eprintln!("sampling: report written to {}", out.display());
     Ok(())
 }
