@@ -193,7 +193,9 @@ impl Tracer {
             return None;
         }
         let o = Vec3A::from(origin) * self.scale;
-        let d = Vec3A::from(dir);
+        // −0 folded into +0: obvhs takes a ray's octant from `d < 0` (+ for −0) but its inverse
+        // from the sign (−1/ε for −0), and a ray with a −0 component missed everything.
+        let d = Vec3A::from(dir) + Vec3A::ZERO;
         let (tmin_s, tmax_s) = (tmin * self.scale, tmax * self.scale);
         // obvhs accepts hits with t < ray.tmax; one ulp more makes tmax inclusive (the
         // watertight test itself enforces [tmin, tmax]).

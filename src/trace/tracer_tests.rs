@@ -303,3 +303,30 @@ mod unpadded_obvhs {
         }
     }
 }
+
+/// A direction with a −0 component (`-Vec3::Z` is (−0, −0, −1)) hits what the same direction
+/// with +0 hits: obvhs took the ray's octant from `d < 0` but its inverse from the sign, and
+/// such rays missed everything.
+#[test]
+fn directions_with_negative_zero_components_hit() {
+    let tris = grid(8, 0.25);
+    let tracer = Tracer::new(&tris);
+    let mut hits = 0;
+    for (o, d) in [
+        (Vec3::new(0.3, 0.7, 1.0), -Vec3::Z),
+        (Vec3::new(0.3, 0.7, 1.0), Vec3::new(-0.0, 0.0, -1.0)),
+        (Vec3::new(0.3, 0.7, 1.0), Vec3::new(0.0, -0.0, -1.0)),
+        (Vec3::new(0.3, 0.7, -1.0), Vec3::new(-0.0, -0.0, 1.0)),
+        (Vec3::new(0.3, 2.0, 0.0), Vec3::new(-0.0, -1.0, -0.0)),
+    ] {
+        let q = RayQuery {
+            origin: o,
+            dir: d,
+            tmin: 0.0,
+            tmax: f32::INFINITY,
+        };
+        assert_matches_brute_force(&tracer, &tris, &q);
+        hits += tracer.any_hit(o, d, 0.0, f32::INFINITY) as u32;
+    }
+    assert_eq!(hits, 4, "the last ray runs in the grid's plane");
+}
