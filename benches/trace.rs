@@ -6,7 +6,7 @@
 //! UV sphere of about 100,000 triangles. `cargo bench --bench trace`.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 use std::hint::black_box;
 use std::path::Path;
 use std::time::Instant;
@@ -35,8 +35,10 @@ fn load_obj(path: &Path) -> Option<Mesh> {
     for m in models {
         let base = mesh.positions.len() as u32;
         let p = &m.mesh.positions;
-        mesh.positions
-            .extend(p.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])));
+        mesh.positions.extend(
+            p.chunks_exact(3)
+                .map(|c| DVec3::new(c[0], c[1], c[2]).as_vec3()),
+        );
         mesh.triangles.extend(
             m.mesh
                 .indices

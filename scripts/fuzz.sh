@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Fuzzes the spec parser, mesh validation and the OBJ and PLY loaders for a bounded time per
+# Fuzzes the spec parser, mesh validation, the OBJ and PLY loaders and PLY headers built from
+# the input (counts, repeated elements, elements without properties) for a bounded time per
 # target (default 60 s):
 #   scripts/fuzz.sh [SECONDS] [TARGET...]
 # Needs cargo-fuzz (`cargo install cargo-fuzz`). On a stable toolchain, RUSTC_BOOTSTRAP=1 lets
@@ -11,7 +12,7 @@ cd "$(dirname "$0")/../fuzz"
 secs="${1:-60}"
 shift || true
 targets=("$@")
-if [ ${#targets[@]} -eq 0 ]; then targets=(spec mesh_parts obj ply); fi
+if [ ${#targets[@]} -eq 0 ]; then targets=(spec mesh_parts obj ply ply_header); fi
 export RUSTC_BOOTSTRAP=1
 status=0
 for t in "${targets[@]}"; do

@@ -1,74 +1,15 @@
 //! Hostile mesh files, OBJ and PLY: each gets one error naming the file, the line or element,
 //! and what is wrong; nothing panics; a run that meets one caches nothing and leaves no output.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use visfield::experiment::run::{run, LoadedSpec};
 use visfield::geometry::Mesh;
 
 mod common;
+use common::mesh_files::{
+    ascii_ply, binary_header, binary_tetra, file, refused, TETRA_BODY, TETRA_OBJ,
+};
 use common::options;
-
-/// `bytes` written to a fresh folder as `name`; the folder lives as long as the guard.
-fn file(name: &str, bytes: &[u8]) -> (tempfile::TempDir, PathBuf) {
-    let dir = tempfile::tempdir().unwrap();
-    let p = dir.path().join(name);
-    std::fs::write(&p, bytes).unwrap();
-    (dir, p)
-}
-
-/// The loader's error on `bytes` as `name`, asserted to name the file and every `parts`.
-fn refused(name: &str, bytes: &[u8], parts: &[&str]) -> String {
-    let (_dir, p) = file(name, bytes);
-    let e = Mesh::load_file(&p, &|_| {})
-        .expect_err("the file should be refused")
-        .to_string();
-    assert!(e.contains(&p.display().to_string()), "{e}");
-    for part in parts {
-        assert!(e.contains(part), "`{part}` missing from: {e}");
-    }
-    eprintln!("{name}: {e}");
-    e
-}
-
-const TETRA_OBJ: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n";
-
-/// An ASCII PLY of a tetrahedron; `vertices` and `faces` replace the header's counts and
-/// `body` the data.
-fn ascii_ply(vertices: usize, faces: usize, body: &str) -> String {
-    format!(
-        "ply\nformat ascii 1.0\nelement vertex {vertices}\nproperty float x\nproperty float y\n\
-         property float z\nelement face {faces}\nproperty list uchar int vertex_indices\n\
-         end_header\n{body}"
-    )
-}
-
-const TETRA_BODY: &str = "0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n3 0 1 3\n3 0 2 3\n3 1 2 3\n";
-
-/// A binary little-endian PLY header for `v` vertices and `f` faces.
-fn binary_header(v: usize, f: usize) -> Vec<u8> {
-    format!(
-        "ply\nformat binary_little_endian 1.0\nelement vertex {v}\nproperty float x\n\
-         property float y\nproperty float z\nelement face {f}\n\
-         property list uchar int vertex_indices\nend_header\n"
-    )
-    .into_bytes()
-}
-
-fn binary_tetra() -> Vec<u8> {
-    let mut b = binary_header(4, 4);
-    for p in [[0f32, 0., 0.], [1., 0., 0.], [0., 1., 0.], [0., 0., 1.]] {
-        for c in p {
-            b.extend_from_slice(&c.to_le_bytes());
-        }
-    }
-    for t in [[0i32, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]] {
-        b.push(3);
-        for i in t {
-            b.extend_from_slice(&i.to_le_bytes());
-        }
-    }
-    b
-}
 
 #[test]
 fn the_well_formed_files_load() {
@@ -135,8 +76,8 @@ fn out_of_range_and_zero_indices_are_refused() {
         ascii_ply(4, 4, &TETRA_BODY.replacen("3 1 2 3", "3 1 2 4", 1)).as_bytes(),
         &[
             "face element 3",
-            "vertex index 4 out of range",
-            "4 vertices",
+            "vertex index 4 (item 2 of its `vertex_indices`) out of range",
+            "the header declares 4 vertices",
         ],
     );
     refused(

@@ -99,6 +99,13 @@ pub struct Mesh {
     pub triangles: Vec<[u32; 3]>,
     /// Zero-area triangles dropped during validation.
     pub dropped_degenerate: usize,
+    /// Faces of a mesh file dropped as exact duplicates of another (the same corners in the
+    /// same cyclic order: [`Mesh::from_file_parts`]); 0 for meshes built otherwise.
+    pub dropped_duplicate: usize,
+    /// Where the positions were moved from: the model's own coordinates are `origin +
+    /// position` (in f64). Zero unless the mesh was centred ([`super::rebase::centred_mesh`],
+    /// or a file far from its origin, rebased as it was read).
+    pub origin: DVec3,
 }
 
 impl Mesh {
@@ -178,6 +185,8 @@ impl Mesh {
             normals,
             triangles: kept,
             dropped_degenerate: dropped,
+            dropped_duplicate: 0,
+            origin: DVec3::ZERO,
         })
     }
 
@@ -270,6 +279,9 @@ impl Mesh {
             normals: self.normals.iter().map(|&n| t.to_world_dir(n)).collect(),
             triangles: self.triangles.clone(),
             dropped_degenerate: self.dropped_degenerate,
+            dropped_duplicate: self.dropped_duplicate,
+            // World positions: the model's coordinates are no longer a shift away.
+            origin: DVec3::ZERO,
         }
     }
 }

@@ -1,8 +1,10 @@
 //! Wavefront OBJ loading (through `tobj`), with file and line in every error.
 
 use super::mesh::PartsError;
+use super::mesh_file::{obj_line_too_long, MAX_OBJ_LINE};
+use super::rebase::centred_positions;
 use super::{GeometryError, Mesh};
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 use std::collections::HashMap;
 use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
@@ -14,8 +16,11 @@ impl Mesh {
     /// - Only positions and faces are read: materials, texture coordinates and the file's normals
     ///   are ignored (normals are recomputed, area-weighted, see [`Mesh`]); `mtllib` files are
     ///   never opened.
-    /// - Positions are welded across objects/groups by exact coordinate equality, so vertices
-    ///   shared between groups stay shared; vertices used by no face are not kept.
+    /// - Positions are read in f64 and rebased next to their origin before they are rounded to
+    ///   f32 ([`Mesh::from_file_parts`]), then welded across objects/groups by exact coordinate
+    ///   equality, so vertices shared between groups stay shared; vertices used by no face and
+    ///   exact duplicate faces are not kept.
+    /// - A line longer than [`MAX_OBJ_LINE`] is an error naming it, before it is held whole.
     /// - The mesh is named by the file name.
     ///
     /// Errors name the file: an unreadable file (I/O error), a parse error with the line where
@@ -42,6 +47,11 @@ impl Mesh {
         };
         let (models, _materials) =
             tobj::load_obj_buf(&mut reader, &options, |_| Ok(Default::default())).map_err(|e| {
+                if reader.too_long {
+                    // The line being read, not yet ended.
+                    let line = reader.newlines as u64 + 1;
+                    return GeometryError::invalid(&display, obj_line_too_long(line));
+                }
                 let line = reader.line_number();
                 let what = match e {
                     // tobj reads lines as UTF-8 text: binary data stops it here.
@@ -59,46 +69,36 @@ impl Mesh {
             return Err(GeometryError::invalid(&display, "read error"));
         }
 
-        let mut positions: Vec<Vec3> = Vec::new();
+        // Every object's positions in one list (f64, as the file holds them) and its faces
+        // renumbered into it; rebased, then welded on the f32 values the mesh will hold.
+        let mut positions: Vec<DVec3> = Vec::new();
         let mut triangles: Vec<[u32; 3]> = Vec::new();
-        let mut weld: HashMap<[u32; 3], u32> = HashMap::new();
         for model in &models {
             let m = &model.mesh;
-            let local: Vec<u32> = m
-                .positions
-                .chunks_exact(3)
-                .map(|c| {
-                    let p = Vec3::new(c[0], c[1], c[2]);
-                    // +0.0 folds −0.0 into 0.0; NaNs stay distinct per bit pattern (and are
-                    // rejected below anyway).
-                    let key = [c[0] + 0.0, c[1] + 0.0, c[2] + 0.0].map(f32::to_bits);
-                    *weld.entry(key).or_insert_with(|| {
-                        positions.push(p);
-                        (positions.len() - 1) as u32
-                    })
-                })
-                .collect();
+            let base = positions.len() as u64;
+            positions.extend(
+                m.positions
+                    .chunks_exact(3)
+                    .map(|c| DVec3::new(c[0], c[1], c[2])),
+            );
+            let local = positions.len() as u64 - base;
             for (f, t) in m.indices.chunks_exact(3).enumerate() {
-                let map = |i: u32| {
-                    local.get(i as usize).copied().ok_or_else(|| {
-                        GeometryError::invalid(
-                            &display,
-                            format!(
-                                "object `{}` face {f}: vertex index out of range",
-                                model.name
-                            ),
-                        )
-                    })
+                let map = |i: u32| match (i as u64) < local {
+                    true => Ok((base + i as u64) as u32),
+                    false => Err(GeometryError::invalid(
+                        &display,
+                        format!(
+                            "object `{}` face {f}: vertex index out of range",
+                            model.name
+                        ),
+                    )),
                 };
                 triangles.push([map(t[0])?, map(t[1])?, map(t[2])?]);
             }
         }
-
-        let name = path
-            .file_name()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_else(|| display.clone());
-        Mesh::try_from_parts(&name, positions, triangles).map_err(|e| match e {
+        let (positions, origin) = centred_positions(&positions);
+        let (positions, triangles) = weld(positions, triangles);
+        Mesh::from_file_parts(path, positions, origin, triangles).map_err(|e| match e {
             PartsError::NonFinite { position, .. } => {
                 let place = match first_non_finite_vertex_line(path) {
                     Some((line, k)) => format!("line {line} (vertex {k}, 1-based as in OBJ)"),
@@ -114,8 +114,33 @@ impl Mesh {
     }
 }
 
-/// Scans the `v ` lines for the first one with a non-finite coordinate, parsing the first three
-/// numbers as f32 like `tobj` does. Returns (line number, vertex number), both 1-based.
+/// Positions welded across objects/groups by exact equality (+0 and −0 alike), so that
+/// vertices shared between groups stay shared, and the faces renumbered.
+fn weld(positions: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    let mut weld: HashMap<[u32; 3], u32> = HashMap::new();
+    let mut kept = Vec::new();
+    let map: Vec<u32> = positions
+        .iter()
+        .map(|&p| {
+            // +0.0 folds −0.0 into 0.0; NaNs stay distinct per bit pattern (and are rejected
+            // later anyway).
+            let key = (p + Vec3::ZERO).to_array().map(f32::to_bits);
+            *weld.entry(key).or_insert_with(|| {
+                kept.push(p);
+                (kept.len() - 1) as u32
+            })
+        })
+        .collect();
+    let triangles = triangles
+        .into_iter()
+        .map(|t| t.map(|i| map[i as usize]))
+        .collect();
+    (kept, triangles)
+}
+
+/// Scans the `v ` lines for the first one with a non-finite coordinate as the f32 a mesh holds
+/// (a value finite in f64 but past f32's range too). Returns (line number, vertex number), both
+/// 1-based.
 fn first_non_finite_vertex_line(path: &Path) -> Option<(usize, usize)> {
     let file = std::fs::File::open(path).ok()?;
     let mut vertex = 0usize;
@@ -137,11 +162,17 @@ fn first_non_finite_vertex_line(path: &Path) -> Option<(usize, usize)> {
 }
 
 /// A `BufRead` that counts the newlines consumed, so that a parse error reported by `tobj` (which
-/// reads line by line) can name the line it stopped at.
+/// reads line by line) can name the line it stopped at, and fails a line longer than
+/// [`MAX_OBJ_LINE`] (`tobj` holds each line whole: without this, a file with no line end is
+/// read into memory whole).
 struct LineCountingReader<'p, R> {
     inner: R,
     newlines: usize,
+    /// Bytes consumed since the last newline.
+    line_len: usize,
     io_error: bool,
+    /// The read failed on a line longer than [`MAX_OBJ_LINE`].
+    too_long: bool,
     /// Bytes consumed, and the last count reported to `progress`.
     bytes: u64,
     reported: u64,
@@ -153,7 +184,9 @@ impl<R: BufRead> LineCountingReader<'_, R> {
         LineCountingReader {
             inner,
             newlines: 0,
+            line_len: 0,
             io_error: false,
+            too_long: false,
             bytes: 0,
             reported: 0,
             progress: None,
@@ -174,12 +207,37 @@ impl<R: BufRead> LineCountingReader<'_, R> {
     fn line_number(&self) -> usize {
         self.newlines.max(1)
     }
+
+    /// Adds the newlines in `bytes`, consumed, to `newlines`, and sets `line_len` to the
+    /// length of the line they end in (fields, not `self`: `consume` holds the inner buffer).
+    fn count(newlines: &mut usize, line_len: &mut usize, bytes: &[u8]) {
+        match bytes.iter().rposition(|&b| b == b'\n') {
+            Some(last) => {
+                *newlines += bytes.iter().filter(|&&b| b == b'\n').count();
+                *line_len = bytes.len() - last - 1;
+            }
+            None => *line_len += bytes.len(),
+        }
+    }
+
+    /// The error that stops a line past [`MAX_OBJ_LINE`].
+    fn check_line(&mut self) -> std::io::Result<()> {
+        if self.line_len > MAX_OBJ_LINE {
+            self.too_long = true;
+            return Err(std::io::Error::new(
+                std::io::ErrorKind::InvalidData,
+                format!("a line longer than {MAX_OBJ_LINE} bytes"),
+            ));
+        }
+        Ok(())
+    }
 }
 
 impl<R: BufRead> Read for LineCountingReader<'_, R> {
     fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        self.check_line()?;
         let n = self.inner.read(buf).inspect_err(|_| self.io_error = true)?;
-        self.newlines += buf[..n].iter().filter(|&&b| b == b'\n').count();
+        Self::count(&mut self.newlines, &mut self.line_len, &buf[..n]);
         self.advance(n);
         Ok(n)
     }
@@ -187,6 +245,7 @@ impl<R: BufRead> Read for LineCountingReader<'_, R> {
 
 impl<R: BufRead> BufRead for LineCountingReader<'_, R> {
     fn fill_buf(&mut self) -> std::io::Result<&[u8]> {
+        self.check_line()?;
         match self.inner.fill_buf() {
             Ok(b) => Ok(b),
             Err(e) => {
@@ -198,10 +257,8 @@ impl<R: BufRead> BufRead for LineCountingReader<'_, R> {
 
     fn consume(&mut self, amt: usize) {
         if let Ok(b) = self.inner.fill_buf() {
-            self.newlines += b[..amt.min(b.len())]
-                .iter()
-                .filter(|&&c| c == b'\n')
-                .count();
+            let n = amt.min(b.len());
+            Self::count(&mut self.newlines, &mut self.line_len, &b[..n]);
         }
         self.advance(amt);
         self.inner.consume(amt);

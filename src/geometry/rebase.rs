@@ -189,8 +189,14 @@ fn world_spheres(placed: &[PlacedMesh]) -> Vec<(DVec3, f64)> {
 /// [`rebase_origin`] of its bounding sphere is not zero (a model whose file coordinates lie far
 /// from the origin), the positions minus that origin, formed in f64 and rounded once, so that
 /// fields are baked and looked up at the precision of the model's size; otherwise the mesh as
-/// it is and zero. Normals are kept (a translation leaves them unchanged).
+/// it is and zero. Normals are kept (a translation leaves them unchanged). A mesh already
+/// centred (a file rebased as it was read, [`centred_positions`]) comes back as it is, with its
+/// [`Mesh::origin`]; the offset returned is always the mesh's `origin`.
 pub fn centred_mesh(mut mesh: Mesh) -> (Mesh, DVec3) {
+    if mesh.origin != DVec3::ZERO {
+        let origin = mesh.origin;
+        return (mesh, origin);
+    }
     let s = mesh.bounding_sphere();
     let origin = rebase_origin(&[(s.center.as_dvec3(), s.radius as f64)]);
     if origin != DVec3::ZERO {
@@ -198,7 +204,34 @@ pub fn centred_mesh(mut mesh: Mesh) -> (Mesh, DVec3) {
             *p = (p.as_dvec3() - origin).as_vec3();
         }
     }
+    mesh.origin = origin;
     (mesh, origin)
+}
+
+/// A mesh file's positions, read in f64, in the frame of [`rebase_origin`] of their bounding
+/// box, each rounded once to f32, and that origin: a model whose coordinates lie far from its
+/// file's origin keeps its shape (read as f32 first, a unit tetrahedron at x = 1e9 collapses
+/// to two triangles). Positions that are not finite or lie past ±[`MAX_COORDINATE`] keep origin
+/// zero, so that validation refuses them as it would their file coordinates.
+///
+/// [`MAX_COORDINATE`]: super::mesh::MAX_COORDINATE
+pub fn centred_positions(positions: &[DVec3]) -> (Vec<Vec3>, DVec3) {
+    let limit = super::mesh::MAX_COORDINATE as f64;
+    let (lo, hi) = positions
+        .iter()
+        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| {
+            (lo.min(p), hi.max(p))
+        });
+    let sane = positions
+        .iter()
+        .all(|p| p.is_finite() && p.abs().max_element() <= limit);
+    let origin = if sane && !positions.is_empty() {
+        rebase_origin(&[(0.5 * (lo + hi), 0.5 * (hi - lo).length())])
+    } else {
+        DVec3::ZERO
+    };
+    let moved = positions.iter().map(|&p| (p - origin).as_vec3()).collect();
+    (moved, origin)
 }
 
 /// A mesh placed in true world coordinates, with its roles (see [`Instance`]).

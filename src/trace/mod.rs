@@ -2,6 +2,7 @@
 //! ray–triangle tests (Woop, Benthin, Wald, "Watertight Ray/Triangle Intersection", JCGT 2013).
 
 pub mod box_tree;
+pub mod bvh_build;
 #[cfg(feature = "embree")]
 pub mod embree;
 #[cfg(feature = "embree")]

@@ -3,7 +3,7 @@
 //! `render` tests.
 
 use crate::sampling::rays::uniform;
-use glam::Vec3;
+use glam::{Quat, Vec3};
 use std::collections::HashMap;
 
 /// An `n × n` grid of square cells of side `cell` in the plane z = 0, centred on the origin,
@@ -160,6 +160,46 @@ pub fn random_soup(n: u32, size: f32, seed: u64) -> Vec<[Vec3; 3]> {
             [0u64, 1, 2].map(|k| c + size * random_point(i, seed ^ (0x1234_5678 + k)))
         })
         .collect()
+}
+
+/// `n` triangles on which a PLOC build takes quadratic time, by name: copies of one triangle,
+/// triangles scaled about one centroid, distinct triangles in one box, a row of equal triangles
+/// equally spaced, a disk fan, a triangle turned by steps of 10⁻⁵ rad about one corner. All lie
+/// in `z = 0` and cover `(0.2, 0.2)` (the row and the fan with one triangle each).
+pub fn ploc_worst_cases(n: usize) -> Vec<(&'static str, Vec<[Vec3; 3]>)> {
+    let tri = [Vec3::ZERO, Vec3::X, Vec3::Y];
+    let c = (tri[0] + tri[1] + tri[2]) / 3.0;
+    vec![
+        ("copies of one triangle", vec![tri; n]),
+        (
+            "triangles scaled about one centroid",
+            (0..n)
+                .map(|k| tri.map(|v| c + (v - c) * (1.0 + k as f32 * 1e-3)))
+                .collect(),
+        ),
+        (
+            "distinct triangles in one box",
+            (0..n)
+                .map(|k| {
+                    let x = k as f32 / n as f32;
+                    [Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0), Vec3::new(x, 1.0, 0.0)]
+                })
+                .collect(),
+        ),
+        (
+            "a row of equal triangles",
+            (0..n)
+                .map(|k| tri.map(|v| v + Vec3::X * (2 * k) as f32))
+                .collect(),
+        ),
+        ("a disk fan", disk_fan(1.0, 0.0, n as u32)),
+        (
+            "a triangle turned about one corner",
+            (0..n)
+                .map(|k| tri.map(|v| Quat::from_rotation_z(k as f32 * 1e-5) * v))
+                .collect(),
+        ),
+    ]
 }
 
 /// Where a test ray passes: through a mesh vertex or through the interior of an edge.

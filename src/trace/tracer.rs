@@ -7,12 +7,10 @@ use crate::visibility::{SurfaceHit, Visibility};
 use glam::{Vec3, Vec3A};
 use obvhs::{
     aabb::Aabb,
-    cwbvh::{builder::build_cwbvh, CwBvh},
+    cwbvh::CwBvh,
     ray::{Ray, RayHit},
-    BvhBuildParams,
 };
 use rayon::prelude::*;
-use std::time::Duration;
 
 /// A closest hit.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -93,7 +91,8 @@ fn pow2(k: i32) -> f32 {
 
 impl Tracer {
     /// Builds the BVH over `triangles` (obvhs PLOC + reinsertion, `medium_build` preset,
-    /// collapsed to a CWBVH). An empty list gives a tracer that always misses.
+    /// collapsed to a CWBVH; a median-split tree where PLOC would take quadratic time, see
+    /// [`super::bvh_build`]). An empty list gives a tracer that always misses.
     ///
     /// # Panics
     /// If a vertex is not finite.
@@ -129,15 +128,7 @@ impl Tracer {
                 Aabb::new(lo - pad, hi + pad)
             })
             .collect();
-        let bvh = if boxes.is_empty() {
-            CwBvh::default()
-        } else {
-            build_cwbvh(
-                &boxes,
-                BvhBuildParams::medium_build(),
-                &mut Duration::default(),
-            )
-        };
+        let bvh = super::bvh_build::build(&boxes);
         // Without spatial splits the primitive indices are a permutation of 0..n.
         let original_index = bvh.primitive_indices.clone();
         debug_assert_eq!(original_index.len(), triangles.len());
@@ -193,7 +184,9 @@ impl Tracer {
             return None;
         }
         let o = Vec3A::from(origin) * self.scale;
-        let d = Vec3A::from(dir);
+        // −0 folded into +0: obvhs takes a ray's octant from `d < 0` (+ for −0) but its inverse
+        // from the sign (−1/ε for −0), and a ray with a −0 component missed everything.
+        let d = Vec3A::from(dir) + Vec3A::ZERO;
         let (tmin_s, tmax_s) = (tmin * self.scale, tmax * self.scale);
         // obvhs accepts hits with t < ray.tmax; one ulp more makes tmax inclusive (the
         // watertight test itself enforces [tmin, tmax]).

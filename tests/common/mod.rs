@@ -2,6 +2,7 @@
 #![allow(dead_code)]
 
 pub mod batch_rays;
+pub mod mesh_files;
 
 use std::path::{Path, PathBuf};
 use visfield::experiment::fields::FieldSupply;
