@@ -73,7 +73,8 @@ impl Mesh {
         // renumbered into it; rebased, then welded on the f32 values the mesh will hold.
         let mut positions: Vec<DVec3> = Vec::new();
         let mut triangles: Vec<[u32; 3]> = Vec::new();
-        for model in &models {
+        // By value: each object's f64 arrays are freed once copied.
+        for model in models {
             let m = &model.mesh;
             let base = positions.len() as u64;
             positions.extend(
