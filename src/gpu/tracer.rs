@@ -16,7 +16,7 @@ use crate::render::shadow::ShadowOptions;
 use crate::sampling::rays::RaySet;
 use crate::trace::RayQuery;
 use glam::Vec3;
-use obvhs::{aabb::Aabb, cwbvh::builder::build_cwbvh, cwbvh::node::CwBvhNode, BvhBuildParams};
+use obvhs::{aabb::Aabb, cwbvh::node::CwBvhNode};
 use std::time::{Duration, Instant};
 
 /// The node struct uploaded as is: WGSL reads it as five `vec4<u32>`.
@@ -107,15 +107,9 @@ impl<'a> GpuTracer<'a> {
                 Aabb::new(a.min(b).min(c) - pad, a.max(b).max(c) + pad)
             })
             .collect();
-        let bvh = if boxes.is_empty() {
-            obvhs::cwbvh::CwBvh::default()
-        } else {
-            build_cwbvh(
-                &boxes,
-                BvhBuildParams::medium_build(),
-                &mut Duration::default(),
-            )
-        };
+        // The CPU tracer's build: obvhs's PLOC, or the median-split tree where PLOC would take
+        // quadratic time (fans, nested or turned copies of a triangle).
+        let bvh = crate::trace::bvh_build::build(&boxes);
         check_binding::<CwBvhNode>(ctx, "CWBVH nodes", bvh.nodes.len())?;
         let mut tri_data: Vec<[f32; 4]> = Vec::with_capacity(bvh.primitive_indices.len() * 3);
         for &i in &bvh.primitive_indices {
