@@ -179,6 +179,8 @@ fn a_kind_registered_at_run_time_is_read_validated_and_run_end_to_end() {
     // run.json carries the kind's own key back.
     let meta = std::fs::read_to_string(out.join("run.json")).unwrap();
     let meta: serde_json::Value = serde_json::from_str(&meta).unwrap();
+    // A kind of a user's own estimates none of the three built-in quantities.
+    assert_eq!(meta["quantity"], "other");
     assert_eq!(
         meta["effective_spec"]["render"]["level"],
         serde_json::json!(0.25)

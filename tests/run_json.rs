@@ -112,6 +112,8 @@ fn a_runs_run_json_holds_no_absolute_path_and_its_wall_times() {
         cache_rec.ends_with("/cache") && cache_rec.starts_with(".."),
         "{cache_rec}"
     );
+    // What the kind estimates, typed: the plots' axis label reads it.
+    assert_eq!(run1["quantity"], "ao");
     let command = run1["meta"]["command"].as_str().unwrap();
     assert!(command.starts_with("experiment run "), "{command}");
     // The run's wall time and each stage's: the stages are timed inside the run.

@@ -9,6 +9,7 @@
 //! relative to the output folder: `experiment run OUT/spec.json --out OUT` reruns it, edited or
 //! not. The verdict per field size ([`verdicts`]) is read back from the run's `table.csv`.
 
+use super::kinds;
 use super::outputs::read_csv;
 use super::run::{self, LoadedSpec, RunOptions, RunReport};
 use super::spec::{Spec, SpecError};
@@ -48,19 +49,19 @@ pub fn spec_text(mesh: &str, label: &str, kind: TryKind) -> String {
     let (what, render, fields, quick_fields) = match kind {
         TryKind::Ao => (
             "per-pixel ambient occlusion",
-            json!({"what": "image_ao", "rays_per_point": 64, "image": image(256)}),
+            json!({"what": kinds::image_ao::ENTRY.name, "rays_per_point": 64, "image": image(256)}),
             fields,
             quick_fields,
         ),
         TryKind::Shadows => (
             "soft shadows from three spherical lights",
-            json!({"what": "shadows", "rays_per_point": 16, "image": image(256), "lights": lights}),
+            json!({"what": kinds::shadows::ENTRY.name, "rays_per_point": 16, "image": image(256), "lights": lights}),
             fields,
             quick_fields,
         ),
         TryKind::Reflections => (
             "glossy reflections in the floor",
-            json!({"what": "reflections", "rays_per_point": 4, "image": image(256),
+            json!({"what": kinds::reflections::ENTRY.name, "rays_per_point": 4, "image": image(256),
                    "lights": lights, "gloss": {"phong": {"exponent": 1000.0}}, "albedo": 0.8,
                    "sky": 0.3, "normal_bits": [16]}),
             json!([{"counts": [1090, 4226], "resolutions": [32, 64], "precisions": ["u16"]}]),

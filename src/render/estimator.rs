@@ -17,6 +17,8 @@
 //! vertex AO and the 2010 paper's per-pixel AO evaluate it at different points).
 
 use super::ao::{ao_at_points, AoOptions};
+use super::reflect::ReflectOptions;
+use super::shadow::ShadowOptions;
 use super::truth::{converged_ao, Truth, TruthOptions};
 use crate::sampling::rays::RaySet;
 use crate::visibility::Visibility;
@@ -39,6 +41,61 @@ impl Points<'_> {
     /// Whether there are none.
     pub fn is_empty(&self) -> bool {
         self.points.is_empty()
+    }
+}
+
+/// What a render kind estimates, as a tag: what tables and plots call its values, and what
+/// `run.json` records (`"quantity"`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Quantity {
+    /// Ambient occlusion.
+    Ao,
+    /// The light fraction of spherical lights.
+    Shadow,
+    /// Reflected radiance.
+    Reflection,
+    /// Anything else (a kind of a user's own).
+    #[default]
+    Other,
+}
+
+impl Quantity {
+    /// How a plot's axis names it: "AO", "shadow", "reflection", or "estimate".
+    pub fn label(self) -> &'static str {
+        match self {
+            Quantity::Ao => "AO",
+            Quantity::Shadow => "shadow",
+            Quantity::Reflection => "reflection",
+            Quantity::Other => "estimate",
+        }
+    }
+}
+
+/// What an estimator computes, typed, with the options that decide its values: how a method
+/// that answers a quantity by its own means (cone tracing a distance field) reads the kind's
+/// options, instead of parsing [`Estimator::key`].
+#[derive(Clone, Copy, Debug)]
+pub enum Estimates<'a> {
+    /// Ambient occlusion ([`AoEstimator`]).
+    Ao(&'a AoOptions),
+    /// The light fraction of spherical lights ([`super::shadow::ShadowEstimator`]).
+    Shadow(&'a ShadowOptions),
+    /// Glossy reflections ([`super::reflect::ReflectionEstimator`]).
+    Reflection(&'a ReflectOptions),
+    /// Anything else.
+    Other,
+}
+
+impl Estimates<'_> {
+    /// Its tag.
+    pub fn quantity(&self) -> Quantity {
+        match self {
+            Estimates::Ao(_) => Quantity::Ao,
+            Estimates::Shadow(_) => Quantity::Shadow,
+            Estimates::Reflection(_) => Quantity::Reflection,
+            Estimates::Other => Quantity::Other,
+        }
     }
 }
 
@@ -67,6 +124,12 @@ pub trait Estimator: Sync {
     /// Everything beside the points, the casters and the rays that determines the values, as
     /// JSON object entries (part of the converged reference's cache key).
     fn key(&self) -> serde_json::Map<String, serde_json::Value>;
+
+    /// What it computes, with its options ([`Estimates`]); none of the three built-in
+    /// quantities by default.
+    fn estimates(&self) -> Estimates<'_> {
+        Estimates::Other
+    }
 }
 
 /// Ambient occlusion at each point (Gaitatzes, Chrysanthou, Papaioannou, WSCG 2008; per pixel:
@@ -84,6 +147,10 @@ impl Estimator for AoEstimator {
 
     fn estimate(&self, vis: &dyn Visibility, at: Points, rays: &RaySet) -> Vec<f32> {
         ao_at_points(vis, at.points, at.normals, rays, &self.opts)
+    }
+
+    fn estimates(&self) -> Estimates<'_> {
+        Estimates::Ao(&self.opts)
     }
 
     fn converged(&self, vis: &dyn Visibility, at: Points, t: &TruthOptions) -> Truth {

@@ -28,7 +28,7 @@
 //! Phong lobe sampled by importance (every ray weighs the same), an unshadowed diffuse hit lit
 //! by the lights' centres and a constant sky; "brushed metal" here is this lobe, converged.
 
-use super::estimator::{Estimator, Points};
+use super::estimator::{Estimates, Estimator, Points};
 use super::per_point;
 use super::ray_lanes::{self, Isa};
 use super::shadow::SphereLight;
@@ -301,6 +301,10 @@ impl Estimator for ReflectionEstimator {
 
     fn estimate(&self, vis: &dyn Visibility, at: Points, rays: &RaySet) -> Vec<f32> {
         reflect_at_points(vis, at.points, at.normals, rays, &self.opts)
+    }
+
+    fn estimates(&self) -> Estimates<'_> {
+        Estimates::Reflection(&self.opts)
     }
 
     fn converged(&self, vis: &dyn Visibility, at: Points, t: &TruthOptions) -> Truth {

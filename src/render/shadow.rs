@@ -35,7 +35,7 @@
 //! saying how; we sample the cone the light subtends, uniformly in solid angle and stratified
 //! (k² per light, so 16 or 25 where the paper has 20). Point lights are ours.
 
-use super::estimator::{Estimator, Points};
+use super::estimator::{Estimates, Estimator, Points};
 use super::per_point;
 use super::ray_lanes::{self, DiskSamples, Isa, ShadowRays};
 use super::truth::{converged, Truth, TruthOptions};
@@ -365,6 +365,10 @@ impl Estimator for ShadowEstimator {
 
     fn estimate(&self, vis: &dyn Visibility, at: Points, rays: &RaySet) -> Vec<f32> {
         shadow_at_points(vis, at.points, at.normals, rays, &self.opts)
+    }
+
+    fn estimates(&self) -> Estimates<'_> {
+        Estimates::Shadow(&self.opts)
     }
 
     fn converged(&self, vis: &dyn Visibility, at: Points, t: &TruthOptions) -> Truth {

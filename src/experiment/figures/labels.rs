@@ -44,18 +44,6 @@ impl Devices {
     }
 }
 
-/// What a run's kind estimates, as a plot names it ("AO", "shadow", "reflection"), from
-/// `run.json`'s `render` (none: "estimate", for runs that predate it).
-pub fn quantity(render: Option<&str>) -> String {
-    match render {
-        Some("vertex_ao" | "image_ao") => "AO".into(),
-        Some("shadows") => "shadow".into(),
-        Some("reflections") => "reflection".into(),
-        Some(other) if !other.is_empty() => other.into(),
-        _ => "estimate".into(),
-    }
-}
-
 /// Two values that a plot draws as one: within this fraction of the larger.
 pub const COINCIDE: f64 = 0.005;
 
@@ -135,15 +123,6 @@ mod tests {
             "GPU NVIDIA H200"
         );
         assert_eq!(gpu_label(""), "GPU");
-    }
-
-    #[test]
-    fn the_quantity_follows_the_kind() {
-        assert_eq!(quantity(Some("vertex_ao")), "AO");
-        assert_eq!(quantity(Some("image_ao")), "AO");
-        assert_eq!(quantity(Some("shadows")), "shadow");
-        assert_eq!(quantity(Some("reflections")), "reflection");
-        assert_eq!(quantity(None), "estimate");
     }
 
     #[test]

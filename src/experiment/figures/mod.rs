@@ -41,6 +41,7 @@ use super::plot::{figure_plot, Axes, Figure, Panel, Series, Style, Styled};
 use super::spec::Backend;
 use super::table::Row;
 use super::{Error, Result};
+use crate::render::estimator::Quantity;
 use labels::Devices;
 use std::path::Path;
 
@@ -49,8 +50,8 @@ use std::path::Path;
 pub struct RunData {
     /// The plots' title (the spec's name).
     pub title: String,
-    /// `run.json`'s `render` (the kind), where it has one.
-    pub render: Option<String>,
+    /// What the run's kind estimates: `run.json`'s `quantity` (a run without one: other).
+    pub quantity: Quantity,
     pub rows: Vec<Row>,
     pub sweep: Vec<SweepRow>,
     pub field_sweep: Vec<FieldSweepRow>,
@@ -78,13 +79,14 @@ impl RunData {
                 .collect(),
             None => Vec::new(),
         };
-        let render = std::fs::read(out.join("run.json"))
+        let quantity = std::fs::read(out.join("run.json"))
             .ok()
             .and_then(|b| serde_json::from_slice::<serde_json::Value>(&b).ok())
-            .and_then(|v| v["render"].as_str().map(String::from));
+            .and_then(|v| serde_json::from_value(v["quantity"].clone()).ok())
+            .unwrap_or(Quantity::Other);
         Ok(RunData {
             title: title.to_string(),
-            render,
+            quantity,
             rows,
             sweep: optional("raycast_sweep.csv").map_or(Ok(Vec::new()), |p| read_csv(&p))?,
             field_sweep: optional("field_sweep.csv").map_or(Ok(Vec::new()), |p| read_csv(&p))?,
@@ -104,9 +106,9 @@ impl RunData {
         out
     }
 
-    /// What the run's kind estimates ([`labels::quantity`]).
+    /// What the run's kind estimates, as an axis names it ([`Quantity::label`]).
     pub fn quantity(&self) -> String {
-        labels::quantity(self.render.as_deref())
+        self.quantity.label().to_string()
     }
 }
 

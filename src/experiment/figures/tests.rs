@@ -141,7 +141,7 @@ fn methods() -> Vec<MethodRow> {
 fn figure6_run(gpu_factor: f64) -> RunData {
     RunData {
         title: "figure6".into(),
-        render: Some("vertex_ao".into()),
+        quantity: Quantity::Ao,
         rows: figure6_rows(gpu_factor),
         sweep: sweep(),
         field_sweep: Vec::new(),
@@ -285,7 +285,7 @@ fn the_gpu_panel_names_lavapipe_and_the_axis_names_the_quantity() {
         .iter()
         .any(|p| p.title.contains("lavapipe (CPU)")));
     assert!(pareto.axes.x_label.starts_with("AO estimate time"));
-    run.render = Some("shadows".into());
+    run.quantity = Quantity::Shadow;
     let pareto = compare::pareto(&run);
     assert!(pareto.axes.x_label.starts_with("shadow estimate time"));
     assert!(!pareto.axes.title.contains("AO") && !pareto.axes.x_label.contains("AO"));

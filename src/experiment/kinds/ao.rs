@@ -9,7 +9,7 @@ use super::super::scenes::BuiltScene;
 use super::super::spec::{Backend, RenderSpec, Spec, SpecError};
 use super::super::validate::Validator;
 use super::super::Result;
-use super::{Columns, Kind, KindOptions, Needs, Setup};
+use super::{Answers, Columns, Kind, KindOptions, Needs, Setup};
 use crate::field::scene::FieldScene;
 use crate::gpu::{FieldAoKernel, FieldGpuOptions, GpuContext, GpuVisibility};
 use crate::render::ao::{AoOptions, Falloff};
@@ -162,6 +162,10 @@ impl<P: AoPoints> Kind for AoKind<P> {
 
     fn render(&self) -> &RenderSpec {
         &self.render
+    }
+
+    fn answers(&self) -> Answers<'_> {
+        Answers::Ao(&self.ao)
     }
 
     fn needs(&self) -> Needs {

@@ -36,7 +36,7 @@ use super::spec::{ImageSpec, RenderSpec, Spec, SpecError};
 use super::validate::Validator;
 use crate::field::lookup::{IntraBias, LookupOptions};
 use crate::field::Selection;
-use crate::render::estimator::Estimator;
+use crate::render::estimator::{Estimator, Quantity};
 use crate::render::image::ImageChannels;
 use crate::render::points::{EvalPoints, GBuffer};
 use crate::render::truth::Truth;
@@ -84,6 +84,11 @@ pub trait Kind: Sync {
     fn name(&self) -> &'static str;
     /// The `render` it was made from (the keys every kind reads are there).
     fn render(&self) -> &RenderSpec;
+    /// What its estimator computes, with the options a method needs to decide whether it
+    /// can answer it before any scene is built ([`Answers`]).
+    fn answers(&self) -> Answers<'_> {
+        Answers::Other
+    }
     /// What it needs built.
     fn needs(&self) -> Needs;
     /// Which metric columns it fills.
@@ -180,6 +185,39 @@ impl<T: KindOptions + serde::Serialize + Clone + 'static> OptionsBase for T {
 
     fn clone_box(&self) -> Box<dyn KindOptions> {
         Box::new(self.clone())
+    }
+}
+
+/// What a kind's estimator computes, typed, with the options known before any scene: how a
+/// method that answers some quantities by its own means (AO fields, SDF cones) decides whether
+/// it can answer a kind, and what `run.json` records as its [`Quantity`]. No method or plot
+/// reads a kind's name or its estimator's key for this.
+#[derive(Clone, Copy, Debug)]
+pub enum Answers<'a> {
+    /// Ambient occlusion with these options (the AO kinds).
+    Ao(&'a ao::AoRender),
+    /// The light fraction of spherical lights.
+    Shadow,
+    /// Glossy reflections.
+    Reflection,
+    /// Anything else (a kind of a user's own).
+    Other,
+}
+
+impl Answers<'_> {
+    /// Its tag.
+    pub fn quantity(&self) -> Quantity {
+        match self {
+            Answers::Ao(_) => Quantity::Ao,
+            Answers::Shadow => Quantity::Shadow,
+            Answers::Reflection => Quantity::Reflection,
+            Answers::Other => Quantity::Other,
+        }
+    }
+
+    /// Binary AO (falloff `step`): the AO whose rays a cone's or a cap's occlusion answers.
+    pub fn binary_ao(&self) -> bool {
+        matches!(self, Answers::Ao(ao) if ao.falloff == crate::render::ao::Falloff::Step)
     }
 }
 

@@ -6,7 +6,7 @@
 //! `lights` and `gloss`.
 
 use super::shadows::{lights_in_frame, validate_lights};
-use super::{read_as, Columns, Kind, KindEntry, KindOptions, Needs, Setup};
+use super::{read_as, Answers, Columns, Kind, KindEntry, KindOptions, Needs, Setup};
 use crate::experiment::backend::{Estimate, Eval};
 use crate::experiment::backend_gpu::{traced, GpuQuantity, KernelEval};
 use crate::experiment::scenes::BuiltScene;
@@ -149,6 +149,10 @@ impl Kind for Reflections {
 
     fn render(&self) -> &RenderSpec {
         &self.render
+    }
+
+    fn answers(&self) -> Answers<'_> {
+        Answers::Reflection
     }
 
     fn needs(&self) -> Needs {

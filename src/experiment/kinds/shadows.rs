@@ -3,7 +3,7 @@
 //! `render::shadow` at every receiver pixel, its shadow rays answered by ray casting or by the
 //! fields; needs `image` and `lights`.
 
-use super::{read_as, Columns, Kind, KindEntry, KindOptions, Needs, Setup};
+use super::{read_as, Answers, Columns, Kind, KindEntry, KindOptions, Needs, Setup};
 use crate::experiment::backend::{Estimate, Eval};
 use crate::experiment::backend_gpu::{traced, GpuQuantity, KernelEval};
 use crate::experiment::scenes::BuiltScene;
@@ -90,6 +90,10 @@ impl Kind for Shadows {
 
     fn render(&self) -> &RenderSpec {
         &self.render
+    }
+
+    fn answers(&self) -> Answers<'_> {
+        Answers::Shadow
     }
 
     fn needs(&self) -> Needs {

@@ -25,12 +25,13 @@ use super::{
 use crate::aofield::cache::{load_or_bake, Outcome};
 use crate::aofield::{AoField, AoFieldInstance, AoFieldScene, BakeParams, Inside, Precision};
 use crate::experiment::backend::{Estimate, Eval};
-use crate::experiment::kinds::Kind;
+use crate::experiment::kinds::{Answers, Kind};
 use crate::experiment::scenes::BuiltScene;
 use crate::experiment::spec::{Spec, SpecError};
 use crate::experiment::validate::Validator;
 use crate::experiment::{Error, Result};
 use crate::gpu::{AoFieldKernel, GpuContext};
+use crate::render::ao::Falloff;
 use crate::render::estimator::{Estimator, Points};
 use crate::render::truth::{Truth, TruthOptions};
 use crate::sampling::rays::RaySet;
@@ -44,9 +45,6 @@ pub const ENTRY: MethodEntry = MethodEntry {
             radial functions giving its spherical cap; AO with no ray",
     read: super::read_as::<AoFieldOptions>,
 };
-
-/// The kinds an AO field answers.
-const AO_KINDS: [&str; 2] = ["vertex_ao", "image_ao"];
 
 /// `aofield`'s keys.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -223,23 +221,23 @@ impl Method for AoFieldMethod {
     }
 
     fn refuses(&self, kind: &dyn Kind) -> Option<String> {
-        if !AO_KINDS.contains(&kind.name()) {
-            return Some(format!(
-                "an AO field answers ambient occlusion only ({}): it casts no ray, so it has \
-                 no shadow or reflection to give",
-                AO_KINDS.join(", ")
-            ));
-        }
-        let opts = kind.render().options.to_json();
-        if let Some(d) = opts.get("max_distance").filter(|d| !d.is_null()) {
+        let Answers::Ao(ao) = kind.answers() else {
+            return Some(
+                "an AO field answers ambient occlusion only: it casts no ray, so it has no \
+                 shadow or reflection to give"
+                    .into(),
+            );
+        };
+        if let Some(d) = ao.max_distance {
             return Some(format!(
                 "render.max_distance = {d}: an AO field answers unbounded AO (the cap counts the \
                  whole occluder at any distance); drop render.max_distance"
             ));
         }
-        if let Some(f) = opts.get("falloff").filter(|f| f.as_str() != Some("step")) {
+        if ao.falloff != Falloff::Step {
             return Some(format!(
-                "render.falloff = {f}: an AO field has no hit distance to weigh; use \"step\""
+                "render.falloff = {}: an AO field has no hit distance to weigh; use \"step\"",
+                serde_json::json!(ao.falloff)
             ));
         }
         None

@@ -148,6 +148,7 @@ pub(super) fn write(
         "profile": if opts.quick { "quick" } else { "full" },
         "meta": meta,
         "render": kind.name(),
+            "quantity": kind.answers().quantity(),
         "rays_per_point": spec.render.rays_per_point,
         "seed": spec.reference.seed,
         "truth": spec.reference.truth,

@@ -221,6 +221,7 @@ impl Runner<'_> {
             "shard": opts.shard,
             "meta": meta,
             "render": self.kind.name(),
+            "quantity": self.kind.answers().quantity(),
             "rays_per_point": spec.render.rays_per_point,
             "reference_rays_per_point": spec.reference.rays_per_point,
             "seed": spec.reference.seed,

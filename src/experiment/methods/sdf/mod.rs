@@ -308,16 +308,12 @@ impl Method for Sdf {
 
     fn refuses_on_gpu(&self, kind: &dyn Kind) -> Option<String> {
         match self.query {
-            Query::Trace => {
-                // The AO kinds with a step falloff: those the cones answer, less shadows.
-                let ao = cone::AO_KINDS.contains(&kind.name()) && cone::refusal(kind).is_none();
-                (!ao).then(|| {
-                    "query \"trace\" on the gpu backend answers ambient occlusion (falloff \
+            Query::Trace => (!kind.answers().binary_ao()).then(|| {
+                "query \"trace\" on the gpu backend answers ambient occlusion (falloff \
                      \"step\") only: the SDF kernels trace no shadow or reflection rays; use \
                      query \"cone\" for shadows, or the cpu backend"
-                        .to_string()
-                })
-            }
+                    .to_string()
+            }),
             Query::Cone => cone::refusal(kind),
         }
     }
