@@ -42,6 +42,7 @@ use crate::render::primary::{gbuffer, PrimaryScene};
 use crate::render::truth::TruthOptions;
 use crate::sampling::rays::RaySet;
 use serde::{Deserialize, Serialize};
+use rayon::prelude::*;
 use std::collections::HashMap;
 use std::sync::Arc;
 use std::time::Instant;
@@ -537,18 +538,27 @@ impl SceneRunner<'_> {
                 bs.name,
                 setup.points.len()
             );
+            // Each method's image and FLIP figures, the methods in parallel (FLIP's C++ runs
+            // on one thread).
+            let figures: Vec<_> = (measured.par_iter())
+                .map(|(method, cell, r, _)| {
+                    let sig = signal(&r.values);
+                    let mask = sig.mask();
+                    let vs = |other: &Signal| {
+                        flip::compare(other.image.as_ref(), sig.image.as_ref(), Some(&mask))
+                            .map(|(s, _)| s)
+                    };
+                    let (vs_raycast, vs_truth) = (vs(&reference_now), vs(&truth_now));
+                    let k = key(method, cell);
+                    let moved = change(prev.get(&k), &sig);
+                    (k, sig, vs_raycast, vs_truth, moved)
+                })
+                .collect();
             let mut now: Vec<((String, String), Signal)> = Vec::new();
-            for (method, cell, r, bytes) in &measured {
+            for ((method, cell, r, bytes), (k, sig, vs_raycast, vs_truth, moved)) in
+                measured.iter().zip(figures)
+            {
                 let rms = rms_unquantised(&r.values, &reference);
-                let sig = signal(&r.values);
-                let mask = sig.mask();
-                let vs = |other: &Signal| {
-                    flip::compare(other.image.as_ref(), sig.image.as_ref(), Some(&mask))
-                        .map(|(s, _)| s)
-                };
-                let (vs_raycast, vs_truth) = (vs(&reference_now), vs(&truth_now));
-                let k = key(method, cell);
-                let moved = change(prev.get(&k), &sig);
                 line.push_str(&format!(
                     " {method} {:.4} s ({rms:.2})",
                     r.update_s + r.query_s
