@@ -72,6 +72,37 @@ pub fn rms_unquantised(a: &[f32], b: &[f32]) -> f64 {
     rms_unquantised_where(a, b, |_| true)
 }
 
+/// Flicker between two frames: the RMS on the 0–255 scale, unquantised, over the pixels (or
+/// points) where `keep` holds and their channels (`prev.len() / keep.len()` values each), of
+/// the method's frame-to-frame change minus the converged reference's,
+/// 255 · ((next − prev) − (truth_next − truth_prev)): motion itself (the reference's change)
+/// costs nothing, only a change the reference does not make counts. A method that is the
+/// reference plus a constant error flickers 0; one whose error steps by `d` on every kept
+/// value between the frames flickers `255 · |d|`. NaN when `keep` selects nothing.
+///
+/// # Panics
+/// If the four lengths differ, or are not a multiple of `keep`'s.
+pub fn flicker(
+    prev: &[f32],
+    next: &[f32],
+    truth_prev: &[f32],
+    truth_next: &[f32],
+    keep: &[bool],
+) -> f64 {
+    let n = prev.len();
+    assert!(
+        next.len() == n && truth_prev.len() == n && truth_next.len() == n,
+        "flicker: lengths differ"
+    );
+    let c = per_pixel(n, Some(keep));
+    let d = (0..n).filter(|&i| keep[i / c]).map(|i| {
+        let change = next[i] as f64 - prev[i] as f64;
+        let truth_change = truth_next[i] as f64 - truth_prev[i] as f64;
+        255.0 * (change - truth_change)
+    });
+    rms_of(d)
+}
+
 /// The RMS of `d`; NaN when empty.
 fn rms_of(d: impl Iterator<Item = f64>) -> f64 {
     let (sum, n) = d.fold((0.0f64, 0usize), |(s, n), x| (s + x * x, n + 1));
@@ -180,6 +211,31 @@ pub fn image_errors(a: &[f32], b: &[f32], mask: &[bool]) -> ErrorStats {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn flicker_closed_forms() {
+        // The reference itself, and the reference plus a constant error: no flicker.
+        let t0 = [0.2f32, 0.4, 0.6, 0.8];
+        let t1 = [0.3f32, 0.1, 0.6, 0.9];
+        let keep = [true; 4];
+        assert_eq!(flicker(&t0, &t1, &t0, &t1, &keep), 0.0);
+        let plus = |t: &[f32], e: f32| t.iter().map(|v| v + e).collect::<Vec<f32>>();
+        let f = flicker(&plus(&t0, 0.05), &plus(&t1, 0.05), &t0, &t1, &keep);
+        assert!(f.abs() < 1e-4, "{f}");
+        // An error stepping by d = 0.02 on every value: 255 · 0.02 = 5.1.
+        let f = flicker(&plus(&t0, 0.01), &plus(&t1, 0.03), &t0, &t1, &keep);
+        assert!((f - 5.1).abs() < 1e-4, "{f}");
+        // A step of 0.04 on one of two kept pixels (two channels each, both stepping):
+        // sqrt((2 · 10.2²) / 4) = 10.2 / sqrt(2).
+        let a0 = [0.5f32; 6];
+        let mut a1 = a0;
+        a1[0] += 0.04;
+        a1[1] += 0.04;
+        a1[4] += 0.9; // pixel 2: not kept
+        let f = flicker(&a0, &a1, &a0, &a0, &[true, true, false]);
+        assert!((f - 10.2 / 2f64.sqrt()).abs() < 1e-3, "{f}");
+        assert!(flicker(&a0, &a1, &a0, &a0, &[false; 3]).is_nan());
+    }
 
     #[test]
     fn rms_u8_closed_form_and_rounding() {

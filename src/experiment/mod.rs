@@ -18,6 +18,7 @@ pub mod dynamic;
 pub mod error;
 pub mod fields;
 pub mod figures;
+pub mod flip;
 pub mod kinds;
 pub mod merge;
 pub mod meta;

@@ -100,6 +100,12 @@ pub struct ErrorColumns {
     pub rms_image_window: Option<f64>,
     /// The same-ray RMS of the shaded images, mean over seeds (kinds with a shading factor).
     pub rms_image_shaded: Option<f64>,
+    /// FLIP of the first seed's image against the same-ray reference's image, and against
+    /// the converged reference's image, pooled over the pixels that show values
+    /// ([`crate::experiment::flip`]); none without an image (or without a converged
+    /// reference).
+    pub flip: Option<crate::experiment::flip::FlipStats>,
+    pub flip_vs_truth: Option<crate::experiment::flip::FlipStats>,
     /// The image, relative to the output folder (empty without an image).
     pub image: String,
 }
@@ -322,6 +328,23 @@ table_columns! {
     /// 2010 paper compares. None for a kind without shading.
     #[serde(default)]
     rms_image_shaded: Option<f64> = |p| p.errors.rms_image_shaded;
+    /// Mean FLIP (Andersson et al., HPG 2020: the perceptual error, 0–1,
+    /// [`crate::experiment::flip`]) of the first seed's image against the same-ray
+    /// reference's image, both read as their 8-bit PNGs (grey as equal RGB), at 67 pixels per
+    /// degree, pooled over the pixels `rms_image` is taken over. None without an image.
+    #[serde(default)]
+    flip_mean: Option<f64> = |p| p.errors.flip.map(|f| f.mean);
+    /// The FLIP pooling's weighted median of the same map: half of the pooled pixels' total
+    /// FLIP error lies at or below it.
+    #[serde(default)]
+    flip_weighted_median: Option<f64> = |p| p.errors.flip.map(|f| f.weighted_median);
+    /// `flip_mean` against the converged reference's image (none without one).
+    #[serde(default)]
+    flip_mean_vs_truth: Option<f64> = |p| p.errors.flip_vs_truth.map(|f| f.mean);
+    /// `flip_weighted_median` against the converged reference's image.
+    #[serde(default)]
+    flip_weighted_median_vs_truth: Option<f64> =
+        |p| p.errors.flip_vs_truth.map(|f| f.weighted_median);
 }
 
 /// A row as written: the standard columns, then the kind's own metric columns (name, value).

@@ -61,6 +61,11 @@ fn parts() -> Parts {
             rms_image_vs_second: Some(12.0),
             rms_image_window: Some(2.25),
             rms_image_shaded: Some(1.5),
+            flip: Some(crate::experiment::flip::FlipStats {
+                mean: 0.125,
+                weighted_median: 0.375,
+            }),
+            flip_vs_truth: None,
             image: "images/s.png".into(),
         },
     }
@@ -78,6 +83,11 @@ fn a_row_is_its_parts_under_the_column_list_and_reads_back_by_name() {
     assert!((row.estimate_mrays_s.unwrap() - 2.0).abs() < 1e-12);
     assert!((row.raycast_mrays_s.unwrap() - 0.5).abs() < 1e-12);
     assert_eq!((row.signal_rms, row.channels), (Some(40.0), 3));
+    assert_eq!(
+        (row.flip_mean, row.flip_weighted_median),
+        (Some(0.125), Some(0.375))
+    );
+    assert_eq!(row.flip_mean_vs_truth, None);
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("table.csv");
     let own = vec![("rms_c0".to_string(), 0.5), ("rms_c1".to_string(), 1.5)];
@@ -165,6 +175,8 @@ fn a_table_under_the_former_names_reads_back_the_same() {
             channels: 1,
             rms_image_window: None,
             rms_image_shaded: None,
+            flip_mean: None,
+            flip_weighted_median: None,
             ..row
         }]
     );

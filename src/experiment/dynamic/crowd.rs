@@ -4,7 +4,7 @@
 use super::movers::{AoFields, FrameCasters, Mover, Sdfs};
 use super::FrameRow;
 use crate::experiment::fields::FieldSupply;
-use crate::experiment::metrics::rms_unquantised;
+use crate::experiment::metrics::{self, rms_unquantised};
 use crate::experiment::scenes::{mesh_sha256, LoadedMesh};
 use crate::experiment::truth_cache::{load_or_compute, TruthInputs};
 use crate::experiment::{Error, Result};
@@ -444,6 +444,10 @@ impl Crowd {
             .sum();
         let rays = (self.points.len() * self.rays.len()) as u64;
         let mut rows = Vec::new();
+        // The previous frame's values per method, and the converged reference's (the flicker).
+        let mut prev: Vec<(&'static str, Vec<f32>)> = Vec::new();
+        let mut prev_truth: Option<Vec<f32>> = None;
+        let keep = vec![true; self.points.len()];
         for f in 0..self.frame_count(p) {
             let frame = self.frame(p, f);
             let (sphere_overlaps, points_in_spheres) = self.overlaps(&frame);
@@ -465,6 +469,8 @@ impl Crowd {
             };
             let mut reference: Option<Vec<f32>> = None;
             let mut truth = None;
+            let mut raycast_flicker = None;
+            let mut now: Vec<(&'static str, Vec<f32>)> = Vec::new();
             for m in movers.iter_mut() {
                 let super::movers::Timed {
                     update_s,
@@ -498,6 +504,15 @@ impl Crowd {
                     truth = Some(load_or_compute(cache, &name, &inputs, &p.truth)?.0);
                 }
                 let t = truth.as_ref().expect("the frame's truth");
+                let before = prev.iter().find(|(n, _)| *n == m.name()).map(|(_, v)| v);
+                let flicker = match (before, &prev_truth) {
+                    (Some(b), Some(bt)) => Some(metrics::flicker(b, &ao, bt, &t.values, &keep)),
+                    _ => None,
+                };
+                // The first method is the world rebuild: the same-ray ray cast.
+                if now.is_empty() {
+                    raycast_flicker = flicker;
+                }
                 let row = FrameRow {
                     sweep: self.sweep,
                     gap_radii,
@@ -518,13 +533,18 @@ impl Crowd {
                     bytes: m.bytes(),
                     sphere_overlaps,
                     points_in_spheres,
+                    flicker,
+                    raycast_flicker,
                 };
                 println!(
                     "dynamic {} N={:<4} frame {f:<2} {:<15} update {:>9.4} s  query {:>8.4} s  RMS {:.3} (vs truth {:.3})",
                     self.sweep, self.n, row.method, row.update_s, row.query_s, row.rms_vs_raycast, row.rms_vs_truth
                 );
                 rows.push(row);
+                now.push((m.name(), ao));
             }
+            prev = now;
+            prev_truth = truth.map(|t| t.values);
         }
         Ok((rows, pictures))
     }

@@ -97,6 +97,12 @@ pub struct FrameRow {
     pub sphere_overlaps: usize,
     /// Receiver points inside some caster's world bounding sphere this frame.
     pub points_in_spheres: usize,
+    /// Flicker from the previous frame over every receiver point (the plane does not move;
+    /// [`super::metrics::flicker`], 0–255, unquantised): the RMS of the method's change of AO
+    /// minus the converged reference's; none on the first frame.
+    pub flicker: Option<f64>,
+    /// The same of `world_rebuild` (the same-ray ray cast) on the same frame pair.
+    pub raycast_flicker: Option<f64>,
 }
 
 /// Runs the crowd sweep into `out` (`table.csv`, `run.json`, `frame_time.png`, …), written in
@@ -153,6 +159,7 @@ fn write(
         .collect();
     plot_frame_time(&out.join("frame_time.png"), &crowd_rows)?;
     plot_approach(&out.join("error_vs_gap.png"), &rows)?;
+    plot_flicker(&out.join("flicker_vs_casters.png"), &crowd_rows)?;
     let meta = super::meta::RunMeta::collect(None).timed();
     let summary = serde_json::json!({
         "experiment": "dynamic",
@@ -206,6 +213,57 @@ fn plot_approach(path: &Path, rows: &[FrameRow]) -> Result<()> {
         x_label: "gap between the caster's bounding sphere and the plane (sphere radii)".into(),
         y_label: "RMS (0-255)".into(),
         log_x: false,
+        log_y: false,
+    };
+    xy_plot(path, &axes, &series, &[])
+}
+
+/// Mean flicker over the frame pairs against the caster count, one line per method
+/// (`world_rebuild`'s is the same-ray ray cast's).
+fn plot_flicker(path: &Path, rows: &[FrameRow]) -> Result<()> {
+    let mut methods: Vec<&str> = Vec::new();
+    for r in rows {
+        if !methods.contains(&r.method) {
+            methods.push(r.method);
+        }
+    }
+    let series: Vec<Series> = methods
+        .iter()
+        .map(|&m| {
+            let mut counts: Vec<usize> = Vec::new();
+            for r in rows.iter().filter(|r| r.method == m) {
+                if !counts.contains(&r.casters) {
+                    counts.push(r.casters);
+                }
+            }
+            let points = counts
+                .iter()
+                .filter_map(|&n| {
+                    let f: Vec<f64> = (rows.iter())
+                        .filter(|r| r.method == m && r.casters == n)
+                        .filter_map(|r| r.flicker)
+                        .collect();
+                    (!f.is_empty()).then(|| (n as f64, f.iter().sum::<f64>() / f.len() as f64))
+                })
+                .collect();
+            Series {
+                label: m.to_string(),
+                points,
+                line: true,
+            }
+        })
+        .filter(|s: &Series| !s.points.is_empty())
+        .collect();
+    if series.is_empty() {
+        return Ok(());
+    }
+    let axes = Axes {
+        title:
+            "moving casters: flicker (change minus the converged reference's) against their count"
+                .into(),
+        x_label: "casters".into(),
+        y_label: "flicker: RMS (0-255), mean over frame pairs".into(),
+        log_x: true,
         log_y: false,
     };
     xy_plot(path, &axes, &series, &[])

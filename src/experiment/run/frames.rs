@@ -23,8 +23,9 @@ use crate::experiment::backend::{ComputeBackend, Quantity};
 use crate::experiment::dynamic::animation::Frame;
 use crate::experiment::dynamic::gpu_movers;
 use crate::experiment::dynamic::movers::{self, FrameCasters, Mover, Timed};
+use crate::experiment::flip;
 use crate::experiment::kinds::Kind;
-use crate::experiment::metrics::rms_unquantised;
+use crate::experiment::metrics::{self, rms_unquantised};
 use crate::experiment::plan::cells_of;
 use crate::experiment::scenes::{BuiltScene, Scenes};
 use crate::experiment::spec::{exact_sqrt, Backend, Spec};
@@ -35,11 +36,14 @@ use crate::field::normals::NormalField;
 use crate::field::scene::FieldScene;
 use crate::field::VisibilityField;
 use crate::geometry::{Mesh, Similarity, Sphere};
+use crate::render::image::Image;
 use crate::render::points::{EvalPoints, GBuffer, Support};
 use crate::render::primary::{gbuffer, PrimaryScene};
 use crate::render::truth::TruthOptions;
 use crate::sampling::rays::RaySet;
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use std::collections::HashMap;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -85,6 +89,99 @@ pub struct FrameRow {
     pub sphere_overlaps: usize,
     /// Points inside the bounding sphere of a caster other than their own instance.
     pub points_in_spheres: usize,
+    /// Mean FLIP ([`crate::experiment::flip`]: 0–1, 67 pixels per degree) of the method's
+    /// image against `world_rebuild`'s on the same rays, over the pixels that show values;
+    /// none without an image (and in tables written before the column).
+    #[serde(default)]
+    pub flip_mean_vs_raycast: Option<f64>,
+    /// The FLIP pooling's weighted median of the same map.
+    #[serde(default)]
+    pub flip_weighted_median_vs_raycast: Option<f64>,
+    /// Mean FLIP against the frame's converged reference's image.
+    #[serde(default)]
+    pub flip_mean_vs_truth: Option<f64>,
+    /// Its weighted median.
+    #[serde(default)]
+    pub flip_weighted_median_vs_truth: Option<f64>,
+    /// Flicker from the previous frame ([`crate::experiment::metrics::flicker`], 0–255,
+    /// unquantised): the RMS of the method's frame-to-frame change minus the converged
+    /// reference's, over the pixels that show values on the same instance in both frames
+    /// (the camera is fixed), or without an image over the points (the same points in both
+    /// frames); none on the first frame.
+    #[serde(default)]
+    pub flicker: Option<f64>,
+    /// The same of `world_rebuild` (the same-ray ray cast) on the same frame pair.
+    #[serde(default)]
+    pub raycast_flicker: Option<f64>,
+    /// Pixels (or points) the flicker is taken over.
+    #[serde(default)]
+    pub flicker_points: Option<usize>,
+    /// Mean FLIP of the method's image at this frame against its image at the previous one,
+    /// over the flicker's pixels; none on the first frame and without an image.
+    #[serde(default)]
+    pub flip_frame_change: Option<f64>,
+    /// The same of the converged reference's images: the change the motion itself shows.
+    #[serde(default)]
+    pub truth_flip_frame_change: Option<f64>,
+}
+
+/// What the flicker and FLIP columns of one frame read of an answer (a method's, or the
+/// converged reference's).
+struct Signal {
+    /// The image's values (with an image: `channels` per pixel) or the points' values.
+    values: Vec<f32>,
+    /// Per pixel (point): the instance it shows a value on, none where it shows none.
+    shown: Vec<Option<usize>>,
+    image: Option<Image>,
+}
+
+impl Signal {
+    /// The pixels (points) that show a value in both frames, on the same instance: what the
+    /// flicker is over. None where the frames' sizes differ.
+    fn kept(&self, prev: &Signal) -> Option<Vec<bool>> {
+        (self.shown.len() == prev.shown.len() && self.values.len() == prev.values.len()).then(
+            || {
+                (self.shown.iter().zip(&prev.shown))
+                    .map(|(a, b)| a.is_some() && a == b)
+                    .collect()
+            },
+        )
+    }
+
+    /// The mask of the pixels that show a value.
+    fn mask(&self) -> Vec<bool> {
+        self.shown.iter().map(Option::is_some).collect()
+    }
+}
+
+/// The flicker between `prev` and `next` against the reference's frames, the pixels it is
+/// over, and the mean FLIP of the frame change: none where no pixel is kept.
+fn frame_change(
+    prev: &Signal,
+    next: &Signal,
+    truth_prev: &Signal,
+    truth_next: &Signal,
+) -> Option<(f64, usize, Option<f64>)> {
+    let keep = next.kept(prev)?;
+    let truth_keep = truth_next.kept(truth_prev)?;
+    let keep: Vec<bool> = keep
+        .iter()
+        .zip(&truth_keep)
+        .map(|(a, b)| *a && *b)
+        .collect();
+    let n = keep.iter().filter(|&&k| k).count();
+    if n == 0 || truth_prev.values.len() != prev.values.len() {
+        return None;
+    }
+    let f = metrics::flicker(
+        &prev.values,
+        &next.values,
+        &truth_prev.values,
+        &truth_next.values,
+        &keep,
+    );
+    let flip = flip::compare(prev.image.as_ref(), next.image.as_ref(), Some(&keep));
+    Some((f, n, flip.map(|(s, _)| s.mean)))
 }
 
 /// What an animated run produced, for [`super::frames_write`].
@@ -320,6 +417,9 @@ impl SceneRunner<'_> {
         }));
         let mut pictures = Vec::new();
         let tris = bs.caster_triangles();
+        // The previous frame's signals per (method, cell), and the converged reference's.
+        let mut prev: HashMap<(String, String), Signal> = HashMap::new();
+        let mut prev_truth: Option<Signal> = None;
         for f in 0..bs.frame_count() {
             let fbs = bs.at_frame(f);
             let t = Instant::now();
@@ -389,13 +489,75 @@ impl SceneRunner<'_> {
             }
             let truth = truth.expect("the world rebuild runs first");
             let reference = measured[0].2.values.clone();
+            // The flicker and FLIP columns (untimed): each answer's image, or its values.
+            let channels = est.channels();
+            let show = view
+                .as_ref()
+                .and_then(|_| self.kind.image_channels(channels));
+            let signal = |values: &[f32]| -> Signal {
+                match (&view, show) {
+                    (Some(v), Some(show)) => {
+                        let (img, mask) =
+                            (setup.points).values_image(&fbs.scene, v, values, channels, show);
+                        let shown = (mask.iter().zip(&v.hits))
+                            .map(|(&m, h)| h.filter(|_| m).map(|h| h.instance as usize))
+                            .collect();
+                        Signal {
+                            values: img.data.clone(),
+                            shown,
+                            image: Some(img),
+                        }
+                    }
+                    _ => Signal {
+                        values: values.to_vec(),
+                        shown: owners
+                            .iter()
+                            .map(|o| Some(o.unwrap_or(usize::MAX)))
+                            .collect(),
+                        image: None,
+                    },
+                }
+            };
+            let truth_now = signal(&truth.values);
+            let reference_now = signal(&reference);
+            let key = |method: &str, cell: &str| (method.to_string(), cell.to_string());
+            let change = |p: Option<&Signal>, now: &Signal| match (p, &prev_truth) {
+                (Some(p), Some(pt)) => frame_change(p, now, pt, &truth_now),
+                _ => None,
+            };
+            let raycast_change = change(prev.get(&key(measured[0].0, "")), &reference_now);
+            let truth_flip_change = (prev_truth.as_ref())
+                .and_then(|pt| truth_now.kept(pt).map(|keep| (pt, keep)))
+                .and_then(|(pt, keep)| {
+                    flip::compare(pt.image.as_ref(), truth_now.image.as_ref(), Some(&keep))
+                })
+                .map(|(s, _)| s.mean);
             let rays = setup.points.len() as u64 * self.kind.rays_cast_per_point();
             let mut line = format!(
                 "{} frame {f}: {} points, overlaps {sphere_overlaps}/{points_in_spheres};",
                 bs.name,
                 setup.points.len()
             );
-            for (method, cell, r, bytes) in &measured {
+            // Each method's image and FLIP figures, the methods in parallel (FLIP's C++ runs
+            // on one thread).
+            let figures: Vec<_> = (measured.par_iter())
+                .map(|(method, cell, r, _)| {
+                    let sig = signal(&r.values);
+                    let mask = sig.mask();
+                    let vs = |other: &Signal| {
+                        flip::compare(other.image.as_ref(), sig.image.as_ref(), Some(&mask))
+                            .map(|(s, _)| s)
+                    };
+                    let (vs_raycast, vs_truth) = (vs(&reference_now), vs(&truth_now));
+                    let k = key(method, cell);
+                    let moved = change(prev.get(&k), &sig);
+                    (k, sig, vs_raycast, vs_truth, moved)
+                })
+                .collect();
+            let mut now: Vec<((String, String), Signal)> = Vec::new();
+            for ((method, cell, r, bytes), (k, sig, vs_raycast, vs_truth, moved)) in
+                measured.iter().zip(figures)
+            {
                 let rms = rms_unquantised(&r.values, &reference);
                 line.push_str(&format!(
                     " {method} {:.4} s ({rms:.2})",
@@ -424,8 +586,20 @@ impl SceneRunner<'_> {
                     bytes: *bytes,
                     sphere_overlaps,
                     points_in_spheres,
+                    flip_mean_vs_raycast: vs_raycast.map(|s| s.mean),
+                    flip_weighted_median_vs_raycast: vs_raycast.map(|s| s.weighted_median),
+                    flip_mean_vs_truth: vs_truth.map(|s| s.mean),
+                    flip_weighted_median_vs_truth: vs_truth.map(|s| s.weighted_median),
+                    flicker: moved.map(|m| m.0),
+                    raycast_flicker: raycast_change.map(|m| m.0),
+                    flicker_points: moved.map(|m| m.1),
+                    flip_frame_change: moved.and_then(|m| m.2),
+                    truth_flip_frame_change: truth_flip_change,
                 });
+                now.push((k, sig));
             }
+            prev.extend(now);
+            prev_truth = Some(truth_now);
             eprintln!("{line}");
             // The animation: the reference and the first field method, where there is an image.
             if let (Some(v), Some(field)) = (&view, measured.iter().find(|m| !m.1.is_empty())) {

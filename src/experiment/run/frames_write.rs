@@ -1,5 +1,8 @@
 //! The end of an animated run ([`super::frames`]): `frames.csv`, per scene the frame time and
-//! the error against the frame (`frame_time-SCENE.png`, `error-SCENE.png`) and, with an image,
+//! the error against the frame (`frame_time-SCENE.png`, `error-SCENE.png`), the flicker
+//! against the frame (`flicker-SCENE.png`), every method, and with an image the mean FLIP
+//! against the converged reference and between consecutive frames (`flip-SCENE.png`,
+//! `flip_change-SCENE.png`); with an image,
 //! the animation of the reference, the first field method and their difference
 //! (`animation-SCENE.png`, APNG), `run.json` and the spec copy.
 
@@ -88,6 +91,86 @@ fn plot_error(path: &Path, rows: &[FrameRow], scene: &str) -> Result<()> {
     xy_plot(path, &axes, &series, &[])
 }
 
+/// One line per method of a per-frame column (`of`: none where the row has no value), on
+/// the frames that have one; none when no row has one.
+fn per_method(
+    rows: &[FrameRow],
+    scene: &str,
+    of: impl Fn(&FrameRow) -> Option<f64>,
+) -> Vec<Series> {
+    series_of(rows, scene)
+        .into_iter()
+        .map(|(label, rs)| Series {
+            label,
+            points: rs
+                .iter()
+                .filter_map(|r| of(r).map(|y| (r.frame as f64, y)))
+                .collect(),
+            line: true,
+        })
+        .filter(|s| !s.points.is_empty())
+        .collect()
+}
+
+/// Flicker against the frame, every method (`world_rebuild`'s line is the same-ray ray
+/// cast's): the spurious frame-to-frame change, against the converged reference's change.
+/// Nothing is drawn for a run without the column.
+fn plot_flicker(path: &Path, rows: &[FrameRow], scene: &str) -> Result<()> {
+    let series = per_method(rows, scene, |r| r.flicker);
+    if series.is_empty() {
+        return Ok(());
+    }
+    let axes = Axes {
+        title: format!(
+            "{scene}: flicker from the previous frame (change minus the converged reference's)"
+        ),
+        x_label: "frame".into(),
+        y_label: "flicker: RMS (0-255)".into(),
+        log_x: false,
+        log_y: false,
+    };
+    xy_plot(path, &axes, &series, &[])
+}
+
+/// FLIP against the frame's converged reference per method, and between consecutive frames
+/// per method beside the converged reference's own frame change. Nothing is drawn for a run
+/// without an image.
+fn plot_flip(path: &Path, change_path: &Path, rows: &[FrameRow], scene: &str) -> Result<()> {
+    let series = per_method(rows, scene, |r| r.flip_mean_vs_truth);
+    if series.is_empty() {
+        return Ok(());
+    }
+    let axes = Axes {
+        title: format!("{scene}: mean FLIP against the converged reference (67 px/degree)"),
+        x_label: "frame".into(),
+        y_label: "mean FLIP".into(),
+        log_x: false,
+        log_y: false,
+    };
+    xy_plot(path, &axes, &series, &[])?;
+    let mut series = per_method(rows, scene, |r| r.flip_frame_change);
+    let truth: Vec<(f64, f64)> = (rows.iter())
+        .filter(|r| r.scene == scene && r.method == "world_rebuild")
+        .filter_map(|r| r.truth_flip_frame_change.map(|y| (r.frame as f64, y)))
+        .collect();
+    if !truth.is_empty() {
+        series.push(Series {
+            label: "converged reference".into(),
+            points: truth,
+            line: true,
+        });
+    }
+    if series.is_empty() {
+        return Ok(());
+    }
+    let axes = Axes {
+        title: format!("{scene}: mean FLIP between consecutive frames"),
+        y_label: "mean FLIP, frame against the previous".into(),
+        ..axes
+    };
+    xy_plot(change_path, &axes, &series, &[])
+}
+
 /// The plots of every scene of `rows` in `dir` (`kind`: the render kind, for the titles).
 fn draw(dir: &Path, rows: &[FrameRow], kind: &str) -> Result<()> {
     let mut scenes: Vec<&str> = Vec::new();
@@ -99,6 +182,9 @@ fn draw(dir: &Path, rows: &[FrameRow], kind: &str) -> Result<()> {
     for n in scenes {
         plot_frame_time(&dir.join(format!("frame_time-{n}.png")), rows, n, kind)?;
         plot_error(&dir.join(format!("error-{n}.png")), rows, n)?;
+        plot_flicker(&dir.join(format!("flicker-{n}.png")), rows, n)?;
+        let (flip, change) = (format!("flip-{n}.png"), format!("flip_change-{n}.png"));
+        plot_flip(&dir.join(flip), &dir.join(change), rows, n)?;
     }
     Ok(())
 }
@@ -152,6 +238,7 @@ pub(super) fn write(
         "rays_per_point": spec.render.rays_per_point,
         "seed": spec.reference.seed,
         "truth": spec.reference.truth,
+        "flip": crate::experiment::flip::metadata(),
         "animation": spec.animation,
         "methods": run.methods,
         "skipped_methods": run

@@ -132,8 +132,8 @@ impl Runner<'_> {
         let setup_s = gpu.as_ref().and_then(|g| g.setup_s());
         drop(gpu);
         let img = st.image(bs, &values[0]);
-        let errors = self.measure(st, bs, &values, img.as_ref().map(|(i, _)| i));
-        let image = self.write_images(&id, img.as_ref(), st)?;
+        let (errors, flips) = self.measure(st, bs, &values, img.as_ref().map(|(i, _)| i));
+        let image = self.write_images(&id, img.as_ref(), st, &flips)?;
         if let Some(shaded) = st.shaded_image(bs, &values[0]) {
             let p = self.opts.out.join(format!("images/{id}-shaded.png"));
             shaded.save_png(&p).map_err(Error::io(&p))?;
@@ -224,5 +224,12 @@ fn push_errors(row: &mut NamedRow, e: &ErrorColumns) {
         .push_opt("second_reference", e.second_reference.as_ref())
         .push_opt("rms_image_vs_second", e.rms_image_vs_second)
         .push_opt("rms_image_window", e.rms_image_window)
-        .push_opt("rms_image_shaded", e.rms_image_shaded);
+        .push_opt("rms_image_shaded", e.rms_image_shaded)
+        .push_opt("flip_mean", e.flip.map(|f| f.mean))
+        .push_opt("flip_weighted_median", e.flip.map(|f| f.weighted_median))
+        .push_opt("flip_mean_vs_truth", e.flip_vs_truth.map(|f| f.mean))
+        .push_opt(
+            "flip_weighted_median_vs_truth",
+            e.flip_vs_truth.map(|f| f.weighted_median),
+        );
 }

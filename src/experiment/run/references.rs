@@ -9,7 +9,7 @@ use crate::experiment::meta::portable_path;
 use crate::experiment::metrics::{rms_u8, rms_unquantised};
 use crate::experiment::progress::stage;
 use crate::experiment::truth_cache::{load_or_compute, TruthInputs, TruthOutcome};
-use crate::experiment::Result;
+use crate::experiment::{Error, Result};
 use crate::render::image::Image;
 use crate::render::truth::TruthOptions;
 use crate::sampling::rays::RaySet;
@@ -54,6 +54,7 @@ impl Runner<'_> {
     pub(super) fn truth(&mut self, scene: usize) -> Result<()> {
         let topts = truth_options(self.spec);
         let cache = self.opts.supply.cache.clone();
+        let out = self.opts.out.clone();
         let scenes = self.scenes;
         let bs = &scenes.scenes[scene];
         let st = self.scene(scene);
@@ -93,6 +94,11 @@ impl Runner<'_> {
             }
         );
         st.truth_source = source;
+        st.truth_image = st.image(bs, &truth.values).map(|(img, _)| img);
+        if let Some(img) = &st.truth_image {
+            let p = out.join(format!("images/{}-truth.png", bs.name));
+            img.save_png(&p).map_err(Error::io(&p))?;
+        }
         st.truth = Some(truth);
         Ok(())
     }

@@ -48,6 +48,8 @@ pub(super) struct SceneState {
     pub(super) ref_shaded: Option<Image>,
     /// The converged reference.
     pub(super) truth: Option<Truth>,
+    /// The converged reference's image (the FLIP columns `flip_*_vs_truth` compare with it).
+    pub(super) truth_image: Option<Image>,
     /// Where the truth came from (cache file, or computed and how long it took).
     pub(super) truth_source: String,
     /// The same-ray reference on the seeds after the first: values, image and shaded picture.
@@ -126,6 +128,7 @@ impl SceneState {
             second: setup.second_reference,
             second_image: None,
             truth: None,
+            truth_image: None,
             truth_source: String::new(),
             seed_refs: Vec::new(),
             reference_vs_truth: Vec::new(),

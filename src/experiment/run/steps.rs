@@ -8,6 +8,7 @@ use super::RunOptions;
 use crate::experiment::backend::{self, Casters, ComputeBackend, CpuBackend, Quantity};
 use crate::experiment::columns::NamedRow;
 use crate::experiment::fields::{derive, Supplied};
+use crate::experiment::flip::{self, FlipMap, FlipStats};
 use crate::experiment::kinds::Kind;
 use crate::experiment::methods::Setting;
 use crate::experiment::metrics::{
@@ -346,8 +347,8 @@ impl<'a> Runner<'a> {
         let (ev, field_sweep) = run.map_err(|e| e.context(format!("cell {id}")))?;
         let st = self.states[c.scene].as_ref().expect("scene state");
         let img = st.image(bs, &ev.values[0]);
-        let errors = self.measure(st, bs, &ev.values, img.as_ref().map(|(i, _)| i));
-        let image = self.write_images(&id, img.as_ref(), st)?;
+        let (errors, flips) = self.measure(st, bs, &ev.values, img.as_ref().map(|(i, _)| i));
+        let image = self.write_images(&id, img.as_ref(), st, &flips)?;
         if let Some(shaded) = st.shaded_image(bs, &ev.values[0]) {
             let p = self.opts.out.join(format!("images/{id}-shaded.png"));
             shaded.save_png(&p).map_err(Error::io(&p))?;
@@ -502,7 +503,13 @@ impl<'a> Runner<'a> {
         bs: &BuiltScene,
         values: &[Vec<f32>],
         first_image: Option<&Image>,
-    ) -> ErrorColumns {
+    ) -> (ErrorColumns, FlipMaps) {
+        // FLIP over the pixels the image RMS is taken over (untimed, as every metric).
+        let mask = st.ref_image.as_ref().map(|(_, m)| m.as_slice());
+        let flips = FlipMaps {
+            vs_reference: flip::compare(st.ref_image.as_ref().map(|(r, _)| r), first_image, mask),
+            vs_truth: flip::compare(st.truth_image.as_ref(), first_image, mask),
+        };
         let vertex: Option<ErrorStats> = self
             .kind
             .columns()
@@ -513,7 +520,7 @@ impl<'a> Runner<'a> {
             _ => None,
         };
         let se: SeedErrors = seed_errors(self.kind.as_ref(), st, bs, values, first_image);
-        ErrorColumns {
+        let errors = ErrorColumns {
             seeds: values.len() as u32,
             rms_vertex: se.vertex,
             rms_image: se.image,
@@ -552,17 +559,23 @@ impl<'a> Runner<'a> {
             },
             rms_image_window: se.image.zip(st.window_share()).map(|(m, s)| m.0 * s.sqrt()),
             rms_image_shaded: se.shaded,
+            flip: flips.vs_reference.as_ref().map(|f| f.0),
+            flip_vs_truth: flips.vs_truth.as_ref().map(|f| f.0),
             image: String::new(),
-        }
+        };
+        (errors, flips)
     }
 
-    /// Write: the cell's image and its difference from the reference ×5; the image's path
-    /// relative to the output folder (empty without an image).
+    /// Write: the cell's image, its difference from the reference ×5 and its FLIP maps
+    /// (magma) against the reference (`-flip.png`) and the converged reference
+    /// (`-flip_vs_truth.png`); the image's path relative to the output folder (empty without an
+    /// image).
     pub(super) fn write_images(
         &self,
         id: &str,
         img: Option<&(Image, Vec<bool>)>,
         st: &SceneState,
+        flips: &FlipMaps,
     ) -> Result<String> {
         let (Some((a, _)), Some((r, _))) = (img, &st.ref_image) else {
             return Ok(String::new());
@@ -573,6 +586,15 @@ impl<'a> Runner<'a> {
         a.save_png(&p).map_err(Error::io(&p))?;
         let p = out.join(format!("images/{id}-diff_x5.png"));
         a.difference(r, 5.0).save_png(&p).map_err(Error::io(&p))?;
+        for (suffix, f) in [
+            ("flip", &flips.vs_reference),
+            ("flip_vs_truth", &flips.vs_truth),
+        ] {
+            if let Some((_, map)) = f {
+                let p = out.join(format!("images/{id}-{suffix}.png"));
+                map.save_magma_png(&p).map_err(Error::io(&p))?;
+            }
+        }
         Ok(image)
     }
 
@@ -606,6 +628,13 @@ impl<'a> Runner<'a> {
         self.kind
             .own_metrics(values, &st.reference, st.truth.as_ref())
     }
+}
+
+/// A cell's FLIP against the same-ray reference's image and against the converged
+/// reference's image: pooled, and the map.
+pub(super) struct FlipMaps {
+    pub(super) vs_reference: Option<(FlipStats, FlipMap)>,
+    pub(super) vs_truth: Option<(FlipStats, FlipMap)>,
 }
 
 /// The smaller of two optional times (a kernel time is the best over the timed runs).

@@ -227,6 +227,7 @@ impl Runner<'_> {
             "seed": spec.reference.seed,
             "seeds": spec.reference.seeds,
             "truth": spec.reference.truth,
+            "flip": crate::experiment::flip::metadata(),
             "timing": format!(
                 "stages under {} s: best of {} runs",
                 opts.short_stage_s, opts.repeats
