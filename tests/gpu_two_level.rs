@@ -1,6 +1,9 @@
 //! Two-level ray casting on the GPU (`gpu::GpuTwoLevel`) against the CPU's two-level caster
 //! (`trace::two_level::TwoLevel`) ray for ray on a moving scene, through every integrand, and
 //! on a crowd that the world BVH on the GPU refuses.
+//!
+//! Only a missing Vulkan driver skips these tests (reported as ignored, with the reason
+//! printed; the harness is `main`, through libtest-mimic); every other GPU failure fails them.
 
 use glam::{Quat, Vec3};
 use visfield::geometry::procedural::{supershape, uv_sphere, Supershape};
@@ -122,9 +125,8 @@ fn assert_agrees(acc: &Agreement) {
 /// Every frame of a moving scene (the instances moved, turned and rescaled, the top level
 /// rebuilt and uploaded each frame, the meshes' BVHs uploaded once): any hit, closest hit and
 /// normal as the CPU's two levels, ray for ray.
-#[test]
 fn gpu_two_levels_answer_as_the_cpu_two_levels_on_every_frame() {
-    let Some(ctx) = context() else { return };
+    let ctx = context().expect("a Vulkan adapter (the harness checked)");
     let meshes = [
         supershape(&Supershape::default(), 3000).unwrap(),
         uv_sphere(1.0, 12, 24).unwrap(),
@@ -152,9 +154,8 @@ fn gpu_two_levels_answer_as_the_cpu_two_levels_on_every_frame() {
 }
 
 /// No instance: every ray misses; the same visibility placed again answers again.
-#[test]
 fn gpu_two_levels_without_instances_miss_everything() {
-    let Some(ctx) = context() else { return };
+    let ctx = context().expect("a Vulkan adapter (the harness checked)");
     let model = vec![tris(&uv_sphere(1.0, 8, 8).unwrap())];
     let mut gpu = GpuTwoLevel::new(ctx, &model).unwrap();
     let ray = RayQuery {
@@ -181,9 +182,8 @@ fn gpu_two_levels_without_instances_miss_everything() {
 /// through its two levels on the same rays: no ray decided differently on all but 1% of the
 /// points (beyond the f32 sums' rounding), and there by about one ray's share at most;
 /// the reflected radiance within 1e-3 at 99% of the points.
-#[test]
 fn every_integrand_runs_on_the_gpu_two_levels_as_on_the_cpu() {
-    let Some(ctx) = context() else { return };
+    let ctx = context().expect("a Vulkan adapter (the harness checked)");
     let model = vec![tris(&supershape(&Supershape::default(), 2000).unwrap())];
     // A 4 × 4 crowd floating over the floor z = 0, turned.
     let instances: Vec<(usize, Similarity)> = (0..16u64)
@@ -289,9 +289,8 @@ fn every_integrand_runs_on_the_gpu_two_levels_as_on_the_cpu() {
 /// placements) build and answer as the CPU's two levels. Where the adapter's binding is so
 /// large that the mesh would take long to build (past 200,000 triangles), a 2,000-triangle mesh
 /// shows the two levels at 64 casters alone, and the refusal is skipped with that reason.
-#[test]
 fn a_crowd_the_world_bvh_refuses_runs_on_the_two_levels() {
-    let Some(ctx) = context() else { return };
+    let ctx = context().expect("a Vulkan adapter (the harness checked)");
     // Three vec4 a triangle, 64 copies.
     let past_binding = (ctx.max_binding() / (48 * 64) + 1) as usize;
     let refusal = past_binding <= 200_000;
@@ -351,4 +350,31 @@ fn a_crowd_the_world_bvh_refuses_runs_on_the_two_levels() {
     assert_agrees(&acc);
     // The mesh once: far below the 64 copies the world BVH would hold.
     assert!(gpu.bytes() < (model[0].len() * 48 * 64 / 8) as u64);
+}
+
+/// The harness: every test above, run where a Vulkan adapter exists and reported as ignored,
+/// with the reason, where none does (a skipped test never shows as passed).
+fn main() {
+    common::run_gpu_trials(
+        "gpu_two_level",
+        &[
+            (
+                "gpu_two_levels_answer_as_the_cpu_two_levels_on_every_frame",
+                gpu_two_levels_answer_as_the_cpu_two_levels_on_every_frame,
+            ),
+            (
+                "gpu_two_levels_without_instances_miss_everything",
+                gpu_two_levels_without_instances_miss_everything,
+            ),
+            (
+                "every_integrand_runs_on_the_gpu_two_levels_as_on_the_cpu",
+                every_integrand_runs_on_the_gpu_two_levels_as_on_the_cpu,
+            ),
+            (
+                "a_crowd_the_world_bvh_refuses_runs_on_the_two_levels",
+                a_crowd_the_world_bvh_refuses_runs_on_the_two_levels,
+            ),
+        ],
+        &[],
+    )
 }
