@@ -56,7 +56,11 @@ fn main() {
         .map(|m| Arc::new(bake(m, params, &BakeOptions::default()).expect("bake").0))
         .collect();
     let model: Vec<Vec<[Vec3; 3]>> = (meshes.iter())
-        .map(|m| (m.triangles.iter()).map(|t| t.map(|i| m.positions[i as usize])).collect())
+        .map(|m| {
+            (m.triangles.iter())
+                .map(|t| t.map(|i| m.positions[i as usize]))
+                .collect()
+        })
         .collect();
     // Each caster fitted to a sphere of radius 0.3 in its unit cell, 0.02 over the plane y = 0,
     // orbiting the cell's centre at 0.12 and turning.
@@ -75,7 +79,10 @@ fn main() {
                 let axis = Vec3::new((i as f32 * 1.3).sin(), 1.0, (i as f32 * 0.7).cos());
                 let rotation = Quat::from_axis_angle(axis.normalize(), a);
                 let scale = 0.3 / b.radius;
-                (m, Similarity::new(rotation, centre - scale * (rotation * b.center), scale))
+                (
+                    m,
+                    Similarity::new(rotation, centre - scale * (rotation * b.center), scale),
+                )
             })
             .collect()
     };
@@ -88,7 +95,11 @@ fn main() {
     let points: Vec<Vec3> = (0..side * 4 * side * 4)
         .map(|i| {
             let (x, z) = (i % (side * 4), i / (side * 4));
-            Vec3::new((x as f32 + 0.5) / 4.0 - half, 0.0, (z as f32 + 0.5) / 4.0 - half)
+            Vec3::new(
+                (x as f32 + 0.5) / 4.0 - half,
+                0.0,
+                (z as f32 + 0.5) / 4.0 - half,
+            )
         })
         .collect();
     let normals = vec![Vec3::Y; points.len()];
@@ -144,7 +155,10 @@ fn main() {
             update[3].push(u);
             query[3].push(t.elapsed().as_secs_f64());
         }
-        assert!(values[2] == values[0] && values[1] == values[0], "frame {frame}: the top level's answers differ from every sphere's");
+        assert!(
+            values[2] == values[0] && values[1] == values[0],
+            "frame {frame}: the top level's answers differ from every sphere's"
+        );
         two_diff = (v.iter().zip(&values[0]))
             .map(|(a, b)| (a - b).abs())
             .fold(two_diff, f32::max);

@@ -352,6 +352,45 @@ fn a_crowd_the_world_bvh_refuses_runs_on_the_two_levels() {
     assert!(gpu.bytes() < (model[0].len() * 48 * 64 / 8) as u64);
 }
 
+/// `{"method": "two_level"}` on a still spec through the harness, on both backends (the tiny
+/// spec: a supershape over a corner, vertex AO): a CPU row and a GPU row naming the adapter
+/// with its upload time, both with the world ray caster's answers on the same rays (same-ray
+/// error below 0.5 on the 0–255 scale) and the same error against the converged reference
+/// within 0.5 of each other, that error not 0.
+fn the_two_levels_run_as_a_method_on_both_backends() {
+    use visfield::experiment::columns::{read_csv, NamedRow};
+    let ctx = context().expect("a Vulkan adapter (the harness checked)");
+    let dir = tempfile::tempdir().unwrap();
+    let methods =
+        r#""methods": [{"method": "two_level", "backends": ["cpu", "gpu"]}], "reference": {"#;
+    let text = common::tiny(common::ONE_FIELD, "").replace(r#""reference": {"#, methods);
+    let ls = common::loaded(dir.path(), &text);
+    let out = dir.path().join("out");
+    visfield::experiment::run::run(&ls, &common::options(out.clone())).unwrap();
+    let rows: Vec<NamedRow> = read_csv(&out.join("methods.csv")).unwrap();
+    let col = |name: &str| -> Vec<&str> { rows.iter().map(|r| r.get(name).unwrap()).collect() };
+    assert_eq!(col("setting"), ["two_level", "two_level"]);
+    assert_eq!(col("backend"), ["cpu", "gpu"]);
+    let (cpu, gpu) = (&rows[0], &rows[1]);
+    assert_eq!(gpu.get("adapter"), Some(ctx.adapter_label().as_str()));
+    assert!(gpu.number("setup_s").unwrap() > 0.0);
+    let (c, g) = (
+        cpu.number("rms_vs_raycast").unwrap(),
+        gpu.number("rms_vs_raycast").unwrap(),
+    );
+    eprintln!("rms_vs_raycast: cpu {c:.4} gpu {g:.4}");
+    assert!(c < 0.5 && g < 0.5, "same-ray error: cpu {c} gpu {g}");
+    let (c, g) = (
+        cpu.number("rms_vs_truth").unwrap(),
+        gpu.number("rms_vs_truth").unwrap(),
+    );
+    eprintln!("rms_vs_truth: cpu {c:.4} gpu {g:.4}");
+    assert!(
+        c > 0.0 && g > 0.0 && (c - g).abs() <= 0.5,
+        "vs truth: cpu {c} gpu {g}"
+    );
+}
+
 /// The harness: every test above, run where a Vulkan adapter exists and reported as ignored,
 /// with the reason, where none does (a skipped test never shows as passed).
 fn main() {
@@ -373,6 +412,10 @@ fn main() {
             (
                 "a_crowd_the_world_bvh_refuses_runs_on_the_two_levels",
                 a_crowd_the_world_bvh_refuses_runs_on_the_two_levels,
+            ),
+            (
+                "the_two_levels_run_as_a_method_on_both_backends",
+                the_two_levels_run_as_a_method_on_both_backends,
             ),
         ],
         &[],
