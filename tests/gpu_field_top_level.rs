@@ -15,7 +15,9 @@ use visfield::field::normals::NormalField;
 use visfield::field::scene::{FieldInstance, FieldScene};
 use visfield::field::{Precision, Selection, VisibilityField};
 use visfield::geometry::Similarity;
-use visfield::gpu::{FieldAoKernel, FieldGpuOptions, FieldReflectKernel, FieldShadowKernel};
+use visfield::gpu::{
+    FieldAoKernel, FieldGpuOptions, FieldLayout, FieldReflectKernel, FieldShadowKernel,
+};
 use visfield::render::ao::{ao_at_points, AoOptions};
 use visfield::render::reflect::{reflect_at_points, Gloss, ReflectOptions};
 use visfield::render::shadow::{shadow_at_points, ShadowOptions, SphereLight};
@@ -191,6 +193,30 @@ fn top_level_ao_is_every_spheres_bit_for_bit() {
     }
 }
 
+/// The top level bound after the 3D texture of the 2010 paper's layout instead of the storage
+/// windows: AO every sphere's bit for bit there too.
+fn top_level_binds_after_the_texture_layout() {
+    let ctx = context().expect("a Vulkan adapter (the harness checked)");
+    let rays = RaySet::new(4, 5);
+    let opts = AoOptions {
+        max_distance: Some(1.5),
+        ..AoOptions::for_scene_radius(3.0)
+    };
+    let insts = crowd(1);
+    let (p, n) = receivers(&insts);
+    let texture = |top_level| FieldGpuOptions {
+        layout: FieldLayout::Texture3d,
+        ..with_top_level(top_level)
+    };
+    let top = FieldAoKernel::new(ctx, &insts, &texture(true)).unwrap();
+    let every = FieldAoKernel::new(ctx, &insts, &texture(false)).unwrap();
+    assert!(top.texture_depth().is_some());
+    let (t, _) = top.ao(&p, &n, &rays, &opts).unwrap();
+    let (e, _) = every.ao(&p, &n, &rays, &opts).unwrap();
+    bit_identical("AO, texture layout", &t, &e);
+    assert!(t.iter().any(|&v| v < 0.9), "no occlusion");
+}
+
 /// Soft shadows and glossy reflections on two frames: the top level's values are every
 /// sphere's bit for bit; the CPU's within the f32 sums' rounding (shadows, at 99% of the
 /// points; one ray's share elsewhere) and within 1e-3 at 99% of the points (reflections: the
@@ -290,6 +316,10 @@ fn main() {
             (
                 "top_level_ao_is_every_spheres_bit_for_bit",
                 top_level_ao_is_every_spheres_bit_for_bit,
+            ),
+            (
+                "top_level_binds_after_the_texture_layout",
+                top_level_binds_after_the_texture_layout,
             ),
             (
                 "top_level_shadows_and_reflections_are_every_spheres_bit_for_bit",
