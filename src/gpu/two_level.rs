@@ -249,7 +249,7 @@ impl<'a> GpuTwoLevel<'a> {
                 )));
             }
             let finite = t.rotation.is_finite() && t.translation.is_finite();
-            if !finite || !(t.scale.is_finite() && t.scale > 0.0) {
+            if !(finite && t.scale.is_finite() && t.scale > 0.0) {
                 return Err(GpuError::Invalid(format!(
                     "instance {i}: transform not finite with a positive scale ({t:?})"
                 )));

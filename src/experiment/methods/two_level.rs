@@ -47,8 +47,11 @@ impl MethodOptions for TwoLevelOptions {
 /// The scene's casters in two levels.
 pub struct TwoLevelMethod;
 
+/// Per distinct caster mesh, its model-space triangles.
+type ModelTriangles = Vec<Vec<[Vec3; 3]>>;
+
 /// The distinct caster meshes' model-space triangles and every caster's (mesh, transform).
-fn instanced(scene: &BuiltScene) -> (Vec<Vec<[Vec3; 3]>>, Vec<(usize, Similarity)>) {
+fn instanced(scene: &BuiltScene) -> (ModelTriangles, Vec<(usize, Similarity)>) {
     let meshes = scene.caster_meshes();
     let mut model = vec![Vec::new(); meshes.len()];
     let mut instances = Vec::new();
@@ -108,7 +111,7 @@ impl Method for TwoLevelMethod {
 
 /// What the GPU two levels upload: the meshes and the placements.
 struct TwoLevelGpu {
-    model: Vec<Vec<[Vec3; 3]>>,
+    model: ModelTriangles,
     instances: Vec<(usize, Similarity)>,
 }
 
