@@ -13,7 +13,13 @@ mkdir -p "$out"
 # line or ";"-separated, each a spec name and its flags), e.g. the 2010 GPU specs:
 #   DEVICE_JOBS="ao2010_figure3; ao2010_figure4; ao2010_models; ao2010_sponza"
 # (their CPU side, the converged references and the 16642 × 128² bake, takes minutes even on
-# 16 cores: run them in a call of their own).
+# 16 cores: run them in a call of their own). DEVICE_SET=moving runs the moving scenes with
+# every GPU per-frame method instead (a call of its own): the 64-caster crowd per pixel
+# (dynamic2010_crowd_gpu), the animated 2008 Figure 8 (dynamic2008_figure8) and the 256-caster
+# crowd (dynamic2010_crowd256_gpu): two_level@gpu, field_every_sphere@gpu and field@gpu beside
+# their CPU twins (and world_rebuild@gpu where the world fits one storage binding), each
+# frame's update and query timed apart. The crowds share their fields through cache/ (one bake
+# of the five meshes); add DEVICE_ARGS=--quick for a first, short try.
 adapter="${DEVICE_ADAPTER:-hardware}"
 if [ -z "${DEVICE_SKIP_LOADER:-}" ]; then
   for f in .gl/*.deb; do dpkg -x "$f" /; done
@@ -26,7 +32,11 @@ export VISFIELD_MODELS="$PWD/.device/models" VISFIELD_COMMIT="$(cat .device/COMM
 nvidia-smi --query-gpu=name,driver_version --format=csv,noheader | tee "$out/gpu.txt" || true
 exp=.device/experiment
 status=0
-jobs="${DEVICE_JOBS:-figure6 --no-cache; figure8 --no-cache; relief}"
+case "${DEVICE_SET:-figures}" in
+  moving) default_jobs="dynamic2010_crowd_gpu; dynamic2008_figure8 --no-cache; dynamic2010_crowd256_gpu" ;;
+  *) default_jobs="figure6 --no-cache; figure8 --no-cache; relief" ;;
+esac
+jobs="${DEVICE_JOBS:-$default_jobs}"
 IFS=$';\n' read -r -d '' -a job_list <<<"$jobs" || true
 for job in "${job_list[@]}"; do
   job="$(echo "$job" | xargs)"
@@ -38,5 +48,8 @@ for job in "${job_list[@]}"; do
     status=1
   fi
 done
+# The adapter each run used, as its run.json records it (the GPU rows name it too).
+grep -ho '"gpu_adapter": *"[^"]*"\|"adapter": *"[^"]*"' results-device/*/run.json 2>/dev/null \
+  | sort -u | tee "$out/adapter.txt" || true
 tar czf "$out/results-device.tgz" results-device
 exit $status

@@ -109,8 +109,9 @@ fn instance_surface_hit(inst: Instance, origin: vec3<f32>, dir: vec3<f32>, tmin:
 // `FieldScene::surface_hit` with the normal of the hit: the nearest hit over the instances
 // (every instance the ray meets is looked up and the nearest kept, since bounding spheres may
 // overlap; ties go to the instance the host tries first: the nearer sphere entry, then the
-// lower index), its normal from the instance's normal field turned to the world.
-fn surface_hit(origin: vec3<f32>, dir: vec3<f32>, tmax: f32) -> SurfaceHit {
+// lower index), its normal from the instance's normal field turned to the world. The
+// visibility's `surface_hit` where the instances have no top level of their own.
+fn surface_hit_every_sphere(origin: vec3<f32>, dir: vec3<f32>, tmax: f32) -> SurfaceHit {
     var res: SurfaceHit;
     res.hit = false;
     var best_t = 0.0;

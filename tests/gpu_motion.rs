@@ -1,7 +1,9 @@
 //! The GPU path per frame (an animated spec with `"backends": ["cpu", "gpu"]`): the GPU twins
-//! of the world rebuild (the GPU tracer's BVH rebuilt and uploaded each frame) and of the field
-//! testing every sphere (the fields uploaded once, the instances moved on the device each
-//! frame) against their CPU twins on the same rays, frame by frame, for AO, shadows and
+//! of the world rebuild (the GPU tracer's BVH rebuilt and uploaded each frame), of the two
+//! levels (each mesh's BVH uploaded once, the top level each frame), of the field testing every
+//! sphere (the fields uploaded once, the instances moved on the device each frame) and of the
+//! field with the BVH over its spheres (the tree rebuilt and uploaded each frame) against their
+//! CPU twins on the same rays, frame by frame, for AO, shadows and
 //! reflections; and a world too large for one storage binding refused by name.
 //!
 //! The bound: the GPU kernels reproduce the CPU values to the f32 differences the GPU tests
@@ -24,7 +26,9 @@ fn twins_agree(rows: &[FrameRow], what: &str) {
     let of = |m: &str| -> Vec<&FrameRow> { rows.iter().filter(|r| r.method == m).collect() };
     for (cpu, gpu) in [
         ("world_rebuild", "world_rebuild@gpu"),
+        ("two_level", "two_level@gpu"),
         ("field_every_sphere", "field_every_sphere@gpu"),
+        ("field", "field@gpu"),
     ] {
         let (c, g) = (of(cpu), of(gpu));
         assert!(

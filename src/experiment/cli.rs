@@ -662,7 +662,7 @@ fn committed_frames(out: &Path, committed: &Path) -> Result<Vec<super::check::Fa
     if left > 0 {
         println!(
             "{}: {left} frame row(s) of methods the committed run lacks (Embree's, in a build \
-             with the `embree` feature) not compared",
+             with the `embree` feature, or methods newer than that run) not compared",
             out.display()
         );
     }

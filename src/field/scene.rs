@@ -36,7 +36,7 @@ pub struct FieldInstance {
 /// Relative slack of [`FieldInstance::may_meet`]: ten times the f32 rounding (a few units of
 /// 6e-8 of the coordinates' magnitude) that separates its world-space test from the exact
 /// model-space one.
-pub(super) const MAY_MEET_SLACK: f32 = 1e-5;
+pub(crate) const MAY_MEET_SLACK: f32 = 1e-5;
 
 impl FieldInstance {
     pub fn new(field: Arc<VisibilityField>, transform: Similarity) -> Self {

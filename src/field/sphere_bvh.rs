@@ -188,6 +188,17 @@ mod avx2 {
     }
 }
 
+/// One node of [`SphereBvh::flat_nodes`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FlatNode {
+    pub lo: Vec3,
+    pub hi: Vec3,
+    /// Whether it is a leaf.
+    pub leaf: bool,
+    /// A leaf's instance, or an inner node's first child.
+    pub index: u32,
+}
+
 /// The tree over a scene's instances (see the module documentation).
 #[derive(Clone, Debug, Default)]
 pub struct SphereBvh {
@@ -270,6 +281,26 @@ impl SphereBvh {
         };
         self.build(first, start, mid, spheres);
         self.build(first + 1, mid, end, spheres);
+    }
+
+    /// The tree as the GPU walks it (src/gpu/field_binding.rs, shaders/field_top_level.wgsl):
+    /// its nodes in order, the root first, each with its box (the may-meet balls and the pad, as
+    /// the CPU's test reads it) and, for a leaf, its instance, for an inner node its first child
+    /// (the second follows it). A leaf holds one instance ([`LEAF`]).
+    pub fn flat_nodes(&self) -> Vec<FlatNode> {
+        const _: () = assert!(LEAF == 1);
+        (self.nodes.iter())
+            .map(|n| FlatNode {
+                lo: n.lo,
+                hi: n.hi,
+                leaf: n.count > 0,
+                index: if n.count > 0 {
+                    self.order[n.first as usize]
+                } else {
+                    n.first
+                },
+            })
+            .collect()
     }
 
     /// Bytes of the tree.

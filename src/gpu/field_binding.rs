@@ -16,17 +16,21 @@
 //!   layout's `load_distance` ([`FieldBinding::shader_source`]).
 //!
 //! The field visibility (src/gpu/field_kernel.rs) is this group with its header and, for
-//! reflections, the normal fields.
+//! reflections, the normal fields; with its own top level ([`FieldBindingOptions::top_level`])
+//! the BVH over the instances' spheres (the CPU's [`SphereBvh`], rebuilt on the host and
+//! uploaded whenever the instances move: shaders/field_top_level.wgsl) answers `occluded` and
+//! `surface_hit` instead of the loops over every instance.
 //!
 //! Group [`FIELD_GROUP`]'s bindings: 0 the visibility's header (`field_params`), 1 `tables`,
 //! 2 `mesh`, 3 `instances`, 4 `normals` (where bound), then the windows `win0`, `win1`, …
-//! (storage layout) or `field_tex` (texture layout).
+//! (storage layout) or `field_tex` (texture layout), then `sphere_nodes` (with the top level).
 
 use super::context::{entry, storage_layout_entry, uniform_layout_entry, GpuContext};
 use super::field_data::{field_words, placed, FieldInstanceGpu, PackedFields};
 use super::texture::FieldTexture;
 use super::GpuError;
-use crate::field::scene::FieldInstance;
+use crate::field::scene::{FieldInstance, MAY_MEET_SLACK};
+use crate::field::sphere_bvh::SphereBvh;
 use crate::field::VisibilityField;
 use std::sync::Arc;
 
@@ -66,6 +70,37 @@ pub(crate) struct FieldBindingOptions {
     /// Upload each field's owner and texel tables and read them before the ring search and
     /// the concentric map (`OWNER_TABLES`, `TEXEL_TABLES` in the WGSL lookup).
     pub lookup_tables: bool,
+    /// Bind the instances' own top level, a BVH over their spheres, and walk it in `occluded`
+    /// and `surface_hit` (one more storage buffer, counted here, not in
+    /// `kernel_storage_buffers`).
+    pub top_level: bool,
+}
+
+/// Twin of WGSL `SphereNode` (shaders/field_top_level.wgsl): one node of the instances' own
+/// top level ([`SphereBvh::flat_nodes`]).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+struct SphereNodeGpu {
+    lo: [f32; 3],
+    /// A leaf's instance, or an inner node's first child.
+    index: u32,
+    hi: [f32; 3],
+    /// 1 for a leaf, 0 for an inner node.
+    leaf: u32,
+}
+const _: () = assert!(std::mem::size_of::<SphereNodeGpu>() == 32);
+const _: () = assert!(std::mem::offset_of!(SphereNodeGpu, hi) == 16);
+
+/// The top level's nodes over `instances` as the WGSL reads them.
+fn sphere_nodes(instances: &[FieldInstance]) -> Vec<SphereNodeGpu> {
+    (SphereBvh::new(instances).flat_nodes().into_iter())
+        .map(|n| SphereNodeGpu {
+            lo: n.lo.to_array(),
+            index: n.index,
+            hi: n.hi.to_array(),
+            leaf: n.leaf as u32,
+        })
+        .collect()
 }
 
 /// The fields' stored distances on the device.
@@ -89,6 +124,8 @@ struct FieldResources {
     instances: wgpu::Buffer,
     normals: Option<wgpu::Buffer>,
     store: FieldStore,
+    /// The instances' own top level, where bound.
+    top: Option<wgpu::Buffer>,
 }
 
 impl FieldResources {
@@ -115,7 +152,19 @@ impl FieldResources {
                 count: None,
             }),
         }
+        if self.top.is_some() {
+            entries.push(storage_layout_entry(self.top_binding(), true));
+        }
         entries
+    }
+
+    /// The top level's binding: after the stored distances.
+    fn top_binding(&self) -> u32 {
+        FIRST_STORE_BINDING
+            + match &self.store {
+                FieldStore::Windows { buffers, .. } => buffers.len() as u32,
+                FieldStore::Texture { .. } => 1,
+            }
     }
 
     /// Bind-group entries of the field group, in the order of [`Self::layout_entries`].
@@ -140,12 +189,28 @@ impl FieldResources {
                 wgpu::BindingResource::TextureView(view),
             )),
         }
+        if let Some(top) = &self.top {
+            entries.push(entry(self.top_binding(), top.as_entire_binding()));
+        }
         entries
     }
 
     /// The generated WGSL (the group's declarations and the layout's element loader) and the
     /// layout's `load_distance` source.
     fn prelude(&self) -> (String, &'static str) {
+        let (prelude, layout) = self.store_prelude();
+        let top = match self.top {
+            Some(_) => format!(
+                "const MAY_MEET_SLACK: f32 = {MAY_MEET_SLACK:e};\n\
+                 @group({FIELD_GROUP}) @binding({}) var<storage, read> sphere_nodes: array<SphereNode>;\n",
+                self.top_binding()
+            ),
+            None => String::new(),
+        };
+        (prelude + &top, layout)
+    }
+
+    fn store_prelude(&self) -> (String, &'static str) {
         match &self.store {
             FieldStore::Windows {
                 buffers,
@@ -193,16 +258,27 @@ impl FieldBinding {
         opts: &FieldBindingOptions,
     ) -> Result<FieldBinding, GpuError> {
         let mut packed = PackedFields::new(instances, opts.lookup_tables)?;
+        let windows_opts = FieldBindingOptions {
+            kernel_storage_buffers: opts.kernel_storage_buffers + opts.top_level as u32,
+            ..*opts
+        };
         let (store, field_bytes) = match opts.layout {
-            FieldLayout::StorageBuffers => upload_windows(ctx, &mut packed, opts)?,
+            FieldLayout::StorageBuffers => upload_windows(ctx, &mut packed, &windows_opts)?,
             FieldLayout::Texture3d => upload_texture(ctx, &mut packed, opts)?,
         };
+        let top = (opts.top_level).then(|| {
+            ctx.storage_buffer(
+                "sphere nodes",
+                bytemuck::cast_slice(&sphere_nodes(instances)),
+            )
+        });
         let resources = FieldResources {
             tables: ctx.storage_buffer("tables", bytemuck::cast_slice(&packed.tables)),
             mesh: ctx.storage_buffer("sphere mesh", bytemuck::cast_slice(&packed.mesh)),
             instances: ctx.storage_buffer("instances", bytemuck::cast_slice(&packed.instances)),
             normals: normals.map(|w| ctx.storage_buffer("normal fields", bytemuck::cast_slice(w))),
             store,
+            top,
         };
         let (prelude, layout_source) = resources.prelude();
         let prelude = kinds_prelude(&packed.instances) + &prelude;
@@ -227,7 +303,8 @@ impl FieldBinding {
 
     /// WGSL of the field lookup: the group's declarations, the layout's element loader,
     /// sphere points, layouts, the lookup and the layout's `load_distance`, then the field
-    /// visibility's `occluded` and, with the normal fields, its `surface_hit`.
+    /// visibility's `occluded` and, with the normal fields, its `surface_hit`: the loops over
+    /// every instance, or the walks of the instances' own top level where it is bound.
     pub fn shader_source(&self) -> String {
         let mut parts = vec![
             self.prelude.as_str(),
@@ -238,10 +315,28 @@ impl FieldBinding {
             self.layout_source,
             include_str!("../../shaders/field_visibility.wgsl"),
         ];
-        if self.resources.normals.is_some() {
+        let normals = self.resources.normals.is_some();
+        if normals {
             parts.push(include_str!("../../shaders/field_surface.wgsl"));
         }
-        parts.concat()
+        let top = self.resources.top.is_some();
+        if top {
+            parts.push(include_str!("../../shaders/field_top_level.wgsl"));
+            if normals {
+                parts.push(include_str!("../../shaders/field_top_level_surface.wgsl"));
+            }
+        }
+        let mode = if top { "top_level" } else { "every_sphere" };
+        let mut queries = format!(
+            "// The visibility's queries: {mode}.\n\
+             fn occluded(o: vec3<f32>, d: vec3<f32>, tmin: f32, tmax: f32) -> bool {{ return occluded_{mode}(o, d, tmin, tmax); }}\n"
+        );
+        if normals {
+            queries += &format!(
+                "fn surface_hit(o: vec3<f32>, d: vec3<f32>, tmax: f32) -> SurfaceHit {{ return surface_hit_{mode}(o, d, tmax); }}\n"
+            );
+        }
+        parts.concat() + &queries
     }
 
     /// The layout of group [`FIELD_GROUP`].
@@ -261,9 +356,12 @@ impl FieldBinding {
 
     /// Moves the bound instances to `instances`' transforms (the same fields, instance by
     /// instance, as at [`Self::new`]): their records are rewritten in place on the device, the
-    /// fields stay where they are. What a moving rigid object costs the field kernels per frame.
+    /// fields stay where they are; with the top level, its tree is rebuilt on the host over the
+    /// moved spheres and rewritten too. What a moving rigid object costs the field kernels per
+    /// frame. Waits until the device holds them, so the upload is this call's cost.
     ///
-    /// Errors: [`GpuError::Invalid`] for another instance count or another field at an index.
+    /// Errors: [`GpuError::Invalid`] for another instance count or another field at an index;
+    /// [`GpuError::Poll`] if waiting for the upload fails.
     pub fn place(&self, ctx: &GpuContext, instances: &[FieldInstance]) -> Result<(), GpuError> {
         if instances.len() != self.records.len() {
             return Err(GpuError::Invalid(format!(
@@ -283,6 +381,22 @@ impl FieldBinding {
         }
         ctx.queue
             .write_buffer(&self.resources.instances, 0, bytemuck::cast_slice(&records));
+        if let Some(top) = self
+            .resources
+            .top
+            .as_ref()
+            .filter(|_| !instances.is_empty())
+        {
+            ctx.queue
+                .write_buffer(top, 0, bytemuck::cast_slice(&sphere_nodes(instances)));
+        }
+        ctx.queue.submit([]);
+        ctx.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|source| GpuError::Poll {
+                what: "waiting for the instances' upload",
+                source,
+            })?;
         Ok(())
     }
 

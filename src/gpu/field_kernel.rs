@@ -66,6 +66,13 @@ pub struct FieldGpuOptions {
     /// same map and texel but for f32 near-ties (docs/gpu.md, "Field kernel speed on
     /// lavapipe").
     pub lookup_tables: bool,
+    /// Walk the instances' own top level, a BVH over their bounding spheres (the CPU's
+    /// `field::sphere_bvh`, rebuilt on the host and uploaded by [`FieldKernel::place`]),
+    /// instead of testing every instance's sphere per ray: the same answers, bit for bit
+    /// (shaders/field_top_level.wgsl). `false` (the default): every sphere. The AO kernel then
+    /// runs the AO integrand (`ao_main`): the workgroup queue (`queue_rays`) culls against
+    /// every sphere.
+    pub top_level: bool,
 }
 
 impl FieldGpuOptions {
@@ -78,6 +85,7 @@ impl FieldGpuOptions {
             max_texture_depth: self.max_texture_depth,
             kernel_storage_buffers,
             lookup_tables: self.lookup_tables,
+            top_level: self.top_level,
         }
     }
 }
@@ -92,6 +100,7 @@ impl Default for FieldGpuOptions {
             max_texture_depth: None,
             queue_rays: true,
             lookup_tables: true,
+            top_level: false,
         }
     }
 }
@@ -195,13 +204,13 @@ impl<'a, Q: FieldQuantity> FieldKernel<'a, Q> {
             ctx,
             field,
             kernels: Kernels::new(start_rays),
-            queue_rays: opts.queue_rays,
+            queue_rays: opts.queue_rays && !opts.top_level,
             normal_bytes: words.map_or(0, |w| w.len() as u64 * 4),
             setup: Duration::ZERO,
             lookup: opts.lookup,
             quantity: PhantomData,
         };
-        let first = match (Q::INTEGRAND.slot == integrand::AO.slot, opts.queue_rays) {
+        let first = match (Q::INTEGRAND.slot == integrand::AO.slot, kernel.queue_rays) {
             (true, true) => &super::field_ao::AO_QUEUE,
             _ => Q::INTEGRAND,
         };
@@ -213,7 +222,8 @@ impl<'a, Q: FieldQuantity> FieldKernel<'a, Q> {
     }
 
     /// Moves the instances to `instances`' transforms, the fields staying on the device (the
-    /// same fields, instance by instance, as at `new`): a moving rigid object's per-frame cost.
+    /// same fields, instance by instance, as at `new`; with the top level, its tree rebuilt
+    /// and uploaded), waiting for the upload: a moving rigid object's per-frame cost.
     pub fn place(&self, instances: &[FieldInstance]) -> Result<(), GpuError> {
         self.field.place(self.ctx, instances)
     }

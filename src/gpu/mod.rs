@@ -17,6 +17,9 @@
 //! - [`GpuTracer`]: the GPU ray-cast reference, an obvhs CWBVH traversed in WGSL with the
 //!   watertight triangle test, a visibility (and its own any / closest hit queries), so that
 //!   GPU lookup is compared with GPU ray casting on the same device.
+//! - [`GpuTwoLevel`]: two-level ray casting for moving rigid instances, each mesh's CWBVH
+//!   uploaded once and a top level over the instances' world boxes rebuilt and uploaded per
+//!   frame (the twin of the CPU's `trace::two_level`), a visibility.
 //! - [`SdfKernel`]: mesh signed distance fields, a visibility by sphere tracing, with
 //!   cone-traced AO and shadows; [`AoFieldKernel`]: AO fields, a direct estimator.
 //! - [`ReliefKernel`]: the 2005 relief caster (linear search, bisection, safety-zone skips)
@@ -46,6 +49,7 @@ mod sdf_kernel;
 mod shadow_rays;
 mod texture;
 mod tracer;
+mod two_level;
 mod visibility;
 
 pub use aofield_kernel::AoFieldKernel;
@@ -59,6 +63,7 @@ pub use relief::ReliefKernel;
 pub use relief_peers::ReliefPeersKernel;
 pub use sdf_kernel::{SdfKernel, SDF_CONES_PER_INVOCATION, SDF_RAYS_PER_INVOCATION};
 pub use tracer::{GpuHit, GpuTracer};
+pub use two_level::{GpuTwoLevel, TwoLevelHit};
 pub use visibility::{GpuVisibility, Kernels, VisibilityGroup};
 
 use std::time::Duration;

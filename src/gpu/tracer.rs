@@ -25,15 +25,15 @@ const _: () = assert!(std::mem::size_of::<CwBvhNode>() == 80);
 /// Twin of WGSL `Ray` (shaders/bvh_queries.wgsl): one query ray.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-struct RayGpu {
+pub(super) struct RayGpu {
     /// Origin.
-    origin: [f32; 3],
+    pub origin: [f32; 3],
     /// Smallest hit distance.
-    tmin: f32,
+    pub tmin: f32,
     /// Direction.
-    direction: [f32; 3],
+    pub direction: [f32; 3],
     /// Largest hit distance.
-    tmax: f32,
+    pub tmax: f32,
 }
 const _: () = assert!(std::mem::size_of::<RayGpu>() == 32);
 const _: () = assert!(std::mem::offset_of!(RayGpu, direction) == 16);
@@ -87,48 +87,21 @@ impl<'a> GpuTracer<'a> {
     /// Builds the CWBVH (obvhs, `medium_build`, boxes padded) on the host and uploads it.
     pub fn new(ctx: &'a GpuContext, triangles: &[[Vec3; 3]]) -> Result<Self, GpuError> {
         let start = Instant::now();
-        if triangles.iter().flatten().any(|v| !v.is_finite()) {
-            return Err(GpuError::Invalid("triangle vertices must be finite".into()));
-        }
         // The triangles and the nodes are one storage binding each: refused by name past the
         // adapter's limit (three vec4 a triangle: 2.8 M triangles fill lavapipe's 128 MiB),
         // the triangles before the build, the nodes before the upload.
-        check_binding::<[f32; 4]>(ctx, "triangle vertices", triangles.len() * 3)?;
-        let (lo, hi) = triangles.iter().flatten().fold(
-            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-            |(lo, hi), &v| (lo.min(v), hi.max(v)),
-        );
-        let extent = (hi - lo).max_element().max(0.0);
-        let pad = glam::Vec3A::splat(BOX_PAD_RELATIVE * extent);
-        let boxes: Vec<Aabb> = triangles
-            .iter()
-            .map(|t| {
-                let [a, b, c] = t.map(glam::Vec3A::from);
-                Aabb::new(a.min(b).min(c) - pad, a.max(b).max(c) + pad)
-            })
-            .collect();
-        // The CPU tracer's build: obvhs's PLOC, or the median-split tree where PLOC would take
-        // quadratic time (fans, nested or turned copies of a triangle).
-        let bvh = crate::trace::bvh_build::build(&boxes);
-        check_binding::<CwBvhNode>(ctx, "CWBVH nodes", bvh.nodes.len())?;
-        let mut tri_data: Vec<[f32; 4]> = Vec::with_capacity(bvh.primitive_indices.len() * 3);
-        for &i in &bvh.primitive_indices {
-            let [a, b, c] = triangles[i as usize];
-            tri_data.push([a.x, a.y, a.z, f32::from_bits(i)]);
-            tri_data.push(b.extend(0.0).to_array());
-            tri_data.push(c.extend(0.0).to_array());
-        }
+        let (nodes, tri_data) = packed_cwbvh(ctx, triangles)?;
         let tracer = GpuTracer {
             ctx,
             group: VisibilityGroup::new(
                 ctx,
                 "cwbvh",
                 &[
-                    bytemuck::cast_slice(&bvh.nodes),
+                    bytemuck::cast_slice(&nodes),
                     bytemuck::cast_slice(&tri_data),
                 ],
             ),
-            node_count: bvh.nodes.len() as u32,
+            node_count: nodes.len() as u32,
             kernels: Kernels::new(super::loop_budget::DEFAULT_RAYS_PER_INVOCATION),
             setup: Duration::ZERO,
         };
@@ -247,7 +220,11 @@ impl GpuVisibility for GpuTracer<'_> {
     }
 
     fn wgsl(&self, _: u32) -> String {
-        include_str!("../../shaders/bvh.wgsl").into()
+        [
+            include_str!("../../shaders/cwbvh.wgsl"),
+            include_str!("../../shaders/bvh.wgsl"),
+        ]
+        .concat()
     }
 
     fn layout(&self) -> &wgpu::BindGroupLayout {
@@ -267,7 +244,48 @@ impl GpuVisibility for GpuTracer<'_> {
     }
 }
 
-fn ray_records(rays: &[RayQuery]) -> Vec<RayGpu> {
+/// The CWBVH of `triangles` as [`GpuTracer`] uploads it (obvhs, the CPU tracer's build, boxes
+/// padded by [`BOX_PAD_RELATIVE`] of the triangles' extent): its nodes, and its triangles in BVH
+/// order, three `vec4` each (v0 with the original index's bits in w, v1, v2). Refused with
+/// [`GpuError::TooLarge`] where either passes one storage binding (the triangles before the
+/// build, the nodes after it), and with [`GpuError::Invalid`] for a vertex that is not finite.
+pub(super) fn packed_cwbvh(
+    ctx: &GpuContext,
+    triangles: &[[Vec3; 3]],
+) -> Result<(Vec<CwBvhNode>, Vec<[f32; 4]>), GpuError> {
+    if triangles.iter().flatten().any(|v| !v.is_finite()) {
+        return Err(GpuError::Invalid("triangle vertices must be finite".into()));
+    }
+    check_binding::<[f32; 4]>(ctx, "triangle vertices", triangles.len() * 3)?;
+    let (lo, hi) = triangles.iter().flatten().fold(
+        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+        |(lo, hi), &v| (lo.min(v), hi.max(v)),
+    );
+    let extent = (hi - lo).max_element().max(0.0);
+    let pad = glam::Vec3A::splat(BOX_PAD_RELATIVE * extent);
+    let boxes: Vec<Aabb> = triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(glam::Vec3A::from);
+            Aabb::new(a.min(b).min(c) - pad, a.max(b).max(c) + pad)
+        })
+        .collect();
+    // The CPU tracer's build: obvhs's PLOC, or the median-split tree where PLOC would take
+    // quadratic time (fans, nested or turned copies of a triangle).
+    let bvh = crate::trace::bvh_build::build(&boxes);
+    check_binding::<CwBvhNode>(ctx, "CWBVH nodes", bvh.nodes.len())?;
+    let mut tri_data: Vec<[f32; 4]> = Vec::with_capacity(bvh.primitive_indices.len() * 3);
+    for &i in &bvh.primitive_indices {
+        let [a, b, c] = triangles[i as usize];
+        tri_data.push([a.x, a.y, a.z, f32::from_bits(i)]);
+        tri_data.push(b.extend(0.0).to_array());
+        tri_data.push(c.extend(0.0).to_array());
+    }
+    Ok((bvh.nodes, tri_data))
+}
+
+/// The query rays as the WGSL reads them.
+pub(super) fn ray_records(rays: &[RayQuery]) -> Vec<RayGpu> {
     rays.iter()
         .map(|r| RayGpu {
             origin: r.origin.to_array(),

@@ -3,14 +3,22 @@
 //!
 //! - `world_rebuild@gpu`: the GPU ray caster (an obvhs CWBVH traversed in WGSL,
 //!   [`GpuTracer`]) over the frame's world triangles, its BVH built on the host and uploaded
-//!   every frame (`update_s`). The only scheme the GPU tracer has: it holds one world BVH, no
-//!   instance level, so a moving object costs a rebuild and an upload of the whole scene.
+//!   every frame (`update_s`): one world BVH, no instance level, so a moving object costs a
+//!   rebuild and an upload of the whole scene. Skipped, with the reason, on a scene whose
+//!   world triangles pass one storage binding ([`world_fits`]).
+//! - `two_level@gpu`: two-level ray casting on the GPU ([`GpuTwoLevel`], the twin of
+//!   `two_level`): each mesh's CWBVH uploaded once before the frames, the top level over the
+//!   instances' world boxes rebuilt on the host and uploaded every frame (`update_s`, which
+//!   waits for the upload), rays moved into each instance's space on the device (`query_s`).
 //! - `field_every_sphere@gpu`: the render kind's field kernel (Gaitatzes et al., WSCG 2010: field
 //!   lookup on the GPU), its fields packed and uploaded once before the frames; per frame the
 //!   instance records (transform and world bounding sphere) are rewritten on the device
-//!   ([`Eval::place`]) and nothing else moves. The kernel tests every instance's sphere per
-//!   ray (no sphere BVH on the GPU), so it is the twin of `field_every_sphere`. The instance
-//!   upload is queued by `update_s` and carried out by the next dispatch, inside `query_s`.
+//!   ([`Eval::place`], waiting for the upload: `update_s`) and nothing else moves. The kernel
+//!   tests every instance's sphere per ray, the twin of `field_every_sphere`.
+//! - `field@gpu`: the same kernel walking the instances' own top level, the BVH over their
+//!   spheres (`FieldGpuOptions::top_level`, the GPU twin of `field`'s `field::sphere_bvh`),
+//!   rebuilt on the host and uploaded with the records every frame (`update_s`): the same
+//!   answers as testing every sphere, bit for bit.
 //!
 //! Both answer the kind through its GPU kernels on the CPU path's rays, so their values match
 //! the CPU twins' within the kernels' parity bounds (the GPU path's tests).
@@ -21,7 +29,7 @@ use crate::experiment::backend_gpu::GpuQuantity;
 use crate::experiment::Result;
 use crate::field::normals::NormalField;
 use crate::field::VisibilityField;
-use crate::gpu::{GpuContext, GpuTracer};
+use crate::gpu::{GpuContext, GpuTracer, GpuTwoLevel};
 use crate::render::estimator::{Estimator, Points};
 use crate::sampling::rays::RaySet;
 use crate::visibility::Visibility;
@@ -29,14 +37,35 @@ use std::sync::Arc;
 
 /// Each CPU per-frame method with a GPU twin, and the twin's name, in the order their rows are
 /// written.
-pub const TWINS: [(&str, &str); 2] = [
+pub const TWINS: [(&str, &str); 4] = [
     ("world_rebuild", WORLD_REBUILD),
+    ("two_level", TWO_LEVEL),
     ("field_every_sphere", FIELD_EVERY_SPHERE),
+    ("field", FIELD_TOP_LEVEL),
 ];
 /// [`GpuWorldRebuild`]'s name.
 pub const WORLD_REBUILD: &str = "world_rebuild@gpu";
-/// [`GpuFields`]' name.
+/// [`GpuTwoLevelMover`]'s name.
+pub const TWO_LEVEL: &str = "two_level@gpu";
+/// [`GpuFields`]' name testing every sphere.
 pub const FIELD_EVERY_SPHERE: &str = "field_every_sphere@gpu";
+/// [`GpuFields`]' name with the instances' own top level.
+pub const FIELD_TOP_LEVEL: &str = "field@gpu";
+
+/// Why `world_rebuild@gpu` cannot run on a world of `triangles` triangles, if it cannot: its
+/// triangles, three `vec4` each, pass one storage binding of the adapter (the GPU tracer would
+/// refuse them with `GpuError::TooLarge`).
+pub fn world_fits(ctx: &GpuContext, triangles: usize) -> std::result::Result<(), String> {
+    let need = triangles as u64 * 48;
+    if need > ctx.max_binding() {
+        return Err(format!(
+            "the world's {triangles} triangles need {need} bytes in one storage binding; the \
+             adapter allows {} (two_level@gpu uploads each mesh once)",
+            ctx.max_binding()
+        ));
+    }
+    Ok(())
+}
 
 /// The GPU ray caster over the world triangles, its BVH built and uploaded every frame.
 pub struct GpuWorldRebuild<'a> {
@@ -80,9 +109,62 @@ impl Mover for GpuWorldRebuild<'_> {
     }
 }
 
+/// Two-level ray casting on the GPU: each mesh's BVH uploaded once, the top level rebuilt and
+/// uploaded every frame.
+pub struct GpuTwoLevelMover<'a> {
+    quantity: &'a dyn GpuQuantity,
+    caster: GpuTwoLevel<'a>,
+}
+
+impl<'a> GpuTwoLevelMover<'a> {
+    /// Builds and uploads every mesh's CWBVH (model space) and compiles the integrands.
+    pub fn new(
+        ctx: &'a GpuContext,
+        quantity: &'a dyn GpuQuantity,
+        meshes: &[Arc<crate::geometry::Mesh>],
+    ) -> Result<Self> {
+        let model: Vec<Vec<[glam::Vec3; 3]>> = meshes
+            .iter()
+            .map(|m| {
+                m.triangles
+                    .iter()
+                    .map(|t| t.map(|i| m.positions[i as usize]))
+                    .collect()
+            })
+            .collect();
+        Ok(GpuTwoLevelMover {
+            quantity,
+            caster: GpuTwoLevel::new(ctx, &model)?,
+        })
+    }
+}
+
+impl Mover for GpuTwoLevelMover<'_> {
+    fn name(&self) -> &'static str {
+        TWO_LEVEL
+    }
+
+    fn update(&mut self, frame: &FrameCasters) -> Result<()> {
+        Ok(self.caster.update(frame.instances)?)
+    }
+
+    fn vis(&self) -> &dyn Visibility {
+        &crate::experiment::methods::NoRays
+    }
+
+    fn bytes(&self) -> Option<u64> {
+        Some(self.caster.bytes())
+    }
+
+    fn estimate(&self, _: &dyn Estimator, at: Points, rays: &RaySet) -> Result<Vec<f32>> {
+        Ok(self.quantity.trace(&self.caster, at, rays)?.values)
+    }
+}
+
 /// The kind's field kernel over one field per mesh (shared by its instances), uploaded once;
-/// per frame the instances are moved on the device.
+/// per frame the instances are moved on the device (with the top level, its tree too).
 pub struct GpuFields<'a> {
+    name: &'static str,
     eval: Box<dyn Eval + 'a>,
     fields: Vec<Arc<VisibilityField>>,
     normals: Vec<Option<Arc<NormalField>>>,
@@ -90,13 +172,16 @@ pub struct GpuFields<'a> {
 
 impl<'a> GpuFields<'a> {
     /// `eval`: the kind's field kernel prepared on instances of `fields` (and `normals`), in
-    /// the order every frame lists them.
+    /// the order every frame lists them; `name`: [`FIELD_EVERY_SPHERE`] or, for a kernel with
+    /// the instances' own top level, [`FIELD_TOP_LEVEL`].
     pub fn new(
+        name: &'static str,
         eval: Box<dyn Eval + 'a>,
         fields: Vec<Arc<VisibilityField>>,
         normals: Vec<Option<Arc<NormalField>>>,
     ) -> Self {
         GpuFields {
+            name,
             eval,
             fields,
             normals,
@@ -106,7 +191,7 @@ impl<'a> GpuFields<'a> {
 
 impl Mover for GpuFields<'_> {
     fn name(&self) -> &'static str {
-        FIELD_EVERY_SPHERE
+        self.name
     }
 
     fn update(&mut self, frame: &FrameCasters) -> Result<()> {

@@ -27,6 +27,7 @@ pub mod aofield;
 pub mod embree;
 pub mod raycast;
 pub mod sdf;
+pub mod two_level;
 
 use super::backend::Eval;
 use super::kinds::Kind;
@@ -119,6 +120,16 @@ pub trait GpuMethod: Send + Sync {
     /// at its points on the reference's rays, as the CPU answer does ([`Eval::setup_s`]: the
     /// upload and compile, the row's `setup_s`).
     fn upload<'a>(&'a self, ctx: &'a GpuContext) -> Result<Box<dyn Eval + 'a>>;
+    /// [`Self::upload`] for a method that answers through the kind's own integrand on a GPU
+    /// visibility of its own (a ray caster), given the kind's GPU kernels (none where the kind
+    /// has no GPU kernel); by default the kind's kernels are not needed.
+    fn upload_for<'a>(
+        &'a self,
+        ctx: &'a GpuContext,
+        _quantity: Option<&'a dyn crate::experiment::backend_gpu::GpuQuantity>,
+    ) -> Result<Box<dyn Eval + 'a>> {
+        self.upload(ctx)
+    }
 }
 
 /// The visibility handed to a method that casts no ray (a direct estimator, an AO field in a
@@ -244,7 +255,13 @@ where
 }
 
 /// The methods of this build.
-pub const BUILT_IN: &[MethodEntry] = &[raycast::ENTRY, embree::ENTRY, sdf::ENTRY, aofield::ENTRY];
+pub const BUILT_IN: &[MethodEntry] = &[
+    raycast::ENTRY,
+    embree::ENTRY,
+    sdf::ENTRY,
+    aofield::ENTRY,
+    two_level::ENTRY,
+];
 
 /// The registry: [`BUILT_IN`], then the methods added at run time by [`register`].
 static REGISTRY: Registry<MethodEntry> = Registry::new(BUILT_IN, "method");

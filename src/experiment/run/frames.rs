@@ -200,6 +200,10 @@ pub(super) struct FramesRun {
 /// A method this build skips, and why.
 type Skipped = (&'static str, &'static str);
 
+/// Why `world_rebuild@gpu` is skipped on a scene (the details are printed).
+const WORLD_TOO_LARGE: &str = "a scene's world triangles pass one storage binding of the \
+     adapter (GpuError::TooLarge); two_level@gpu uploads each mesh once";
+
 /// The per-frame methods the spec asks for (`animation.methods`, default every one) that this
 /// build runs, and the ones it skips with the reason (`--require-embree` fails instead).
 fn methods(spec: &Spec, opts: &RunOptions) -> Result<(Vec<&'static str>, Vec<Skipped>)> {
@@ -390,7 +394,28 @@ impl SceneRunner<'_> {
             };
             let ctx = be.gpu_context().expect("the gpu backend has a device");
             if self.names.contains(&gpu_movers::WORLD_REBUILD) {
-                gpu_casters.push(Box::new(gpu_movers::GpuWorldRebuild::new(ctx, kernels)));
+                match gpu_movers::world_fits(ctx, bs.caster_triangles()) {
+                    Ok(()) => {
+                        gpu_casters.push(Box::new(gpu_movers::GpuWorldRebuild::new(ctx, kernels)))
+                    }
+                    Err(why) => {
+                        eprintln!(
+                            "SKIPPED per-frame method {} on scene {}: {why}",
+                            gpu_movers::WORLD_REBUILD,
+                            bs.name
+                        );
+                        out.methods.retain(|&m| m != gpu_movers::WORLD_REBUILD);
+                        if !out.skipped.iter().any(|s| s.0 == gpu_movers::WORLD_REBUILD) {
+                            out.skipped
+                                .push((gpu_movers::WORLD_REBUILD, WORLD_TOO_LARGE));
+                        }
+                    }
+                }
+            }
+            if self.names.contains(&gpu_movers::TWO_LEVEL) {
+                gpu_casters.push(Box::new(gpu_movers::GpuTwoLevelMover::new(
+                    ctx, kernels, &meshes,
+                )?));
             }
             let mut scenes = gpu_scenes.iter();
             for c in &cells {
@@ -399,7 +424,23 @@ impl SceneRunner<'_> {
                     let scene = scenes.next().expect("a scene per gpu cell");
                     if self.names.contains(&gpu_movers::FIELD_EVERY_SPHERE) {
                         v.push(Box::new(gpu_movers::GpuFields::new(
+                            gpu_movers::FIELD_EVERY_SPHERE,
                             be.fields(scene, q)?,
+                            c.fields.clone(),
+                            c.normals.clone(),
+                        )));
+                    }
+                    if self.names.contains(&gpu_movers::FIELD_TOP_LEVEL) {
+                        // The same kernel walking the instances' own top level (the layout
+                        // and the rest of the backend's defaults).
+                        let opts = crate::gpu::FieldGpuOptions {
+                            lookup: scene.options,
+                            top_level: true,
+                            ..Default::default()
+                        };
+                        v.push(Box::new(gpu_movers::GpuFields::new(
+                            gpu_movers::FIELD_TOP_LEVEL,
+                            kernels.fields(ctx, scene, &opts)?,
                             c.fields.clone(),
                             c.normals.clone(),
                         )));

@@ -100,7 +100,11 @@ impl Runner<'_> {
                         format!("prepared no GPU kernel for render \"{}\"", self.kind.name()),
                     )
                 })?;
-                Some(kernels.upload(device).map_err(context)?)
+                Some(
+                    kernels
+                        .upload_for(device, st.gpu.as_deref())
+                        .map_err(context)?,
+                )
             }
         };
         let kernel_s = std::cell::Cell::new(None::<f64>);

@@ -1,0 +1,153 @@
+//! `{"method": "two_level"}`: our ray caster in two levels (`trace::two_level::TwoLevel`: one
+//! model-space BVH per distinct caster mesh, shared by its instances, and a top level over the
+//! instances' world boxes), the way engines cast rays over instanced objects; on the `gpu`
+//! backend its twin, two-level GPU ray casting (`gpu::GpuTwoLevel`: each mesh's CWBVH uploaded
+//! once, the top level built on the host and uploaded), through the kind's own integrand. Its
+//! precompute is the per-mesh BVHs and the top level; its values are the world ray caster's up
+//! to moving the ray instead of the triangles (f32), so its same-ray error is near 0.
+
+use super::Prepared;
+use super::{Answer, GpuMethod, Method, MethodContext, MethodEntry, MethodOptions, Precompute};
+use crate::experiment::backend::{Estimate, Eval};
+use crate::experiment::backend_gpu::GpuQuantity;
+use crate::experiment::kinds::Kind;
+use crate::experiment::scenes::BuiltScene;
+use crate::experiment::spec::{Spec, SpecError};
+use crate::experiment::validate::Validator;
+use crate::experiment::{Error, Result};
+use crate::geometry::Similarity;
+use crate::gpu::{GpuContext, GpuTwoLevel};
+use crate::render::estimator::Points;
+use crate::sampling::rays::RaySet;
+use crate::trace::two_level::TwoLevel;
+use glam::Vec3;
+use serde::{Deserialize, Serialize};
+
+pub const ENTRY: MethodEntry = MethodEntry {
+    name: "two_level",
+    about: "our ray caster in two levels: a BVH per distinct mesh, a top level over the instances (on the gpu backend: two-level GPU ray casting)",
+    read: super::read_as::<TwoLevelOptions>,
+};
+
+/// `two_level` has no parameters.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TwoLevelOptions {}
+
+impl MethodOptions for TwoLevelOptions {
+    fn validate(&self, _at: &str, _spec: &Spec, _v: &Validator) -> Result<(), SpecError> {
+        Ok(())
+    }
+
+    fn settings(&self) -> Vec<Box<dyn Method>> {
+        vec![Box::new(TwoLevelMethod)]
+    }
+}
+
+/// The scene's casters in two levels.
+pub struct TwoLevelMethod;
+
+/// Per distinct caster mesh, its model-space triangles.
+type ModelTriangles = Vec<Vec<[Vec3; 3]>>;
+
+/// The distinct caster meshes' model-space triangles and every caster's (mesh, transform).
+fn instanced(scene: &BuiltScene) -> (ModelTriangles, Vec<(usize, Similarity)>) {
+    let meshes = scene.caster_meshes();
+    let mut model = vec![Vec::new(); meshes.len()];
+    let mut instances = Vec::new();
+    for (i, inst) in scene.scene.casters() {
+        let m = (meshes.iter().position(|&g| g == scene.mesh_of[i])).expect("a caster mesh");
+        if model[m].is_empty() {
+            model[m] = (0..inst.mesh.triangle_count())
+                .map(|t| inst.mesh.triangle(t))
+                .collect();
+        }
+        instances.push((m, inst.transform));
+    }
+    (model, instances)
+}
+
+impl Method for TwoLevelMethod {
+    fn name(&self) -> &'static str {
+        ENTRY.name
+    }
+
+    /// The kind's integrand on the GPU two levels, where the kind has GPU kernels (refused by
+    /// the run, naming the kind, where it has none).
+    fn refuses_on_gpu(&self, _kind: &dyn Kind) -> Option<String> {
+        None
+    }
+
+    /// A BVH per distinct caster mesh, at the planner's bytes a triangle.
+    fn precompute(&self, scene: &BuiltScene) -> std::result::Result<Option<Precompute>, String> {
+        let (model, instances) = instanced(scene);
+        let triangles: u64 = model.iter().map(|m| m.len() as u64).sum();
+        let bytes = triangles.saturating_mul(crate::experiment::plan::BVH_BYTES_PER_TRIANGLE);
+        Ok(Some(Precompute {
+            what: format!(
+                "build a BVH per mesh over {triangles} triangles of {} mesh(es), a top level over {} instance(s) (bytes: about)",
+                model.len(),
+                instances.len()
+            ),
+            rays: 0,
+            bytes,
+            peak_bytes: bytes,
+        }))
+    }
+
+    fn prepare(&self, ctx: &MethodContext) -> Result<Prepared> {
+        let (model, instances) = instanced(ctx.scene);
+        let mut tl = TwoLevel::new(&model);
+        tl.update(&instances);
+        Ok(Prepared {
+            bytes: Some(tl.bytes()),
+            cached: false,
+            columns: Vec::new(),
+            answer: Answer::Rays(Box::new(tl)),
+            gpu: Some(Box::new(TwoLevelGpu { model, instances })),
+        })
+    }
+}
+
+/// What the GPU two levels upload: the meshes and the placements.
+struct TwoLevelGpu {
+    model: ModelTriangles,
+    instances: Vec<(usize, Similarity)>,
+}
+
+impl GpuMethod for TwoLevelGpu {
+    fn upload<'a>(&'a self, _ctx: &'a GpuContext) -> Result<Box<dyn Eval + 'a>> {
+        Err(Error::invalid(
+            "methods \"two_level\"",
+            "casts the kind's rays through its GPU integrand: needs the kind's GPU kernels",
+        ))
+    }
+
+    fn upload_for<'a>(
+        &'a self,
+        ctx: &'a GpuContext,
+        quantity: Option<&'a dyn GpuQuantity>,
+    ) -> Result<Box<dyn Eval + 'a>> {
+        let Some(quantity) = quantity else {
+            return self.upload(ctx);
+        };
+        let mut caster = GpuTwoLevel::new(ctx, &self.model)?;
+        caster.update(&self.instances)?;
+        Ok(Box::new(TwoLevelEval { caster, quantity }))
+    }
+}
+
+struct TwoLevelEval<'a> {
+    caster: GpuTwoLevel<'a>,
+    quantity: &'a dyn GpuQuantity,
+}
+
+impl Eval for TwoLevelEval<'_> {
+    fn estimate(&self, at: Points, rays: &RaySet) -> Result<Estimate> {
+        self.quantity.trace(&self.caster, at, rays)
+    }
+
+    fn setup_s(&self) -> Option<f64> {
+        Some(self.caster.setup_time().as_secs_f64())
+    }
+}
