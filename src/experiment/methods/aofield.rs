@@ -30,6 +30,7 @@ use crate::experiment::scenes::BuiltScene;
 use crate::experiment::spec::{Spec, SpecError};
 use crate::experiment::validate::Validator;
 use crate::experiment::{Error, Result};
+use crate::experiment::backend_gpu::GpuQuantity;
 use crate::gpu::{AoFieldKernel, GpuContext};
 use crate::render::estimator::{Estimator, Points};
 use crate::render::truth::{Truth, TruthOptions};
@@ -381,7 +382,11 @@ struct AoFieldGpu {
 }
 
 impl GpuMethod for AoFieldGpu {
-    fn upload<'a>(&'a self, ctx: &'a GpuContext) -> Result<Box<dyn Eval + 'a>> {
+    fn upload<'a>(
+        &'a self,
+        ctx: &'a GpuContext,
+        _: Option<&'a dyn GpuQuantity>,
+    ) -> Result<Box<dyn Eval + 'a>> {
         Ok(Box::new(AoFieldKernel::new(ctx, &self.fields)?))
     }
 }
