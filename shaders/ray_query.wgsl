@@ -23,7 +23,8 @@ struct RayQueryHeader {
 // found ends the walk.
 fn occluded(o: vec3<f32>, d: vec3<f32>, tmin: f32, tmax: f32) -> bool {
     var rq: ray_query;
-    rayQueryInitialize(&rq, rq_tlas, RayDesc(RAY_FLAG_TERMINATE_ON_FIRST_HIT | RAY_FLAG_FORCE_OPAQUE, 0xffu, tmin, tmax, o, d));
+    let flags = RAY_FLAG_TERMINATE_ON_FIRST_HIT | RAY_FLAG_FORCE_OPAQUE;
+    rayQueryInitialize(&rq, rq_tlas, RayDesc(flags, 0xffu, tmin, tmax, o, d));
     while rayQueryProceed(&rq) {}
     return rayQueryGetCommittedIntersection(&rq).kind != RAY_QUERY_INTERSECTION_NONE;
 }
@@ -41,7 +42,11 @@ struct RayQueryHit {
 
 fn closest_hit(o: vec3<f32>, d: vec3<f32>, tmin: f32, tmax: f32) -> RayQueryHit {
     var rq: ray_query;
-    rayQueryInitialize(&rq, rq_tlas, RayDesc(RAY_FLAG_FORCE_OPAQUE, 0xffu, tmin, tmax, o, d));
+    rayQueryInitialize(
+        &rq,
+        rq_tlas,
+        RayDesc(RAY_FLAG_FORCE_OPAQUE, 0xffu, tmin, tmax, o, d),
+    );
     while rayQueryProceed(&rq) {}
     let h = rayQueryGetCommittedIntersection(&rq);
     var res: RayQueryHit;

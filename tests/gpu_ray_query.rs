@@ -2,9 +2,10 @@
 //! instances) against our CPU ray caster (`trace::Tracer` over the same instances' world
 //! triangles) on the same rays: any hits, closest-hit distances, triangles and normals, frame
 //! after frame as the instances move (the TLAS rebuilt), and the integrands (AO, shadows,
-//! reflections) on them against the CPU estimators. Where the adapter offers no ray queries
-//! (Mesa's lavapipe before 24.1, datacenter GPUs) or there is no Vulkan adapter, every test is
-//! reported as ignored with that reason, never as passed.
+//! reflections) on them against the CPU estimators; the `rayquery` method through the harness.
+//! Where the adapter offers no ray queries (Mesa's lavapipe before 24.1, datacenter GPUs) or
+//! there is no Vulkan adapter, the tests that need them are reported as ignored with that
+//! reason, never as passed; the method's test then checks that its row is skipped, saying why.
 
 use glam::{Quat, Vec3};
 use visfield::geometry::procedural::{supershape, uv_sphere, Supershape};
@@ -118,10 +119,7 @@ fn compare(scene: &RayQueryScene, model: &[Vec<[Vec3; 3]>], frame: u64) -> Compa
     };
     for (i, r) in rays.iter().enumerate() {
         let want = cpu.closest_hit(r.origin, r.dir, r.tmin, r.tmax);
-        assert_eq!(
-            cpu.any_hit(r.origin, r.dir, r.tmin, r.tmax),
-            want.is_some()
-        );
+        assert_eq!(cpu.any_hit(r.origin, r.dir, r.tmin, r.tmax), want.is_some());
         c.cpu_hits += want.is_some() as usize;
         c.any_differ += (any[i] != want.is_some()) as usize;
         c.closest_differ += (closest[i].is_some() != want.is_some()) as usize;
@@ -196,7 +194,12 @@ fn empty_scenes_miss_and_bad_input_is_refused() {
     let scene = RayQueryScene::new(ctx, &model, &[]).unwrap();
     let r = rays(0, 64);
     assert!(scene.any_hits(&r).unwrap().0.iter().all(|&h| !h));
-    assert!(scene.closest_hits(&r).unwrap().0.iter().all(Option::is_none));
+    assert!(scene
+        .closest_hits(&r)
+        .unwrap()
+        .0
+        .iter()
+        .all(Option::is_none));
     // A mesh without triangles is left out of the TLAS.
     let with_empty = vec![Vec::new(), model[1].clone()];
     let scene = RayQueryScene::new(ctx, &with_empty, &placed(&instances(0))).unwrap();
@@ -234,7 +237,13 @@ fn integrands_on_ray_queries_match_the_cpu() {
     let cpu = Tracer::new(&world);
     // Receivers on the plane y = -1.2 under the grid and around it, facing up.
     let p: Vec<Vec3> = (0..30 * 30)
-        .map(|i| Vec3::new((i % 30) as f32 * 0.4 - 3.3, -1.2, (i / 30) as f32 * 0.4 - 3.3))
+        .map(|i| {
+            Vec3::new(
+                (i % 30) as f32 * 0.4 - 3.3,
+                -1.2,
+                (i / 30) as f32 * 0.4 - 3.3,
+            )
+        })
         .collect();
     let n = vec![Vec3::Y; p.len()];
     let rays = RaySet::new(8, 5);
@@ -258,7 +267,10 @@ fn integrands_on_ray_queries_match_the_cpu() {
     let off = share(&got, &want, 1.0 / 64.0 + 1e-6);
     let any = share(&got, &want, 0.0);
     eprintln!("AO: {any} of {} differ, {off} by more than a ray", p.len());
-    assert!(off == 0 && any * 100 <= p.len(), "AO: {any} differ, {off} by more than a ray");
+    assert!(
+        off == 0 && any * 100 <= p.len(),
+        "AO: {any} differ, {off} by more than a ray"
+    );
     assert!(want.iter().any(|&a| a < 0.7) && want.contains(&1.0));
 
     let light = SphereLight {
@@ -274,7 +286,10 @@ fn integrands_on_ray_queries_match_the_cpu() {
     let (got, _) = visfield::gpu::shadows(&scene, &p, &n, &rays, &shadow_opts).unwrap();
     let off = share(&got, &want, 1.0 / 64.0 + 1e-5);
     let any = share(&got, &want, 1e-5);
-    eprintln!("shadows: {any} of {} differ, {off} by more than a ray", p.len());
+    eprintln!(
+        "shadows: {any} of {} differ, {off} by more than a ray",
+        p.len()
+    );
     assert!(off == 0 && any * 100 <= p.len(), "shadows: {any} differ");
     assert!(want.contains(&0.0) || want.iter().any(|&v| v < 0.5));
     assert!(want.contains(&1.0));
@@ -295,31 +310,117 @@ fn integrands_on_ray_queries_match_the_cpu() {
     assert!(want.iter().any(|&v| v != 0.1) && want.contains(&0.1));
 }
 
+/// The tiny spec with `methods` spliced in.
+fn with_methods(methods: &str) -> String {
+    common::tiny(common::ONE_FIELD, "").replace(
+        r#""reference": {"#,
+        &format!(r#""methods": {methods}, "reference": {{"#),
+    )
+}
+
+/// `rayquery` is a method of the gpu backend alone: refused on the cpu backend by name, read
+/// on the gpu's (no adapter needed).
+fn rayquery_is_refused_on_the_cpu_backend() {
+    use visfield::experiment::spec::Spec;
+    let parse = |m: &str| {
+        Spec::parse(&with_methods(m), std::path::Path::new("specs/m.json"))
+            .map(|s| s.methods.len())
+            .map_err(|e| e.to_string())
+    };
+    let e = parse(r#"[{"method": "rayquery"}]"#).unwrap_err();
+    assert!(
+        e.contains("methods[0]") && e.contains("gpu backend only"),
+        "{e}"
+    );
+    assert_eq!(parse(r#"[{"method": "rayquery", "backends": ["gpu"]}]"#), Ok(1));
+    let e = parse(r#"[{"method": "rayquery", "backends": ["gpu"], "res": [8]}]"#).unwrap_err();
+    assert!(e.contains("res"), "{e}");
+}
+
+/// The tiny spec with `rayquery` on the gpu backend: where the adapter has ray queries, its
+/// row answers as our ray caster on the same rays (the GPU integrand's f32 sums apart); where
+/// it has none, the row is skipped and run.json says why.
+fn rayquery_method_runs_or_is_skipped_with_the_reason() {
+    let Some(ctx) = common::gpu_context() else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let text = with_methods(r#"[{"method": "raycast"}, {"method": "rayquery", "backends": ["gpu"]}]"#);
+    let ls = common::loaded(dir.path(), &text);
+    let out = dir.path().join("out");
+    visfield::experiment::run::run(&ls, &common::options(out.clone())).unwrap();
+    let rows = visfield::experiment::columns::read_csv(&out.join("methods.csv")).unwrap();
+    let run: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("run.json")).unwrap()).unwrap();
+    let skipped = run["skipped_methods"].as_array().unwrap();
+    let ours: Vec<_> = rows
+        .iter()
+        .filter(|r| r.get("method") == Some("rayquery"))
+        .collect();
+    match ctx.ray_query_support() {
+        Ok(()) => {
+            assert!(skipped.is_empty(), "{skipped:?}");
+            assert_eq!(ours.len(), 1);
+            assert_eq!(ours[0].get("backend"), Some("gpu"));
+            let rms = ours[0].number("rms_vs_raycast").unwrap();
+            assert!(rms < 1e-3, "rms_vs_raycast {rms}");
+        }
+        Err(why) => {
+            assert!(ours.is_empty());
+            assert_eq!(skipped.len(), 1, "{skipped:?}");
+            assert_eq!(skipped[0]["method"], "rayquery@gpu");
+            assert_eq!(skipped[0]["why"], why.as_str());
+        }
+    }
+}
+
 fn main() {
     let args = libtest_mimic::Arguments::from_args();
-    let tests: [(&'static str, fn()); 4] = [
+    // (name, body, what it needs: 2 ray queries, 1 a Vulkan adapter, 0 nothing).
+    let tests: [(&'static str, fn(), u8); 6] = [
         (
             "ray_queries_answer_as_the_cpu_caster",
             ray_queries_answer_as_the_cpu_caster,
+            2,
         ),
         (
             "moved_instances_answer_as_the_cpu_caster",
             moved_instances_answer_as_the_cpu_caster,
+            2,
         ),
         (
             "empty_scenes_miss_and_bad_input_is_refused",
             empty_scenes_miss_and_bad_input_is_refused,
+            2,
         ),
         (
             "integrands_on_ray_queries_match_the_cpu",
             integrands_on_ray_queries_match_the_cpu,
+            2,
+        ),
+        (
+            "rayquery_method_runs_or_is_skipped_with_the_reason",
+            rayquery_method_runs_or_is_skipped_with_the_reason,
+            1,
+        ),
+        (
+            "rayquery_is_refused_on_the_cpu_backend",
+            rayquery_is_refused_on_the_cpu_backend,
+            0,
         ),
     ];
     let trials = tests
         .into_iter()
-        .map(|(name, f)| {
+        .map(|(name, f, needs)| {
             libtest_mimic::Trial::ignorable_test(name, move || {
-                if let Err(why) = device() {
+                let why = match needs {
+                    2 => device().err(),
+                    1 => common::gpu_context()
+                        .is_none()
+                        .then(|| "no Vulkan adapter (install mesa-vulkan-drivers)".to_string()),
+                    _ => None,
+                };
+                if let Some(why) = why {
                     return Ok(libtest_mimic::Completion::ignored_with(why));
                 }
                 f();

@@ -5,10 +5,11 @@
 //! measured on the GPU. Beyond the papers: they compare with no ray caster of this kind.
 //!
 //! - One BLAS per mesh, built once in model space: its triangles sorted in the Morton order of
-//!   their centroids first (lavapipe builds its BVH in index order: unsorted, traces run 35–50×
-//!   slower), flagged opaque (else hits stay candidates and the committed result is a miss).
-//!   Every mesh's triangles share one buffer (BLAS input and storage, three `vec4` a triangle
-//!   with the original index in the first `w`), each BLAS built from its range.
+//!   their centroids first (lavapipe builds its BVH in index order: unsorted, its traces run
+//!   many times slower), flagged opaque (else hits stay candidates and the committed result
+//!   is a miss). Every mesh's triangles share one buffer (BLAS input and storage, three
+//!   `vec4` a triangle with the original index in the first `w`), each BLAS built from its
+//!   range.
 //! - A TLAS over the instances, rebuilt by [`RayQueryScene::place`] with each instance's
 //!   transform (wgpu 30 turns an update into a full build: N transforms); an instance's id
 //!   is the TLAS instance's custom data (24 bits), not its slot.
@@ -175,7 +176,6 @@ impl Placement<'_> {
             })?;
         Ok(instances.len() as u32)
     }
-
 }
 
 /// `m`'s affine part as wgpu's 3 × 4 row-major matrix.
@@ -550,7 +550,13 @@ mod tests {
     #[test]
     fn morton_order_is_a_permutation_that_groups_neighbours() {
         // A row of triangles along x given in a shuffled order comes back sorted by x.
-        let tri = |x: f32| [Vec3::new(x, 0.0, 0.0), Vec3::new(x + 0.5, 0.0, 0.0), Vec3::Y];
+        let tri = |x: f32| {
+            [
+                Vec3::new(x, 0.0, 0.0),
+                Vec3::new(x + 0.5, 0.0, 0.0),
+                Vec3::Y,
+            ]
+        };
         let xs = [5.0, 1.0, 7.0, 0.0, 3.0, 6.0, 2.0, 4.0];
         let tris: Vec<[Vec3; 3]> = xs.iter().map(|&x| tri(x)).collect();
         let order = morton_order(&tris);

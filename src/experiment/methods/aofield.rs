@@ -25,12 +25,12 @@ use super::{
 use crate::aofield::cache::{load_or_bake, Outcome};
 use crate::aofield::{AoField, AoFieldInstance, AoFieldScene, BakeParams, Inside, Precision};
 use crate::experiment::backend::{Estimate, Eval};
+use crate::experiment::backend_gpu::GpuQuantity;
 use crate::experiment::kinds::Kind;
 use crate::experiment::scenes::BuiltScene;
 use crate::experiment::spec::{Spec, SpecError};
 use crate::experiment::validate::Validator;
 use crate::experiment::{Error, Result};
-use crate::experiment::backend_gpu::GpuQuantity;
 use crate::gpu::{AoFieldKernel, GpuContext};
 use crate::render::estimator::{Estimator, Points};
 use crate::render::truth::{Truth, TruthOptions};

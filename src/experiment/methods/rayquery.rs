@@ -17,7 +17,7 @@ use super::{
     caster_mesh_triangles, Answer, GpuMethod, Method, MethodContext, MethodEntry, MethodOptions,
     NoRays, Prepared,
 };
-use crate::experiment::backend::{Eval, Estimate};
+use crate::experiment::backend::{Estimate, Eval};
 use crate::experiment::backend_gpu::GpuQuantity;
 use crate::experiment::kinds::Kind;
 use crate::experiment::spec::{Spec, SpecError};

@@ -6,9 +6,9 @@
 
 use super::cone::Quantity;
 use crate::experiment::backend::{Estimate, Eval};
+use crate::experiment::backend_gpu::GpuQuantity;
 use crate::experiment::methods::GpuMethod;
 use crate::experiment::Result;
-use crate::experiment::backend_gpu::GpuQuantity;
 use crate::gpu::{GpuContext, GpuTiming, SdfKernel};
 use crate::render::ao::{AoOptions, Falloff};
 use crate::render::estimator::Points;
