@@ -332,7 +332,10 @@ fn rayquery_is_refused_on_the_cpu_backend() {
         e.contains("methods[0]") && e.contains("gpu backend only"),
         "{e}"
     );
-    assert_eq!(parse(r#"[{"method": "rayquery", "backends": ["gpu"]}]"#), Ok(1));
+    assert_eq!(
+        parse(r#"[{"method": "rayquery", "backends": ["gpu"]}]"#),
+        Ok(1)
+    );
     let e = parse(r#"[{"method": "rayquery", "backends": ["gpu"], "res": [8]}]"#).unwrap_err();
     assert!(e.contains("res"), "{e}");
 }
@@ -345,7 +348,8 @@ fn rayquery_method_runs_or_is_skipped_with_the_reason() {
         return;
     };
     let dir = tempfile::tempdir().unwrap();
-    let text = with_methods(r#"[{"method": "raycast"}, {"method": "rayquery", "backends": ["gpu"]}]"#);
+    let text =
+        with_methods(r#"[{"method": "raycast"}, {"method": "rayquery", "backends": ["gpu"]}]"#);
     let ls = common::loaded(dir.path(), &text);
     let out = dir.path().join("out");
     visfield::experiment::run::run(&ls, &common::options(out.clone())).unwrap();

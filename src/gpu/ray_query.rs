@@ -162,7 +162,7 @@ impl Placement<'_> {
             tlas[s] = None;
         }
         if !firsts.is_empty() {
-            (self.ctx.queue).write_buffer(&self.instance_first, 0, bytemuck::cast_slice(&firsts));
+            (self.ctx.queue).write_buffer(self.instance_first, 0, bytemuck::cast_slice(&firsts));
         }
         let mut encoder = (self.ctx.device)
             .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
