@@ -2,7 +2,8 @@
 //! instances) against our CPU ray caster (`trace::Tracer` over the same instances' world
 //! triangles) on the same rays: any hits, closest-hit distances, triangles and normals, frame
 //! after frame as the instances move (the TLAS rebuilt), and the integrands (AO, shadows,
-//! reflections) on them against the CPU estimators; the `rayquery` method through the harness.
+//! reflections) on them against the CPU estimators; the `rayquery` method through the harness,
+//! and its per-frame twin `rayquery@gpu` against `two_level` in an animated spec.
 //! Where the adapter offers no ray queries (Mesa's lavapipe before 24.1, datacenter GPUs) or
 //! there is no Vulkan adapter, the tests that need them are reported as ignored with that
 //! reason, never as passed; the method's test then checks that its row is skipped, saying why.
@@ -378,10 +379,70 @@ fn rayquery_method_runs_or_is_skipped_with_the_reason() {
     }
 }
 
+/// An animated spec on the gpu backend: `rayquery@gpu`, the twin of `two_level`, answers as
+/// it frame by frame for AO, shadows and reflections (the GPU integrand's f32 sums apart: the
+/// errors against the same-ray ray cast within 0.5 of 255, the means within 0.002), its TLAS
+/// rebuilt each frame (the caster lifted between the frames moves the answer); on an adapter
+/// without ray queries its rows are skipped and run.json says why.
+fn rayquery_twin_answers_as_two_level_every_frame() {
+    let Some(ctx) = common::gpu_context() else {
+        return;
+    };
+    let lights = r#""lights": [{ "center": [2, 3, 2.5], "radius": 0.2, "intensity": 1 }]"#;
+    let dir = tempfile::tempdir().unwrap();
+    let lift = r#"{ "keyframes": [{ "time": 0 }, { "time": 1, "translate": [0, 0.3, 0] }] }"#;
+    for (what, own) in [
+        ("vertex_ao", String::new()),
+        ("shadows", lights.to_string() + ", "),
+        (
+            "reflections",
+            format!(r#"{lights}, "gloss": "mirror", "normal_bits": [8], "#),
+        ),
+    ] {
+        let mut text = common::animated(lift, "", r#"{ "frames": 2, "time_step": 1 }"#).replace(
+            r#""quick": {}"#,
+            r#""backends": ["cpu", "gpu"], "quick": {}"#,
+        );
+        if what != "vertex_ao" {
+            text = text.replace(
+                r#""render": { "#,
+                &format!(r#""render": {{ "what": "{what}", {own}"#),
+            );
+        }
+        let rows = common::frames_of(dir.path(), &text, what);
+        let of = |m: &str| -> Vec<_> { rows.iter().filter(|r| r.method == m).collect() };
+        let (cpu, gpu) = (of("two_level"), of("rayquery@gpu"));
+        let run: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.path().join(what).join("run.json")).unwrap())
+                .unwrap();
+        let skipped = run["skipped_methods"].as_array().unwrap().clone();
+        let skipped_rq = skipped.iter().any(|m| m["method"] == "rayquery@gpu");
+        if ctx.ray_query_support().is_err() {
+            assert!(gpu.is_empty() && skipped_rq, "{what}: {skipped:?}");
+            continue;
+        }
+        assert!(!skipped_rq && cpu.len() == 2 && gpu.len() == 2, "{what}");
+        for (c, g) in cpu.iter().zip(&gpu) {
+            assert_eq!((c.frame, c.points, c.rays), (g.frame, g.points, g.rays));
+            assert!(
+                (c.rms_vs_raycast - g.rms_vs_raycast).abs() < 0.5
+                    && (c.mean_value - g.mean_value).abs() < 0.002
+                    && g.update_s > 0.0,
+                "{what} frame {}: {c:?}\n{g:?}",
+                c.frame
+            );
+        }
+        assert!(
+            (gpu[0].mean_value - gpu[1].mean_value).abs() > 0.004,
+            "{what}: the lift moves the answer"
+        );
+    }
+}
+
 fn main() {
     let args = libtest_mimic::Arguments::from_args();
     // (name, body, what it needs: 2 ray queries, 1 a Vulkan adapter, 0 nothing).
-    let tests: [(&'static str, fn(), u8); 6] = [
+    let tests: [(&'static str, fn(), u8); 7] = [
         (
             "ray_queries_answer_as_the_cpu_caster",
             ray_queries_answer_as_the_cpu_caster,
@@ -405,6 +466,11 @@ fn main() {
         (
             "rayquery_method_runs_or_is_skipped_with_the_reason",
             rayquery_method_runs_or_is_skipped_with_the_reason,
+            1,
+        ),
+        (
+            "rayquery_twin_answers_as_two_level_every_frame",
+            rayquery_twin_answers_as_two_level_every_frame,
             1,
         ),
         (
