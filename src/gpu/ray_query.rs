@@ -138,21 +138,11 @@ impl Placement<'_> {
                 instances.len()
             )));
         }
+        check_instances(instances, self.first_triangle.len())?;
         let mut firsts = Vec::with_capacity(instances.len());
         let mut slot = 0;
         for (id, (mesh, m)) in instances.iter().enumerate() {
-            let Some(first) = self.first_triangle.get(*mesh) else {
-                return Err(GpuError::Invalid(format!(
-                    "instance {id}: mesh {mesh} of {}",
-                    self.first_triangle.len()
-                )));
-            };
-            if !m.is_finite() {
-                return Err(GpuError::Invalid(format!(
-                    "instance {id}: its transform must be finite"
-                )));
-            }
-            firsts.push(*first);
+            firsts.push(self.first_triangle[*mesh]);
             if let Some(b) = &self.blas[*mesh] {
                 tlas[slot] = Some(wgpu::TlasInstance::new(b, rows_3x4(m), id as u32, 0xff));
                 slot += 1;
@@ -176,6 +166,24 @@ impl Placement<'_> {
             })?;
         Ok(instances.len() as u32)
     }
+}
+
+/// Every instance names one of `meshes` meshes and has a finite transform; else the first
+/// that does not, named.
+fn check_instances(instances: &[(usize, Mat4)], meshes: usize) -> Result<(), GpuError> {
+    for (id, (mesh, m)) in instances.iter().enumerate() {
+        if *mesh >= meshes {
+            return Err(GpuError::Invalid(format!(
+                "instance {id}: mesh {mesh} of {meshes}"
+            )));
+        }
+        if !m.is_finite() {
+            return Err(GpuError::Invalid(format!(
+                "instance {id}: its transform must be finite"
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// `m`'s affine part as wgpu's 3 × 4 row-major matrix.
@@ -240,6 +248,7 @@ impl<'a> RayQueryScene<'a> {
                 });
             }
         }
+        check_instances(instances, meshes.len())?;
         let total: usize = meshes.iter().map(Vec::len).sum();
         let need = total as u64 * TRIANGLE_BYTES;
         if need > ctx.max_binding() {
