@@ -192,6 +192,9 @@ fn rows_3x4(m: &Mat4) -> [f32; 12] {
     std::array::from_fn(|i| c[i % 4][i / 4])
 }
 
+/// The largest unit coordinate the Morton code keeps apart from 1 (21 bits a coordinate).
+const BELOW_ONE: f64 = 1.0 - 1.0 / (1u64 << 21) as f64;
+
 /// The order of `triangles` by the Morton code of their centroids over the centroids' box
 /// (ties by index).
 pub fn morton_order(triangles: &[[Vec3; 3]]) -> Vec<u32> {
@@ -208,7 +211,8 @@ pub fn morton_order(triangles: &[[Vec3; 3]]) -> Vec<u32> {
         .iter()
         .enumerate()
         .map(|(i, &c)| {
-            let u = ((c - lo) * scale).clamp(DVec3::ZERO, DVec3::ONE);
+            // Below 1: obvhs maps [0, 1) onto 21 bits a coordinate, and 1 would wrap to 0.
+            let u = ((c - lo) * scale).clamp(DVec3::ZERO, DVec3::splat(BELOW_ONE));
             (morton_encode_u64_unorm(u), i as u32)
         })
         .collect();
