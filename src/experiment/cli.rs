@@ -656,13 +656,32 @@ fn check_dynamic(args: &RunArgs, parent: &Path, committed_root: &Path) -> Result
 /// An animated run's `frames.csv` (in `out`) against the committed one
 /// ([`super::check::check_committed_frames`]); an error where the committed file is missing.
 fn committed_frames(out: &Path, committed: &Path) -> Result<Vec<super::check::Failure>> {
-    let theirs = super::columns::read_csv(committed)?;
+    let mut theirs = super::columns::read_csv(committed)?;
     let ours = super::columns::read_csv(&out.join("frames.csv"))?;
+    // The committed rows of a method this run skipped on its device (ray queries on an
+    // adapter without them; run.json's `skipped_methods`) are not compared.
+    let skipped: Vec<String> = read_run_json(out)["skipped_methods"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .filter_map(|m| m["method"].as_str().map(String::from))
+        .collect();
+    let before = theirs.len();
+    theirs.retain(|r| !skipped.iter().any(|m| r.get("method") == Some(m.as_str())));
+    if theirs.len() < before {
+        println!(
+            "{}: {} committed frame row(s) of methods this run skipped ({}) not compared",
+            out.display(),
+            before - theirs.len(),
+            skipped.join(", ")
+        );
+    }
     let (f, left) = super::check::check_committed_frames(&ours, &theirs);
     if left > 0 {
         println!(
             "{}: {left} frame row(s) of methods the committed run lacks (Embree's, in a build \
-             with the `embree` feature, or methods newer than that run) not compared",
+             with the `embree` feature; ray queries, on an adapter with them; or methods newer
+             than that run) not compared",
             out.display()
         );
     }

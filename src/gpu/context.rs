@@ -76,6 +76,9 @@ pub struct GpuContext {
     info: wgpu::AdapterInfo,
     limits: wgpu::Limits,
     timestamps: bool,
+    /// Whether the device was opened with hardware ray queries (wgpu's
+    /// `EXPERIMENTAL_RAY_QUERY`), where the adapter offers them.
+    ray_query: bool,
 }
 
 impl GpuContext {
@@ -125,16 +128,33 @@ impl GpuContext {
         let info = adapter.get_info();
         let limits = adapter.limits();
         let timestamps = adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY);
-        let required_features = if timestamps {
+        let mut required_features = if timestamps {
             wgpu::Features::TIMESTAMP_QUERY
         } else {
             wgpu::Features::empty()
+        };
+        // Ray queries (src/gpu/ray_query.rs) where the adapter offers them: wgpu marks them
+        // experimental, so the device is opened with its experimental features allowed (the
+        // adapter's own limits, above, are what permit acceleration structures at all).
+        let ray_query = adapter
+            .features()
+            .contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY);
+        if ray_query {
+            required_features |= wgpu::Features::EXPERIMENTAL_RAY_QUERY;
+        }
+        // SAFETY: the experimental feature is ray queries; its known pitfalls (docs/gpu.md,
+        // "Ray queries") are avoided by the only WGSL that uses it, shaders/ray_query.wgsl.
+        let experimental_features = if ray_query {
+            unsafe { wgpu::ExperimentalFeatures::enabled() }
+        } else {
+            wgpu::ExperimentalFeatures::disabled()
         };
         let (device, queue) = adapter
             .request_device(&wgpu::DeviceDescriptor {
                 label: Some("visfield"),
                 required_features,
                 required_limits: limits.clone(),
+                experimental_features,
                 ..Default::default()
             })
             .await
@@ -148,7 +168,23 @@ impl GpuContext {
             info,
             limits,
             timestamps,
+            ray_query,
         })
+    }
+
+    /// Whether the device has hardware ray queries ([`super::RayQueryScene`]): the adapter
+    /// offers wgpu's `EXPERIMENTAL_RAY_QUERY` (Mesa's lavapipe from 24.1, GPUs with
+    /// ray-tracing units), or why not.
+    pub fn ray_query_support(&self) -> Result<(), String> {
+        if self.ray_query {
+            Ok(())
+        } else {
+            Err(format!(
+                "adapter {:?} ({} {}) offers no ray queries (wgpu EXPERIMENTAL_RAY_QUERY: Mesa's \
+                 lavapipe before 24.1, GPUs without ray-tracing units)",
+                self.info.name, self.info.driver, self.info.driver_info
+            ))
+        }
     }
 
     /// "name | driver driver_info | backend": what every result row records.

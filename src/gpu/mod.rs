@@ -20,6 +20,9 @@
 //! - [`GpuTwoLevel`]: two-level ray casting for moving rigid instances, each mesh's CWBVH
 //!   uploaded once and a top level over the instances' world boxes rebuilt and uploaded per
 //!   frame (the twin of the CPU's `trace::two_level`), a visibility.
+//! - [`RayQueryScene`]: hardware ray queries (wgpu's `EXPERIMENTAL_RAY_QUERY`) as a
+//!   visibility, a BLAS per mesh and a TLAS of the instances rebuilt as they move, where the
+//!   adapter offers them ([`GpuContext::ray_query_support`]).
 //! - [`SdfKernel`]: mesh signed distance fields, a visibility by sphere tracing, with
 //!   cone-traced AO and shadows; [`AoFieldKernel`]: AO fields, a direct estimator.
 //! - [`ReliefKernel`]: the 2005 relief caster (linear search, bisection, safety-zone skips)
@@ -40,6 +43,7 @@ mod field_data;
 mod field_kernel;
 mod integrand;
 mod loop_budget;
+mod ray_query;
 mod rays;
 mod reflect_rays;
 mod relief;
@@ -59,6 +63,7 @@ pub use field_binding::FieldLayout;
 pub use field_data::FieldInstanceGpu;
 pub use field_kernel::{FieldGpuOptions, FieldKernel, FieldReflectKernel, FieldShadowKernel};
 pub use integrand::{ao, reflections, shadows};
+pub use ray_query::{morton_order, RayQueryHit, RayQueryScene};
 pub use relief::ReliefKernel;
 pub use relief_peers::ReliefPeersKernel;
 pub use sdf_kernel::{SdfKernel, SDF_CONES_PER_INVOCATION, SDF_RAYS_PER_INVOCATION};

@@ -39,6 +39,11 @@ pub trait GpuVisibility: Sync {
     fn variant(&self) -> u32 {
         0
     }
+    /// WGSL directives its queries need (`enable wgpu_ray_query;`), put before every
+    /// declaration of the pipeline's source, as WGSL requires; none by default.
+    fn directives(&self) -> &'static str {
+        ""
+    }
 }
 
 /// An integrand compiled against a visibility: its group 0 and the pipeline.
@@ -88,7 +93,7 @@ impl Kernels {
             return Ok(c.clone());
         }
         let ctx = vis.context();
-        let mut source = HEADER_WGSL.concat() + &vis.wgsl(variant);
+        let mut source = vis.directives().to_string() + &HEADER_WGSL.concat() + &vis.wgsl(variant);
         source.extend(integrand.sources.iter().copied());
         let group = KernelGroup::new(ctx, integrand.entry, integrand.own);
         let pipeline = group.pipeline(ctx, &source, integrand.entry, &[vis.layout()])?;

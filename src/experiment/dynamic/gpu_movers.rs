@@ -20,7 +20,13 @@
 //!   rebuilt on the host and uploaded with the records every frame (`update_s`): the same
 //!   answers as testing every sphere, bit for bit.
 //!
-//! Both answer the kind through its GPU kernels on the CPU path's rays, so their values match
+//! - `rayquery@gpu`: hardware ray queries ([`RayQueryScene`]), where the adapter offers them:
+//!   a BLAS per mesh built once before the frames (as `two_level`'s per-mesh BVHs, its
+//!   twin), the TLAS over the frame's instances rebuilt per frame and waited for (`update_s`),
+//!   the kind's integrand on it apart (`query_s`). Skipped, saying why, on an adapter without
+//!   ray queries.
+//!
+//! All answer the kind through its GPU kernels on the CPU path's rays, so their values match
 //! the CPU twins' within the kernels' parity bounds (the GPU path's tests).
 
 use super::movers::{field_instances, FrameCasters, Mover};
@@ -29,7 +35,7 @@ use crate::experiment::backend_gpu::GpuQuantity;
 use crate::experiment::Result;
 use crate::field::normals::NormalField;
 use crate::field::VisibilityField;
-use crate::gpu::{GpuContext, GpuTracer, GpuTwoLevel};
+use crate::gpu::{GpuContext, GpuTracer, GpuTwoLevel, RayQueryScene};
 use crate::render::estimator::{Estimator, Points};
 use crate::sampling::rays::RaySet;
 use crate::visibility::Visibility;
@@ -37,12 +43,19 @@ use std::sync::Arc;
 
 /// Each CPU per-frame method with a GPU twin, and the twin's name, in the order their rows are
 /// written.
-pub const TWINS: [(&str, &str); 4] = [
+pub const TWINS: [(&str, &str); 5] = [
     ("world_rebuild", WORLD_REBUILD),
     ("two_level", TWO_LEVEL),
+    ("two_level", RAYQUERY),
     ("field_every_sphere", FIELD_EVERY_SPHERE),
     ("field", FIELD_TOP_LEVEL),
 ];
+/// [`GpuRayQuery`]'s name.
+pub const RAYQUERY: &str = "rayquery@gpu";
+/// Why [`GpuRayQuery`] is skipped on an adapter without ray queries (the run's output names
+/// the adapter too).
+pub const RAYQUERY_SKIPPED: &str = "the adapter offers no ray queries (wgpu \
+    EXPERIMENTAL_RAY_QUERY: Mesa's lavapipe before 24.1, GPUs without ray-tracing units)";
 /// [`GpuWorldRebuild`]'s name.
 pub const WORLD_REBUILD: &str = "world_rebuild@gpu";
 /// [`GpuTwoLevelMover`]'s name.
@@ -210,5 +223,60 @@ impl Mover for GpuFields<'_> {
 
     fn estimate(&self, _: &dyn Estimator, at: Points, rays: &RaySet) -> Result<Vec<f32>> {
         Ok(self.eval.estimate(at, rays)?.values)
+    }
+}
+
+/// Hardware ray queries over the frame's instances: a BLAS per mesh built once, the TLAS
+/// rebuilt per frame.
+pub struct GpuRayQuery<'a> {
+    quantity: &'a dyn GpuQuantity,
+    scene: RayQueryScene<'a>,
+}
+
+/// A frame's instances as (mesh, model-to-world matrix).
+fn placements(frame: &FrameCasters) -> Vec<(usize, glam::Mat4)> {
+    (frame.instances.iter())
+        .map(|&(m, t)| (m, t.to_mat4()))
+        .collect()
+}
+
+impl<'a> GpuRayQuery<'a> {
+    /// Builds every mesh's BLAS and the TLAS of `first` (the first frame), before the frames.
+    pub fn new(
+        ctx: &'a GpuContext,
+        quantity: &'a dyn GpuQuantity,
+        first: &FrameCasters,
+    ) -> Result<Self> {
+        let meshes: Vec<Vec<[glam::Vec3; 3]>> = (first.meshes.iter())
+            .map(|m| {
+                (m.triangles.iter())
+                    .map(|t| t.map(|i| m.positions[i as usize]))
+                    .collect()
+            })
+            .collect();
+        let scene = RayQueryScene::new(ctx, &meshes, &placements(first))?;
+        Ok(GpuRayQuery { quantity, scene })
+    }
+}
+
+impl Mover for GpuRayQuery<'_> {
+    fn name(&self) -> &'static str {
+        RAYQUERY
+    }
+
+    fn update(&mut self, frame: &FrameCasters) -> Result<()> {
+        Ok(self.scene.place(&placements(frame))?)
+    }
+
+    fn vis(&self) -> &dyn Visibility {
+        &crate::experiment::methods::NoRays
+    }
+
+    fn bytes(&self) -> Option<u64> {
+        None
+    }
+
+    fn estimate(&self, _: &dyn Estimator, at: Points, rays: &RaySet) -> Result<Vec<f32>> {
+        Ok(self.quantity.trace(&self.scene, at, rays)?.values)
     }
 }

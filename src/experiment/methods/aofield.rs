@@ -25,6 +25,7 @@ use super::{
 use crate::aofield::cache::{load_or_bake, Outcome};
 use crate::aofield::{AoField, AoFieldInstance, AoFieldScene, BakeParams, Inside, Precision};
 use crate::experiment::backend::{Estimate, Eval};
+use crate::experiment::backend_gpu::GpuQuantity;
 use crate::experiment::kinds::{Answers, Kind};
 use crate::experiment::scenes::BuiltScene;
 use crate::experiment::spec::{Spec, SpecError};
@@ -379,7 +380,11 @@ struct AoFieldGpu {
 }
 
 impl GpuMethod for AoFieldGpu {
-    fn upload<'a>(&'a self, ctx: &'a GpuContext) -> Result<Box<dyn Eval + 'a>> {
+    fn upload<'a>(
+        &'a self,
+        ctx: &'a GpuContext,
+        _: Option<&'a dyn GpuQuantity>,
+    ) -> Result<Box<dyn Eval + 'a>> {
         Ok(Box::new(AoFieldKernel::new(ctx, &self.fields)?))
     }
 }

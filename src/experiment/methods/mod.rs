@@ -21,15 +21,19 @@
 //! before the method's own keys): each setting then has a row per backend ([`Setting`]), the
 //! `gpu` row answered by the kernels the prepared method hands over ([`Prepared::gpu`],
 //! [`GpuMethod`]); a method without them, or without one for the kind, is refused by name
-//! before any work ([`Method::refuses_on_gpu`]).
+//! before any work ([`Method::refuses_on_gpu`]). `rayquery` runs on the `gpu` backend alone
+//! ([`Method::refuses_on_cpu`]), and is skipped, saying why, on a device without ray queries
+//! ([`Method::unavailable_on_gpu`]).
 
 pub mod aofield;
 pub mod embree;
 pub mod raycast;
+pub mod rayquery;
 pub mod sdf;
 pub mod two_level;
 
 use super::backend::Eval;
+use super::backend_gpu::GpuQuantity;
 use super::kinds::Kind;
 use super::registry::{Entry, Registry};
 use super::scenes::BuiltScene;
@@ -118,18 +122,14 @@ pub struct Prepared {
 pub trait GpuMethod: Send + Sync {
     /// Uploads the precompute to `ctx` and compiles the kernels; the result answers the kind
     /// at its points on the reference's rays, as the CPU answer does ([`Eval::setup_s`]: the
-    /// upload and compile, the row's `setup_s`).
-    fn upload<'a>(&'a self, ctx: &'a GpuContext) -> Result<Box<dyn Eval + 'a>>;
-    /// [`Self::upload`] for a method that answers through the kind's own integrand on a GPU
-    /// visibility of its own (a ray caster), given the kind's GPU kernels (none where the kind
-    /// has no GPU kernel); by default the kind's kernels are not needed.
-    fn upload_for<'a>(
+    /// upload and compile, the row's `setup_s`). `quantity`: the kind's GPU kernels, for a
+    /// method that runs the kind's integrand on a visibility of its own (`rayquery`,
+    /// `two_level`).
+    fn upload<'a>(
         &'a self,
         ctx: &'a GpuContext,
-        _quantity: Option<&'a dyn crate::experiment::backend_gpu::GpuQuantity>,
-    ) -> Result<Box<dyn Eval + 'a>> {
-        self.upload(ctx)
-    }
+        quantity: Option<&'a dyn GpuQuantity>,
+    ) -> Result<Box<dyn Eval + 'a>>;
 }
 
 /// The visibility handed to a method that casts no ray (a direct estimator, an AO field in a
@@ -177,6 +177,17 @@ pub trait Method: Send + Sync {
     /// Why this build cannot run it (a cargo feature it needs), or none: the runner skips it
     /// with that reason, or fails where the run requires it.
     fn unavailable(&self) -> Option<String> {
+        None
+    }
+    /// Why it cannot answer on the `cpu` backend (refused before any work, naming the kind),
+    /// or none: a method of the GPU alone (`rayquery`).
+    fn refuses_on_cpu(&self, _kind: &dyn Kind) -> Option<String> {
+        None
+    }
+    /// Why the device `ctx` cannot run it (a feature the adapter lacks: ray queries), or
+    /// none: the runner skips its `gpu` rows with that reason (the run's output and
+    /// run.json's `skipped_methods`).
+    fn unavailable_on_gpu(&self, _ctx: &GpuContext) -> Option<String> {
         None
     }
     /// Its precompute on one scene (timed by the runner: the row's `precompute_s`).
@@ -261,6 +272,7 @@ pub const BUILT_IN: &[MethodEntry] = &[
     sdf::ENTRY,
     aofield::ENTRY,
     two_level::ENTRY,
+    rayquery::ENTRY,
 ];
 
 /// The registry: [`BUILT_IN`], then the methods added at run time by [`register`].
@@ -304,7 +316,7 @@ impl Setting {
     /// the CPU; none where it can.
     pub fn refuses(&self, kind: &dyn Kind) -> Option<String> {
         let why = self.method.refuses(kind).or_else(|| match self.backend {
-            Backend::Cpu => None,
+            Backend::Cpu => self.method.refuses_on_cpu(kind),
             Backend::Gpu => self.method.refuses_on_gpu(kind),
         })?;
         let on = match self.backend {

@@ -116,20 +116,16 @@ struct TwoLevelGpu {
 }
 
 impl GpuMethod for TwoLevelGpu {
-    fn upload<'a>(&'a self, _ctx: &'a GpuContext) -> Result<Box<dyn Eval + 'a>> {
-        Err(Error::invalid(
-            "methods \"two_level\"",
-            "casts the kind's rays through its GPU integrand: needs the kind's GPU kernels",
-        ))
-    }
-
-    fn upload_for<'a>(
+    fn upload<'a>(
         &'a self,
         ctx: &'a GpuContext,
         quantity: Option<&'a dyn GpuQuantity>,
     ) -> Result<Box<dyn Eval + 'a>> {
         let Some(quantity) = quantity else {
-            return self.upload(ctx);
+            return Err(Error::invalid(
+                "methods \"two_level\"",
+                "casts the kind's rays through its GPU integrand: needs the kind's GPU kernels",
+            ));
         };
         let mut caster = GpuTwoLevel::new(ctx, &self.model)?;
         caster.update(&self.instances)?;

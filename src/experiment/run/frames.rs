@@ -13,10 +13,12 @@
 //! points inside another caster's sphere), where the papers' non-penetrating assumption stops
 //! holding. The ray casters are measured once per frame; the field methods once per field cell
 //! of the spec's `fields`, each cell's fields (one per caster mesh, shared by its instances)
-//! supplied once, before the frames. With the "gpu" backend, the GPU twins of the world rebuild
-//! and of the field testing every sphere run beside them ([`gpu_movers`]: the GPU tracer's
-//! world BVH rebuilt and uploaded each frame; each "gpu" field cell's fields uploaded once and
-//! its instances moved on the device each frame). [`super::frames_write`] writes the outputs.
+//! supplied once, before the frames. With the "gpu" backend, the GPU twins of the world rebuild,
+//! of the two-level caster and of the field testing every sphere run beside them
+//! ([`gpu_movers`]: the GPU tracer's world BVH rebuilt and uploaded each frame; hardware ray
+//! queries with their TLAS rebuilt each frame, skipped with the reason on an adapter without
+//! them; each "gpu" field cell's fields uploaded once and its instances moved on the device
+//! each frame). [`super::frames_write`] writes the outputs.
 
 use super::{LoadedSpec, RunOptions};
 use crate::experiment::backend::{ComputeBackend, Quantity};
@@ -241,7 +243,7 @@ pub(super) fn run(
         .expect("an animated spec has its animation");
     let k = exact_sqrt(spec.render.rays_per_point)
         .ok_or_else(|| Error::invalid("render.rays_per_point", "not a perfect square"))?;
-    let (mut names, skipped) = methods(spec, opts)?;
+    let (mut names, mut skipped) = methods(spec, opts)?;
     let kind = crate::experiment::kinds::of(&spec.render);
     let gpu = if spec.backends.contains(&Backend::Gpu) {
         // The GPU twins of the CPU methods asked for.
@@ -250,10 +252,17 @@ pub(super) fn run(
                 names.push(twin);
             }
         }
-        Some(crate::experiment::backend::open(
-            Backend::Gpu,
-            &opts.adapter,
-        )?)
+        let be = crate::experiment::backend::open(Backend::Gpu, &opts.adapter)?;
+        let ctx = be.gpu_context().expect("the gpu backend has a device");
+        if let (Err(why), Some(at)) = (
+            ctx.ray_query_support(),
+            names.iter().position(|&n| n == gpu_movers::RAYQUERY),
+        ) {
+            eprintln!("SKIPPED per-frame method {}: {why}", gpu_movers::RAYQUERY);
+            names.remove(at);
+            skipped.push((gpu_movers::RAYQUERY, gpu_movers::RAYQUERY_SKIPPED));
+        }
+        Some(be)
     } else {
         None
     };
@@ -415,6 +424,13 @@ impl SceneRunner<'_> {
             if self.names.contains(&gpu_movers::TWO_LEVEL) {
                 gpu_casters.push(Box::new(gpu_movers::GpuTwoLevelMover::new(
                     ctx, kernels, &meshes,
+                )?));
+            }
+            if self.names.contains(&gpu_movers::RAYQUERY) {
+                gpu_casters.push(Box::new(gpu_movers::GpuRayQuery::new(
+                    ctx,
+                    kernels,
+                    &first_frame,
                 )?));
             }
             let mut scenes = gpu_scenes.iter();

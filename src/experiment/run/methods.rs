@@ -54,6 +54,21 @@ impl Runner<'_> {
         }
         self.scene(scene);
         let backend = self.methods[setting].backend;
+        // A method the device cannot run (ray queries the adapter lacks): skipped, saying why,
+        // once for the run.
+        if let Some(ctx) = (backend == Backend::Gpu)
+            .then(|| self.backends[&backend].gpu_context())
+            .flatten()
+        {
+            if let Some(why) = self.methods[setting].method.unavailable_on_gpu(ctx) {
+                let label = self.methods[setting].label();
+                println!("SKIPPED method \"{label}\": {why}");
+                self.skipped_methods
+                    .push(serde_json::json!({"method": label, "why": why}));
+                self.method_runs[setting] = false;
+                return Ok(());
+            }
+        }
         let m: &dyn Method = self.methods[setting].method.as_ref();
         let bs = &self.scenes.scenes[scene];
         let st = self.states[scene].as_ref().expect("scene state");
@@ -100,11 +115,7 @@ impl Runner<'_> {
                         format!("prepared no GPU kernel for render \"{}\"", self.kind.name()),
                     )
                 })?;
-                Some(
-                    kernels
-                        .upload_for(device, st.gpu.as_deref())
-                        .map_err(context)?,
-                )
+                Some(kernels.upload(device, st.gpu.as_deref()).map_err(context)?)
             }
         };
         let kernel_s = std::cell::Cell::new(None::<f64>);

@@ -55,6 +55,8 @@ pub(super) struct Runner<'a> {
     pub(super) methods: Vec<Setting>,
     pub(super) method_runs: Vec<bool>,
     pub(super) method_rows: Vec<NamedRow>,
+    /// The method settings skipped on this run's device, and why (run.json).
+    pub(super) skipped_methods: Vec<serde_json::Value>,
 }
 
 /// A cell's fields as the lookup reads them, and what their bakes cost.
@@ -114,6 +116,7 @@ impl<'a> Runner<'a> {
             methods,
             method_runs: Vec::new(),
             method_rows: Vec::new(),
+            skipped_methods: Vec::new(),
         })
     }
 

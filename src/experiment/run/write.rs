@@ -243,6 +243,7 @@ impl Runner<'_> {
                 "needs_normal_field": plan.needs_normal_field,
             },
             "scenes": scene_info,
+            "skipped_methods": self.skipped_methods,
             "meshes": meshes,
             "effective_spec": spec,
         });

@@ -6,6 +6,7 @@
 
 use super::cone::Quantity;
 use crate::experiment::backend::{Estimate, Eval};
+use crate::experiment::backend_gpu::GpuQuantity;
 use crate::experiment::methods::GpuMethod;
 use crate::experiment::Result;
 use crate::gpu::{GpuContext, GpuTiming, SdfKernel};
@@ -71,7 +72,11 @@ pub(super) struct SdfGpu {
 }
 
 impl GpuMethod for SdfGpu {
-    fn upload<'a>(&'a self, ctx: &'a GpuContext) -> Result<Box<dyn Eval + 'a>> {
+    fn upload<'a>(
+        &'a self,
+        ctx: &'a GpuContext,
+        _: Option<&'a dyn GpuQuantity>,
+    ) -> Result<Box<dyn Eval + 'a>> {
         Ok(Box::new(SdfEval {
             kernel: SdfKernel::new(ctx, &self.scene)?,
             query: &self.query,

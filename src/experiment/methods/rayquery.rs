@@ -1,0 +1,144 @@
+//! `{"method": "rayquery", "backends": ["gpu"]}`: hardware ray queries
+//! ([`crate::gpu::RayQueryScene`]: a BLAS per caster mesh, built once in model space, and a
+//! TLAS of the scene's caster instances), the kind's own GPU integrand (AO, shadows,
+//! reflections: src/gpu/integrand.rs) run on them on the reference's rays, as the GPU ray
+//! caster runs it. What engines answer visibility with today, beside the field (Gaitatzes et
+//! al., WSCG 2010, compare with no such caster: beyond the papers).
+//!
+//! It runs on the `gpu` backend only (the CPU has no ray-query hardware; `raycast` and
+//! `embree` are the CPU's casters), and only where the adapter offers ray queries: elsewhere
+//! (Mesa's lavapipe before 24.1, GPUs without ray-tracing units) it is skipped, the run's
+//! output and run.json (`skipped_methods`) saying why. Its precompute (timed) gathers each
+//! mesh's model-space triangles and the instances' transforms; the upload (the row's
+//! `setup_s`) sorts each mesh's triangles in Morton order, builds the acceleration structures
+//! and compiles the kernels.
+
+use super::{
+    caster_mesh_triangles, Answer, GpuMethod, Method, MethodContext, MethodEntry, MethodOptions,
+    NoRays, Prepared,
+};
+use crate::experiment::backend::{Estimate, Eval};
+use crate::experiment::backend_gpu::GpuQuantity;
+use crate::experiment::kinds::Kind;
+use crate::experiment::spec::{Spec, SpecError};
+use crate::experiment::validate::Validator;
+use crate::experiment::{Error, Result};
+use crate::gpu::{GpuContext, RayQueryScene};
+use crate::render::estimator::Points;
+use crate::sampling::rays::RaySet;
+use glam::{Mat4, Vec3};
+use serde::{Deserialize, Serialize};
+
+pub const ENTRY: MethodEntry = MethodEntry {
+    name: "rayquery",
+    about: "hardware ray queries (a BLAS per mesh, a TLAS of the instances; gpu backend, where \
+            the adapter offers them)",
+    read: super::read_as::<RayQueryOptions>,
+};
+
+/// `rayquery` has no parameters.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RayQueryOptions {}
+
+impl MethodOptions for RayQueryOptions {
+    fn validate(&self, _at: &str, _spec: &Spec, _v: &Validator) -> Result<(), SpecError> {
+        Ok(())
+    }
+
+    fn settings(&self) -> Vec<Box<dyn Method>> {
+        vec![Box::new(RayQuery)]
+    }
+}
+
+/// Hardware ray queries over the scene's caster instances.
+pub struct RayQuery;
+
+impl Method for RayQuery {
+    fn name(&self) -> &'static str {
+        ENTRY.name
+    }
+
+    fn refuses_on_cpu(&self, _kind: &dyn Kind) -> Option<String> {
+        Some(
+            "ray queries run on the gpu backend only (`\"backends\": [\"gpu\"]`); the CPU's \
+             casters are \"raycast\" and \"embree\""
+                .into(),
+        )
+    }
+
+    /// Every kind with GPU kernels (the runner refuses one without them, naming it).
+    fn refuses_on_gpu(&self, _kind: &dyn Kind) -> Option<String> {
+        None
+    }
+
+    fn unavailable_on_gpu(&self, ctx: &GpuContext) -> Option<String> {
+        ctx.ray_query_support().err()
+    }
+
+    fn prepare(&self, ctx: &MethodContext) -> Result<Prepared> {
+        let scene = ctx.scene;
+        let meshes = caster_mesh_triangles(scene);
+        // Each caster mesh in the order of its first instance, as caster_mesh_triangles.
+        let mut seen = Vec::new();
+        let mut instances = Vec::new();
+        for (i, inst) in scene.scene.casters() {
+            let m = scene.mesh_of[i];
+            let local = match seen.iter().position(|&s| s == m) {
+                Some(l) => l,
+                None => {
+                    seen.push(m);
+                    seen.len() - 1
+                }
+            };
+            instances.push((local, inst.transform.to_mat4()));
+        }
+        Ok(Prepared {
+            answer: Answer::Rays(Box::new(NoRays)),
+            bytes: None,
+            cached: false,
+            columns: Vec::new(),
+            gpu: Some(Box::new(RayQueryGpu { meshes, instances })),
+        })
+    }
+}
+
+/// The scene's meshes and instances, ready to build on a device.
+struct RayQueryGpu {
+    meshes: Vec<Vec<[Vec3; 3]>>,
+    instances: Vec<(usize, Mat4)>,
+}
+
+impl GpuMethod for RayQueryGpu {
+    fn upload<'a>(
+        &'a self,
+        ctx: &'a GpuContext,
+        quantity: Option<&'a dyn GpuQuantity>,
+    ) -> Result<Box<dyn Eval + 'a>> {
+        let quantity = quantity.ok_or_else(|| {
+            Error::invalid(
+                "methods \"rayquery\"",
+                "the render kind has no GPU integrand to run on ray queries",
+            )
+        })?;
+        Ok(Box::new(RayQueryEval {
+            scene: RayQueryScene::new(ctx, &self.meshes, &self.instances)?,
+            quantity,
+        }))
+    }
+}
+
+struct RayQueryEval<'a> {
+    scene: RayQueryScene<'a>,
+    quantity: &'a dyn GpuQuantity,
+}
+
+impl Eval for RayQueryEval<'_> {
+    fn estimate(&self, at: Points, rays: &RaySet) -> Result<Estimate> {
+        self.quantity.trace(&self.scene, at, rays)
+    }
+
+    fn setup_s(&self) -> Option<f64> {
+        Some(self.scene.setup_time().as_secs_f64())
+    }
+}
