@@ -9,6 +9,9 @@
 #
 # usage: scripts/crowd_instructions.sh [N ...]     (default 1 4 16 64 256; needs valgrind and
 #        the system's Embree 3: apt-get install valgrind libembree-dev)
+#        With CROWD_PROFILES=DIR CROWD_COMMIT=SHA, tabulates the profiles DIR/cg-METHOD-N.out
+#        that this script's valgrind command made from a build of commit SHA, instead of
+#        building and profiling again.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 counts=("$@")
@@ -18,27 +21,49 @@ for n in "${counts[@]}"; do
     echo "N = $n is not a perfect square (the crowd is a square grid)" >&2; exit 2; }
 done
 command -v valgrind >/dev/null || { echo "needs valgrind (apt-get install valgrind)" >&2; exit 2; }
-cargo build --release --features embree --example crowd_cost
+profiles="${CROWD_PROFILES:-}"
+[ -z "$profiles" ] || [ -n "${CROWD_COMMIT:-}" ] || { echo "CROWD_PROFILES needs CROWD_COMMIT" >&2; exit 2; }
+[ -n "$profiles" ] || cargo build --release --features embree --example crowd_cost
 bin=target/release/examples/crowd_cost
 out=results/crowd_instructions
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
-echo "casters,method,rays,instructions,instructions_per_ray" > "$tmp/table.csv"
+echo "casters,method,rays,instructions,instructions_per_ray,node_tests_per_ray,instance_calls_per_ray,reads_per_ray" > "$tmp/table.csv"
 for method in field embree_instances; do
   for n in "${counts[@]}"; do
     side=$(python3 -c "import math; print(math.isqrt($n))")
     rays=$(( (8 * side + 1) * (8 * side + 1) * 64 ))
-    cg="$tmp/cg-$method-$n.out"
-    echo "callgrind: $method at $n casters ($rays rays)" >&2
-    RAYON_NUM_THREADS=1 valgrind --tool=callgrind --callgrind-out-file="$cg" "$bin" "$n" "$method" 1 >/dev/null 2>&1
-    inc=$(callgrind_annotate --threshold=100 --inclusive=yes "$cg" 2>/dev/null \
-      | grep -E "as visfield::visibility::Visibility>::occluded_many " | head -1 | awk '{gsub(",","",$1); print $1}')
+    if [ -n "$profiles" ]; then
+      cg="$profiles/cg-$method-$n.out"
+    else
+      cg="$tmp/cg-$method-$n.out"
+      echo "callgrind: $method at $n casters ($rays rays)" >&2
+      RAYON_NUM_THREADS=1 valgrind --tool=callgrind --callgrind-out-file="$cg" "$bin" "$n" "$method" 1 >/dev/null 2>&1
+    fi
+    callgrind_annotate --threshold=100 --inclusive=yes "$cg" > "$tmp/annotated" 2>/dev/null
+    # The inclusive instructions of the first (outermost) function matching $1, or 0.
+    inclusive() { grep -E "$1" "$tmp/annotated" | head -1 | awk '{gsub(",","",$1); print $1+0}'; }
+    inc=$(inclusive "as visfield::visibility::Visibility>::occluded_many ")
     [ -n "$inc" ] || { echo "no occluded_many in the profile of $method at $n" >&2; exit 1; }
-    echo "$n,$method,$rays,$inc,$(python3 -c "print(round($inc/$rays, 1))")" >> "$tmp/table.csv"
+    per() { python3 -c "print(round(${1:-0}/$rays, 1))"; }
+    if [ "$method" = field ]; then
+      # The field's parts: the top level's node tests, the per-instance batched calls, and
+      # within them the reads of the stored distances (none with one caster: no top level).
+      node=$(per "$(inclusive 'sphere_bvh::avx2::test_lanes|sphere_bvh::BoxFrom::test_lanes')")
+      calls=$(per "$(inclusive 'FieldInstance::occluded_many')")
+      reads=$(per "$(inclusive 'lookup::NearestRead as visfield::field::lookup::Reads>::of_block')")
+    else
+      node=""; calls=""; reads=""
+    fi
+    echo "$n,$method,$rays,$inc,$(per "$inc"),$node,$calls,$reads" >> "$tmp/table.csv"
   done
 done
-commit=$(git rev-parse HEAD)
-[ -z "$(git status --porcelain)" ] || commit="$commit-dirty"
+if [ -n "$profiles" ]; then
+  commit="$CROWD_COMMIT"
+else
+  commit=$(git rev-parse HEAD)
+  [ -z "$(git status --porcelain)" ] || commit="$commit-dirty"
+fi
 python3 - "$tmp/run.json" "$commit" "${counts[*]}" <<'PY'
 import json, platform, subprocess, sys, datetime
 cpu = next((l.split(':', 1)[1].strip() for l in open('/proc/cpuinfo') if l.startswith('model name')), platform.machine())

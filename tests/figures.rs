@@ -44,7 +44,11 @@ fn write_run(dir: &Path, images: bool) {
         ));
     }
     std::fs::write(dir.join("raycast_sweep.csv"), sweep).unwrap();
-    std::fs::write(dir.join("run.json"), r#"{"render": "image_ao"}"#).unwrap();
+    std::fs::write(
+        dir.join("run.json"),
+        r#"{"render": "image_ao", "quantity": "ao"}"#,
+    )
+    .unwrap();
     if images {
         std::fs::create_dir_all(dir.join("images")).unwrap();
         let grey = image::GrayImage::from_pixel(8, 8, image::Luma([255]));
