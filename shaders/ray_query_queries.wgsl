@@ -3,7 +3,7 @@
 // binding 1; shaders/integrand.wgsl for the header), the acceleration structures as group 1
 // (shaders/ray_query.wgsl).
 
-// One query ray. Mirrors `RayQueryRayGpu` (src/gpu/ray_query.rs), 32 bytes.
+// One query ray. Mirrors `RayGpu` (src/gpu/tracer.rs, the query rays of every ray-casting visibility), 32 bytes.
 struct QueryRay {
     // Origin.
     origin: vec3<f32>,

@@ -24,7 +24,8 @@
 //! [`RayQueryScene::new`] refuses with [`GpuError::Unsupported`], saying why.
 
 use super::context::{entry, storage_layout_entry, uniform_layout_entry, GpuContext};
-use super::integrand::{self, timing, Integrand, IntegrandParamsGpu};
+use super::integrand::{self, timing, Integrand};
+use super::tracer::{any_hits, query_rays};
 use super::visibility::{GpuVisibility, Kernels};
 use super::{GpuError, GpuTiming};
 use crate::trace::RayQuery;
@@ -44,22 +45,6 @@ struct RayQueryHeaderGpu {
     _pad2: u32,
 }
 const _: () = assert!(std::mem::size_of::<RayQueryHeaderGpu>() == 16);
-
-/// Twin of WGSL `QueryRay` (shaders/ray_query_queries.wgsl): one query ray.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-struct RayQueryRayGpu {
-    /// Origin.
-    origin: [f32; 3],
-    /// Smallest hit distance.
-    tmin: f32,
-    /// Direction.
-    direction: [f32; 3],
-    /// Largest hit distance.
-    tmax: f32,
-}
-const _: () = assert!(std::mem::size_of::<RayQueryRayGpu>() == 32);
-const _: () = assert!(std::mem::offset_of!(RayQueryRayGpu, direction) == 16);
 
 /// The visibility's own queries, the rays in place of receivers.
 const ANY: Integrand = Integrand {
@@ -436,10 +421,7 @@ impl<'a> RayQueryScene<'a> {
 
     /// Whether each ray hits any triangle with `tmin <= t <= tmax`.
     pub fn any_hits(&self, rays: &[RayQuery]) -> Result<(Vec<bool>, GpuTiming), GpuError> {
-        let start = Instant::now();
-        let (words, kernel, upload) = self.query(&ANY, rays, 1)?;
-        let hits = words.into_iter().map(|w| w != 0).collect();
-        Ok((hits, timing(kernel, upload, start)))
+        any_hits(self, &self.kernels, &ANY, rays)
     }
 
     /// The closest hit of each ray with `tmin <= t <= tmax`.
@@ -448,7 +430,8 @@ impl<'a> RayQueryScene<'a> {
         rays: &[RayQuery],
     ) -> Result<(Vec<Option<RayQueryHit>>, GpuTiming), GpuError> {
         let start = Instant::now();
-        let (words, kernel, upload) = self.query(&CLOSEST, rays, CLOSEST_WORDS)?;
+        let (words, kernel, upload) =
+            query_rays(self, &self.kernels, &CLOSEST, rays, CLOSEST_WORDS)?;
         let f = f32::from_bits;
         let hits = words
             .chunks_exact(CLOSEST_WORDS as usize)
@@ -462,35 +445,6 @@ impl<'a> RayQueryScene<'a> {
             })
             .collect();
         Ok((hits, timing(kernel, upload, start)))
-    }
-
-    /// One query ray per invocation, `words` words each, in batches that fit one binding.
-    fn query(
-        &self,
-        integrand: &Integrand,
-        rays: &[RayQuery],
-        words: u32,
-    ) -> Result<super::loop_budget::Dispatched, GpuError> {
-        let k = self.kernels.compiled(self, integrand)?;
-        let group = self.bind_group();
-        let records: Vec<RayQueryRayGpu> = rays
-            .iter()
-            .map(|r| RayQueryRayGpu {
-                origin: r.origin.to_array(),
-                tmin: r.tmin,
-                direction: r.dir.to_array(),
-                tmax: r.tmax.min(f32::MAX),
-            })
-            .collect();
-        (k.group).run(
-            self.ctx,
-            &k.pipeline,
-            &[&group],
-            IntegrandParamsGpu::default(),
-            &records,
-            &[],
-            (1, words),
-        )
     }
 }
 

@@ -22,7 +22,8 @@ use std::time::{Duration, Instant};
 /// The node struct uploaded as is: WGSL reads it as five `vec4<u32>`.
 const _: () = assert!(std::mem::size_of::<CwBvhNode>() == 80);
 
-/// Twin of WGSL `Ray` (shaders/bvh_queries.wgsl): one query ray.
+/// Twin of WGSL `Ray` (shaders/bvh_queries.wgsl, and `QueryRay` of shaders/ray_query_queries.wgsl):
+/// one query ray.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub(super) struct RayGpu {
@@ -127,10 +128,7 @@ impl<'a> GpuTracer<'a> {
 
     /// Whether each ray hits any triangle with `tmin <= t <= tmax`.
     pub fn any_hits(&self, rays: &[RayQuery]) -> Result<(Vec<bool>, GpuTiming), GpuError> {
-        let start = Instant::now();
-        let (words, kernel, upload) = self.query(&ANY, rays, 1)?;
-        let hits = words.into_iter().map(|w| w != 0).collect();
-        Ok((hits, timing(kernel, upload, start)))
+        any_hits(self, &self.kernels, &ANY, rays)
     }
 
     /// The closest hit of each ray with `tmin <= t <= tmax`.
@@ -139,7 +137,7 @@ impl<'a> GpuTracer<'a> {
         rays: &[RayQuery],
     ) -> Result<(Vec<Option<GpuHit>>, GpuTiming), GpuError> {
         let start = Instant::now();
-        let (words, kernel, upload) = self.query(&CLOSEST, rays, 2)?;
+        let (words, kernel, upload) = query_rays(self, &self.kernels, &CLOSEST, rays, 2)?;
         let hits = words
             .chunks_exact(2)
             .map(|w| {
@@ -189,28 +187,6 @@ impl<'a> GpuTracer<'a> {
         opts: &ReflectOptions,
     ) -> Result<(Vec<f32>, GpuTiming), GpuError> {
         integrand::reflections(self, points, normals, rays, opts)
-    }
-
-    /// One query ray per invocation, `words` words each, in batches that fit one binding.
-    fn query(
-        &self,
-        integrand: &Integrand,
-        rays: &[RayQuery],
-        words: u32,
-    ) -> Result<super::loop_budget::Dispatched, GpuError> {
-        let k = self.kernels.compiled(self, integrand)?;
-        let group = self.bind_group();
-        let params = IntegrandParamsGpu::default();
-        let records = ray_records(rays);
-        (k.group).run(
-            self.ctx,
-            &k.pipeline,
-            &[&group],
-            params,
-            &records,
-            &[],
-            (1, words),
-        )
     }
 }
 
@@ -284,8 +260,45 @@ pub(super) fn packed_cwbvh(
     Ok((bvh.nodes, tri_data))
 }
 
+/// One query ray per invocation of `integrand` (a ray-casting visibility's own any- or
+/// closest-hit entry) on `vis`, `words` words each, in batches that fit one binding: the query
+/// of every ray-casting visibility (the CWBVH, the two levels, ray queries).
+pub(super) fn query_rays(
+    vis: &dyn GpuVisibility,
+    kernels: &Kernels,
+    integrand: &Integrand,
+    rays: &[RayQuery],
+    words: u32,
+) -> Result<super::loop_budget::Dispatched, GpuError> {
+    let k = kernels.compiled(vis, integrand)?;
+    let group = vis.bind_group();
+    (k.group).run(
+        vis.context(),
+        &k.pipeline,
+        &[&group],
+        IntegrandParamsGpu::default(),
+        &ray_records(rays),
+        &[],
+        (1, words),
+    )
+}
+
+/// Whether each ray hits, by `any` (an entry of [`query_rays`] writing one word a ray, not 0
+/// for a hit).
+pub(super) fn any_hits(
+    vis: &dyn GpuVisibility,
+    kernels: &Kernels,
+    any: &Integrand,
+    rays: &[RayQuery],
+) -> Result<(Vec<bool>, GpuTiming), GpuError> {
+    let start = Instant::now();
+    let (words, kernel, upload) = query_rays(vis, kernels, any, rays, 1)?;
+    let hits = words.into_iter().map(|w| w != 0).collect();
+    Ok((hits, timing(kernel, upload, start)))
+}
+
 /// The query rays as the WGSL reads them.
-pub(super) fn ray_records(rays: &[RayQuery]) -> Vec<RayGpu> {
+fn ray_records(rays: &[RayQuery]) -> Vec<RayGpu> {
     rays.iter()
         .map(|r| RayGpu {
             origin: r.origin.to_array(),

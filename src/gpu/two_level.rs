@@ -23,9 +23,9 @@
 //! within a few ulps (tests/gpu_two_level.rs).
 
 use super::context::{entry, storage_layout_entry, uniform_layout_entry, GpuContext};
-use super::integrand::{self, timing, Integrand, IntegrandParamsGpu};
+use super::integrand::{self, timing, Integrand};
 use super::shadow_rays::check_binding;
-use super::tracer::{packed_cwbvh, ray_records};
+use super::tracer::{any_hits, packed_cwbvh, query_rays};
 use super::visibility::{GpuVisibility, Kernels};
 use super::{GpuError, GpuTiming};
 use crate::geometry::Similarity;
@@ -323,10 +323,7 @@ impl<'a> GpuTwoLevel<'a> {
 
     /// Whether each ray hits any instance's triangle with `tmin <= t <= tmax`.
     pub fn any_hits(&self, rays: &[RayQuery]) -> Result<(Vec<bool>, GpuTiming), GpuError> {
-        let start = Instant::now();
-        let (words, kernel, upload) = self.query(&ANY, rays, 1)?;
-        let hits = words.into_iter().map(|w| w != 0).collect();
-        Ok((hits, timing(kernel, upload, start)))
+        any_hits(self, &self.kernels, &ANY, rays)
     }
 
     /// The closest hit of each ray with `tmin <= t <= tmax`: its distance, instance and world
@@ -336,7 +333,7 @@ impl<'a> GpuTwoLevel<'a> {
         rays: &[RayQuery],
     ) -> Result<(Vec<Option<TwoLevelHit>>, GpuTiming), GpuError> {
         let start = Instant::now();
-        let (words, kernel, upload) = self.query(&CLOSEST, rays, 5)?;
+        let (words, kernel, upload) = query_rays(self, &self.kernels, &CLOSEST, rays, 5)?;
         let hits = words
             .chunks_exact(5)
             .map(|w| {
@@ -352,27 +349,6 @@ impl<'a> GpuTwoLevel<'a> {
             })
             .collect();
         Ok((hits, timing(kernel, upload, start)))
-    }
-
-    /// One query ray per invocation, `words` words each, in batches that fit one binding.
-    fn query(
-        &self,
-        integrand: &Integrand,
-        rays: &[RayQuery],
-        words: u32,
-    ) -> Result<super::loop_budget::Dispatched, GpuError> {
-        let k = self.kernels.compiled(self, integrand)?;
-        let group = self.bind_group();
-        let records = ray_records(rays);
-        (k.group).run(
-            self.ctx,
-            &k.pipeline,
-            &[&group],
-            IntegrandParamsGpu::default(),
-            &records,
-            &[],
-            (1, words),
-        )
     }
 }
 
