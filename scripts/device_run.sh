@@ -15,8 +15,8 @@ mkdir -p "$out"
 # (their CPU side, the converged references and the 16642 × 128² bake, takes minutes even on
 # 16 cores: run them in a call of their own). DEVICE_SET=moving runs the moving scenes with
 # every GPU per-frame method instead (a call of its own): the 64-caster crowd per pixel
-# (dynamic2010_crowd_gpu), the animated 2008 Figure 8 (dynamic2008_figure8) and the 256-caster
-# crowd (dynamic2010_crowd256_gpu): two_level@gpu, field_every_sphere@gpu and field@gpu beside
+# (dynamic2010_crowd_gpu) and per vertex (dynamic2008_crowd_gpu), the animated 2008 Figure 8 (dynamic2008_figure8) and the 256-caster
+# crowd (dynamic2010_crowd256_gpu): two_level@gpu, rayquery@gpu (where offered), field_every_sphere@gpu and field@gpu beside
 # their CPU twins (and world_rebuild@gpu where the world fits one storage binding), each
 # frame's update and query timed apart. The crowds share their fields through cache/ (one bake
 # of the five meshes); add DEVICE_ARGS=--quick for a first, short try.
@@ -33,7 +33,7 @@ nvidia-smi --query-gpu=name,driver_version --format=csv,noheader | tee "$out/gpu
 exp=.device/experiment
 status=0
 case "${DEVICE_SET:-figures}" in
-  moving) default_jobs="dynamic2010_crowd_gpu; dynamic2008_figure8 --no-cache; dynamic2010_crowd256_gpu" ;;
+  moving) default_jobs="dynamic2010_crowd_gpu; dynamic2008_crowd_gpu; dynamic2008_figure8 --no-cache; dynamic2010_crowd256_gpu" ;;
   *) default_jobs="figure6 --no-cache; figure8 --no-cache; relief" ;;
 esac
 jobs="${DEVICE_JOBS:-$default_jobs}"
@@ -51,5 +51,12 @@ done
 # The adapter each run used, as its run.json records it (the GPU rows name it too).
 grep -ho '"gpu_adapter": *"[^"]*"\|"adapter": *"[^"]*"' results-device/*/run.json 2>/dev/null \
   | sort -u | tee "$out/adapter.txt" || true
+# Whether the adapter offered ray queries: a run that asked for them and was refused lists
+# rayquery@gpu (or rayquery) in run.json's skipped_methods with the reason.
+if grep -l '"method": *"rayquery' results-device/*/run.json 2>/dev/null | xargs -r grep -l 'no ray queries' >/dev/null 2>&1; then
+  echo "ray queries: not offered (runs skipped them; see run.json skipped_methods)" | tee "$out/ray_queries.txt"
+else
+  echo "ray queries: offered, or no run asked for them" | tee "$out/ray_queries.txt"
+fi
 tar czf "$out/results-device.tgz" results-device
 exit $status

@@ -1,10 +1,12 @@
 //! FLIP and flicker: the reference implementation's published values on its test pair, zero on
 //! identical images and on a scene that does not move, the flicker formula on a synthetic
-//! sequence with a known step, and the columns and maps a run writes.
+//! sequence with a known step, and the columns and maps a run writes (its cells' and its ray-cast
+//! sweep's).
 
 use std::path::Path;
 use visfield::experiment::flip::{self, FlipMap};
 use visfield::experiment::metrics::flicker;
+use visfield::experiment::outputs::{read_csv, SweepRow};
 use visfield::experiment::run::frames::FrameRow;
 use visfield::experiment::run::run;
 use visfield::experiment::table::Row;
@@ -201,4 +203,23 @@ fn a_runs_table_has_the_flip_columns_and_maps_of_its_pngs() {
             assert_eq!(magma, map.magma_rgb8(), "{}", written.display());
         }
     }
+    // The ray-cast sweep (4 and 16 rays; 16 is the reference's count): the reference's row
+    // shows no difference from itself; 4 rays do, and against the converged reference their
+    // noise shows more than 16 rays'.
+    let sweep: Vec<SweepRow> = read_csv(&out.join("raycast_sweep.csv")).unwrap();
+    let at = |k: u32| {
+        (sweep.iter().find(|s| s.rays_per_point == k)).unwrap_or_else(|| panic!("{k}: {sweep:?}"))
+    };
+    let (four, sixteen) = (at(4), at(16));
+    assert_eq!(sixteen.flip_mean, Some(0.0), "{sixteen:?}");
+    assert!(
+        four.flip_mean.is_some_and(|f| f > 0.0 && f <= 1.0),
+        "{four:?}"
+    );
+    let vs_truth = |s: &SweepRow| {
+        s.flip_mean_vs_truth
+            .filter(|f| *f > 0.0 && *f <= 1.0)
+            .unwrap()
+    };
+    assert!(vs_truth(four) > vs_truth(sixteen), "{four:?}\n{sixteen:?}");
 }

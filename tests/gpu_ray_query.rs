@@ -415,6 +415,12 @@ fn rayquery_twin_answers_as_two_level_every_frame() {
         let run: serde_json::Value =
             serde_json::from_slice(&std::fs::read(dir.path().join(what).join("run.json")).unwrap())
                 .unwrap();
+        // The adapter of the GPU rows, named in the run's metadata.
+        assert_eq!(
+            run["meta"]["gpu_adapter"].as_str(),
+            Some(ctx.adapter_label().as_str()),
+            "{what}"
+        );
         let skipped = run["skipped_methods"].as_array().unwrap().clone();
         let skipped_rq = skipped.iter().any(|m| m["method"] == "rayquery@gpu");
         if ctx.ray_query_support().is_err() {

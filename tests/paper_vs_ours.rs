@@ -357,6 +357,8 @@ fn each_source_reads_its_own_measurement_and_ratios_go_to_the_reference_cell() {
         rms_vs_truth: None,
         rms_vs_truth_sd: None,
         truth_stderr: None,
+        flip_mean: None,
+        flip_mean_vs_truth: None,
     }];
     let paper = PaperNumbers {
         source: "test".into(),

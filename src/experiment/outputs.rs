@@ -41,6 +41,13 @@ pub struct SweepRow {
     /// The converged reference's RMS standard error (0–255).
     #[serde(default)]
     pub truth_stderr: Option<f64>,
+    /// Mean FLIP of the first seed's image against the same-ray reference's image (0 for the
+    /// reference itself), over the pixels the image RMS is taken over; empty without an image.
+    #[serde(default)]
+    pub flip_mean: Option<f64>,
+    /// Mean FLIP of the first seed's image against the converged reference's image.
+    #[serde(default)]
+    pub flip_mean_vs_truth: Option<f64>,
 }
 
 /// The estimate through one cell's fields with another ray count, against the converged

@@ -70,6 +70,8 @@ fn sweep() -> Vec<SweepRow> {
             rms_vs_truth: Some(40.0 / (k as f64).sqrt()),
             rms_vs_truth_sd: None,
             truth_stderr: Some(0.13),
+            flip_mean: None,
+            flip_mean_vs_truth: None,
         })
         .collect()
 }

@@ -226,7 +226,13 @@ pub(super) fn write(
         })
         .collect();
     let meshes = super::write::meshes_json(scenes);
-    let meta = crate::experiment::meta::RunMeta::collect(Some(&ls.text)).timed();
+    let mut meta = crate::experiment::meta::RunMeta::collect(Some(&ls.text)).timed();
+    // The adapter of the GPU rows, where the spec has the "gpu" backend (each scene's
+    // precompute names it too).
+    meta.gpu_adapter = run
+        .precompute
+        .iter()
+        .find_map(|p| p["gpu_adapter"].as_str().map(String::from));
     let summary = serde_json::json!({
         "spec": ls.name,
         "spec_file": crate::experiment::meta::portable_path(&ls.path),
@@ -234,7 +240,7 @@ pub(super) fn write(
         "profile": if opts.quick { "quick" } else { "full" },
         "meta": meta,
         "render": kind.name(),
-            "quantity": kind.answers().quantity(),
+        "quantity": kind.answers().quantity(),
         "rays_per_point": spec.render.rays_per_point,
         "seed": spec.reference.seed,
         "truth": spec.reference.truth,

@@ -267,6 +267,8 @@ impl<'a> Runner<'a> {
             self.kind.columns().vertex.then_some(0.0),
             st.ref_image.as_ref().map(|_| 0.0),
         );
+        let ref_image = st.ref_image.as_ref().map(|(img, _)| img);
+        let (flip_mean, flip_mean_vs_truth) = sweep_flips(st, ref_image);
         let name = bs.name.clone();
         self.seed_references(scene, k)?;
         let st = self.states[scene].as_ref().expect("scene state");
@@ -282,6 +284,8 @@ impl<'a> Runner<'a> {
             rms_vs_truth: st.truth.as_ref().map(|_| t),
             rms_vs_truth_sd: st.truth.as_ref().and(t_sd),
             truth_stderr: st.truth.as_ref().map(|t| t.rms_stderr_255()),
+            flip_mean,
+            flip_mean_vs_truth,
         };
         self.sweep.push(row);
         Ok(())
@@ -320,6 +324,8 @@ impl<'a> Runner<'a> {
             st.raycast_kernel_s.insert((b, k), ks);
         }
         let (rms_vertex, rms_image) = st.errors(self.kind.as_ref(), bs, &values);
+        let image = st.image(bs, &values).map(|(img, _)| img);
+        let (flip_mean, flip_mean_vs_truth) = sweep_flips(st, image.as_ref());
         let vs = raycast_truth_errors(be, st, k, &seeds, &values)?;
         let (t, t_sd) = mean_sd(&vs);
         self.sweep.push(SweepRow {
@@ -333,6 +339,8 @@ impl<'a> Runner<'a> {
             rms_vs_truth: (!vs.is_empty()).then_some(t),
             rms_vs_truth_sd: t_sd,
             truth_stderr: st.truth.as_ref().map(|t| t.rms_stderr_255()),
+            flip_mean,
+            flip_mean_vs_truth,
         });
         Ok(())
     }
@@ -638,6 +646,18 @@ impl<'a> Runner<'a> {
 pub(super) struct FlipMaps {
     pub(super) vs_reference: Option<(FlipStats, FlipMap)>,
     pub(super) vs_truth: Option<(FlipStats, FlipMap)>,
+}
+
+/// A ray cast's mean FLIP against the same-ray reference's image and against the converged
+/// reference's, over the pixels the image RMS is taken over (untimed, as every metric).
+fn sweep_flips(st: &SceneState, image: Option<&Image>) -> (Option<f64>, Option<f64>) {
+    let mask = st.ref_image.as_ref().map(|(_, m)| m.as_slice());
+    let mean =
+        |reference: Option<&Image>| flip::compare(reference, image, mask).map(|(f, _)| f.mean);
+    (
+        mean(st.ref_image.as_ref().map(|(r, _)| r)),
+        mean(st.truth_image.as_ref()),
+    )
 }
 
 /// The smaller of two optional times (a kernel time is the best over the timed runs).
