@@ -290,3 +290,357 @@ fn the_import_scanner_finds_grouped_nested_and_climbing_paths() {
     let names: Vec<String> = code.iter().flat_map(|(_, l)| named_modules(l, 0)).collect();
     assert_eq!(names, ["a", "d"]);
 }
+
+/// The module a file under `src/` is: `experiment/run/mod.rs` → `experiment::run`,
+/// `experiment/spec/mesh.rs` → `experiment::spec::mesh`.
+fn module_path(rel: &Path) -> Vec<String> {
+    let mut parts: Vec<String> = rel
+        .components()
+        .map(|c| c.as_os_str().to_string_lossy().into_owned())
+        .collect();
+    let file = parts.pop().unwrap();
+    let stem = file.trim_end_matches(".rs");
+    if stem != "mod" && stem != "lib" {
+        parts.push(stem.to_string());
+    }
+    parts
+}
+
+/// The paths of a `use` tree (or a plain path) at the start of `s`, relative to where it
+/// starts, `{…}` groups expanded: `a::{b::C, d}` gives `a::b::C` and `a::d`.
+fn use_tree(s: &str) -> Vec<Vec<String>> {
+    fn tree(s: &[char], i: &mut usize) -> Vec<Vec<String>> {
+        let mut prefix = Vec::new();
+        loop {
+            while *i < s.len() && s[*i].is_whitespace() {
+                *i += 1;
+            }
+            if *i < s.len() && s[*i] == '{' {
+                *i += 1;
+                let mut out = Vec::new();
+                loop {
+                    while *i < s.len() && (s[*i].is_whitespace() || s[*i] == ',') {
+                        *i += 1;
+                    }
+                    if *i >= s.len() {
+                        break;
+                    }
+                    if s[*i] == '}' {
+                        *i += 1;
+                        break;
+                    }
+                    let start = *i;
+                    for mut p in tree(s, i) {
+                        let mut full = prefix.clone();
+                        full.append(&mut p);
+                        out.push(full);
+                    }
+                    // Skip what the item leaves (`as x`) up to its comma or the brace.
+                    let mut depth = 0;
+                    while *i < s.len() && (depth > 0 || (s[*i] != ',' && s[*i] != '}')) {
+                        match s[*i] {
+                            '{' => depth += 1,
+                            '}' => depth -= 1,
+                            _ => {}
+                        }
+                        *i += 1;
+                    }
+                    if *i == start {
+                        *i += 1;
+                    }
+                }
+                return out;
+            }
+            let start = *i;
+            while *i < s.len() && (s[*i].is_ascii_alphanumeric() || s[*i] == '_') {
+                *i += 1;
+            }
+            if *i == start {
+                break;
+            }
+            prefix.push(s[start..*i].iter().collect());
+            if s[*i..].starts_with(&[':', ':']) {
+                *i += 2;
+            } else {
+                break;
+            }
+        }
+        vec![prefix]
+    }
+    let chars: Vec<char> = s.chars().collect();
+    tree(&chars, &mut 0)
+}
+
+/// Every path `text` names through `crate::`, `self::` or `super::`, resolved against the
+/// module `module` to a path from the crate root, with the byte offset it starts at.
+fn resolved_paths(text: &str, module: &[String]) -> Vec<(usize, Vec<String>)> {
+    let mut out = Vec::new();
+    for root in ["crate::", "super::", "self::"] {
+        for (at, _) in text.match_indices(root) {
+            let before = text[..at].chars().last();
+            if before.is_some_and(|c| c.is_ascii_alphanumeric() || "_$:".contains(c)) {
+                continue; // `$crate::`, or the second `super::` of a chain
+            }
+            for p in use_tree(&text[at..]) {
+                let mut base: Vec<String> = match p.first().map(String::as_str) {
+                    Some("crate") => Vec::new(),
+                    _ => module.to_vec(),
+                };
+                let mut rest = p.as_slice();
+                if rest.first().is_some_and(|s| s == "crate" || s == "self") {
+                    rest = &rest[1..];
+                }
+                while rest.first().is_some_and(|s| s == "super") {
+                    base.pop();
+                    rest = &rest[1..];
+                }
+                base.extend(rest.iter().filter(|s| *s != "self").cloned());
+                out.push((at, base));
+            }
+        }
+    }
+    out
+}
+
+/// The strongly connected components of a graph with more than one node (Tarjan).
+fn cycles(edges: &BTreeMap<String, BTreeSet<String>>) -> Vec<BTreeSet<String>> {
+    struct T<'a> {
+        edges: &'a BTreeMap<String, BTreeSet<String>>,
+        index: HashMap<&'a str, usize>,
+        low: HashMap<&'a str, usize>,
+        stack: Vec<&'a str>,
+        on: BTreeSet<&'a str>,
+        out: Vec<BTreeSet<String>>,
+    }
+    fn visit<'a>(t: &mut T<'a>, v: &'a str) {
+        let n = t.index.len();
+        t.index.insert(v, n);
+        t.low.insert(v, n);
+        t.stack.push(v);
+        t.on.insert(v);
+        let edges = t.edges;
+        for w in edges.get(v).into_iter().flatten() {
+            let w = w.as_str();
+            if !t.index.contains_key(w) {
+                visit(t, w);
+                let l = t.low[v].min(t.low[w]);
+                t.low.insert(v, l);
+            } else if t.on.contains(w) {
+                let l = t.low[v].min(t.index[w]);
+                t.low.insert(v, l);
+            }
+        }
+        if t.low[v] == t.index[v] {
+            let mut comp = BTreeSet::new();
+            loop {
+                let w = t.stack.pop().unwrap();
+                t.on.remove(w);
+                comp.insert(w.to_string());
+                if w == v {
+                    break;
+                }
+            }
+            if comp.len() > 1 {
+                t.out.push(comp);
+            }
+        }
+    }
+    let mut t = T {
+        edges,
+        index: HashMap::new(),
+        low: HashMap::new(),
+        stack: Vec::new(),
+        on: BTreeSet::new(),
+        out: Vec::new(),
+    };
+    for v in edges.keys() {
+        if !t.index.contains_key(v.as_str()) {
+            visit(&mut t, v);
+        }
+    }
+    t.out
+}
+
+/// The folders whose sub-modules must not import each other in a cycle.
+const LAYERED: &[&str] = &["experiment", "gpu"];
+
+/// Cycles among `gpu`'s sub-modules that predate the check, each a pair that shares one
+/// kernel's types; a cycle outside these (or larger than one of them) fails.
+const KNOWN_CYCLES: &[&[&str]] = &[
+    &["gpu::context", "gpu::loop_budget"],
+    &["gpu::field_ao", "gpu::field_kernel"],
+    &["gpu::integrand", "gpu::visibility"],
+];
+
+/// A module graph: each module and the modules it imports.
+type Graph = BTreeMap<String, BTreeSet<String>>;
+/// The places (`file:line`) that make each edge of a [`Graph`].
+type Places = BTreeMap<(String, String), Vec<String>>;
+
+/// The imports among the sub-modules of each [`LAYERED`] folder (`experiment::kinds` →
+/// `experiment::spec`), from the code of `src/` (comments and tests aside), each edge with
+/// the places that make it.
+fn sub_module_edges() -> (Graph, Places) {
+    let src = Path::new("src");
+    let mut files = Vec::new();
+    rust_files(src, &mut files);
+    files.sort();
+    let (test_only, _) = included_files(&files);
+    let mut edges: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+    let mut why: BTreeMap<(String, String), Vec<String>> = BTreeMap::new();
+    for parent in LAYERED {
+        let dir = src.join(parent);
+        for e in std::fs::read_dir(&dir).unwrap() {
+            let p = e.unwrap().path();
+            let name = p.file_stem().unwrap().to_string_lossy().into_owned();
+            if name != "mod" && (p.is_dir() || p.extension().is_some_and(|x| x == "rs")) {
+                edges.entry(format!("{parent}::{name}")).or_default();
+            }
+        }
+    }
+    for f in &files {
+        let name = f.file_name().unwrap().to_string_lossy();
+        if test_only.contains(f) || name.ends_with("_tests.rs") {
+            continue;
+        }
+        let rel = f.strip_prefix(src).unwrap();
+        let module = module_path(rel);
+        if module.len() < 2 || !LAYERED.contains(&module[0].as_str()) {
+            continue;
+        }
+        let from = format!("{}::{}", module[0], module[1]);
+        let text = std::fs::read_to_string(f).unwrap();
+        let lines = code_lines(&text);
+        let mut joined = String::new();
+        let mut starts = Vec::new();
+        for (n, l) in &lines {
+            starts.push((joined.len(), *n));
+            joined.push_str(l);
+            joined.push('\n');
+        }
+        for (at, path) in resolved_paths(&joined, &module) {
+            if path.len() < 2 || path[0] != module[0] {
+                continue;
+            }
+            let to = format!("{}::{}", path[0], path[1]);
+            if to == from || !edges.contains_key(&to) {
+                continue;
+            }
+            let line = starts
+                .iter()
+                .rev()
+                .find(|(o, _)| *o <= at)
+                .map_or(0, |s| s.1);
+            edges.get_mut(&from).unwrap().insert(to.clone());
+            let place = format!("{}:{line}", f.display());
+            let places = why.entry((from.clone(), to)).or_default();
+            if !places.contains(&place) {
+                places.push(place);
+            }
+        }
+    }
+    (edges, why)
+}
+
+#[test]
+fn the_sub_modules_of_experiment_and_gpu_import_each_other_in_no_cycle() {
+    let (edges, why) = sub_module_edges();
+    let known: Vec<BTreeSet<String>> = KNOWN_CYCLES
+        .iter()
+        .map(|c| c.iter().map(|s| s.to_string()).collect())
+        .collect();
+    let mut problems = Vec::new();
+    for comp in cycles(&edges) {
+        if known.iter().any(|k| comp.is_subset(k)) {
+            continue;
+        }
+        let mut lines = vec![format!(
+            "an import cycle among {}:",
+            comp.iter().cloned().collect::<Vec<_>>().join(", ")
+        )];
+        for a in &comp {
+            for b in edges[a].iter().filter(|b| comp.contains(*b)) {
+                let places = &why[&(a.clone(), b.clone())];
+                lines.push(format!("  {a} → {b} ({})", places.join(", ")));
+            }
+        }
+        problems.push(lines.join("\n"));
+    }
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+}
+
+#[test]
+fn relief_and_gpu_do_not_import_each_other_and_the_table_has_no_cycle() {
+    let table = import_table();
+    let edges: BTreeMap<String, BTreeSet<String>> = table
+        .iter()
+        .map(|(m, allowed)| {
+            let to = allowed.iter().filter(|a| table.contains_key(*a)).cloned();
+            (m.clone(), to.collect())
+        })
+        .collect();
+    assert!(
+        cycles(&edges).is_empty(),
+        "ARCHITECTURE.md's import table has a cycle: {:?}",
+        cycles(&edges)
+    );
+    // `gpu` reads relief's height maps; `relief` never names `gpu` (the table, which the test
+    // above holds the code to, says so).
+    assert!(
+        !table["relief"].contains("gpu"),
+        "relief may not import gpu"
+    );
+}
+
+#[test]
+fn the_module_resolver_expands_groups_and_climbs_super() {
+    let m = |s: &str| -> Vec<String> { s.split("::").map(String::from).collect() };
+    let paths = |text: &str, module: &str| -> Vec<String> {
+        resolved_paths(text, &m(module))
+            .into_iter()
+            .map(|(_, p)| p.join("::"))
+            .collect()
+    };
+    assert_eq!(
+        module_path(Path::new("experiment/run/mod.rs")),
+        m("experiment::run")
+    );
+    assert_eq!(
+        module_path(Path::new("experiment/spec/mesh.rs")),
+        m("experiment::spec::mesh")
+    );
+    assert_eq!(
+        paths("use super::{a::X, b};", "experiment::c"),
+        ["experiment::a::X", "experiment::b"]
+    );
+    assert_eq!(
+        paths("use super::super::kinds::Kind;", "experiment::run::steps"),
+        ["experiment::kinds::Kind"]
+    );
+    assert_eq!(
+        paths(
+            "use crate::experiment::{\n    spec::{Spec, self},\n    kinds as k,\n};",
+            "gpu::x"
+        ),
+        [
+            "experiment::spec::Spec",
+            "experiment::spec",
+            "experiment::kinds"
+        ]
+    );
+    assert!(paths("$crate::x::y", "gpu::x").is_empty());
+    // A cycle is found, and a chain is not one.
+    let g = |pairs: &[(&str, &str)]| {
+        let mut e: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+        for (a, b) in pairs {
+            e.entry(a.to_string()).or_default().insert(b.to_string());
+            e.entry(b.to_string()).or_default();
+        }
+        e
+    };
+    assert_eq!(cycles(&g(&[("a", "b"), ("b", "c")])).len(), 0);
+    assert_eq!(
+        cycles(&g(&[("a", "b"), ("b", "c"), ("c", "a"), ("c", "d")])),
+        [["a", "b", "c"].iter().map(|s| s.to_string()).collect()]
+    );
+}

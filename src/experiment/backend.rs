@@ -6,18 +6,18 @@
 //! and rays as many times as the timing asks ([`Eval::estimate`]), so that the preparation is
 //! reported apart from the estimate's time. The CPU backend runs the estimator through the
 //! [`crate::visibility::Visibility`] interface on the same rays; the GPU backend
-//! ([`super::backend_gpu::GpuBackend`]) runs the wgpu kernel of the estimator's quantity
+//! (`backend_gpu::GpuBackend`) runs the wgpu kernel of the estimator's quantity
 //! ([`crate::gpu`]) on the same rays. No GPU device is ever opened unless a spec asks for
 //! "gpu".
 
-use super::backend_gpu::{GpuBackend, GpuQuantity};
 use super::spec::Backend;
 use super::{Error, Result};
 use crate::field::scene::{FieldInstance, FieldScene};
-use crate::gpu::AdapterPreference;
+use crate::gpu::{FieldGpuOptions, GpuContext, GpuVisibility};
 use crate::render::estimator::{Estimator, Points};
 use crate::sampling::rays::RaySet;
 use crate::trace::Tracer;
+use crate::visibility::Visibility;
 use glam::Vec3;
 
 /// The casters of a scene, as the reference sees them.
@@ -29,7 +29,7 @@ pub struct Casters<'a> {
 }
 
 /// What a backend computes: a render kind's estimator, and its GPU kernels where it has them
-/// ([`super::kinds::Setup`]).
+/// (`kinds::Setup`).
 #[derive(Clone, Copy)]
 pub struct Quantity<'a> {
     /// The estimator, run through [`crate::visibility::Visibility`] on the CPU.
@@ -180,11 +180,43 @@ impl ComputeBackend for CpuBackend {
     }
 }
 
-/// Opens a backend; "gpu" opens the adapter `adapter` selects ([`AdapterPreference::Auto`]:
-/// hardware where there is one, else lavapipe).
-pub fn open(kind: Backend, adapter: &AdapterPreference) -> Result<Box<dyn ComputeBackend>> {
-    match kind {
-        Backend::Cpu => Ok(Box::new(CpuBackend::new())),
-        Backend::Gpu => Ok(Box::new(GpuBackend::open(adapter.clone())?)),
+/// The GPU kernels of one estimator's quantity, supplied by its render kind
+/// (in `kinds::Setup::gpu`): field lookup on the kernel of the quantity, and the
+/// quantity's integrand (src/gpu/integrand.rs) on any GPU visibility (the casters' CWBVH
+/// [`GpuTracer`] here), both on the CPU path's rays.
+pub trait GpuQuantity: Send + Sync {
+    /// Packs and uploads `fields` for this quantity's field kernel (`opts`: how they are bound).
+    fn fields<'s>(
+        &'s self,
+        ctx: &'s GpuContext,
+        fields: &'s FieldScene,
+        opts: &FieldGpuOptions,
+    ) -> Result<Box<dyn Eval + 's>>;
+    /// This quantity at `at` by its integrand on `vis` (the GPU ray caster, or any other
+    /// [`GpuVisibility`]).
+    fn trace(&self, vis: &dyn GpuVisibility, at: Points, rays: &RaySet) -> Result<Estimate>;
+}
+
+/// The visibility handed to a method that casts no ray (a direct estimator, an AO field in a
+/// moving scene): any query through it is a bug of the method, reported as such.
+pub struct NoRays;
+
+impl Visibility for NoRays {
+    fn occluded(&self, _: Vec3, _: Vec3, _: f32, _: f32) -> bool {
+        unreachable!("a method that casts no ray was asked about one")
+    }
+
+    fn hit_distance(&self, _: Vec3, _: Vec3, _: f32, _: f32) -> Option<f32> {
+        unreachable!("a method that casts no ray was asked about one")
+    }
+
+    fn surface_hit(
+        &self,
+        _: Vec3,
+        _: Vec3,
+        _: f32,
+        _: f32,
+    ) -> Option<crate::visibility::SurfaceHit> {
+        unreachable!("a method that casts no ray was asked about one")
     }
 }

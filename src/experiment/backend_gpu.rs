@@ -3,7 +3,7 @@
 //! [`crate::gpu::FieldAoKernel`], field-lookup soft shadows (§4.2) through [`crate::gpu::FieldShadowKernel`],
 //! field-lookup glossy reflections (§4.2, with the normal fields) through
 //! [`crate::gpu::FieldReflectKernel`], and ray-cast AO, shadows and reflections on a [`GpuTracer`] (an
-//! obvhs CWBVH in WGSL; the kinds' integrands run on any [`GpuVisibility`]), on the rays of the CPU path (the same seeded k² cell centres, rotated
+//! obvhs CWBVH in WGSL; the kinds' integrands run on any [`crate::gpu::GpuVisibility`]), on the rays of the CPU path (the same seeded k² cell centres, rotated
 //! per point by the same angles, from the same offset origins; for shadows mapped into each
 //! light's cone, for reflections into the Phong lobe about the mirror direction, as on the
 //! CPU).
@@ -19,13 +19,13 @@
 //! back in [`Estimate::kernel_s`]; packing and uploading the fields (or building and uploading
 //! the CWBVH) and compiling the shaders is [`Eval::setup_s`], reported apart.
 
-use super::backend::{Casters, ComputeBackend, Estimate, Eval, Quantity};
+pub use super::backend::GpuQuantity;
+use super::backend::{Casters, ComputeBackend, CpuBackend, Estimate, Eval, Quantity};
 use super::spec::Backend;
 use super::Result;
 use crate::field::scene::{FieldInstance, FieldScene};
 use crate::gpu::{
     AdapterPreference, FieldGpuOptions, FieldLayout, GpuContext, GpuError, GpuTiming, GpuTracer,
-    GpuVisibility,
 };
 use crate::render::estimator::Points;
 use crate::sampling::rays::RaySet;
@@ -59,23 +59,6 @@ fn out(values: Vec<f32>, t: GpuTiming) -> Estimate {
         values,
         kernel_s: t.kernel.map(|d| d.as_secs_f64()),
     }
-}
-
-/// The GPU kernels of one estimator's quantity, supplied by its render kind
-/// ([`super::kinds::Setup::gpu`]): field lookup on the kernel of the quantity, and the
-/// quantity's integrand (src/gpu/integrand.rs) on any GPU visibility (the casters' CWBVH
-/// [`GpuTracer`] here), both on the CPU path's rays.
-pub trait GpuQuantity: Send + Sync {
-    /// Packs and uploads `fields` for this quantity's field kernel (`opts`: how they are bound).
-    fn fields<'s>(
-        &'s self,
-        ctx: &'s GpuContext,
-        fields: &'s FieldScene,
-        opts: &FieldGpuOptions,
-    ) -> Result<Box<dyn Eval + 's>>;
-    /// This quantity at `at` by its integrand on `vis` (the GPU ray caster, or any other
-    /// [`GpuVisibility`]).
-    fn trace(&self, vis: &dyn GpuVisibility, at: Points, rays: &RaySet) -> Result<Estimate>;
 }
 
 /// A field kernel prepared for one quantity: the kernel, the quantity's options and the
@@ -178,5 +161,14 @@ impl ComputeBackend for GpuBackend {
         let quantity = quantity(q)?;
         let tracer = GpuTracer::new(&self.ctx, casters.triangles)?;
         Ok(Box::new(TraceEval { tracer, quantity }))
+    }
+}
+
+/// Opens a backend; "gpu" opens the adapter `adapter` selects ([`AdapterPreference::Auto`]:
+/// hardware where there is one, else lavapipe).
+pub fn open(kind: Backend, adapter: &AdapterPreference) -> Result<Box<dyn ComputeBackend>> {
+    match kind {
+        Backend::Cpu => Ok(Box::new(CpuBackend::new())),
+        Backend::Gpu => Ok(Box::new(GpuBackend::open(adapter.clone())?)),
     }
 }

@@ -12,8 +12,9 @@
 //! and setting ([`check_committed_methods`]), and an animated spec's frames (`frames.csv`)
 //! by scene, frame, method and field cell ([`check_committed_frames`]).
 
+pub use super::cells::threshold_matches;
+use super::cells::Cell;
 use super::columns::NamedRow;
-use super::plan::Cell;
 use super::spec::Threshold;
 use super::table::Row;
 use crate::field::FieldParams;
@@ -64,19 +65,6 @@ impl std::fmt::Display for Failure {
             ),
         }
     }
-}
-
-/// Whether threshold `t` applies to `cell` of the scene called `scene`.
-pub fn threshold_matches(t: &Threshold, scene: &str, cell: &Cell) -> bool {
-    let p: &FieldParams = &cell.params;
-    t.scene.as_ref().is_none_or(|s| s == scene)
-        && t.sphere.is_none_or(|s| s == p.sphere)
-        && t.positional_samples.is_none_or(|n| n == p.count)
-        && t.directional_res.is_none_or(|r| r == p.res)
-        && t.layout.is_none_or(|l| l == p.layout)
-        && t.precision.is_none_or(|x| x == p.precision)
-        && t.selection.is_none_or(|s| s == cell.selection)
-        && t.backend.is_none_or(|b| b == cell.backend)
 }
 
 fn row_cell(r: &Row) -> Cell {

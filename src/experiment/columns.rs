@@ -4,7 +4,7 @@
 //! a kind with its own metrics adds columns without a struct field. The header is the ordered
 //! union of the rows' names (a row without a column leaves it empty), and names say what they
 //! hold for every kind (`estimate_s`, `rms_vs_truth`), not for AO. `table.csv` is written the
-//! same way ([`super::table`]): its standard columns in the order of its one column list
+//! same way (`experiment::table`): its standard columns in the order of its one column list
 //! ([`write_csv_with`]), a kind's own columns after them.
 
 use super::{Error, Result};
@@ -114,7 +114,7 @@ pub fn write_csv_with(path: &Path, first: &[&str], rows: &[NamedRow]) -> Result<
 
 /// The named columns of a value serde writes as one CSV record (a struct of plain fields),
 /// each written as the CSV serialiser writes it: so a table of such rows has the bytes
-/// [`crate::experiment::outputs::write_csv`] gives it.
+/// `experiment::outputs::write_csv` gives it.
 ///
 /// # Panics
 /// If `v` does not serialise as one record (a nested map or sequence): a bug of the type.

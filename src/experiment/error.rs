@@ -2,7 +2,6 @@
 //! field, the cell, the output path) and keeps its source, so `experiment` prints a chain such
 //! as `figure6: cell bunny-slater-290-…-gpu: backend "gpu": device: …`.
 
-use crate::experiment::spec::SpecError;
 use crate::field::FieldError;
 use crate::geometry::models::ModelError;
 use crate::geometry::GeometryError;
@@ -215,4 +214,27 @@ impl<T, E: Into<Error>> ResultExt<T> for std::result::Result<T, E> {
     fn context(self, context: impl FnOnce() -> String) -> Result<T> {
         self.map_err(|e| e.into().context(context()))
     }
+}
+
+/// A spec error, naming the file and the field.
+#[derive(Debug, thiserror::Error)]
+pub enum SpecError {
+    #[error("{}: {source}", file.display())]
+    Io {
+        file: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{}: at `{path}`: {message}", file.display())]
+    Parse {
+        file: PathBuf,
+        path: String,
+        message: String,
+    },
+    #[error("{}: field `{field}`: {message}", file.display())]
+    Invalid {
+        file: PathBuf,
+        field: String,
+        message: String,
+    },
 }

@@ -10,6 +10,7 @@
 
 pub mod backend;
 pub mod backend_gpu;
+pub mod cells;
 pub mod check;
 pub mod cli;
 pub mod columns;
@@ -40,8 +41,9 @@ pub mod sampling_report;
 pub mod scenes;
 pub mod shard;
 pub mod spec;
-pub mod spec_mesh;
+pub mod spec_load;
 pub mod stability;
+pub(crate) mod staging;
 pub mod table;
 pub mod truth_cache;
 pub mod try_mesh;

@@ -1,13 +1,13 @@
 //! The tables a run writes (CSV, atomically) and reads back for `experiment plots`:
 //!
-//! - `table.csv`: one row per cell and backend ([`super::table`]);
+//! - `table.csv`: one row per cell and backend (`experiment::table`);
 //! - `raycast_sweep.csv`: the kind's estimate by ray casting at several ray counts
 //!   ([`SweepRow`]), the ray-casting curve of the error-against-time plot;
 //! - `field_sweep.csv`: the estimate through every cell's fields at more ray counts
 //!   ([`FieldSweepRow`]), against the converged reference;
 //! - `pairs.csv`: RMS between cells that differ only in precision ([`PairRow`]; the slides'
 //!   8 vs 16 bit);
-//! - `paper_vs_ours.csv`: the paper's numbers beside ours, written by [`super::paper`].
+//! - `paper_vs_ours.csv`: the paper's numbers beside ours, written by `experiment::paper`.
 
 use super::spec::Backend;
 use super::{Error, Result};

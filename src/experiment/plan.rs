@@ -22,123 +22,16 @@
 //! has an image, normal fields where it reads them (reflections), a GPU device
 //! only where a cell's backend is "gpu".
 
+pub use super::cells::{cells_of, selection_name, Cell, Geometry};
 use super::kinds::Kind;
+pub use super::methods::BVH_BYTES_PER_TRIANGLE;
 use super::scenes::Scenes;
 use super::spec::{exact_sqrt, Backend, Spec};
 use super::{Error, Result};
-use crate::field::{ByteSize, FieldParams, Precision, Selection};
-use crate::sampling::{HemisphereLayout, LayoutKind, SphereKind};
+use crate::field::{ByteSize, FieldParams, Precision};
+use crate::sampling::HemisphereLayout;
 use std::collections::HashSet;
 use std::fmt::Write as _;
-
-/// One evaluated setting: a field on a scene, read with a selection, on a backend (and, for a
-/// kind that reads normal fields, at a normal field precision).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub struct Cell {
-    /// Index into the profile's scenes.
-    pub scene: usize,
-    pub params: FieldParams,
-    pub selection: Selection,
-    pub backend: Backend,
-    /// Bits per component of the normal field read (none: the kind reads no normals).
-    pub normal_bits: Option<u32>,
-}
-
-impl Cell {
-    /// A file-name-safe id: `scene-sphere-count-layout-res-precision-selection-backend`, with
-    /// `-n8` / `-n16` after it where the cell reads a normal field.
-    pub fn id(&self, scene_name: &str) -> String {
-        let p = &self.params;
-        let normals = self.normal_bits.map_or(String::new(), |b| format!("-n{b}"));
-        format!(
-            "{scene_name}-{}-{}-{}-{}-{}-{}-{}{normals}",
-            p.sphere.name(),
-            p.count,
-            p.layout.name(),
-            p.res,
-            p.precision.name(),
-            selection_name(self.selection),
-            self.backend.name()
-        )
-    }
-
-    /// The field geometry (everything but the precision).
-    pub fn geometry(&self) -> Geometry {
-        Geometry::of(&self.params)
-    }
-}
-
-/// The snake-case name of a selection.
-pub fn selection_name(s: Selection) -> &'static str {
-    match s {
-        Selection::Nearest => "nearest",
-        Selection::Interpolated => "interpolated",
-    }
-}
-
-/// A field's parameters without its precision: what one bake of f32 distances determines.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub struct Geometry {
-    pub sphere: SphereKind,
-    pub count: usize,
-    pub layout: LayoutKind,
-    pub res: u32,
-}
-
-impl Geometry {
-    pub fn of(p: &FieldParams) -> Geometry {
-        Geometry {
-            sphere: p.sphere,
-            count: p.count,
-            layout: p.layout,
-            res: p.res,
-        }
-    }
-
-    pub fn with(&self, precision: Precision) -> FieldParams {
-        FieldParams {
-            sphere: self.sphere,
-            count: self.count,
-            layout: self.layout,
-            res: self.res,
-            precision,
-        }
-    }
-}
-
-/// The cells of a spec profile: scenes × field settings × backends (× the normal field
-/// precisions of a kind that reads them), duplicates dropped, in spec order.
-pub fn cells_of(spec: &Spec) -> Vec<Cell> {
-    let bits = super::kinds::of(&spec.render).normal_bits();
-    let normal_bits: Vec<Option<u32>> = if bits.is_empty() {
-        vec![None]
-    } else {
-        bits.into_iter().map(Some).collect()
-    };
-    let mut seen = HashSet::new();
-    let mut out = Vec::new();
-    for scene in 0..spec.scenes.len() {
-        for axes in &spec.fields {
-            for (params, selection) in axes.settings() {
-                for &backend in &spec.backends {
-                    for &nb in &normal_bits {
-                        let c = Cell {
-                            scene,
-                            params,
-                            selection,
-                            backend,
-                            normal_bits: nb,
-                        };
-                        if seen.insert(c) {
-                            out.push(c);
-                        }
-                    }
-                }
-            }
-        }
-    }
-    out
-}
 
 /// Bytes a mesh's normal fields take in memory at `geometry`: the 16-bit normals of the bake
 /// and each other precision derived from them, 4 bytes a texel each.
@@ -542,10 +435,6 @@ fn precompute_step(
         bytes: p.bytes,
     }))
 }
-
-/// The planner's bound on the bytes of a BVH over one triangle, the triangle included (the
-/// scene's state holds two: [`scene_state_bytes`]; a method's world BVH one).
-pub const BVH_BYTES_PER_TRIANGLE: u64 = 128;
 
 /// `k` with `k² = n`, or the error naming the spec field.
 fn square_root(n: u32, field: &str) -> Result<u32> {

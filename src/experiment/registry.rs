@@ -1,5 +1,5 @@
 //! A registry of plug-ins (render kinds, methods): the entries built into this build, then
-//! those added at run time, looked up by name. [`super::kinds`] and [`super::methods`] each keep
+//! those added at run time, looked up by name. `experiment::kinds` and `experiment::methods` each keep
 //! one.
 
 use std::sync::RwLock;

@@ -1,7 +1,7 @@
 //! `--shard I/N`: a deterministic share of a spec's cells, for running one spec's cells on
 //! several machines (or processes) at once.
 //!
-//! The assignment: the spec profile's cells in plan order ([`super::plan::cells_of`]: scenes ×
+//! The assignment: the spec profile's cells in plan order ([`super::cells::cells_of`]: scenes ×
 //! field settings × backends, duplicates dropped) are cut into `N` contiguous blocks, positions
 //! `⌊(I−1)·n/N⌋ .. ⌊I·n/N⌋` for shard `I` (1-based); then each field group (a scene's cells
 //! that read one bake: the same scene and field geometry, every precision, selection, backend
@@ -20,7 +20,7 @@
 //! estimator's options; no shard enters the key), so shards sharing a cache folder compute it
 //! once where they do not race, and identically where they do.
 
-use super::plan::{cells_of, Cell};
+use super::cells::{cells_of, Cell};
 use super::spec::Spec;
 use super::{Error, Result};
 use serde::Serialize;

@@ -5,11 +5,11 @@
 //! absolute path).
 //!
 //! The field cache keys on the loaded mesh's model-space positions and triangles
-//! ([`super::scenes::mesh_sha256`]), not on the file: a renamed or moved file reuses its fields,
+//! (`scenes::mesh_sha256`), not on the file: a renamed or moved file reuses its fields,
 //! an edited one bakes again.
 
+use super::spec::mesh::MeshFile;
 use super::spec::{MeshSource, Spec, SpecError};
-use super::spec_mesh::MeshFile;
 use crate::field::ByteSize;
 use crate::geometry::{Mesh, MeshFormat};
 use serde::Serialize;
@@ -34,7 +34,7 @@ pub struct FileRecord {
 /// Bytes a mesh of these sizes takes while it is loaded and traced: the file's bytes, the mesh
 /// (positions and normals, 24 bytes a vertex; triangles, 12 bytes) three times (the parsed
 /// parts, the validated mesh, its centred copy), and three BVHs over its triangles at 128 bytes
-/// a triangle (the scene's two, as [`super::plan::scene_state_bytes`] counts them, and the
+/// a triangle (the scene's two, as `plan::scene_state_bytes` counts them, and the
 /// bake's). For the 10 M-triangle binary PLY of `examples/big_mesh.rs` this is 4.4 GiB; its
 /// `experiment try --quick` peaked at 4.5 GiB resident (rays and images besides).
 pub fn load_bytes(file_bytes: u64, vertices: u64, triangles: u64) -> u64 {

@@ -4,8 +4,8 @@
 //! parts it replaces prefixed by `quick.`.
 
 use super::spec::{
-    exact_sqrt, Backend, FieldAxes, MeshSource, OursSource, PaperCell, SceneSpec, Spec, SpecError,
-    Threshold,
+    exact_sqrt, FieldAxes, MeshSource, OursSource, PaperCell, SceneSpec, Spec, SpecError,
+    FRAME_METHODS,
 };
 use crate::geometry::models::ModelRegistry;
 use crate::sampling::{HemisphereLayout, SphereKind, SpherePoints};
@@ -27,89 +27,32 @@ pub const MAX_TRUTH_BATCHES: u32 = 64;
 pub const MAX_FRAMES: u32 = 10_000;
 
 /// Where each replaceable part of a profile lives in the file.
-struct Paths {
-    scenes: &'static str,
-    fields: &'static str,
-    render_rays: &'static str,
-    reference_rays: &'static str,
-    image: &'static str,
-    sweep: &'static str,
-    field_sweep: &'static str,
-    truth_max_rays: &'static str,
-    thresholds: &'static str,
-    backends: &'static str,
-    frames: &'static str,
-}
-
-/// Validates both profiles of `spec`.
-pub fn validate(spec: &Spec, file: &Path) -> Result<(), SpecError> {
-    let full = Paths {
-        scenes: "scenes",
-        fields: "fields",
-        render_rays: "render.rays_per_point",
-        reference_rays: "reference.rays_per_point",
-        image: "render.image",
-        sweep: "reference.raycast_sweep",
-        field_sweep: "reference.field_rays_sweep",
-        truth_max_rays: "reference.truth.max_rays",
-        thresholds: "thresholds",
-        backends: "backends",
-        frames: "animation.frames",
-    };
-    let q = &spec.quick;
-    let pick = |given: bool, quick: &'static str, full: &'static str| {
-        if given {
-            quick
-        } else {
-            full
-        }
-    };
-    let rays = q.rays_per_point.is_some();
-    let quick = Paths {
-        scenes: pick(q.scenes.is_some(), "quick.scenes", full.scenes),
-        fields: pick(q.fields.is_some(), "quick.fields", full.fields),
-        render_rays: pick(rays, "quick.rays_per_point", full.render_rays),
-        reference_rays: pick(rays, "quick.rays_per_point", full.reference_rays),
-        image: pick(q.image.is_some(), "quick.image", full.image),
-        sweep: pick(q.raycast_sweep.is_some(), "quick.raycast_sweep", full.sweep),
-        field_sweep: pick(
-            q.field_rays_sweep.is_some(),
-            "quick.field_rays_sweep",
-            full.field_sweep,
-        ),
-        truth_max_rays: pick(
-            q.truth_max_rays.is_some(),
-            "quick.truth_max_rays",
-            full.truth_max_rays,
-        ),
-        thresholds: "quick.thresholds",
-        backends: pick(q.backends.is_some(), "quick.backends", full.backends),
-        frames: pick(q.frames.is_some(), "quick.frames", full.frames),
-    };
-    let ctx = Validator { file };
-    ctx.profile(spec, &full)?;
-    // The paper's cells pair with the full profile's scenes and sweep; a quick run that lacks
-    // one leaves the row's ours empty.
-    for (i, c) in spec.paper.iter().flat_map(|p| p.cells.iter().enumerate()) {
-        ctx.paper_source(spec, c, &format!("paper.cells[{i}]"), full.sweep)?;
-    }
-    ctx.profile(&spec.quick(), &quick)?;
-    if spec.reproduces.trim().is_empty() {
-        return Err(ctx.err(
-            "reproduces",
-            "must name the figure or table reproduced".into(),
-        ));
-    }
-    Ok(())
+pub(crate) struct Paths {
+    pub(crate) scenes: &'static str,
+    pub(crate) fields: &'static str,
+    pub(crate) render_rays: &'static str,
+    pub(crate) reference_rays: &'static str,
+    pub(crate) image: &'static str,
+    pub(crate) sweep: &'static str,
+    pub(crate) field_sweep: &'static str,
+    pub(crate) truth_max_rays: &'static str,
+    pub(crate) thresholds: &'static str,
+    pub(crate) backends: &'static str,
+    pub(crate) frames: &'static str,
 }
 
 /// Validation of one spec file: its errors name the file ([`Validator::err`]); the render
-/// kinds' own checks ([`super::kinds::KindOptions::validate`]) are given one.
+/// kinds' and methods' own checks (`kinds::KindOptions::validate`) are given one.
 pub struct Validator<'a> {
     file: &'a Path,
 }
 
 impl Validator<'_> {
+    /// The validation of the spec file `file`.
+    pub(crate) fn new(file: &Path) -> Validator<'_> {
+        Validator { file }
+    }
+
     /// The error at `field` (a path such as `render.lights[1].radius`) of this file.
     pub fn err(&self, field: &str, message: String) -> SpecError {
         SpecError::Invalid {
@@ -119,148 +62,13 @@ impl Validator<'_> {
         }
     }
 
-    fn profile(&self, s: &Spec, p: &Paths) -> Result<(), SpecError> {
-        self.scenes(&s.scenes, p.scenes)?;
-        if s.fields.is_empty() {
-            return Err(self.err(p.fields, "needs at least one entry".into()));
-        }
-        for (i, f) in s.fields.iter().enumerate() {
-            self.axes(f, &format!("{}[{i}]", p.fields))?;
-        }
-        self.square(s.render.rays_per_point, p.render_rays)?;
-        self.square(s.reference.rays_per_point, p.reference_rays)?;
-        for (i, &n) in s.reference.raycast_sweep.iter().enumerate() {
-            self.square(n, &format!("{}[{i}]", p.sweep))?;
-        }
-        for (i, &n) in s.reference.field_rays_sweep.iter().enumerate() {
-            self.square(n, &format!("{}[{i}]", p.field_sweep))?;
-        }
-        let t = &s.reference.truth;
-        if !(t.target_stderr > 0.0 && t.target_stderr.is_finite()) {
-            return Err(self.err(
-                "reference.truth.target_stderr",
-                format!("{} must be positive and finite", t.target_stderr),
-            ));
-        }
-        if t.batches < 2 {
-            return Err(self.err(
-                "reference.truth.batches",
-                format!(
-                    "{} batches: needs at least 2 (their spread is the error)",
-                    t.batches
-                ),
-            ));
-        }
-        if t.max_rays > MAX_TRUTH_RAYS {
-            return Err(self.err(
-                p.truth_max_rays,
-                format!("{} rays per point: at most {MAX_TRUTH_RAYS}", t.max_rays),
-            ));
-        }
-        if t.batches > MAX_TRUTH_BATCHES {
-            return Err(self.err(
-                "reference.truth.batches",
-                format!("{} batches: at most {MAX_TRUTH_BATCHES}", t.batches),
-            ));
-        }
-        if (t.max_rays as u64) < 64 * t.batches as u64 {
-            return Err(self.err(
-                p.truth_max_rays,
-                format!(
-                    "{} rays: the first round already traces {} (batches × 8²)",
-                    t.max_rays,
-                    64 * t.batches
-                ),
-            ));
-        }
-        if !(1..=MAX_SEEDS).contains(&s.reference.seeds) {
-            return Err(self.err(
-                "reference.seeds",
-                format!("{} seeds: needs 1 to {MAX_SEEDS}", s.reference.seeds),
-            ));
-        }
-        if let Some(img) = s.render.image() {
-            for (name, v) in [("width", img.width), ("height", img.height)] {
-                if !(1..=8192).contains(&v) {
-                    return Err(self.err(
-                        &format!("{}.{name}", p.image),
-                        format!("{v} is outside 1..=8192 pixels"),
-                    ));
-                }
-            }
-            if let Some(cam) = &img.camera {
-                let path = format!("{}.camera", p.image);
-                camera_problem(cam).map_or(Ok(()), |(field, message)| {
-                    Err(self.err(&format!("{path}.{field}"), message))
-                })?;
-            }
-        }
-        let kind = super::kinds::of(&s.render);
-        if kind.needs().view && s.render.image().is_none() {
-            return Err(self.err(
-                "render.image",
-                format!("\"{}\" computes per pixel and needs an image", kind.name()),
-            ));
-        }
-        s.render.options.validate(&s.render, s, self)?;
-        self.methods(s, kind.as_ref())?;
-        if let Some(b) = s.render.intra_bias {
-            if !(0.0..1.0).contains(&b) {
-                return Err(self.err("render.intra_bias", format!("{b} is outside [0, 1)")));
-            }
-        }
-        if s.backends.is_empty() {
-            return Err(self.err(p.backends, "needs \"cpu\" and/or \"gpu\"".into()));
-        }
-        for (i, b) in s.backends.iter().enumerate() {
-            if s.backends[..i].contains(b) {
-                return Err(self.err(&format!("{}[{i}]", p.backends), format!("{b:?} twice")));
-            }
-        }
-        if s.backends.contains(&Backend::Gpu) {
-            // The GPU kernels answer the nearest map of Slater and lat-long sets only.
-            for (i, f) in s.fields.iter().enumerate() {
-                if let Some(j) = f.spheres.iter().position(|&k| k == SphereKind::Fibonacci) {
-                    return Err(self.err(
-                        &format!("{}[{i}].spheres[{j}]", p.fields),
-                        "\"fibonacci\" has no nearest-map query on the \"gpu\" backend; use \
-                         \"slater\" or \"lat_long\", or drop \"gpu\" from backends"
-                            .into(),
-                    ));
-                }
-            }
-        }
-        if let Some(paper) = &s.paper {
-            for (i, c) in paper.cells.iter().enumerate() {
-                if paper.cells[..i].iter().any(|d| d.label == c.label) {
-                    return Err(self.err(
-                        &format!("paper.cells[{i}].label"),
-                        format!("label `{}` is used twice", c.label),
-                    ));
-                }
-            }
-            if let Some(r) = &paper.reference_cell {
-                if !paper.cells.iter().any(|c| &c.label == r) {
-                    return Err(self.err(
-                        "paper.reference_cell",
-                        format!("no paper cell is labelled `{r}`"),
-                    ));
-                }
-            }
-        }
-        for (i, t) in s.thresholds.iter().enumerate() {
-            self.threshold(s, t, &format!("{}[{i}]", p.thresholds))?;
-        }
-        self.animation(s, p)
-    }
-
     /// The frames and every instance's motion: a motion only with `animation`; frames in
     /// 1..=[`MAX_FRAMES`], a positive finite time step, known per-frame methods, each named
     /// once; each motion's own values ([`crate::geometry::motion::Motion::problem`]). An
     /// animated spec writes `frames.csv`, so the keys of the static table (`methods`, `paper`,
     /// `thresholds`, `reference.field_rays_sweep`) are refused in it; its "gpu" backend adds the
-    /// GPU twins of its methods ([`super::dynamic::gpu_movers`]).
-    fn animation(&self, s: &Spec, p: &Paths) -> Result<(), SpecError> {
+    /// GPU twins of its methods (`dynamic::gpu_movers`).
+    pub(crate) fn animation(&self, s: &Spec, p: &Paths) -> Result<(), SpecError> {
         let motions = s.scenes.iter().enumerate().flat_map(|(i, sc)| {
             let here = format!("{}[{i}]", p.scenes);
             (sc.instances.iter().enumerate()).filter_map(move |(j, inst)| {
@@ -298,7 +106,7 @@ impl Validator<'_> {
                 format!("{} must be positive and finite", a.time_step),
             ));
         }
-        let known = super::dynamic::movers::NAMES;
+        let known = FRAME_METHODS;
         for (i, m) in a.methods.iter().flatten().enumerate() {
             let at = format!("animation.methods[{i}]");
             if !known.contains(&m.as_str()) {
@@ -348,29 +156,7 @@ impl Validator<'_> {
         Ok(())
     }
 
-    /// A paper cell's scene and `ours`: scenes the spec has, a ray count it sweeps.
-    /// Each `methods` entry's own options, then whether every setting answers the kind; a
-    /// setting listed twice is refused.
-    fn methods(&self, s: &Spec, kind: &dyn super::kinds::Kind) -> Result<(), SpecError> {
-        let mut seen: Vec<String> = Vec::new();
-        for (i, m) in s.methods.iter().enumerate() {
-            let at = format!("methods[{i}]");
-            m.options.validate(&at, s, self)?;
-            for setting in m.settings() {
-                if let Some(why) = setting.refuses(kind) {
-                    return Err(self.err(&at, format!("\"{}\" {why}", setting.id())));
-                }
-                let label = setting.label();
-                if seen.contains(&label) {
-                    return Err(self.err(&at, format!("setting \"{label}\" listed twice")));
-                }
-                seen.push(label);
-            }
-        }
-        Ok(())
-    }
-
-    fn paper_source(
+    pub(crate) fn paper_source(
         &self,
         s: &Spec,
         c: &PaperCell,
@@ -428,7 +214,7 @@ impl Validator<'_> {
         }
     }
 
-    fn scenes(&self, scenes: &[SceneSpec], path: &str) -> Result<(), SpecError> {
+    pub(crate) fn scenes(&self, scenes: &[SceneSpec], path: &str) -> Result<(), SpecError> {
         if scenes.is_empty() {
             return Err(self.err(path, "needs at least one scene".into()));
         }
@@ -616,7 +402,7 @@ impl Validator<'_> {
         }
     }
 
-    fn axes(&self, f: &FieldAxes, path: &str) -> Result<(), SpecError> {
+    pub(crate) fn axes(&self, f: &FieldAxes, path: &str) -> Result<(), SpecError> {
         for (name, empty) in [
             ("spheres", f.spheres.is_empty()),
             ("counts", f.counts.is_empty()),
@@ -652,7 +438,7 @@ impl Validator<'_> {
         Ok(())
     }
 
-    fn square(&self, n: u32, path: &str) -> Result<(), SpecError> {
+    pub(crate) fn square(&self, n: u32, path: &str) -> Result<(), SpecError> {
         if n > MAX_RAYS_PER_POINT {
             return Err(self.err(
                 path,
@@ -673,44 +459,6 @@ impl Validator<'_> {
         }
         Ok(())
     }
-
-    fn threshold(&self, s: &Spec, t: &Threshold, path: &str) -> Result<(), SpecError> {
-        if t.rms_vertex_max.is_none() && t.rms_image_max.is_none() {
-            return Err(self.err(path, "sets neither rms_vertex_max nor rms_image_max".into()));
-        }
-        for (name, v) in [
-            ("rms_vertex_max", t.rms_vertex_max),
-            ("rms_image_max", t.rms_image_max),
-        ] {
-            if v.is_some_and(|v| !(v >= 0.0 && v.is_finite())) {
-                return Err(self.err(
-                    &format!("{path}.{name}"),
-                    "must be finite and non-negative".into(),
-                ));
-            }
-        }
-        if t.rms_image_max.is_some() && s.render.image().is_none() {
-            return Err(self.err(
-                &format!("{path}.rms_image_max"),
-                "the spec renders no image".into(),
-            ));
-        }
-        let kind = super::kinds::of(&s.render);
-        if t.rms_vertex_max.is_some() && !kind.columns().vertex {
-            return Err(self.err(
-                &format!("{path}.rms_vertex_max"),
-                format!("\"{}\" has no per-vertex values", kind.name()),
-            ));
-        }
-        let cells = super::plan::cells_of(s);
-        if !cells
-            .iter()
-            .any(|c| super::check::threshold_matches(t, &s.scenes[c.scene].name, c))
-        {
-            return Err(self.err(path, "matches no cell of the spec".into()));
-        }
-        Ok(())
-    }
 }
 
 /// The f32 steps of a camera's coordinates its eye must be from its target: the view direction
@@ -721,7 +469,9 @@ const CAMERA_DIRECTION_STEPS: f64 = 1e3;
 /// the spec coordinates' range (±1.15e18), look somewhere (its target more than
 /// [`CAMERA_DIRECTION_STEPS`] f32 steps from its eye), have an up hint not along the view, and
 /// a field of view in (0°, 180°).
-fn camera_problem(cam: &crate::render::camera::Camera) -> Option<(&'static str, String)> {
+pub(crate) fn camera_problem(
+    cam: &crate::render::camera::Camera,
+) -> Option<(&'static str, String)> {
     for (field, v) in [("eye", cam.eye), ("target", cam.target), ("up", cam.up)] {
         if !v.is_finite() {
             return Some((field, format!("{v} is not finite")));

@@ -109,7 +109,7 @@ impl Mover for GpuWorldRebuild<'_> {
     }
 
     fn vis(&self) -> &dyn Visibility {
-        &crate::experiment::methods::NoRays
+        &crate::experiment::backend::NoRays
     }
 
     fn bytes(&self) -> Option<u64> {
@@ -162,7 +162,7 @@ impl Mover for GpuTwoLevelMover<'_> {
     }
 
     fn vis(&self) -> &dyn Visibility {
-        &crate::experiment::methods::NoRays
+        &crate::experiment::backend::NoRays
     }
 
     fn bytes(&self) -> Option<u64> {
@@ -213,7 +213,7 @@ impl Mover for GpuFields<'_> {
     }
 
     fn vis(&self) -> &dyn Visibility {
-        &crate::experiment::methods::NoRays
+        &crate::experiment::backend::NoRays
     }
 
     fn bytes(&self) -> Option<u64> {
@@ -269,7 +269,7 @@ impl Mover for GpuRayQuery<'_> {
     }
 
     fn vis(&self) -> &dyn Visibility {
-        &crate::experiment::methods::NoRays
+        &crate::experiment::backend::NoRays
     }
 
     fn bytes(&self) -> Option<u64> {

@@ -51,7 +51,7 @@ pub mod movers;
 
 use super::fields::FieldSupply;
 use super::plot::{xy_plot, Axes, Series};
-use super::run::staging;
+use super::staging;
 use super::{Error, Result};
 use serde::Serialize;
 use std::path::Path;
@@ -107,7 +107,7 @@ pub struct FrameRow {
 
 /// Runs the crowd sweep into `out` (`table.csv`, `run.json`, `frame_time.png`, …), written in
 /// a staging folder beside it and published only when whole, as a spec's run is
-/// ([`super::run::staging`]): a file at `out`, or a folder that holds files no run wrote, is
+/// ([`super::staging`]): a file at `out`, or a folder that holds files no run wrote, is
 /// refused before any work unless `allow_nonempty_out` (the folder's files are then kept).
 pub fn run(
     out: &Path,

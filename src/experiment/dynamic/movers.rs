@@ -20,15 +20,9 @@ use std::sync::Arc;
 use std::time::Instant;
 
 /// Every per-frame method, in the order their rows are written: the ray casters (the world
-/// rebuild first: the reference of the others), then the fields.
-pub const NAMES: [&str; 6] = [
-    "world_rebuild",
-    "two_level",
-    "embree_rebuild",
-    "embree_instances",
-    "field_every_sphere",
-    "field",
-];
+/// rebuild first: the reference of the others), then the fields (the names a spec's
+/// `animation.methods` may list, [`crate::experiment::spec::FRAME_METHODS`]).
+pub use crate::experiment::spec::FRAME_METHODS as NAMES;
 
 /// Why this build cannot run the method `name`, if it cannot (Embree's without the `embree`
 /// feature).
@@ -521,7 +515,7 @@ impl Mover for AoFields {
     }
 
     fn vis(&self) -> &dyn Visibility {
-        &crate::experiment::methods::NoRays
+        &crate::experiment::backend::NoRays
     }
 
     fn bytes(&self) -> Option<u64> {

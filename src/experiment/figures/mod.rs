@@ -33,10 +33,10 @@ pub mod positional;
 #[cfg(test)]
 mod tests;
 
+use super::cells::selection_name;
 use super::columns::NamedRow;
 use super::outputs::{read_csv, FieldSweepRow, SweepRow};
 use super::paper::PaperRow;
-use super::plan::selection_name;
 use super::plot::{figure_plot, Axes, Figure, Panel, Series, Style, Styled};
 use super::spec::Backend;
 use super::table::Row;

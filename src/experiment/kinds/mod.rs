@@ -273,9 +273,86 @@ pub fn names() -> Vec<&'static str> {
     REGISTRY.names()
 }
 
+/// The options of a spec's `render`, read by its kind's plug-in from the keys it wrote back
+/// (a `render` the registry read: its kind is registered and its keys read back).
+pub fn options_of(render: &RenderSpec) -> Box<dyn KindOptions> {
+    let entry = lookup(render.what)
+        .unwrap_or_else(|| panic!("render kind \"{}\" is not registered", render.what));
+    (entry.read)(serde_json::Value::Object(render.options.clone())).unwrap_or_else(|e| {
+        panic!(
+            "render kind \"{}\" does not read back its own options: {e}",
+            render.what
+        )
+    })
+}
+
 /// The kind of a spec's `render`.
 pub fn of(render: &RenderSpec) -> Box<dyn Kind> {
-    render.options.kind(render)
+    options_of(render).kind(render)
+}
+
+impl<'de> serde::Deserialize<'de> for RenderSpec {
+    /// Two steps: the keys every kind reads, each typed where it stands (so that an error names
+    /// its path, `render.rays_per_point`), then the rest by the kind's plug-in, whose options
+    /// are written back as the spec's plain JSON.
+    fn deserialize<D: serde::Deserializer<'de>>(de: D) -> Result<RenderSpec, D::Error> {
+        de.deserialize_map(RenderVisitor)
+    }
+}
+
+struct RenderVisitor;
+
+impl<'de> serde::de::Visitor<'de> for RenderVisitor {
+    type Value = RenderSpec;
+
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str("a render object: `what`, `rays_per_point` and the kind's keys")
+    }
+
+    fn visit_map<A: serde::de::MapAccess<'de>>(self, mut m: A) -> Result<RenderSpec, A::Error> {
+        use serde::de::Error;
+        let (mut what, mut rays, mut image, mut intra_bias) = (None, None, None, None);
+        let mut own = serde_json::Map::new();
+        while let Some(key) = m.next_key::<String>()? {
+            let twice = || A::Error::custom(format!("`{key}` given twice"));
+            match key.as_str() {
+                "what" if what.is_some() => return Err(twice()),
+                "what" => what = Some(m.next_value::<String>()?),
+                "rays_per_point" if rays.is_some() => return Err(twice()),
+                "rays_per_point" => rays = Some(m.next_value::<u32>()?),
+                "image" if image.is_some() => return Err(twice()),
+                "image" => image = Some(m.next_value::<Option<ImageSpec>>()?),
+                "intra_bias" if intra_bias.is_some() => return Err(twice()),
+                "intra_bias" => intra_bias = Some(m.next_value::<Option<f32>>()?),
+                _ if own.contains_key(&key) => return Err(twice()),
+                _ => {
+                    let v = m.next_value::<serde_json::Value>()?;
+                    own.insert(key, v);
+                }
+            }
+        }
+        let what = what.unwrap_or_else(|| BUILT_IN[0].name.to_string());
+        let entry = lookup(&what).ok_or_else(|| {
+            A::Error::custom(format!(
+                "`what`: unknown render kind \"{what}\"; this build has {}",
+                names()
+                    .iter()
+                    .map(|n| format!("\"{n}\""))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ))
+        })?;
+        let rays_per_point = rays.ok_or_else(|| A::Error::missing_field("rays_per_point"))?;
+        let options = (entry.read)(serde_json::Value::Object(own))
+            .map_err(|e| A::Error::custom(format!("\"{}\": {e}", entry.name)))?;
+        Ok(RenderSpec {
+            what: entry.name,
+            rays_per_point,
+            image: image.flatten(),
+            intra_bias: intra_bias.flatten(),
+            options: options.to_json(),
+        })
+    }
 }
 
 /// The pixels of an image (none without one): the most points a per-pixel kind can have.

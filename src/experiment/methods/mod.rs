@@ -10,7 +10,7 @@
 //! runner, with its bytes), then an [`Answer`]: a [`Visibility`] that the kind's own estimator
 //! runs through on the reference's rays (a ray caster, a sphere tracer), or an estimator of
 //! its own on the kind's points (an estimator that casts no ray, as cone tracing or an AO
-//! field). The runner ([`super::run`]) gives every setting one row of `methods.csv` per scene:
+//! field). The runner (`experiment::run`) gives every setting one row of `methods.csv` per scene:
 //! the precompute's time and bytes, the estimate's time and rays per second, and the same
 //! error columns as the field's rows, against the same same-ray reference and the same
 //! converged reference.
@@ -33,11 +33,13 @@ pub mod sdf;
 pub mod two_level;
 
 use super::backend::Eval;
+pub use super::backend::NoRays;
 use super::backend_gpu::GpuQuantity;
 use super::kinds::Kind;
 use super::registry::{Entry, Registry};
 use super::scenes::BuiltScene;
-use super::spec::{Backend, Spec, SpecError};
+pub use super::spec::MethodSpec;
+use super::spec::{default_backends, Backend, Spec, SpecError};
 use super::validate::Validator;
 use super::Result;
 use crate::gpu::GpuContext;
@@ -132,29 +134,9 @@ pub trait GpuMethod: Send + Sync {
     ) -> Result<Box<dyn Eval + 'a>>;
 }
 
-/// The visibility handed to a method that casts no ray (a direct estimator, an AO field in a
-/// moving scene): any query through it is a bug of the method, reported as such.
-pub struct NoRays;
-
-impl Visibility for NoRays {
-    fn occluded(&self, _: Vec3, _: Vec3, _: f32, _: f32) -> bool {
-        unreachable!("a method that casts no ray was asked about one")
-    }
-
-    fn hit_distance(&self, _: Vec3, _: Vec3, _: f32, _: f32) -> Option<f32> {
-        unreachable!("a method that casts no ray was asked about one")
-    }
-
-    fn surface_hit(
-        &self,
-        _: Vec3,
-        _: Vec3,
-        _: f32,
-        _: f32,
-    ) -> Option<crate::visibility::SurfaceHit> {
-        unreachable!("a method that casts no ray was asked about one")
-    }
-}
+/// The planner's bound on the bytes of a BVH over one triangle, the triangle included (the
+/// scene's state holds two: `plan::scene_state_bytes`; a method's world BVH one).
+pub const BVH_BYTES_PER_TRIANGLE: u64 = 128;
 
 /// One setting of a method: what answers a kind, with its parameters fixed.
 pub trait Method: Send + Sync {
@@ -345,27 +327,26 @@ pub fn settings_of(spec: &Spec) -> Vec<Setting> {
     spec.methods.iter().flat_map(|m| m.settings()).collect()
 }
 
-/// The CPU, where an entry lists no `backends`.
-fn default_backends() -> Vec<Backend> {
-    vec![Backend::Cpu]
-}
-
-/// One entry of a spec's `methods`: the method's name, the backends it runs on and its own
-/// options.
-#[derive(Debug)]
-pub struct MethodSpec {
-    pub method: &'static str,
-    pub options: Box<dyn MethodOptions>,
-    /// `backends` (default `["cpu"]`).
-    pub backends: Vec<Backend>,
-}
-
 impl MethodSpec {
+    /// Its options, read by its method's plug-in from the keys it wrote back (an entry the
+    /// registry read: its method is registered and its keys read back).
+    pub fn read_options(&self) -> Box<dyn MethodOptions> {
+        let entry = lookup(self.method)
+            .unwrap_or_else(|| panic!("method \"{}\" is not registered", self.method));
+        (entry.read)(serde_json::Value::Object(self.options.clone())).unwrap_or_else(|e| {
+            panic!(
+                "method \"{}\" does not read back its own options: {e}",
+                self.method
+            )
+        })
+    }
+
     /// Its settings ([`MethodOptions::settings`]), each on its backends.
     pub fn settings(&self) -> Vec<Setting> {
         let mut out = Vec::new();
+        let options = self.read_options();
         for &backend in &self.backends {
-            for (i, method) in self.options.settings().into_iter().enumerate() {
+            for (i, method) in options.settings().into_iter().enumerate() {
                 out.push((i, Setting { method, backend }));
             }
         }
@@ -375,43 +356,9 @@ impl MethodSpec {
     }
 }
 
-impl Clone for MethodSpec {
-    fn clone(&self) -> MethodSpec {
-        MethodSpec {
-            method: self.method,
-            options: self.options.clone_box(),
-            backends: self.backends.clone(),
-        }
-    }
-}
-
-impl PartialEq for MethodSpec {
-    fn eq(&self, other: &MethodSpec) -> bool {
-        self.method == other.method
-            && self.backends == other.backends
-            && self.options.to_json() == other.options.to_json()
-    }
-}
-
-impl serde::Serialize for MethodSpec {
-    fn serialize<S: serde::Serializer>(&self, ser: S) -> std::result::Result<S::Ok, S::Error> {
-        use serde::ser::SerializeMap;
-        let own = self.options.to_json();
-        let backends = self.backends != default_backends();
-        let mut m = ser.serialize_map(Some(1 + backends as usize + own.len()))?;
-        m.serialize_entry("method", self.method)?;
-        if backends {
-            m.serialize_entry("backends", &self.backends)?;
-        }
-        for (k, v) in &own {
-            m.serialize_entry(k, v)?;
-        }
-        m.end()
-    }
-}
-
 impl<'de> serde::Deserialize<'de> for MethodSpec {
-    /// Two steps: `method` and `backends`, then the rest by that method's plug-in.
+    /// Two steps: `method` and `backends`, then the rest by that method's plug-in, whose
+    /// options are written back as the spec's plain JSON.
     fn deserialize<D: serde::Deserializer<'de>>(
         de: D,
     ) -> std::result::Result<MethodSpec, D::Error> {
@@ -455,7 +402,7 @@ impl<'de> serde::Deserialize<'de> for MethodSpec {
             .map_err(|e| D::Error::custom(format!("\"{}\": {e}", entry.name)))?;
         Ok(MethodSpec {
             method: entry.name,
-            options,
+            options: options.to_json(),
             backends,
         })
     }

@@ -59,11 +59,11 @@ impl Method for Raycast {
 }
 
 /// A world BVH over every caster triangle of `scene` (ours or Embree's) as a precompute: no
-/// ray, about [`crate::experiment::plan::BVH_BYTES_PER_TRIANGLE`] a triangle (the planner's
+/// ray, about [`crate::experiment::methods::BVH_BYTES_PER_TRIANGLE`] a triangle (the planner's
 /// bound, the triangles included).
 pub fn world_bvh(scene: &BuiltScene) -> Precompute {
     let triangles = scene.caster_triangles() as u64;
-    let bytes = triangles.saturating_mul(crate::experiment::plan::BVH_BYTES_PER_TRIANGLE);
+    let bytes = triangles.saturating_mul(crate::experiment::methods::BVH_BYTES_PER_TRIANGLE);
     Precompute {
         what: format!("build a world BVH over {triangles} caster triangles (bytes: about)"),
         rays: 0,

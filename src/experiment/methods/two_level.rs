@@ -82,7 +82,7 @@ impl Method for TwoLevelMethod {
     fn precompute(&self, scene: &BuiltScene) -> std::result::Result<Option<Precompute>, String> {
         let (model, instances) = instanced(scene);
         let triangles: u64 = model.iter().map(|m| m.len() as u64).sum();
-        let bytes = triangles.saturating_mul(crate::experiment::plan::BVH_BYTES_PER_TRIANGLE);
+        let bytes = triangles.saturating_mul(crate::experiment::methods::BVH_BYTES_PER_TRIANGLE);
         Ok(Some(Precompute {
             what: format!(
                 "build a BVH per mesh over {triangles} triangles of {} mesh(es), a top level over {} instance(s) (bytes: about)",

@@ -252,7 +252,7 @@ pub(super) fn run(
                 names.push(twin);
             }
         }
-        let be = crate::experiment::backend::open(Backend::Gpu, &opts.adapter)?;
+        let be = crate::experiment::backend_gpu::open(Backend::Gpu, &opts.adapter)?;
         let ctx = be.gpu_context().expect("the gpu backend has a device");
         if let (Err(why), Some(at)) = (
             ctx.ray_query_support(),

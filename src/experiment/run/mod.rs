@@ -14,7 +14,7 @@ mod frames_write;
 pub use frames_write::redraw as redraw_frames;
 mod methods;
 mod references;
-pub(crate) mod staging;
+pub(crate) use super::staging;
 mod state;
 mod steps;
 mod write;

@@ -5,7 +5,7 @@
 use super::references::{raycast_truth_errors, seed_errors, SeedErrors};
 use super::state::{mean_sd, CellResult, SceneState};
 use super::RunOptions;
-use crate::experiment::backend::{self, Casters, ComputeBackend, CpuBackend, Quantity};
+use crate::experiment::backend::{Casters, ComputeBackend, CpuBackend, Quantity};
 use crate::experiment::columns::NamedRow;
 use crate::experiment::fields::{derive, Supplied};
 use crate::experiment::flip::{self, FlipMap, FlipStats};
@@ -89,7 +89,7 @@ impl<'a> Runner<'a> {
             .chain(methods.iter().map(|m| &m.backend))
         {
             if let std::collections::hash_map::Entry::Vacant(e) = backends.entry(b) {
-                e.insert(backend::open(b, &opts.adapter)?);
+                e.insert(crate::experiment::backend_gpu::open(b, &opts.adapter)?);
             }
         }
         Ok(Runner {

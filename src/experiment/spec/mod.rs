@@ -1,41 +1,21 @@
 //! Experiment specs: `experiments/*.json`, one per figure or table of a paper. Plain structs, a
 //! doc comment per field, unknown keys rejected; every error names the file, the field path and
-//! what was expected ([`SpecError`]). Validation lives in [`super::validate`].
+//! what was expected ([`SpecError`]). Reading a file (`Spec::load`, `Spec::parse`) and
+//! validating it live in `experiment::spec_load`; the part checks in `experiment::validate`.
 //!
 //! A spec's name is its file stem (`experiments/figure6.json` is `figure6`). Its cells are
 //! scenes × field settings × backends: each entry of `fields` is a cross product of its axes, and
 //! the cells are the union of the entries (duplicates dropped), so that a figure comparing, say,
 //! 1122 lat-long maps with 1090 Slater maps lists two entries.
 
+pub mod mesh;
+
+pub use super::error::SpecError;
 use crate::field::{FieldParams, Precision, Selection};
 use crate::render::camera::Camera;
 use crate::sampling::{LayoutKind, SphereKind};
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
-use std::path::{Path, PathBuf};
-
-/// A spec error, naming the file and the field.
-#[derive(Debug, thiserror::Error)]
-pub enum SpecError {
-    #[error("{}: {source}", file.display())]
-    Io {
-        file: PathBuf,
-        #[source]
-        source: std::io::Error,
-    },
-    #[error("{}: at `{path}`: {message}", file.display())]
-    Parse {
-        file: PathBuf,
-        path: String,
-        message: String,
-    },
-    #[error("{}: field `{field}`: {message}", file.display())]
-    Invalid {
-        file: PathBuf,
-        field: String,
-        message: String,
-    },
-}
 
 /// One experiment: scenes, the field axes to sweep, what to render, how to measure.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -56,10 +36,10 @@ pub struct Spec {
     #[serde(default = "default_backends")]
     pub backends: Vec<Backend>,
     /// Other methods answering the kind on every scene, beside the field's cells and our ray
-    /// cast reference (`[{"method": "embree"}, …]`, see [`super::methods`]): each setting is a
-    /// row of `methods.csv`, measured as the field's cells are.
+    /// cast reference (`[{"method": "embree"}, …]`, see `experiment::methods`): each setting
+    /// is a row of `methods.csv`, measured as the field's cells are.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub methods: Vec<super::methods::MethodSpec>,
+    pub methods: Vec<MethodSpec>,
     /// The ray-cast reference.
     pub reference: ReferenceSpec,
     /// The paper's own numbers for the cells reproduced.
@@ -86,12 +66,25 @@ pub struct AnimationSpec {
     /// Seconds between frames (positive, finite).
     pub time_step: f64,
     /// The per-frame methods measured beside `world_rebuild` (the reference, always run), by
-    /// name (`experiment::dynamic::movers::NAMES`); default every one this build has.
+    /// name ([`FRAME_METHODS`]); default every one this build has.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub methods: Option<Vec<String>>,
 }
 
-fn default_backends() -> Vec<Backend> {
+/// Every per-frame method an animation may name, in the order their rows are written: the ray
+/// casters (the world rebuild first: the reference of the others), then the fields
+/// (`experiment::dynamic::movers` builds them).
+pub const FRAME_METHODS: [&str; 6] = [
+    "world_rebuild",
+    "two_level",
+    "embree_rebuild",
+    "embree_instances",
+    "field_every_sphere",
+    "field",
+];
+
+/// The CPU, where a spec (or a `methods` entry) lists no `backends`.
+pub fn default_backends() -> Vec<Backend> {
     vec![Backend::Cpu]
 }
 
@@ -161,7 +154,7 @@ pub enum MeshSource {
     /// A user's OBJ or PLY file (`{"file": "PATH", "sha256": "…"}`), PATH relative to the
     /// spec file's folder.
     #[serde(skip)]
-    File(super::spec_mesh::MeshFile),
+    File(mesh::MeshFile),
     /// The 2008 paper's corner receiver: three unit squares, n × n vertices each.
     Corner { n: usize },
     /// A closed cube of side `size` with a square through-hole of side `hole`.
@@ -300,11 +293,13 @@ impl FieldAxes {
     }
 }
 
-/// What is rendered: the kind (`what`, a name in the kind registry of [`super::kinds`]; default
-/// `"vertex_ao"`), the keys every kind reads (`rays_per_point`, `image`, `intra_bias`), and the
-/// kind's own options, read in a second step by the kind's plug-in into its own struct, where a
-/// key it does not read is refused by name ([`super::kinds::KindEntry::read`]).
-#[derive(Debug)]
+/// What is rendered: the kind (`what`, a name in the kind registry of `experiment::kinds`;
+/// default `"vertex_ao"`), the keys every kind reads (`rays_per_point`, `image`,
+/// `intra_bias`), and the kind's own options, plain JSON: the kind registry reads `render`
+/// (its `Deserialize` lives there), handing the kind's own keys to its plug-in, which refuses
+/// a key it does not read and writes its options back here (`kinds::KindEntry::read`,
+/// `kinds::options_of`).
+#[derive(Clone, Debug, PartialEq)]
 pub struct RenderSpec {
     /// The kind's name (`render.what`).
     pub what: &'static str,
@@ -318,36 +313,14 @@ pub struct RenderSpec {
     /// of 2R (none: the field's own resolution-derived tolerance, `IntraBias::Auto`; see
     /// `field::lookup`).
     pub intra_bias: Option<f32>,
-    /// The kind's own options.
-    pub options: Box<dyn super::kinds::KindOptions>,
-}
-
-impl Clone for RenderSpec {
-    fn clone(&self) -> RenderSpec {
-        RenderSpec {
-            what: self.what,
-            rays_per_point: self.rays_per_point,
-            image: self.image.clone(),
-            intra_bias: self.intra_bias,
-            options: self.options.clone_box(),
-        }
-    }
-}
-
-impl PartialEq for RenderSpec {
-    fn eq(&self, other: &RenderSpec) -> bool {
-        self.what == other.what
-            && self.rays_per_point == other.rays_per_point
-            && self.image == other.image
-            && self.intra_bias == other.intra_bias
-            && self.options.to_json() == other.options.to_json()
-    }
+    /// The kind's own options, as its plug-in read and wrote them back.
+    pub options: serde_json::Map<String, serde_json::Value>,
 }
 
 impl Serialize for RenderSpec {
     fn serialize<S: serde::Serializer>(&self, ser: S) -> Result<S::Ok, S::Error> {
         use serde::ser::SerializeMap;
-        let own = self.options.to_json();
+        let own = &self.options;
         let mut m = ser.serialize_map(Some(3 + self.intra_bias.is_some() as usize + own.len()))?;
         m.serialize_entry("what", self.what)?;
         m.serialize_entry("rays_per_point", &self.rays_per_point)?;
@@ -355,73 +328,40 @@ impl Serialize for RenderSpec {
         if let Some(b) = self.intra_bias {
             m.serialize_entry("intra_bias", &b)?;
         }
-        for (k, v) in &own {
+        for (k, v) in own {
             m.serialize_entry(k, v)?;
         }
         m.end()
     }
 }
 
-impl<'de> Deserialize<'de> for RenderSpec {
-    /// Two steps: the keys every kind reads, each typed where it stands (so that an error names
-    /// its path, `render.rays_per_point`), then the rest by the kind's plug-in.
-    fn deserialize<D: serde::Deserializer<'de>>(de: D) -> Result<RenderSpec, D::Error> {
-        de.deserialize_map(RenderVisitor)
-    }
+/// One entry of a spec's `methods`: the method's name, the backends it runs on and its own
+/// options, plain JSON: the method registry reads each entry (its `Deserialize` lives in
+/// `experiment::methods`), handing the method's own keys to its plug-in, which refuses a key
+/// it does not read and writes its options back here.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MethodSpec {
+    pub method: &'static str,
+    /// The method's own options, as its plug-in read and wrote them back.
+    pub options: serde_json::Map<String, serde_json::Value>,
+    /// `backends` (default `["cpu"]`).
+    pub backends: Vec<Backend>,
 }
 
-struct RenderVisitor;
-
-impl<'de> serde::de::Visitor<'de> for RenderVisitor {
-    type Value = RenderSpec;
-
-    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-        f.write_str("a render object: `what`, `rays_per_point` and the kind's keys")
-    }
-
-    fn visit_map<A: serde::de::MapAccess<'de>>(self, mut m: A) -> Result<RenderSpec, A::Error> {
-        use serde::de::Error;
-        let (mut what, mut rays, mut image, mut intra_bias) = (None, None, None, None);
-        let mut own = serde_json::Map::new();
-        while let Some(key) = m.next_key::<String>()? {
-            let twice = || A::Error::custom(format!("`{key}` given twice"));
-            match key.as_str() {
-                "what" if what.is_some() => return Err(twice()),
-                "what" => what = Some(m.next_value::<String>()?),
-                "rays_per_point" if rays.is_some() => return Err(twice()),
-                "rays_per_point" => rays = Some(m.next_value::<u32>()?),
-                "image" if image.is_some() => return Err(twice()),
-                "image" => image = Some(m.next_value::<Option<ImageSpec>>()?),
-                "intra_bias" if intra_bias.is_some() => return Err(twice()),
-                "intra_bias" => intra_bias = Some(m.next_value::<Option<f32>>()?),
-                _ if own.contains_key(&key) => return Err(twice()),
-                _ => {
-                    let v = m.next_value::<serde_json::Value>()?;
-                    own.insert(key, v);
-                }
-            }
+impl Serialize for MethodSpec {
+    fn serialize<S: serde::Serializer>(&self, ser: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let own = &self.options;
+        let backends = self.backends != default_backends();
+        let mut m = ser.serialize_map(Some(1 + backends as usize + own.len()))?;
+        m.serialize_entry("method", self.method)?;
+        if backends {
+            m.serialize_entry("backends", &self.backends)?;
         }
-        let what = what.unwrap_or_else(|| super::kinds::BUILT_IN[0].name.to_string());
-        let entry = super::kinds::lookup(&what).ok_or_else(|| {
-            A::Error::custom(format!(
-                "`what`: unknown render kind \"{what}\"; this build has {}",
-                super::kinds::names()
-                    .iter()
-                    .map(|n| format!("\"{n}\""))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ))
-        })?;
-        let rays_per_point = rays.ok_or_else(|| A::Error::missing_field("rays_per_point"))?;
-        let options = (entry.read)(serde_json::Value::Object(own))
-            .map_err(|e| A::Error::custom(format!("\"{}\": {e}", entry.name)))?;
-        Ok(RenderSpec {
-            what: entry.name,
-            rays_per_point,
-            image: image.flatten(),
-            intra_bias: intra_bias.flatten(),
-            options,
-        })
+        for (k, v) in own {
+            m.serialize_entry(k, v)?;
+        }
+        m.end()
     }
 }
 
@@ -433,7 +373,7 @@ impl RenderSpec {
 
     /// The kind's own options as `T`, when they are (tests and tools reading one kind's keys).
     pub fn options_as<T: serde::de::DeserializeOwned>(&self) -> Option<T> {
-        serde_json::from_value(serde_json::Value::Object(self.options.to_json())).ok()
+        serde_json::from_value(serde_json::Value::Object(self.options.clone())).ok()
     }
 }
 
@@ -691,37 +631,6 @@ pub struct QuickProfile {
 }
 
 impl Spec {
-    /// Reads, parses and validates a spec file.
-    pub fn load(path: &Path) -> Result<Spec, SpecError> {
-        let text = std::fs::read_to_string(path).map_err(|source| SpecError::Io {
-            file: path.to_path_buf(),
-            source,
-        })?;
-        Self::parse(&text, path)
-    }
-
-    /// Parses and validates spec text; `file` names it in errors.
-    /// A UTF-8 byte-order mark before the JSON is skipped; any text after it is an error.
-    pub fn parse(text: &str, file: &Path) -> Result<Spec, SpecError> {
-        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-        let de = &mut serde_json::Deserializer::from_str(text);
-        let parse_error = |path: String, message: String| SpecError::Parse {
-            file: file.to_path_buf(),
-            path: if path.is_empty() { ".".into() } else { path },
-            message,
-        };
-        let spec: Spec = serde_path_to_error::deserialize(&mut *de)
-            .map_err(|e| parse_error(e.path().to_string(), e.into_inner().to_string()))?;
-        de.end().map_err(|e| {
-            parse_error(
-                ".".into(),
-                format!("text after the spec's closing brace ({e})"),
-            )
-        })?;
-        super::validate::validate(&spec, file)?;
-        Ok(spec)
-    }
-
     /// The spec with its quick profile applied (its `quick` left as is).
     pub fn quick(&self) -> Spec {
         let mut s = self.clone();

@@ -7,7 +7,7 @@
 //! code through [`Keyed`], so that a parse error inside a procedural mesh keeps its path
 //! (`scenes[0].instances[1].mesh.corner.n`).
 
-use super::spec::MeshSource;
+use super::MeshSource;
 use serde::de::{self, DeserializeSeed, IntoDeserializer, MapAccess, Visitor};
 use serde::ser::SerializeMap;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
