@@ -1,16 +1,8 @@
 // The GPU ray-cast reference over one world BVH (src/gpu/tracer.rs): its header, its nodes and
 // triangles, and the queries, with the traversal of shaders/cwbvh.wgsl.
 
-// The visibility's header (group 1). Mirrors `BvhParamsGpu` (src/gpu/tracer.rs), 16 bytes.
-struct BvhParams {
-    // CWBVH nodes (0: an empty scene).
-    node_count: u32,
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
-}
-
-@group(1) @binding(0) var<uniform> bvh: BvhParams;
+// The visibility's header: the CWBVH's nodes (shaders/caster_header.wgsl).
+@group(1) @binding(0) var<uniform> bvh: CasterHeader;
 // 80-byte obvhs `CwBvhNode`s as five vec4<u32> each.
 @group(1) @binding(1) var<storage, read> nodes: array<vec4<u32>>;
 // Triangles in BVH order: v0 (w: original index bits), v1, v2.

@@ -141,67 +141,93 @@ fn field_sample(inst: Instance, u: vec3<f32>, dir: vec3<f32>, selection: u32) ->
     return 1.0;
 }
 
-// Whether instance `inst` blocks the world segment origin + t dir, t in [tmin, tmax].
-fn instance_occludes(inst: Instance, origin: vec3<f32>, dir: vec3<f32>, tmin: f32, tmax: f32,
-                     selection: u32, intra_bias: f32, intra_auto: bool) -> bool {
+// Instance `inst`'s part of the world segment origin + t dir, t in [tmin, tmax], where every
+// query of one instance starts (`instance_occludes`; `instance_surface_hit` in
+// shaders/field_surface.wgsl): the segment in model space (`o`, `d`, `lmin`, `lmax`) and where
+// it crosses the model sphere (`t0`, `t1`); `met` is false where the world sphere test, the
+// model sphere or the segment's span leaves the instance out before any lookup.
+struct InstanceRay {
+    met: bool,
+    o: vec3<f32>,
+    d: vec3<f32>,
+    lmin: f32,
+    lmax: f32,
+    t0: f32,
+    t1: f32,
+}
+
+fn instance_ray(inst: Instance, origin: vec3<f32>, dir: vec3<f32>, tmin: f32, tmax: f32) -> InstanceRay {
+    var ir: InstanceRay;
+    ir.met = false;
     // World-space sphere test first (src/field/scene.rs).
     let ws = ray_sphere(origin, dir, inst.world_center, inst.world_radius);
     if ws.z == 0.0 || !(ws.y >= tmin && ws.x <= tmax) {
-        return false;
+        return ir;
     }
     let scale = inst.scale;
-    let o = quat_rotate(inst.rotation, (origin - inst.translation) / scale);
-    let d = normalize_exact(quat_rotate(inst.rotation, dir));
-    let lmin = tmin / scale;
-    let lmax = tmax / scale;
+    ir.o = quat_rotate(inst.rotation, (origin - inst.translation) / scale);
+    ir.d = normalize_exact(quat_rotate(inst.rotation, dir));
+    ir.lmin = tmin / scale;
+    ir.lmax = tmax / scale;
+    let rs = ray_sphere(ir.o, ir.d, inst.model_center, inst.model_radius);
+    if rs.z == 0.0 {
+        return ir;
+    }
+    ir.t0 = rs.x;
+    ir.t1 = rs.y;
+    if ir.t1 < ir.lmin {
+        return ir;
+    }
+    ir.met = true;
+    return ir;
+}
+
+// Whether instance `inst` blocks the world segment origin + t dir, t in [tmin, tmax].
+fn instance_occludes(inst: Instance, origin: vec3<f32>, dir: vec3<f32>, tmin: f32, tmax: f32,
+                     selection: u32, intra_bias: f32, intra_auto: bool) -> bool {
+    let ir = instance_ray(inst, origin, dir, tmin, tmax);
+    if !ir.met {
+        return false;
+    }
     let c = inst.model_center;
     let r = inst.model_radius;
-    let rs = ray_sphere(o, d, c, r);
-    if rs.z == 0.0 {
-        return false;
-    }
-    let t0 = rs.x;
-    let t1 = rs.y;
     let diameter = 2.0 * r;
-    if t1 < lmin {
-        return false;
-    }
-    if t0 >= 0.0 {
+    if ir.t0 >= 0.0 {
         // Outside: inter-object lookup at the entry point.
-        if t0 > lmax {
+        if ir.t0 > ir.lmax {
             return false;
         }
-        let f = o - c;
-        let l = f - dot(f, d) * d;
+        let f = ir.o - c;
+        let l = f - dot(f, ir.d) * ir.d;
         let ll = length(l);
         let disc = (r - ll) * (r + ll);
         if disc < 0.0 {
             return false;
         }
-        let u = (l - sqrt(disc) * d) / r;
-        let dd = field_sample(inst, u, d, selection);
+        let u = (l - sqrt(disc) * ir.d) / r;
+        let dd = field_sample(inst, u, ir.d, selection);
         if dd >= 1.0 {
             return false;
         }
-        let t = t0 + diameter * dd;
-        return t >= lmin && t <= lmax;
+        let t = ir.t0 + diameter * dd;
+        return t >= ir.lmin && t <= ir.lmax;
     }
     // Inside: intra-object test from the exit point back towards the origin.
-    let p1 = (o - c) + t1 * d;
+    let p1 = (ir.o - c) + ir.t1 * ir.d;
     let len = sqrt(dot(p1, p1));
     var u = vec3<f32>(0.0);
     if len > 0.0 {
         u = p1 * (1.0 / len);
     }
-    let dd = field_sample(inst, u, -d, selection);
+    let dd = field_sample(inst, u, -ir.d, selection);
     if dd >= 1.0 {
         return false;
     }
-    let t = t1 - diameter * dd;
+    let t = ir.t1 - diameter * dd;
     // `IntraBias::model_units` (src/field/lookup.rs): Auto scales the field's own tolerance.
     var tol = intra_bias * diameter;
     if intra_auto {
-        tol = intra_bias * (inst.intra_positional + inst.intra_directional * t1);
+        tol = intra_bias * (inst.intra_positional + inst.intra_directional * ir.t1);
     }
-    return t > lmin + tol && t <= lmax;
+    return t > ir.lmin + tol && t <= ir.lmax;
 }

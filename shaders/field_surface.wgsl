@@ -18,58 +18,45 @@ struct FieldHit {
     texel: u32,
 }
 
-// `VisibilityField::surface_hit` (src/field/normals.rs) of instance `inst`: the lookup of
-// `instance_occludes` (shaders/field_lookup.wgsl) line for line, keeping the distance and the
-// map and texel of the nearest selection at the point and direction read.
+// `VisibilityField::surface_hit` (src/field/normals.rs) of instance `inst`: from the same
+// `instance_ray`, the lookup of `instance_occludes` (shaders/field_lookup.wgsl) line for line,
+// keeping the distance and the map and texel of the nearest selection at the point and
+// direction read.
 fn instance_surface_hit(inst: Instance, origin: vec3<f32>, dir: vec3<f32>, tmin: f32, tmax: f32,
                         selection: u32, intra_bias: f32, intra_auto: bool) -> FieldHit {
     var res: FieldHit;
     res.hit = false;
-    let ws = ray_sphere(origin, dir, inst.world_center, inst.world_radius);
-    if ws.z == 0.0 || !(ws.y >= tmin && ws.x <= tmax) {
+    let ir = instance_ray(inst, origin, dir, tmin, tmax);
+    if !ir.met {
         return res;
     }
-    let scale = inst.scale;
-    let o = quat_rotate(inst.rotation, (origin - inst.translation) / scale);
-    let d = normalize_exact(quat_rotate(inst.rotation, dir));
-    let lmin = tmin / scale;
-    let lmax = tmax / scale;
     let c = inst.model_center;
     let r = inst.model_radius;
-    let rs = ray_sphere(o, d, c, r);
-    if rs.z == 0.0 {
-        return res;
-    }
-    let t0 = rs.x;
-    let t1 = rs.y;
     let diameter = 2.0 * r;
-    if t1 < lmin {
-        return res;
-    }
-    let inside = t0 < 0.0;
+    let inside = ir.t0 < 0.0;
     var u = vec3<f32>(0.0);
-    var dread = d;
+    var dread = ir.d;
     if !inside {
         // Outside: inter-object lookup at the entry point.
-        if t0 > lmax {
+        if ir.t0 > ir.lmax {
             return res;
         }
-        let f = o - c;
-        let l = f - dot(f, d) * d;
+        let f = ir.o - c;
+        let l = f - dot(f, ir.d) * ir.d;
         let ll = length(l);
         let disc = (r - ll) * (r + ll);
         if disc < 0.0 {
             return res;
         }
-        u = (l - sqrt(disc) * d) / r;
+        u = (l - sqrt(disc) * ir.d) / r;
     } else {
         // Inside: intra-object test from the exit point back towards the origin.
-        let p1 = (o - c) + t1 * d;
+        let p1 = (ir.o - c) + ir.t1 * ir.d;
         let len = sqrt(dot(p1, p1));
         if len > 0.0 {
             u = p1 * (1.0 / len);
         }
-        dread = -d;
+        dread = -ir.d;
     }
     let pbase = inst.point_base;
     let m = lookup_nearest(inst, u);
@@ -85,17 +72,17 @@ fn instance_surface_hit(inst: Instance, origin: vec3<f32>, dir: vec3<f32>, tmin:
     }
     var t = 0.0;
     if !inside {
-        t = t0 + diameter * dd;
-        if !(t >= lmin && t <= lmax) {
+        t = ir.t0 + diameter * dd;
+        if !(t >= ir.lmin && t <= ir.lmax) {
             return res;
         }
     } else {
-        t = t1 - diameter * dd;
+        t = ir.t1 - diameter * dd;
         var tol = intra_bias * diameter;
         if intra_auto {
-            tol = intra_bias * (inst.intra_positional + inst.intra_directional * t1);
+            tol = intra_bias * (inst.intra_positional + inst.intra_directional * ir.t1);
         }
-        if !(t > lmin + tol && t <= lmax) {
+        if !(t > ir.lmin + tol && t <= ir.lmax) {
             return res;
         }
     }

@@ -5,16 +5,8 @@
 // The WGSL follows the pitfalls of docs/gpu.md "Ray queries": each query's `ray_query` is a
 // function variable declared outside any loop and never passed by pointer to a helper.
 
-// Mirrors `RayQueryHeaderGpu` (src/gpu/ray_query.rs), 16 bytes.
-struct RayQueryHeader {
-    // Instances in the TLAS.
-    instance_count: u32,
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
-}
-
-@group(1) @binding(0) var<uniform> rq_header: RayQueryHeader;
+// The visibility's header: the instances (shaders/caster_header.wgsl).
+@group(1) @binding(0) var<uniform> rq_header: CasterHeader;
 @group(1) @binding(1) var rq_tlas: acceleration_structure;
 @group(1) @binding(2) var<storage, read> rq_tris: array<vec4<f32>>;
 @group(1) @binding(3) var<storage, read> rq_first_triangle: array<u32>;

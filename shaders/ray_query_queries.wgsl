@@ -1,41 +1,10 @@
-// The ray-query visibility's own queries (src/gpu/ray_query.rs, `any_hits` and
-// `closest_hits`): one query ray per invocation, the rays in place of the receivers (group 0,
-// binding 1; shaders/integrand.wgsl for the header), the acceleration structures as group 1
-// (shaders/ray_query.wgsl).
-
-// One query ray. Mirrors `RayGpu` (src/gpu/tracer.rs, the query rays of every ray-casting visibility), 32 bytes.
-struct QueryRay {
-    // Origin.
-    origin: vec3<f32>,
-    // Smallest hit distance.
-    tmin: f32,
-    // Direction.
-    direction: vec3<f32>,
-    // Largest hit distance.
-    tmax: f32,
-}
-
-@group(0) @binding(1) var<storage, read> query_rays: array<QueryRay>;
-
-@compute @workgroup_size(64)
-fn rq_any_main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x + gid.y * params.row_stride;
-    if i >= params.point_count {
-        return;
-    }
-    let r = query_rays[i];
-    out[i] = select(0u, 1u, occluded(r.origin, r.direction, r.tmin, r.tmax));
-}
+// The ray-query visibility's closest-hit words (src/gpu/ray_query.rs, `closest_hits`), after
+// the queries every ray-casting visibility shares (shaders/ray_queries.wgsl); the acceleration
+// structures as group 1 (shaders/ray_query.wgsl).
 
 // Six words a ray: t, the triangle's index in its mesh (0xffffffff: no hit), the normal, the
 // instance.
-@compute @workgroup_size(64)
-fn rq_closest_main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x + gid.y * params.row_stride;
-    if i >= params.point_count {
-        return;
-    }
-    let r = query_rays[i];
+fn write_closest(i: u32, r: Ray) {
     let h = closest_hit(r.origin, r.direction, r.tmin, r.tmax);
     var original = 0xffffffffu;
     if h.triangle != 0xffffffffu {

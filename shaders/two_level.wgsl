@@ -5,16 +5,6 @@
 // each instance's ray moved into its model space (the similarity's inverse: rotation,
 // translation, distances divided by the scale) as the CPU moves it.
 
-// The visibility's header. Mirrors `TwoLevelParamsGpu` (src/gpu/two_level.rs), 16 bytes.
-struct TwoLevelParams {
-    // Top-level nodes (0: no instance).
-    top_node_count: u32,
-    // Instances placed.
-    instance_count: u32,
-    _pad0: u32,
-    _pad1: u32,
-}
-
 // One top-level node. Mirrors `TopNodeGpu` (src/gpu/two_level.rs), 32 bytes: a box over its
 // instances' world boxes; a leaf holds `count` instances from `first` in `top_order`, an inner
 // node its two children (`first`, `first + 1`), as the CPU's `BoxNode`.
@@ -41,7 +31,8 @@ struct Placement {
     _pad1: u32,
 }
 
-@group(1) @binding(0) var<uniform> two_level: TwoLevelParams;
+// The visibility's header: the top level's nodes, the instances (shaders/caster_header.wgsl).
+@group(1) @binding(0) var<uniform> two_level: CasterHeader;
 // Every mesh's CWBVH nodes, child and primitive indices absolute (80 bytes a node).
 @group(1) @binding(1) var<storage, read> nodes: array<vec4<u32>>;
 // Every mesh's triangles in BVH order, model space: v0 (w: the mesh's own index bits), v1, v2.
@@ -86,7 +77,7 @@ struct TwoLevelHit {
 
 fn two_level_trace(origin: vec3<f32>, dir: vec3<f32>, tmin: f32, tmax_in: f32, any_hit: bool) -> TwoLevelHit {
     var best = TwoLevelHit(tmax_in, NO_INSTANCE, 0xffffffffu);
-    if two_level.top_node_count == 0u {
+    if two_level.node_count == 0u {
         return best;
     }
     var tmax = tmax_in;

@@ -1,40 +1,9 @@
-// Two-level ray casting's own ray queries (src/gpu/two_level.rs, `any_hits` and
-// `closest_hits`): one query ray per invocation, the rays in place of the receivers (group 0,
-// binding 1; shaders/integrand.wgsl for the header), the instances as group 1
-// (shaders/two_level.wgsl).
-
-// One query ray. Mirrors `RayGpu` (src/gpu/tracer.rs), 32 bytes.
-struct Ray {
-    // Origin.
-    origin: vec3<f32>,
-    // Smallest hit distance.
-    tmin: f32,
-    // Direction (unit length).
-    direction: vec3<f32>,
-    // Largest hit distance.
-    tmax: f32,
-}
-
-@group(0) @binding(1) var<storage, read> rays: array<Ray>;
-
-@compute @workgroup_size(64)
-fn any_main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x + gid.y * params.row_stride;
-    if i >= params.point_count {
-        return;
-    }
-    let r = rays[i];
-    out[i] = select(0u, 1u, occluded(r.origin, r.direction, r.tmin, r.tmax));
-}
+// Two-level ray casting's closest-hit words (src/gpu/two_level.rs, `closest_hits`), after the
+// queries every ray-casting visibility shares (shaders/ray_queries.wgsl); the instances as
+// group 1 (shaders/two_level.wgsl).
 
 // Five words a ray: the distance's bits, the instance (0xffffffff on a miss), the world normal.
-@compute @workgroup_size(64)
-fn closest_main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x + gid.y * params.row_stride;
-    if i >= params.point_count {
-        return;
-    }
-    let r = rays[i];
+fn write_closest(i: u32, r: Ray) {
     let h = two_level_trace(r.origin, r.direction, r.tmin, r.tmax, false);
     var n = vec3<f32>(0.0);
     if h.instance != NO_INSTANCE {

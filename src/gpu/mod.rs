@@ -69,7 +69,7 @@ pub use relief_peers::ReliefPeersKernel;
 pub use sdf_kernel::{SdfKernel, SDF_CONES_PER_INVOCATION, SDF_RAYS_PER_INVOCATION};
 pub use tracer::{GpuHit, GpuTracer};
 pub use two_level::{GpuTwoLevel, TwoLevelHit};
-pub use visibility::{GpuVisibility, Kernels, VisibilityGroup};
+pub use visibility::{GpuVisibility, Kernels, VisibilityGroup, READ_ONLY_STORAGE};
 
 use std::time::Duration;
 

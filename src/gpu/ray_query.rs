@@ -23,10 +23,13 @@
 //! the adapter offers ray queries ([`GpuContext::ray_query_support`]); elsewhere
 //! [`RayQueryScene::new`] refuses with [`GpuError::Unsupported`], saying why.
 
-use super::context::{entry, storage_layout_entry, uniform_layout_entry, GpuContext};
-use super::integrand::{self, timing, Integrand};
-use super::tracer::{any_hits, query_rays};
-use super::visibility::{GpuVisibility, Kernels};
+use super::context::GpuContext;
+use super::integrand;
+use super::tracer::{
+    any_hits, closest_hits, ray_queries, CasterHeaderGpu, RayQueries, CASTER_HEADER_WGSL,
+    RAY_QUERIES_WGSL,
+};
+use super::visibility::{GpuVisibility, Kernels, VisibilityGroup, READ_ONLY_STORAGE};
 use super::{GpuError, GpuTiming};
 use crate::trace::RayQuery;
 use glam::{DVec3, Mat4, Vec3};
@@ -34,29 +37,11 @@ use obvhs::ploc::morton::morton_encode_u64_unorm;
 use std::time::{Duration, Instant};
 use wgpu::util::DeviceExt;
 
-/// Twin of WGSL `RayQueryHeader` (shaders/ray_query.wgsl): the visibility's header.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-struct RayQueryHeaderGpu {
-    /// Instances in the TLAS.
-    instance_count: u32,
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
-}
-const _: () = assert!(std::mem::size_of::<RayQueryHeaderGpu>() == 16);
-
-/// The visibility's own queries, the rays in place of receivers.
-const ANY: Integrand = Integrand {
-    sources: &[include_str!("../../shaders/ray_query_queries.wgsl")],
-    entry: "rq_any_main",
-    own: 0,
-    slot: 0,
-};
-const CLOSEST: Integrand = Integrand {
-    entry: "rq_closest_main",
-    ..ANY
-};
+/// The visibility's own queries (its closest-hit words: shaders/ray_query_queries.wgsl).
+const QUERIES: RayQueries = ray_queries(&[
+    RAY_QUERIES_WGSL,
+    include_str!("../../shaders/ray_query_queries.wgsl"),
+]);
 
 /// Words a closest-hit query writes per ray (shaders/ray_query_queries.wgsl).
 const CLOSEST_WORDS: u32 = 6;
@@ -83,7 +68,9 @@ pub struct RayQueryHit {
 /// the module documentation).
 pub struct RayQueryScene<'a> {
     ctx: &'a GpuContext,
-    layout: wgpu::BindGroupLayout,
+    /// The header, then the TLAS, the triangles and the instances' first triangles, bound at
+    /// each call.
+    group: VisibilityGroup,
     /// Per mesh: its BLAS (none for a mesh without triangles) and its first triangle in
     /// `triangles`.
     blas: Vec<Option<wgpu::Blas>>,
@@ -321,22 +308,18 @@ impl<'a> RayQueryScene<'a> {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("ray query"),
-            entries: &[
-                uniform_layout_entry(0),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::AccelerationStructure {
-                        vertex_return: false,
-                    },
-                    count: None,
+        let group = VisibilityGroup::with_bindings(
+            ctx,
+            "ray query",
+            &[],
+            &[
+                wgpu::BindingType::AccelerationStructure {
+                    vertex_return: false,
                 },
-                storage_layout_entry(2, true),
-                storage_layout_entry(3, true),
+                READ_ONLY_STORAGE,
+                READ_ONLY_STORAGE,
             ],
-        });
+        );
         // The BLASes are built with the first TLAS, in one submission (a BLAS built without
         // the TLAS that references it is refused at submit by wgpu 30).
         let mut tlas = tlas;
@@ -370,7 +353,7 @@ impl<'a> RayQueryScene<'a> {
         drop(entries);
         let scene = RayQueryScene {
             ctx,
-            layout,
+            group,
             blas,
             first_triangle,
             triangles,
@@ -381,8 +364,8 @@ impl<'a> RayQueryScene<'a> {
             setup: Duration::ZERO,
         };
         for i in [
-            &ANY,
-            &CLOSEST,
+            &QUERIES.any,
+            &QUERIES.closest,
             &integrand::AO,
             &integrand::SHADOWS,
             &integrand::REFLECTIONS,
@@ -421,7 +404,7 @@ impl<'a> RayQueryScene<'a> {
 
     /// Whether each ray hits any triangle with `tmin <= t <= tmax`.
     pub fn any_hits(&self, rays: &[RayQuery]) -> Result<(Vec<bool>, GpuTiming), GpuError> {
-        any_hits(self, &self.kernels, &ANY, rays)
+        any_hits(self, &self.kernels, &QUERIES.any, rays)
     }
 
     /// The closest hit of each ray with `tmin <= t <= tmax`.
@@ -429,22 +412,22 @@ impl<'a> RayQueryScene<'a> {
         &self,
         rays: &[RayQuery],
     ) -> Result<(Vec<Option<RayQueryHit>>, GpuTiming), GpuError> {
-        let start = Instant::now();
-        let (words, kernel, upload) =
-            query_rays(self, &self.kernels, &CLOSEST, rays, CLOSEST_WORDS)?;
         let f = f32::from_bits;
-        let hits = words
-            .chunks_exact(CLOSEST_WORDS as usize)
-            .map(|w| {
+        closest_hits(
+            self,
+            &self.kernels,
+            &QUERIES.closest,
+            rays,
+            CLOSEST_WORDS,
+            |w| {
                 (w[1] != u32::MAX).then(|| RayQueryHit {
                     t: f(w[0]),
                     triangle: w[1],
                     normal: Vec3::new(f(w[2]), f(w[3]), f(w[4])),
                     instance: w[5],
                 })
-            })
-            .collect();
-        Ok((hits, timing(kernel, upload, start)))
+            },
+        )
     }
 }
 
@@ -454,7 +437,11 @@ impl GpuVisibility for RayQueryScene<'_> {
     }
 
     fn wgsl(&self, _: u32) -> String {
-        include_str!("../../shaders/ray_query.wgsl").into()
+        [
+            CASTER_HEADER_WGSL,
+            include_str!("../../shaders/ray_query.wgsl"),
+        ]
+        .concat()
     }
 
     fn directives(&self) -> &'static str {
@@ -462,27 +449,23 @@ impl GpuVisibility for RayQueryScene<'_> {
     }
 
     fn layout(&self) -> &wgpu::BindGroupLayout {
-        &self.layout
+        self.group.layout()
     }
 
     fn bind_group(&self) -> wgpu::BindGroup {
-        let header = RayQueryHeaderGpu {
+        let header = CasterHeaderGpu {
             instance_count: self.instance_count,
             ..Default::default()
         };
-        let uniform = self
-            .ctx
-            .uniform_buffer("ray query header", bytemuck::bytes_of(&header));
-        (self.ctx.device).create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("ray query"),
-            layout: &self.layout,
-            entries: &[
-                entry(0, uniform.as_entire_binding()),
-                entry(1, wgpu::BindingResource::AccelerationStructure(&self.tlas)),
-                entry(2, self.triangles.as_entire_binding()),
-                entry(3, self.instance_first.as_entire_binding()),
+        self.group.bind_with(
+            self.ctx,
+            bytemuck::bytes_of(&header),
+            &[
+                wgpu::BindingResource::AccelerationStructure(&self.tlas),
+                self.triangles.as_entire_binding(),
+                self.instance_first.as_entire_binding(),
             ],
-        })
+        )
     }
 
     fn kernels(&self) -> &Kernels {

@@ -22,8 +22,7 @@ use std::time::{Duration, Instant};
 /// The node struct uploaded as is: WGSL reads it as five `vec4<u32>`.
 const _: () = assert!(std::mem::size_of::<CwBvhNode>() == 80);
 
-/// Twin of WGSL `Ray` (shaders/bvh_queries.wgsl, and `QueryRay` of shaders/ray_query_queries.wgsl):
-/// one query ray.
+/// Twin of WGSL `Ray` (shaders/ray_queries.wgsl): one query ray.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub(super) struct RayGpu {
@@ -39,27 +38,56 @@ pub(super) struct RayGpu {
 const _: () = assert!(std::mem::size_of::<RayGpu>() == 32);
 const _: () = assert!(std::mem::offset_of!(RayGpu, direction) == 16);
 
-/// Twin of WGSL `BvhParams` (shaders/bvh.wgsl): the visibility's header.
+/// Twin of WGSL `CasterHeader` (shaders/caster_header.wgsl): the header of every ray-casting
+/// visibility (this CWBVH, [`super::GpuTwoLevel`], [`super::RayQueryScene`]).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-struct BvhParamsGpu {
-    /// CWBVH nodes (0: an empty scene).
-    node_count: u32,
-    _pad: [u32; 3],
+pub(super) struct CasterHeaderGpu {
+    /// Nodes of the BVH walked first: the world CWBVH's, the top level's (0: nothing to hit).
+    pub node_count: u32,
+    /// Instances placed (the two levels, ray queries).
+    pub instance_count: u32,
+    pub _pad: [u32; 2],
 }
-const _: () = assert!(std::mem::size_of::<BvhParamsGpu>() == 16);
+const _: () = assert!(std::mem::size_of::<CasterHeaderGpu>() == 16);
 
-/// The CWBVH's own ray queries (shaders/bvh_queries.wgsl), the rays in place of receivers.
-const ANY: Integrand = Integrand {
-    sources: &[include_str!("../../shaders/bvh_queries.wgsl")],
-    entry: "any_main",
-    own: 0,
-    slot: 0,
-};
-const CLOSEST: Integrand = Integrand {
-    entry: "closest_main",
-    ..ANY
-};
+/// The header's WGSL, before a ray-casting visibility's own.
+pub(super) const CASTER_HEADER_WGSL: &str = include_str!("../../shaders/caster_header.wgsl");
+
+/// The any- and closest-hit entries of a ray-casting visibility ([`query_rays`], the rays in
+/// place of receivers).
+pub(super) struct RayQueries {
+    pub any: Integrand,
+    pub closest: Integrand,
+}
+
+/// A ray-casting visibility's [`RayQueries`]: `sources` are the queries they all share
+/// ([`RAY_QUERIES_WGSL`]), then the visibility's own WGSL (its `write_closest`).
+pub(super) const fn ray_queries(sources: &'static [&'static str]) -> RayQueries {
+    RayQueries {
+        any: Integrand {
+            sources,
+            entry: "any_main",
+            own: 0,
+            slot: 0,
+        },
+        closest: Integrand {
+            sources,
+            entry: "closest_main",
+            own: 0,
+            slot: 0,
+        },
+    }
+}
+
+/// The queries every ray-casting visibility shares (shaders/ray_queries.wgsl).
+pub(super) const RAY_QUERIES_WGSL: &str = include_str!("../../shaders/ray_queries.wgsl");
+
+/// The CWBVH's own ray queries (its closest-hit words: shaders/bvh_queries.wgsl).
+const QUERIES: RayQueries = ray_queries(&[
+    RAY_QUERIES_WGSL,
+    include_str!("../../shaders/bvh_queries.wgsl"),
+]);
 
 /// Box padding relative to the scene extent, as the CPU tracer pads (`2^-18`), so that the
 /// quantised node test stays conservative for the watertight triangle test.
@@ -107,8 +135,8 @@ impl<'a> GpuTracer<'a> {
             setup: Duration::ZERO,
         };
         for i in [
-            &ANY,
-            &CLOSEST,
+            &QUERIES.any,
+            &QUERIES.closest,
             &integrand::AO,
             &integrand::SHADOWS,
             &integrand::REFLECTIONS,
@@ -128,7 +156,7 @@ impl<'a> GpuTracer<'a> {
 
     /// Whether each ray hits any triangle with `tmin <= t <= tmax`.
     pub fn any_hits(&self, rays: &[RayQuery]) -> Result<(Vec<bool>, GpuTiming), GpuError> {
-        any_hits(self, &self.kernels, &ANY, rays)
+        any_hits(self, &self.kernels, &QUERIES.any, rays)
     }
 
     /// The closest hit of each ray with `tmin <= t <= tmax`.
@@ -136,18 +164,12 @@ impl<'a> GpuTracer<'a> {
         &self,
         rays: &[RayQuery],
     ) -> Result<(Vec<Option<GpuHit>>, GpuTiming), GpuError> {
-        let start = Instant::now();
-        let (words, kernel, upload) = query_rays(self, &self.kernels, &CLOSEST, rays, 2)?;
-        let hits = words
-            .chunks_exact(2)
-            .map(|w| {
-                (w[1] != u32::MAX).then(|| GpuHit {
-                    t: f32::from_bits(w[0]),
-                    triangle: w[1],
-                })
+        closest_hits(self, &self.kernels, &QUERIES.closest, rays, 2, |w| {
+            (w[1] != u32::MAX).then(|| GpuHit {
+                t: f32::from_bits(w[0]),
+                triangle: w[1],
             })
-            .collect();
-        Ok((hits, timing(kernel, upload, start)))
+        })
     }
 
     /// Vertex AO by ray casting with the same rays as [`crate::render::ao::ao_at_points`]
@@ -198,6 +220,7 @@ impl GpuVisibility for GpuTracer<'_> {
     fn wgsl(&self, _: u32) -> String {
         [
             include_str!("../../shaders/cwbvh.wgsl"),
+            CASTER_HEADER_WGSL,
             include_str!("../../shaders/bvh.wgsl"),
         ]
         .concat()
@@ -208,7 +231,7 @@ impl GpuVisibility for GpuTracer<'_> {
     }
 
     fn bind_group(&self) -> wgpu::BindGroup {
-        let header = BvhParamsGpu {
+        let header = CasterHeaderGpu {
             node_count: self.node_count,
             ..Default::default()
         };
@@ -294,6 +317,22 @@ pub(super) fn any_hits(
     let start = Instant::now();
     let (words, kernel, upload) = query_rays(vis, kernels, any, rays, 1)?;
     let hits = words.into_iter().map(|w| w != 0).collect();
+    Ok((hits, timing(kernel, upload, start)))
+}
+
+/// The closest hit of each ray by `closest` (an entry of [`query_rays`] writing `words` words a
+/// ray), each ray's words read by `hit` (none: a miss).
+pub(super) fn closest_hits<H>(
+    vis: &dyn GpuVisibility,
+    kernels: &Kernels,
+    closest: &Integrand,
+    rays: &[RayQuery],
+    words: u32,
+    hit: impl Fn(&[u32]) -> Option<H>,
+) -> Result<(Vec<Option<H>>, GpuTiming), GpuError> {
+    let start = Instant::now();
+    let (w, kernel, upload) = query_rays(vis, kernels, closest, rays, words)?;
+    let hits = w.chunks_exact(words as usize).map(hit).collect();
     Ok((hits, timing(kernel, upload, start)))
 }
 

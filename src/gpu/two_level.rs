@@ -22,11 +22,14 @@
 //! [`super::GpuTracer`]): the same hits and misses away from edges and grazing rays, distances
 //! within a few ulps (tests/gpu_two_level.rs).
 
-use super::context::{entry, storage_layout_entry, uniform_layout_entry, GpuContext};
-use super::integrand::{self, timing, Integrand};
+use super::context::GpuContext;
+use super::integrand;
 use super::shadow_rays::check_binding;
-use super::tracer::{any_hits, packed_cwbvh, query_rays};
-use super::visibility::{GpuVisibility, Kernels};
+use super::tracer::{
+    any_hits, closest_hits, packed_cwbvh, ray_queries, CasterHeaderGpu, RayQueries,
+    CASTER_HEADER_WGSL, RAY_QUERIES_WGSL,
+};
+use super::visibility::{GpuVisibility, Kernels, VisibilityGroup, READ_ONLY_STORAGE};
 use super::{GpuError, GpuTiming};
 use crate::geometry::Similarity;
 use crate::trace::box_tree::BoxTree;
@@ -34,18 +37,6 @@ use crate::trace::RayQuery;
 use glam::Vec3;
 use obvhs::cwbvh::node::CwBvhNode;
 use std::time::{Duration, Instant};
-
-/// Twin of WGSL `TwoLevelParams` (shaders/two_level.wgsl): the visibility's header.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-struct TwoLevelParamsGpu {
-    /// Top-level nodes (0: no instance).
-    top_node_count: u32,
-    /// Instances placed.
-    instance_count: u32,
-    _pad: [u32; 2],
-}
-const _: () = assert!(std::mem::size_of::<TwoLevelParamsGpu>() == 16);
 
 /// Twin of WGSL `TopNode` (shaders/two_level.wgsl): one node of the top level, the CPU's
 /// [`crate::trace::box_tree::BoxNode`].
@@ -82,17 +73,11 @@ const _: () = assert!(std::mem::size_of::<PlacementGpu>() == 48);
 const _: () = assert!(std::mem::offset_of!(PlacementGpu, translation) == 16);
 const _: () = assert!(std::mem::offset_of!(PlacementGpu, root) == 32);
 
-/// Its own ray queries (shaders/two_level_queries.wgsl), the rays in place of receivers.
-const ANY: Integrand = Integrand {
-    sources: &[include_str!("../../shaders/two_level_queries.wgsl")],
-    entry: "any_main",
-    own: 0,
-    slot: 0,
-};
-const CLOSEST: Integrand = Integrand {
-    entry: "closest_main",
-    ..ANY
-};
+/// Its own ray queries (its closest-hit words: shaders/two_level_queries.wgsl).
+const QUERIES: RayQueries = ray_queries(&[
+    RAY_QUERIES_WGSL,
+    include_str!("../../shaders/two_level_queries.wgsl"),
+]);
 
 /// Instances per top-level leaf (as the CPU's).
 const LEAF: usize = 2;
@@ -148,10 +133,9 @@ impl TopLevel {
 /// Two-level ray casting on the GPU (see the module documentation).
 pub struct GpuTwoLevel<'a> {
     ctx: &'a GpuContext,
-    layout: wgpu::BindGroupLayout,
-    /// Every mesh's nodes and triangles, uploaded once.
-    nodes: wgpu::Buffer,
-    tris: wgpu::Buffer,
+    /// The header, every mesh's nodes and triangles (uploaded once), then the top level's
+    /// buffers, bound at each call.
+    group: VisibilityGroup,
     meshes: Vec<MeshLevel>,
     mesh_bytes: u64,
     top: TopLevel,
@@ -201,21 +185,19 @@ impl<'a> GpuTwoLevel<'a> {
             "CWBVH nodes of the distinct meshes (each uploaded once)",
             all_nodes.len(),
         )?;
-        let mut entries = vec![uniform_layout_entry(0)];
-        entries.extend((1..=5).map(|b| storage_layout_entry(b, true)));
-        let layout = ctx
-            .device
-            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("two-level"),
-                entries: &entries,
-            });
         let mesh_bytes =
             (all_nodes.len() * std::mem::size_of::<CwBvhNode>() + all_tris.len() * 16) as u64;
         let tl = GpuTwoLevel {
             ctx,
-            layout,
-            nodes: ctx.storage_buffer("mesh CWBVH nodes", bytemuck::cast_slice(&all_nodes)),
-            tris: ctx.storage_buffer("mesh triangles", bytemuck::cast_slice(&all_tris)),
+            group: VisibilityGroup::with_bindings(
+                ctx,
+                "two-level",
+                &[
+                    bytemuck::cast_slice(&all_nodes),
+                    bytemuck::cast_slice(&all_tris),
+                ],
+                &[READ_ONLY_STORAGE; 3],
+            ),
             meshes: levels,
             mesh_bytes,
             top: TopLevel::with_capacity(ctx, 1),
@@ -323,7 +305,7 @@ impl<'a> GpuTwoLevel<'a> {
 
     /// Whether each ray hits any instance's triangle with `tmin <= t <= tmax`.
     pub fn any_hits(&self, rays: &[RayQuery]) -> Result<(Vec<bool>, GpuTiming), GpuError> {
-        any_hits(self, &self.kernels, &ANY, rays)
+        any_hits(self, &self.kernels, &QUERIES.any, rays)
     }
 
     /// The closest hit of each ray with `tmin <= t <= tmax`: its distance, instance and world
@@ -332,23 +314,14 @@ impl<'a> GpuTwoLevel<'a> {
         &self,
         rays: &[RayQuery],
     ) -> Result<(Vec<Option<TwoLevelHit>>, GpuTiming), GpuError> {
-        let start = Instant::now();
-        let (words, kernel, upload) = query_rays(self, &self.kernels, &CLOSEST, rays, 5)?;
-        let hits = words
-            .chunks_exact(5)
-            .map(|w| {
-                (w[1] != u32::MAX).then(|| TwoLevelHit {
-                    t: f32::from_bits(w[0]),
-                    instance: w[1],
-                    normal: Vec3::new(
-                        f32::from_bits(w[2]),
-                        f32::from_bits(w[3]),
-                        f32::from_bits(w[4]),
-                    ),
-                })
+        let f = f32::from_bits;
+        closest_hits(self, &self.kernels, &QUERIES.closest, rays, 5, |w| {
+            (w[1] != u32::MAX).then(|| TwoLevelHit {
+                t: f(w[0]),
+                instance: w[1],
+                normal: Vec3::new(f(w[2]), f(w[3]), f(w[4])),
             })
-            .collect();
-        Ok((hits, timing(kernel, upload, start)))
+        })
     }
 }
 
@@ -374,44 +347,32 @@ impl GpuVisibility for GpuTwoLevel<'_> {
     fn wgsl(&self, _: u32) -> String {
         [
             include_str!("../../shaders/cwbvh.wgsl"),
+            CASTER_HEADER_WGSL,
             include_str!("../../shaders/two_level.wgsl"),
         ]
         .concat()
     }
 
     fn layout(&self) -> &wgpu::BindGroupLayout {
-        &self.layout
+        self.group.layout()
     }
 
     fn bind_group(&self) -> wgpu::BindGroup {
-        let header = TwoLevelParamsGpu {
-            top_node_count: self.top_node_count,
+        let header = CasterHeaderGpu {
+            node_count: self.top_node_count,
             instance_count: self.instance_count,
             _pad: [0; 2],
         };
-        let uniform = self
-            .ctx
-            .uniform_buffer("two-level params", bytemuck::bytes_of(&header));
-        let buffers = [
-            &self.nodes,
-            &self.tris,
-            &self.top.nodes,
-            &self.top.order,
-            &self.top.placements,
-        ];
-        let mut entries = vec![entry(0, uniform.as_entire_binding())];
-        entries.extend(
-            (buffers.iter())
-                .zip(1..)
-                .map(|(b, i)| entry(i, b.as_entire_binding())),
-        );
-        self.ctx
-            .device
-            .create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("two-level"),
-                layout: &self.layout,
-                entries: &entries,
-            })
+        let top = &self.top;
+        self.group.bind_with(
+            self.ctx,
+            bytemuck::bytes_of(&header),
+            &[
+                top.nodes.as_entire_binding(),
+                top.order.as_entire_binding(),
+                top.placements.as_entire_binding(),
+            ],
+        )
     }
 
     fn kernels(&self) -> &Kernels {

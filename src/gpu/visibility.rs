@@ -103,20 +103,49 @@ impl Kernels {
     }
 }
 
-/// The usual shape of a visibility's group: its header (a uniform at binding 0) and read-only
-/// storage buffers at bindings 1, 2, … (the CWBVH's nodes and triangles; the SDF's volumes,
-/// instances and samples).
+/// The usual shape of a visibility's group: its header (a uniform at binding 0), read-only
+/// storage buffers uploaded once at bindings 1, 2, … (the CWBVH's nodes and triangles; the
+/// SDF's volumes, instances and samples), then any bindings the visibility binds itself at each
+/// call ([`Self::with_bindings`]: buffers it rewrites or replaces, an acceleration structure).
 pub struct VisibilityGroup {
     layout: wgpu::BindGroupLayout,
     buffers: Vec<wgpu::Buffer>,
     label: &'static str,
 }
 
+/// A read-only storage buffer's binding type, as [`VisibilityGroup::new`] binds its data.
+pub const READ_ONLY_STORAGE: wgpu::BindingType = wgpu::BindingType::Buffer {
+    ty: wgpu::BufferBindingType::Storage { read_only: true },
+    has_dynamic_offset: false,
+    min_binding_size: None,
+};
+
 impl VisibilityGroup {
     /// Uploads `data` (one storage buffer each, binding 1 on) and makes the group's layout.
     pub fn new(ctx: &GpuContext, label: &'static str, data: &[&[u8]]) -> VisibilityGroup {
+        VisibilityGroup::with_bindings(ctx, label, data, &[])
+    }
+
+    /// As [`Self::new`], with `more` bindings after `data`'s, whose resources each call hands
+    /// to [`Self::bind_with`].
+    pub fn with_bindings(
+        ctx: &GpuContext,
+        label: &'static str,
+        data: &[&[u8]],
+        more: &[wgpu::BindingType],
+    ) -> VisibilityGroup {
         let mut entries = vec![uniform_layout_entry(0)];
         entries.extend((1..=data.len() as u32).map(|b| storage_layout_entry(b, true)));
+        entries.extend(
+            (more.iter().zip(data.len() as u32 + 1..)).map(|(&ty, binding)| {
+                wgpu::BindGroupLayoutEntry {
+                    binding,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty,
+                    count: None,
+                }
+            }),
+        );
         let layout = ctx
             .device
             .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -138,13 +167,26 @@ impl VisibilityGroup {
 
     /// The group with `header` as its uniform ([`GpuVisibility::bind_group`]).
     pub fn bind(&self, ctx: &GpuContext, header: &[u8]) -> wgpu::BindGroup {
+        self.bind_with(ctx, header, &[])
+    }
+
+    /// The group with `header` as its uniform, its uploaded buffers, then `more`, the
+    /// resources of the bindings [`Self::with_bindings`] was given, in order.
+    pub fn bind_with(
+        &self,
+        ctx: &GpuContext,
+        header: &[u8],
+        more: &[wgpu::BindingResource],
+    ) -> wgpu::BindGroup {
         let uniform = ctx.uniform_buffer(self.label, header);
         let mut entries = vec![entry(0, uniform.as_entire_binding())];
         entries.extend(
             self.buffers
                 .iter()
+                .map(|b| b.as_entire_binding())
+                .chain(more.iter().cloned())
                 .zip(1..)
-                .map(|(b, i)| entry(i, b.as_entire_binding())),
+                .map(|(r, i)| entry(i, r)),
         );
         ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some(self.label),
