@@ -149,15 +149,40 @@ impl FlipMap {
         map.apply_color_lut(&nv_flip::magma_lut()).to_vec()
     }
 
-    /// Writes the magma-coloured map as an 8-bit RGB PNG, atomically.
+    /// Writes the magma-coloured map as a PNG, atomically: indexed (the table's colours the
+    /// map uses as its palette, a third of the RGB file's bytes), the same pixels as
+    /// [`FlipMap::magma_rgb8`] when read back.
     pub fn save_magma_png(&self, path: &Path) -> std::io::Result<()> {
-        let img = image::RgbImage::from_raw(self.width, self.height, self.magma_rgb8())
-            .expect("buffer matches dimensions");
-        let mut out = std::io::Cursor::new(Vec::new());
-        img.write_to(&mut out, image::ImageFormat::Png)
-            .map_err(|e| std::io::Error::other(e.to_string()))?;
-        crate::io::write_atomic(path, &out.into_inner())
+        let bytes = indexed_png(self.width, self.height, &self.magma_rgb8())
+            .expect("the magma table has 256 colours");
+        crate::io::write_atomic(path, &bytes)
     }
+}
+
+/// 8-bit RGB pixels (row-major) as an indexed PNG whose palette holds their colours in order of
+/// first use; `None` where they have more than 256 colours.
+pub fn indexed_png(width: u32, height: u32, rgb: &[u8]) -> Option<Vec<u8>> {
+    let mut palette: Vec<[u8; 3]> = Vec::new();
+    let mut index = std::collections::HashMap::new();
+    let mut pixels = Vec::with_capacity(rgb.len() / 3);
+    for px in rgb.chunks_exact(3) {
+        let c = [px[0], px[1], px[2]];
+        let i = *index.entry(c).or_insert_with(|| {
+            palette.push(c);
+            palette.len() - 1
+        });
+        pixels.push(u8::try_from(i).ok()?);
+    }
+    let mut out = Vec::new();
+    let mut enc = png::Encoder::new(&mut out, width, height);
+    enc.set_color(png::ColorType::Indexed);
+    enc.set_depth(png::BitDepth::Eight);
+    enc.set_palette(palette.concat());
+    enc.set_compression(png::Compression::High);
+    let mut writer = enc.write_header().ok()?;
+    writer.write_image_data(&pixels).ok()?;
+    writer.finish().ok()?;
+    Some(out)
 }
 
 /// The pooled FLIP of `test` against `reference` over `mask` (the pixels that show values),
