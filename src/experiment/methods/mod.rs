@@ -27,6 +27,7 @@
 
 pub mod aofield;
 pub mod embree;
+pub mod motion;
 pub mod raycast;
 pub mod rayquery;
 pub mod sdf;

@@ -3,13 +3,17 @@
 //! triangles is built as its precompute (timed), then the kind's estimator runs through it on
 //! the reference's rays. Its values are the reference's, ray for ray (its same-ray errors are
 //! zero by construction); the row is its cost with the BVH build counted, beside the others.
+//! In a moving scene it follows motion by rebuilding that BVH every frame ([`WorldRebuild`],
+//! `world_rebuild`, the reference of the other per-frame methods).
 
+use super::motion::{FrameCasters, Mover};
 use super::{Answer, Method, MethodContext, MethodEntry, MethodOptions, Precompute, Prepared};
 use crate::experiment::scenes::BuiltScene;
 use crate::experiment::spec::{Spec, SpecError};
 use crate::experiment::validate::Validator;
 use crate::experiment::Result;
 use crate::trace::Tracer;
+use crate::visibility::Visibility;
 use serde::{Deserialize, Serialize};
 
 pub const ENTRY: MethodEntry = MethodEntry {
@@ -69,5 +73,30 @@ pub fn world_bvh(scene: &BuiltScene) -> Precompute {
         rays: 0,
         bytes,
         peak_bytes: bytes,
+    }
+}
+
+/// Our ray caster over the world triangles, its BVH rebuilt every frame.
+#[derive(Default)]
+pub struct WorldRebuild {
+    tracer: Option<Tracer>,
+}
+
+impl Mover for WorldRebuild {
+    fn name(&self) -> &'static str {
+        "world_rebuild"
+    }
+
+    fn update(&mut self, frame: &FrameCasters) -> Result<()> {
+        self.tracer = Some(Tracer::new(&frame.world_triangles()));
+        Ok(())
+    }
+
+    fn vis(&self) -> &dyn Visibility {
+        self.tracer.as_ref().expect("updated before the query")
+    }
+
+    fn bytes(&self) -> Option<u64> {
+        self.tracer.as_ref().map(Tracer::bytes)
     }
 }

@@ -325,23 +325,20 @@ fn ray_casters(scene: &Scene) -> Vec<Backend<'static>> {
     let tris = scene.caster_triangles();
     let t = Instant::now();
     let tracer = Tracer::new(&tris);
-    #[allow(unused_mut)]
     let mut v = vec![Backend {
         name: "raycast",
         vis: Rc::new(tracer),
         setup_s: t.elapsed().as_secs_f64(),
     }];
-    #[cfg(feature = "embree")]
-    {
-        let t = Instant::now();
-        match crate::trace::embree::EmbreeTracer::new(&tris) {
-            Ok(e) => v.push(Backend {
-                name: "embree",
-                vis: Rc::new(e),
-                setup_s: t.elapsed().as_secs_f64(),
-            }),
-            Err(e) => eprintln!("performance: Embree not timed: {e}"),
-        }
+    let t = Instant::now();
+    match super::methods::embree::world(&tris) {
+        Some(Ok(e)) => v.push(Backend {
+            name: "embree",
+            vis: Rc::<dyn Visibility + Send>::from(e),
+            setup_s: t.elapsed().as_secs_f64(),
+        }),
+        Some(Err(e)) => eprintln!("performance: Embree not timed: {e}"),
+        None => {}
     }
     v
 }
