@@ -26,7 +26,10 @@
 //!   the kind's integrand on it apart (`query_s`). Skipped, saying why, on an adapter without
 //!   ray queries.
 //!
-//! All answer the kind through its GPU kernels on the CPU path's rays, so their values match
+//! Their names and the CPU forms they run beside are the registry's
+//! ([`crate::experiment::methods::motion::gpu_twins`]: each method's `frame_forms`, the field's
+//! `FIELD_FORMS`); this file builds them. All answer the kind through its GPU kernels on the
+//! CPU path's rays, so their values match
 //! the CPU twins' within the kernels' parity bounds (the GPU path's tests).
 
 use super::movers::{field_instances, FrameCasters, Mover};
@@ -41,15 +44,6 @@ use crate::sampling::rays::RaySet;
 use crate::visibility::Visibility;
 use std::sync::Arc;
 
-/// Each CPU per-frame method with a GPU twin, and the twin's name, in the order their rows are
-/// written.
-pub const TWINS: [(&str, &str); 5] = [
-    ("world_rebuild", WORLD_REBUILD),
-    ("two_level", TWO_LEVEL),
-    ("two_level", RAYQUERY),
-    ("field_every_sphere", FIELD_EVERY_SPHERE),
-    ("field", FIELD_TOP_LEVEL),
-];
 /// [`GpuRayQuery`]'s name.
 pub const RAYQUERY: &str = "rayquery@gpu";
 /// Why [`GpuRayQuery`] is skipped on an adapter without ray queries (the run's output names

@@ -21,6 +21,7 @@ use std::sync::Arc;
 
 #[cfg(feature = "embree")]
 pub use crate::experiment::methods::embree::{EmbreeInstanced, EmbreeRebuild};
+use crate::experiment::methods::motion;
 pub use crate::experiment::methods::motion::{timed, FrameCasters, Mover, Timed, MIN_TIMED_S};
 pub use crate::experiment::methods::raycast::WorldRebuild;
 pub use crate::experiment::methods::two_level::TwoLevelRebuild;
@@ -30,25 +31,28 @@ pub use crate::experiment::methods::two_level::TwoLevelRebuild;
 /// `animation.methods` may list, [`crate::experiment::spec::FRAME_METHODS`]).
 pub use crate::experiment::spec::FRAME_METHODS as NAMES;
 
-/// Why this build cannot run the method `name`, if it cannot (Embree's without the `embree`
-/// feature).
+/// Why this build cannot run the per-frame method `name`, if it cannot (Embree's without the
+/// `embree` feature): its registered method's answer ([`crate::experiment::methods::Method::frame_unavailable`]).
 pub fn unavailable(name: &str) -> Option<&'static str> {
-    (name.starts_with("embree") && !cfg!(feature = "embree"))
-        .then_some(crate::experiment::methods::embree::NO_EMBREE_FEATURE)
+    motion::method_of(name).and_then(|m| m.frame_unavailable())
 }
 
 /// The ray casters among `names` over `meshes` (in [`NAMES`] order, the per-mesh precompute
-/// of the two-level and instanced ones done), each that this build runs; the world rebuild
-/// always, first.
+/// of the two-level and instanced ones done), each a registered method's CPU form that this
+/// build runs; the world rebuild always, first.
 pub fn ray_casters(
     meshes: &[Arc<Mesh>],
     names: &[&str],
 ) -> crate::experiment::Result<Vec<Box<dyn Mover>>> {
-    let mut v: Vec<Box<dyn Mover>> = vec![Box::<WorldRebuild>::default()];
-    if names.contains(&"two_level") {
-        v.push(Box::new(TwoLevelRebuild::new(meshes)));
+    let mut v = Vec::new();
+    for name in NAMES {
+        if name != "world_rebuild" && !names.contains(&name) {
+            continue;
+        }
+        if let Some(m) = motion::method_of(name).filter(|m| m.frame_unavailable().is_none()) {
+            v.push(m.mover(name, meshes)?);
+        }
     }
-    v.extend(crate::experiment::methods::embree::movers(meshes, names)?);
     Ok(v)
 }
 

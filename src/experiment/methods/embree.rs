@@ -10,9 +10,9 @@
 //! `embree_instances`: one scene per mesh built once, the instances' transforms set and the top
 //! scene committed every frame), and `experiment performance`'s caster ([`world`]).
 
-use super::motion::Mover;
 #[cfg(feature = "embree")]
 use super::motion::{model_triangles, FrameCasters};
+use super::motion::{FrameForm, Mover};
 #[cfg(feature = "embree")]
 use super::Answer;
 use super::{Method, MethodContext, MethodEntry, MethodOptions, Prepared};
@@ -58,23 +58,22 @@ pub fn world(
     }
 }
 
-/// The per-frame forms among `names` over `meshes` (`embree_rebuild`, then `embree_instances`
-/// with its per-mesh scenes built), each that this build runs: none without Embree.
-pub fn movers(meshes: &[Arc<Mesh>], names: &[&str]) -> Result<Vec<Box<dyn Mover>>> {
-    #[allow(unused_mut)]
-    let mut v: Vec<Box<dyn Mover>> = Vec::new();
+/// The per-frame form `form` over `meshes` (`embree_instances` with its per-mesh scenes
+/// built); an error in a build without Embree.
+fn mover(form: &str, meshes: &[Arc<Mesh>]) -> Result<Box<dyn Mover>> {
     #[cfg(feature = "embree")]
-    {
-        if names.contains(&"embree_rebuild") {
-            v.push(Box::<EmbreeRebuild>::default());
-        }
-        if names.contains(&"embree_instances") {
-            v.push(Box::new(EmbreeInstanced::new(meshes)?));
-        }
-    }
+    return Ok(match form {
+        "embree_instances" => Box::new(EmbreeInstanced::new(meshes)?),
+        _ => Box::<EmbreeRebuild>::default(),
+    });
     #[cfg(not(feature = "embree"))]
-    let _ = (meshes, names);
-    Ok(v)
+    {
+        let _ = meshes;
+        Err(crate::experiment::Error::invalid(
+            format!("animation method {form}"),
+            NO_EMBREE_FEATURE,
+        ))
+    }
 }
 
 /// `embree` has no parameters.
@@ -98,6 +97,30 @@ pub struct Embree;
 impl Method for Embree {
     fn name(&self) -> &'static str {
         ENTRY.name
+    }
+
+    /// `embree_rebuild` and `embree_instances`; no GPU form.
+    fn frame_forms(&self) -> &'static [FrameForm] {
+        const FORMS: &[FrameForm] = &[
+            FrameForm::cpu("embree_rebuild"),
+            FrameForm::cpu("embree_instances"),
+        ];
+        FORMS
+    }
+
+    fn mover(&self, form: &str, meshes: &[Arc<Mesh>]) -> Result<Box<dyn Mover>> {
+        mover(form, meshes)
+    }
+
+    fn frame_unavailable(&self) -> Option<&'static str> {
+        (!cfg!(feature = "embree")).then_some(NO_EMBREE_FEATURE)
+    }
+
+    fn world_caster(
+        &self,
+        triangles: &[[Vec3; 3]],
+    ) -> Option<std::result::Result<Box<dyn Visibility + Send>, String>> {
+        world(triangles)
     }
 
     /// Embree's scene over every caster triangle, bounded as our BVH is.

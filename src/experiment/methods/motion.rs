@@ -6,7 +6,15 @@
 //! movers beside its still form (`raycast.rs`: `world_rebuild`; `two_level.rs`: `two_level`;
 //! `embree.rs`: `embree_rebuild`, `embree_instances`); `experiment dynamic`'s crowd and every
 //! animated spec run them the same way.
+//!
+//! The registry says which methods follow motion: a registered method lists its per-frame
+//! forms ([`Method::frame_forms`], [`FrameForm`]: each CPU form with the GPU forms measured
+//! beside it) and builds its CPU forms ([`Method::mover`]); the field, a spec's `fields` axis
+//! rather than a registered method, has [`FIELD_FORMS`]. [`frame_forms`] gathers them for
+//! animated specs and `experiment dynamic`, [`gpu_twins`] the GPU forms beside each CPU one.
 
+use super::Method;
+use crate::experiment::spec::Backend;
 use crate::experiment::Result;
 use crate::geometry::{Mesh, Similarity};
 use crate::render::ao::{ao_at_points, AoOptions};
@@ -128,4 +136,110 @@ pub fn model_triangles(meshes: &[Arc<Mesh>]) -> Vec<Vec<[Vec3; 3]>> {
                 .collect()
         })
         .collect()
+}
+
+/// One per-frame form of a method (see the module documentation).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FrameForm {
+    /// Its name: in a spec's `animation.methods` (the CPU forms) and the rows' `method`.
+    pub name: &'static str,
+    pub backend: Backend,
+    /// The CPU form it runs beside, where that one is asked for: itself on the CPU; a GPU
+    /// form's CPU twin (`rayquery@gpu` beside `two_level`).
+    pub beside: &'static str,
+}
+
+impl FrameForm {
+    /// A CPU form.
+    pub const fn cpu(name: &'static str) -> FrameForm {
+        FrameForm {
+            name,
+            backend: Backend::Cpu,
+            beside: name,
+        }
+    }
+
+    /// A GPU form run beside the CPU form `beside`.
+    pub const fn gpu(name: &'static str, beside: &'static str) -> FrameForm {
+        FrameForm {
+            name,
+            backend: Backend::Gpu,
+            beside,
+        }
+    }
+}
+
+/// The field's per-frame forms: testing every sphere, and with the BVH over the spheres
+/// (`experiment::dynamic::movers::Fields`), each with its GPU twin (`gpu_movers::GpuFields`).
+pub const FIELD_FORMS: &[FrameForm] = &[
+    FrameForm::cpu("field_every_sphere"),
+    FrameForm::gpu("field_every_sphere@gpu", "field_every_sphere"),
+    FrameForm::cpu("field"),
+    FrameForm::gpu("field@gpu", "field"),
+];
+
+/// Every per-frame form: the registered methods' (in registry order, each with its method),
+/// then the field's (no method).
+pub fn frame_forms() -> Vec<(FrameForm, Option<Arc<dyn Method>>)> {
+    let mut out: Vec<(FrameForm, Option<Arc<dyn Method>>)> = Vec::new();
+    for m in super::default_settings() {
+        let m: Arc<dyn Method> = Arc::from(m);
+        out.extend(m.frame_forms().iter().map(|&f| (f, Some(m.clone()))));
+    }
+    out.extend(FIELD_FORMS.iter().map(|&f| (f, None)));
+    out
+}
+
+/// The registered method whose CPU form is `name`, if any (the field's forms have none).
+pub fn method_of(name: &str) -> Option<Arc<dyn Method>> {
+    frame_forms()
+        .into_iter()
+        .find(|(f, _)| f.backend == Backend::Cpu && f.name == name)
+        .and_then(|(_, m)| m)
+}
+
+/// Each CPU form among `order` with a GPU form beside it, and that form's name: for each name
+/// of `order` in turn, the GPU forms beside it in registry order, the field's last.
+pub fn gpu_twins(order: &[&str]) -> Vec<(&'static str, &'static str)> {
+    let forms = frame_forms();
+    let mut out = Vec::new();
+    for &cpu in order {
+        for (f, _) in &forms {
+            if f.backend == Backend::Gpu && f.beside == cpu {
+                out.push((f.beside, f.name));
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::experiment::spec::FRAME_METHODS;
+
+    #[test]
+    fn the_registry_gives_every_frame_method_and_the_gpu_twins_in_row_order() {
+        let cpu: Vec<&str> = (frame_forms().iter())
+            .filter(|(f, _)| f.backend == Backend::Cpu)
+            .map(|(f, _)| f.name)
+            .collect();
+        let mut sorted = cpu.clone();
+        sorted.sort_unstable();
+        let mut names = FRAME_METHODS.to_vec();
+        names.sort_unstable();
+        assert_eq!(sorted, names);
+        assert_eq!(
+            gpu_twins(&FRAME_METHODS),
+            [
+                ("world_rebuild", "world_rebuild@gpu"),
+                ("two_level", "two_level@gpu"),
+                ("two_level", "rayquery@gpu"),
+                ("field_every_sphere", "field_every_sphere@gpu"),
+                ("field", "field@gpu"),
+            ]
+        );
+        assert_eq!(method_of("embree_instances").unwrap().name(), "embree");
+        assert!(method_of("field").is_none());
+    }
 }

@@ -6,15 +6,18 @@
 //! In a moving scene it follows motion by rebuilding that BVH every frame ([`WorldRebuild`],
 //! `world_rebuild`, the reference of the other per-frame methods).
 
-use super::motion::{FrameCasters, Mover};
+use super::motion::{FrameCasters, FrameForm, Mover};
 use super::{Answer, Method, MethodContext, MethodEntry, MethodOptions, Precompute, Prepared};
 use crate::experiment::scenes::BuiltScene;
 use crate::experiment::spec::{Spec, SpecError};
 use crate::experiment::validate::Validator;
 use crate::experiment::Result;
+use crate::geometry::Mesh;
 use crate::trace::Tracer;
 use crate::visibility::Visibility;
+use glam::Vec3;
 use serde::{Deserialize, Serialize};
+use std::sync::Arc;
 
 pub const ENTRY: MethodEntry = MethodEntry {
     name: "raycast",
@@ -48,6 +51,27 @@ impl Method for Raycast {
     /// The world BVH over every caster triangle, at the planner's bytes a triangle.
     fn precompute(&self, scene: &BuiltScene) -> std::result::Result<Option<Precompute>, String> {
         Ok(Some(world_bvh(scene)))
+    }
+
+    /// `world_rebuild`, the world BVH rebuilt every frame, the moving scene's reference; on
+    /// the GPU `world_rebuild@gpu`.
+    fn frame_forms(&self) -> &'static [FrameForm] {
+        const FORMS: &[FrameForm] = &[
+            FrameForm::cpu("world_rebuild"),
+            FrameForm::gpu("world_rebuild@gpu", "world_rebuild"),
+        ];
+        FORMS
+    }
+
+    fn mover(&self, _form: &str, _meshes: &[Arc<Mesh>]) -> Result<Box<dyn Mover>> {
+        Ok(Box::<WorldRebuild>::default())
+    }
+
+    fn world_caster(
+        &self,
+        triangles: &[[Vec3; 3]],
+    ) -> Option<std::result::Result<Box<dyn Visibility + Send>, String>> {
+        Some(Ok(Box::new(Tracer::new(triangles))))
     }
 
     fn prepare(&self, ctx: &MethodContext) -> Result<Prepared> {

@@ -55,6 +55,13 @@ impl MethodOptions for RayQueryOptions {
 pub struct RayQuery;
 
 impl Method for RayQuery {
+    /// `rayquery@gpu`, its TLAS rebuilt every frame, beside `two_level` (its twin).
+    fn frame_forms(&self) -> &'static [super::motion::FrameForm] {
+        const FORMS: &[super::motion::FrameForm] =
+            &[super::motion::FrameForm::gpu("rayquery@gpu", "two_level")];
+        FORMS
+    }
+
     fn name(&self) -> &'static str {
         ENTRY.name
     }

@@ -8,7 +8,7 @@
 //! moving scene it follows motion by rebuilding its top level every frame ([`TwoLevelRebuild`],
 //! `two_level`).
 
-use super::motion::{model_triangles, FrameCasters, Mover};
+use super::motion::{model_triangles, FrameCasters, FrameForm, Mover};
 use super::Prepared;
 use super::{Answer, GpuMethod, Method, MethodContext, MethodEntry, MethodOptions, Precompute};
 use crate::experiment::backend::{Estimate, Eval};
@@ -74,6 +74,19 @@ fn instanced(scene: &BuiltScene) -> (ModelTriangles, Vec<(usize, Similarity)>) {
 }
 
 impl Method for TwoLevelMethod {
+    /// `two_level`, its top level rebuilt every frame; on the GPU `two_level@gpu`.
+    fn frame_forms(&self) -> &'static [FrameForm] {
+        const FORMS: &[FrameForm] = &[
+            FrameForm::cpu("two_level"),
+            FrameForm::gpu("two_level@gpu", "two_level"),
+        ];
+        FORMS
+    }
+
+    fn mover(&self, _form: &str, meshes: &[Arc<Mesh>]) -> Result<Box<dyn Mover>> {
+        Ok(Box::new(TwoLevelRebuild::new(meshes)))
+    }
+
     fn name(&self) -> &'static str {
         ENTRY.name
     }

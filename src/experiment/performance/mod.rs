@@ -34,7 +34,6 @@ use crate::render::ao::{ao_at_points, AoOptions};
 use crate::render::receivers::Receivers;
 use crate::sampling::rays::RaySet;
 use crate::sampling::{Frame, LayoutKind, SphereKind};
-use crate::trace::Tracer;
 use crate::visibility::Visibility;
 use floor::{NoQuery, SphereCull};
 use glam::{Quat, Vec3};
@@ -320,25 +319,26 @@ fn rows(
         .collect()
 }
 
-/// The ray casters of a scene: ours and, with the feature, Embree.
+/// The ray casters of a scene: every registered method that is a ray caster over world
+/// triangles ([`super::methods::Method::world_caster`]), in registry order: ours and, with
+/// the feature, Embree.
 fn ray_casters(scene: &Scene) -> Vec<Backend<'static>> {
     let tris = scene.caster_triangles();
-    let t = Instant::now();
-    let tracer = Tracer::new(&tris);
-    let mut v = vec![Backend {
-        name: "raycast",
-        vis: Rc::new(tracer),
-        setup_s: t.elapsed().as_secs_f64(),
-    }];
-    let t = Instant::now();
-    match super::methods::embree::world(&tris) {
-        Some(Ok(e)) => v.push(Backend {
-            name: "embree",
-            vis: Rc::<dyn Visibility + Send>::from(e),
-            setup_s: t.elapsed().as_secs_f64(),
-        }),
-        Some(Err(e)) => eprintln!("performance: Embree not timed: {e}"),
-        None => {}
+    let mut v = Vec::new();
+    for m in super::methods::default_settings() {
+        let t = Instant::now();
+        match m.world_caster(&tris) {
+            Some(Ok(vis)) => v.push(Backend {
+                name: m.name(),
+                vis: Rc::<dyn Visibility + Send>::from(vis),
+                setup_s: t.elapsed().as_secs_f64(),
+            }),
+            Some(Err(e)) if m.name() == "embree" => {
+                eprintln!("performance: Embree not timed: {e}")
+            }
+            Some(Err(e)) => eprintln!("performance: {} not timed: {e}", m.name()),
+            None => {}
+        }
     }
     v
 }

@@ -171,7 +171,7 @@ pub(super) fn run(
     let kind = crate::experiment::kinds::of(&spec.render);
     let gpu = if spec.backends.contains(&Backend::Gpu) {
         // The GPU twins of the CPU methods asked for.
-        for (cpu, twin) in gpu_movers::TWINS {
+        for (cpu, twin) in crate::experiment::methods::motion::gpu_twins(&movers::NAMES) {
             if names.contains(&cpu) {
                 names.push(twin);
             }
