@@ -33,6 +33,13 @@ pub const ENTRY: MethodEntry = MethodEntry {
     read: super::read_as::<EmbreeOptions>,
 };
 
+/// Its per-frame forms ([`Method::frame_forms`]): `embree_rebuild` and `embree_instances`; no
+/// GPU form.
+pub const FRAME_FORMS: &[FrameForm] = &[
+    FrameForm::cpu("embree_rebuild"),
+    FrameForm::cpu("embree_instances"),
+];
+
 /// Why a build without the `embree` feature skips the still method (its rows).
 pub const NO_EMBREE: &str =
     "this build has no Embree (build with --features embree; needs libembree-dev)";
@@ -99,13 +106,8 @@ impl Method for Embree {
         ENTRY.name
     }
 
-    /// `embree_rebuild` and `embree_instances`; no GPU form.
     fn frame_forms(&self) -> &'static [FrameForm] {
-        const FORMS: &[FrameForm] = &[
-            FrameForm::cpu("embree_rebuild"),
-            FrameForm::cpu("embree_instances"),
-        ];
-        FORMS
+        FRAME_FORMS
     }
 
     fn mover(&self, form: &str, meshes: &[Arc<Mesh>]) -> Result<Box<dyn Mover>> {

@@ -25,6 +25,13 @@ pub const ENTRY: MethodEntry = MethodEntry {
     read: super::read_as::<RaycastOptions>,
 };
 
+/// Its per-frame forms ([`Method::frame_forms`]): `world_rebuild`, the world BVH rebuilt every
+/// frame, the moving scene's reference; on the GPU `world_rebuild@gpu`.
+pub const FRAME_FORMS: &[FrameForm] = &[
+    FrameForm::cpu("world_rebuild"),
+    FrameForm::gpu("world_rebuild@gpu", "world_rebuild"),
+];
+
 /// `raycast` has no parameters.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -53,14 +60,8 @@ impl Method for Raycast {
         Ok(Some(world_bvh(scene)))
     }
 
-    /// `world_rebuild`, the world BVH rebuilt every frame, the moving scene's reference; on
-    /// the GPU `world_rebuild@gpu`.
     fn frame_forms(&self) -> &'static [FrameForm] {
-        const FORMS: &[FrameForm] = &[
-            FrameForm::cpu("world_rebuild"),
-            FrameForm::gpu("world_rebuild@gpu", "world_rebuild"),
-        ];
-        FORMS
+        FRAME_FORMS
     }
 
     fn mover(&self, _form: &str, _meshes: &[Arc<Mesh>]) -> Result<Box<dyn Mover>> {

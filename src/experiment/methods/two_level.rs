@@ -35,6 +35,13 @@ pub const ENTRY: MethodEntry = MethodEntry {
     read: super::read_as::<TwoLevelOptions>,
 };
 
+/// Its per-frame forms ([`Method::frame_forms`]): `two_level`, its top level rebuilt every
+/// frame; on the GPU `two_level@gpu`.
+pub const FRAME_FORMS: &[FrameForm] = &[
+    FrameForm::cpu("two_level"),
+    FrameForm::gpu("two_level@gpu", "two_level"),
+];
+
 /// `two_level` has no parameters.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -74,13 +81,8 @@ fn instanced(scene: &BuiltScene) -> (ModelTriangles, Vec<(usize, Similarity)>) {
 }
 
 impl Method for TwoLevelMethod {
-    /// `two_level`, its top level rebuilt every frame; on the GPU `two_level@gpu`.
     fn frame_forms(&self) -> &'static [FrameForm] {
-        const FORMS: &[FrameForm] = &[
-            FrameForm::cpu("two_level"),
-            FrameForm::gpu("two_level@gpu", "two_level"),
-        ];
-        FORMS
+        FRAME_FORMS
     }
 
     fn mover(&self, _form: &str, meshes: &[Arc<Mesh>]) -> Result<Box<dyn Mover>> {
