@@ -464,14 +464,6 @@ fn cycles(edges: &BTreeMap<String, BTreeSet<String>>) -> Vec<BTreeSet<String>> {
 /// The folders whose sub-modules must not import each other in a cycle.
 const LAYERED: &[&str] = &["experiment", "gpu"];
 
-/// Cycles among `gpu`'s sub-modules that predate the check, each a pair that shares one
-/// kernel's types; a cycle outside these (or larger than one of them) fails.
-const KNOWN_CYCLES: &[&[&str]] = &[
-    &["gpu::context", "gpu::loop_budget"],
-    &["gpu::field_ao", "gpu::field_kernel"],
-    &["gpu::integrand", "gpu::visibility"],
-];
-
 /// A module graph: each module and the modules it imports.
 type Graph = BTreeMap<String, BTreeSet<String>>;
 /// The places (`file:line`) that make each edge of a [`Graph`].
@@ -545,15 +537,8 @@ fn sub_module_edges() -> (Graph, Places) {
 #[test]
 fn the_sub_modules_of_experiment_and_gpu_import_each_other_in_no_cycle() {
     let (edges, why) = sub_module_edges();
-    let known: Vec<BTreeSet<String>> = KNOWN_CYCLES
-        .iter()
-        .map(|c| c.iter().map(|s| s.to_string()).collect())
-        .collect();
     let mut problems = Vec::new();
     for comp in cycles(&edges) {
-        if known.iter().any(|k| comp.is_subset(k)) {
-            continue;
-        }
         let mut lines = vec![format!(
             "an import cycle among {}:",
             comp.iter().cloned().collect::<Vec<_>>().join(", ")

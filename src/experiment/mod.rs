@@ -20,6 +20,7 @@ pub mod error;
 pub mod fields;
 pub mod figures;
 pub mod flip;
+pub mod frame_row;
 pub mod kinds;
 pub mod merge;
 pub mod meta;

@@ -1,6 +1,7 @@
 //! The headless wgpu device: adapter choice, limits, features, and the buffer helpers every
 //! kernel uses (upload, read-back, timestamp queries).
 
+use super::loop_budget::{add_kernel, Dispatched};
 use super::GpuError;
 use std::time::Duration;
 use wgpu::util::DeviceExt;
@@ -448,7 +449,7 @@ impl GpuContext {
         item: &str,
         (threads_per_item, words_per_thread): (u32, u32),
         mut bind: impl FnMut(&[T], u32, &wgpu::Buffer) -> wgpu::BindGroup,
-    ) -> Result<super::loop_budget::Dispatched, GpuError> {
+    ) -> Result<Dispatched, GpuError> {
         let words_per_item = threads_per_item as u64 * words_per_thread as u64;
         let max_binding = self.max_binding();
         let batch = (max_binding / (4 * words_per_item))
@@ -481,14 +482,6 @@ impl GpuContext {
             ));
         }
         Ok((words, kernel, upload))
-    }
-}
-
-/// Kernel time summed over dispatches, where the adapter measured any.
-pub(crate) fn add_kernel(total: Option<Duration>, k: Option<Duration>) -> Option<Duration> {
-    match (total, k) {
-        (Some(a), Some(b)) => Some(a + b),
-        (a, b) => a.or(b),
     }
 }
 

@@ -16,8 +16,8 @@
 //! receivers over several dispatches where their buffers would pass the adapter's binding
 //! limit, so any ray count and any number of points run.
 
-use super::field_kernel::{Ao, FieldKernel};
-use super::integrand::{self, Integrand, IntegrandParamsGpu, RECEIVER_WGSL};
+use super::field_kernel::{Ao, FieldKernel, AO_QUEUE};
+use super::integrand::{self, Integrand, IntegrandParamsGpu};
 use super::rays::ReceiverGpu;
 use super::visibility::GpuVisibility;
 use super::{GpuError, GpuTiming};
@@ -38,16 +38,6 @@ pub struct LookupProbe {
     pub interpolated: f32,
 }
 
-/// The field's batched form of the AO integrand (shaders/field_ao.wgsl, `ao_queue_main`).
-pub(super) const AO_QUEUE: Integrand = Integrand {
-    sources: &[
-        RECEIVER_WGSL,
-        include_str!("../../shaders/ao.wgsl"),
-        include_str!("../../shaders/field_ao.wgsl"),
-    ],
-    entry: "ao_queue_main",
-    ..integrand::AO
-};
 /// Single lookups (shaders/field_ao.wgsl, `probe_main`).
 const PROBE: Integrand = Integrand {
     entry: "probe_main",

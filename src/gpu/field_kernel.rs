@@ -23,7 +23,7 @@
 
 use super::context::GpuContext;
 use super::field_binding::{FieldBinding, FieldBindingOptions, FieldLayout};
-use super::integrand::{self, Integrand};
+use super::integrand::{self, Integrand, RECEIVER_WGSL};
 use super::reflect_rays::normal_words;
 use super::shadow_rays::check_binding;
 use super::visibility::{GpuVisibility, Kernels};
@@ -147,6 +147,18 @@ impl FieldQuantity for Reflections {
     const NORMALS: bool = true;
 }
 
+/// The field's batched form of the AO integrand (shaders/field_ao.wgsl, `ao_queue_main`;
+/// run by [`super::FieldAoKernel`], src/gpu/field_ao.rs).
+pub(super) const AO_QUEUE: Integrand = Integrand {
+    sources: &[
+        RECEIVER_WGSL,
+        include_str!("../../shaders/ao.wgsl"),
+        include_str!("../../shaders/field_ao.wgsl"),
+    ],
+    entry: "ao_queue_main",
+    ..integrand::AO
+};
+
 /// Field lookup over a set of field instances, uploaded once: the field visibility (see the
 /// module documentation), for the quantity `Q`.
 pub struct FieldKernel<'a, Q> {
@@ -211,7 +223,7 @@ impl<'a, Q: FieldQuantity> FieldKernel<'a, Q> {
             quantity: PhantomData,
         };
         let first = match (Q::INTEGRAND.slot == integrand::AO.slot, kernel.queue_rays) {
-            (true, true) => &super::field_ao::AO_QUEUE,
+            (true, true) => &AO_QUEUE,
             _ => Q::INTEGRAND,
         };
         kernel.kernels.compiled(&kernel, first)?;

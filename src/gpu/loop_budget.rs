@@ -35,6 +35,14 @@ pub const DEFAULT_RAYS_PER_INVOCATION: u32 = 256;
 /// One dispatch of an AO kernel: its output words, kernel time, upload time.
 pub(crate) type Dispatched = (Vec<u32>, Option<Duration>, Duration);
 
+/// Kernel time summed over dispatches, where the adapter measured any.
+pub(crate) fn add_kernel(total: Option<Duration>, k: Option<Duration>) -> Option<Duration> {
+    match (total, k) {
+        (Some(a), Some(b)) => Some(a + b),
+        (a, b) => a.or(b),
+    }
+}
+
 /// What [`complete_runs`] returns: the words, the invocations per point, the rays per
 /// invocation, the kernel time and the upload time.
 pub(crate) type Completed = (Vec<u32>, u32, u32, Option<Duration>, Duration);
@@ -60,7 +68,7 @@ pub(crate) fn complete_runs(
         let per_invocation = split.load(Ordering::Relaxed).clamp(1, rays);
         let per_point = rays.div_ceil(per_invocation);
         let (words, k, u) = dispatch(per_invocation, per_point)?;
-        kernel = super::context::add_kernel(kernel, k);
+        kernel = add_kernel(kernel, k);
         upload += u;
         if !words
             .chunks_exact(words_per_invocation)

@@ -42,6 +42,7 @@ mod field_binding;
 mod field_data;
 mod field_kernel;
 mod integrand;
+mod kernel_group;
 mod loop_budget;
 mod ray_query;
 mod rays;

@@ -14,7 +14,7 @@
 //! analytic sphere, tests/gpu_toy_visibility.rs) runs the same integrands.
 
 use super::context::{entry, storage_layout_entry, uniform_layout_entry, GpuContext};
-use super::integrand::{Integrand, KernelGroup, HEADER_WGSL};
+use super::kernel_group::{Integrand, KernelGroup, HEADER_WGSL};
 use super::GpuError;
 use std::collections::HashMap;
 use std::sync::atomic::AtomicU32;

@@ -26,7 +26,10 @@
 //!   the kind's integrand on it apart (`query_s`). Skipped, saying why, on an adapter without
 //!   ray queries.
 //!
-//! All answer the kind through its GPU kernels on the CPU path's rays, so their values match
+//! Their names and the CPU forms they run beside are the registry's
+//! ([`crate::experiment::methods::motion::gpu_twins`]: each method's `frame_forms`, the field's
+//! `FIELD_FORMS`); this file builds them. All answer the kind through its GPU kernels on the
+//! CPU path's rays, so their values match
 //! the CPU twins' within the kernels' parity bounds (the GPU path's tests).
 
 use super::movers::{field_instances, FrameCasters, Mover};
@@ -41,29 +44,20 @@ use crate::sampling::rays::RaySet;
 use crate::visibility::Visibility;
 use std::sync::Arc;
 
-/// Each CPU per-frame method with a GPU twin, and the twin's name, in the order their rows are
-/// written.
-pub const TWINS: [(&str, &str); 5] = [
-    ("world_rebuild", WORLD_REBUILD),
-    ("two_level", TWO_LEVEL),
-    ("two_level", RAYQUERY),
-    ("field_every_sphere", FIELD_EVERY_SPHERE),
-    ("field", FIELD_TOP_LEVEL),
-];
 /// [`GpuRayQuery`]'s name.
-pub const RAYQUERY: &str = "rayquery@gpu";
+pub const RAYQUERY: &str = crate::experiment::methods::rayquery::FRAME_FORMS[0].name;
 /// Why [`GpuRayQuery`] is skipped on an adapter without ray queries (the run's output names
 /// the adapter too).
 pub const RAYQUERY_SKIPPED: &str = "the adapter offers no ray queries (wgpu \
     EXPERIMENTAL_RAY_QUERY: Mesa's lavapipe before 24.1, GPUs without ray-tracing units)";
 /// [`GpuWorldRebuild`]'s name.
-pub const WORLD_REBUILD: &str = "world_rebuild@gpu";
+pub const WORLD_REBUILD: &str = crate::experiment::methods::raycast::FRAME_FORMS[1].name;
 /// [`GpuTwoLevelMover`]'s name.
-pub const TWO_LEVEL: &str = "two_level@gpu";
+pub const TWO_LEVEL: &str = crate::experiment::methods::two_level::FRAME_FORMS[1].name;
 /// [`GpuFields`]' name testing every sphere.
-pub const FIELD_EVERY_SPHERE: &str = "field_every_sphere@gpu";
+pub const FIELD_EVERY_SPHERE: &str = crate::experiment::methods::motion::FIELD_FORMS[1].name;
 /// [`GpuFields`]' name with the instances' own top level.
-pub const FIELD_TOP_LEVEL: &str = "field@gpu";
+pub const FIELD_TOP_LEVEL: &str = crate::experiment::methods::motion::FIELD_FORMS[3].name;
 
 /// Why `world_rebuild@gpu` cannot run on a world of `triangles` triangles, if it cannot: its
 /// triangles, three `vec4` each, pass one storage binding of the adapter (the GPU tracer would

@@ -53,57 +53,10 @@ use super::fields::FieldSupply;
 use super::plot::{xy_plot, Axes, Series};
 use super::staging;
 use super::{Error, Result};
-use serde::Serialize;
 use std::path::Path;
 
-/// One method on one frame of one crowd.
-#[derive(Clone, Debug, Serialize)]
-pub struct FrameRow {
-    /// `crowd` (N moving casters) or `approach` (one caster lowered onto the plane).
-    pub sweep: &'static str,
-    /// The approach: the gap between the caster's sphere and the plane, in sphere radii
-    /// (negative: the sphere cuts the plane).
-    pub gap_radii: Option<f64>,
-    /// The approach: the moved mesh's lowest point over the plane, in sphere radii (negative:
-    /// the mesh goes through it).
-    pub mesh_clearance: Option<f64>,
-    /// Casters in the scene.
-    pub casters: usize,
-    pub caster_triangles: usize,
-    pub frame: usize,
-    /// `world_rebuild`, `two_level`, `embree_rebuild`, `embree_instances`,
-    /// `field_every_sphere`, `field`, `sdf`, `aofield`.
-    pub method: &'static str,
-    /// What the frame's motion costs the method (seconds): BVH rebuild, scene commit, the
-    /// instance list.
-    pub update_s: f64,
-    /// The AO pass on the frame's rays (seconds, all threads).
-    pub query_s: f64,
-    pub frame_s: f64,
-    pub rays: u64,
-    /// rays / query_s, millions.
-    pub mrays_s: f64,
-    /// RMS over the points (0–255, unquantised) against `world_rebuild` on the same rays.
-    pub rms_vs_raycast: f64,
-    /// RMS over the points (0–255, unquantised) against the frame's converged reference.
-    pub rms_vs_truth: f64,
-    /// The converged reference's RMS standard error (0–255): the floor of `rms_vs_truth`.
-    pub truth_stderr: f64,
-    /// Mean AO over the points (the answer's size, for reading the RMS).
-    pub mean_ao: f64,
-    /// Bytes the method keeps for the scene: the world BVH, or every mesh's field once.
-    pub bytes: Option<u64>,
-    /// Caster pairs whose world bounding spheres overlap this frame.
-    pub sphere_overlaps: usize,
-    /// Receiver points inside some caster's world bounding sphere this frame.
-    pub points_in_spheres: usize,
-    /// Flicker from the previous frame over every receiver point (the plane does not move;
-    /// [`super::metrics::flicker`], 0–255, unquantised): the RMS of the method's change of AO
-    /// minus the converged reference's; none on the first frame.
-    pub flicker: Option<f64>,
-    /// The same of `world_rebuild` (the same-ray ray cast) on the same frame pair.
-    pub raycast_flicker: Option<f64>,
-}
+/// One method on one frame of one crowd (its view: [`super::frame_row::DYNAMIC_CSV`]).
+pub use super::frame_row::FrameRow;
 
 /// Runs the crowd sweep into `out` (`table.csv`, `run.json`, `frame_time.png`, …), written in
 /// a staging folder beside it and published only when whole, as a spec's run is
@@ -151,10 +104,10 @@ fn write(
         (approach.plane_side, approach.plane_side),
         500,
     )?;
-    super::outputs::write_csv(&out.join("table.csv"), &rows)?;
+    super::frame_row::DYNAMIC_CSV.write(&out.join("table.csv"), &rows)?;
     let crowd_rows: Vec<FrameRow> = rows
         .iter()
-        .filter(|r| r.sweep == "crowd")
+        .filter(|r| r.scene == "crowd")
         .cloned()
         .collect();
     plot_frame_time(&out.join("frame_time.png"), &crowd_rows)?;
@@ -177,7 +130,7 @@ fn write(
 
 /// The approach: each method's error against the gap, on the same rays and against the truth.
 fn plot_approach(path: &Path, rows: &[FrameRow]) -> Result<()> {
-    let approach: Vec<&FrameRow> = rows.iter().filter(|r| r.sweep == "approach").collect();
+    let approach: Vec<&FrameRow> = rows.iter().filter(|r| r.scene == "approach").collect();
     let mut series = Vec::new();
     {
         let m = "field";
@@ -223,24 +176,28 @@ fn plot_approach(path: &Path, rows: &[FrameRow]) -> Result<()> {
 fn plot_flicker(path: &Path, rows: &[FrameRow]) -> Result<()> {
     let mut methods: Vec<&str> = Vec::new();
     for r in rows {
-        if !methods.contains(&r.method) {
-            methods.push(r.method);
+        if !methods.contains(&r.method.as_str()) {
+            methods.push(&r.method);
         }
     }
     let series: Vec<Series> = methods
         .iter()
         .map(|&m| {
             let mut counts: Vec<usize> = Vec::new();
-            for r in rows.iter().filter(|r| r.method == m) {
-                if !counts.contains(&r.casters) {
-                    counts.push(r.casters);
+            for n in rows
+                .iter()
+                .filter(|r| r.method == m)
+                .filter_map(|r| r.casters)
+            {
+                if !counts.contains(&n) {
+                    counts.push(n);
                 }
             }
             let points = counts
                 .iter()
                 .filter_map(|&n| {
                     let f: Vec<f64> = (rows.iter())
-                        .filter(|r| r.method == m && r.casters == n)
+                        .filter(|r| r.method == m && r.casters == Some(n))
                         .filter_map(|r| r.flicker)
                         .collect();
                     (!f.is_empty()).then(|| (n as f64, f.iter().sum::<f64>() / f.len() as f64))
@@ -271,7 +228,7 @@ fn plot_flicker(path: &Path, rows: &[FrameRow]) -> Result<()> {
 
 /// Mean frame time against the caster count, one line per method.
 fn plot_frame_time(path: &Path, rows: &[FrameRow]) -> Result<()> {
-    let mut methods: Vec<&str> = rows.iter().map(|r| r.method).collect();
+    let mut methods: Vec<&str> = rows.iter().map(|r| r.method.as_str()).collect();
     methods.dedup();
     methods.sort_unstable();
     methods.dedup();
@@ -281,7 +238,7 @@ fn plot_frame_time(path: &Path, rows: &[FrameRow]) -> Result<()> {
             let mut counts: Vec<usize> = rows
                 .iter()
                 .filter(|r| r.method == m)
-                .map(|r| r.casters)
+                .filter_map(|r| r.casters)
                 .collect();
             counts.dedup();
             let points = counts
@@ -289,7 +246,7 @@ fn plot_frame_time(path: &Path, rows: &[FrameRow]) -> Result<()> {
                 .map(|&n| {
                     let t: Vec<f64> = rows
                         .iter()
-                        .filter(|r| r.method == m && r.casters == n)
+                        .filter(|r| r.method == m && r.casters == Some(n))
                         .map(|r| r.frame_s)
                         .collect();
                     (n as f64, t.iter().sum::<f64>() / t.len().max(1) as f64)

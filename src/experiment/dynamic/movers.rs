@@ -1,6 +1,9 @@
 //! The methods of a moving scene, each charged for what a frame's motion costs it
 //! ([`Mover::update`]) apart from the query on the frame's rays ([`timed`]): `experiment
-//! dynamic`'s crowd and every animated spec measure them the same way.
+//! dynamic`'s crowd and every animated spec measure them the same way. The seam
+//! (`methods::motion`) and the ray casters' per-frame forms live beside their still methods
+//! (`methods::raycast`, `methods::two_level`, `methods::embree`); here, the fields' and the
+//! per-object peers', and the lists a run draws from.
 
 use crate::aofield::{AoField, AoFieldInstance, AoFieldScene};
 use crate::field::lookup::LookupOptions;
@@ -8,47 +11,46 @@ use crate::field::normals::NormalField;
 use crate::field::scene::{FieldInstance, FieldScene};
 use crate::field::sphere_bvh::SphereBvhScene;
 use crate::field::VisibilityField;
-use crate::geometry::{Mesh, Similarity, Sphere};
-use crate::render::ao::{ao_at_points, AoOptions};
-use crate::render::estimator::{Estimator, Points};
+use crate::geometry::{Mesh, Sphere};
+use crate::render::ao::AoOptions;
 use crate::sampling::rays::RaySet;
 use crate::sdf::{DistanceVolume, SdfInstance, SdfScene, SdfTrace};
-use crate::trace::Tracer;
 use crate::visibility::Visibility;
 use glam::Vec3;
 use std::sync::Arc;
-use std::time::Instant;
+
+#[cfg(feature = "embree")]
+pub use crate::experiment::methods::embree::{EmbreeInstanced, EmbreeRebuild};
+use crate::experiment::methods::motion;
+pub use crate::experiment::methods::motion::{timed, FrameCasters, Mover, Timed, MIN_TIMED_S};
+pub use crate::experiment::methods::raycast::WorldRebuild;
+pub use crate::experiment::methods::two_level::TwoLevelRebuild;
 
 /// Every per-frame method, in the order their rows are written: the ray casters (the world
 /// rebuild first: the reference of the others), then the fields (the names a spec's
 /// `animation.methods` may list, [`crate::experiment::spec::FRAME_METHODS`]).
 pub use crate::experiment::spec::FRAME_METHODS as NAMES;
 
-/// Why this build cannot run the method `name`, if it cannot (Embree's without the `embree`
-/// feature).
+/// Why this build cannot run the per-frame method `name`, if it cannot (Embree's without the
+/// `embree` feature): its registered method's answer ([`crate::experiment::methods::Method::frame_unavailable`]).
 pub fn unavailable(name: &str) -> Option<&'static str> {
-    (name.starts_with("embree") && !cfg!(feature = "embree"))
-        .then_some("this build lacks the `embree` feature (cargo build --features embree)")
+    motion::method_of(name).and_then(|m| m.frame_unavailable())
 }
 
 /// The ray casters among `names` over `meshes` (in [`NAMES`] order, the per-mesh precompute
-/// of the two-level and instanced ones done), each that this build runs; the world rebuild
-/// always, first.
+/// of the two-level and instanced ones done), each a registered method's CPU form that this
+/// build runs; the world rebuild always, first.
 pub fn ray_casters(
     meshes: &[Arc<Mesh>],
     names: &[&str],
 ) -> crate::experiment::Result<Vec<Box<dyn Mover>>> {
-    let mut v: Vec<Box<dyn Mover>> = vec![Box::<WorldRebuild>::default()];
-    if names.contains(&"two_level") {
-        v.push(Box::new(TwoLevelRebuild::new(meshes)));
-    }
-    #[cfg(feature = "embree")]
-    {
-        if names.contains(&"embree_rebuild") {
-            v.push(Box::<EmbreeRebuild>::default());
+    let mut v = Vec::new();
+    for name in NAMES {
+        if name != "world_rebuild" && !names.contains(&name) {
+            continue;
         }
-        if names.contains(&"embree_instances") {
-            v.push(Box::new(EmbreeInstanced::new(meshes)?));
+        if let Some(m) = motion::method_of(name).filter(|m| m.frame_unavailable().is_none()) {
+            v.push(m.mover(name, meshes)?);
         }
     }
     Ok(v)
@@ -71,54 +73,6 @@ pub fn field_methods(
             Box::new(f) as Box<dyn Mover>
         })
         .collect()
-}
-
-/// One method on one frame: its update and its query timed apart.
-pub struct Timed {
-    /// Seconds of [`Mover::update`] (a mean over [`Timed::runs`]).
-    pub update_s: f64,
-    /// Seconds of the query (a mean over [`Timed::runs`]).
-    pub query_s: f64,
-    /// How many times the frame was updated and queried for the two means: 1, or more for a
-    /// frame shorter than [`MIN_TIMED_S`].
-    pub runs: u32,
-    /// The query's values (of the first run).
-    pub values: Vec<f32>,
-}
-
-/// The least wall time over which a frame is timed: a shorter frame (a few casters, a few
-/// thousand rays: a fraction of a millisecond) is updated and queried again until its runs
-/// add up to this, and the means are reported, so that the thread pool is awake for all of it
-/// and every thread takes part, as in a long frame. Every method is timed by the same rule.
-pub const MIN_TIMED_S: f64 = 0.05;
-
-/// Brings `mover` to `frame` and answers `query` through it, each timed (all threads); a frame
-/// shorter than [`MIN_TIMED_S`] is updated and queried again until the runs add up to it (at
-/// most 10,000 runs), and the mean of each part is reported. Updates and queries are pure
-/// functions of the frame, so the repeats answer the same values.
-pub fn timed(
-    mover: &mut dyn Mover,
-    frame: &FrameCasters,
-    query: impl Fn(&dyn Mover) -> crate::experiment::Result<Vec<f32>>,
-) -> crate::experiment::Result<Timed> {
-    let (mut update_s, mut query_s, mut runs) = (0.0, 0.0, 0u32);
-    let mut values = None;
-    while values.is_none() || (update_s + query_s < MIN_TIMED_S && runs < 10_000) {
-        let t = Instant::now();
-        mover.update(frame)?;
-        update_s += t.elapsed().as_secs_f64();
-        let t = Instant::now();
-        let v = query(&*mover)?;
-        query_s += t.elapsed().as_secs_f64();
-        runs += 1;
-        values.get_or_insert(v);
-    }
-    Ok(Timed {
-        update_s: update_s / runs as f64,
-        query_s: query_s / runs as f64,
-        runs,
-        values: values.expect("one run at least"),
-    })
 }
 
 /// A frame's overlap counts: caster pairs whose world bounding spheres overlap, and points
@@ -152,37 +106,6 @@ pub fn overlaps(
     (pairs, inside)
 }
 
-/// One frame's casters: each instance's mesh and transform.
-pub struct FrameCasters<'a> {
-    pub meshes: &'a [Arc<Mesh>],
-    /// Per instance: its mesh (index into `meshes`) and its transform this frame.
-    pub instances: &'a [(usize, Similarity)],
-}
-
-impl FrameCasters<'_> {
-    /// Per instance, `make` of its mesh's entry of `per_mesh` (a field, a volume: one per mesh,
-    /// shared by its instances) and its transform this frame.
-    pub fn place<T, I>(&self, per_mesh: &[T], make: impl Fn(&T, Similarity) -> I) -> Vec<I> {
-        (self.instances.iter())
-            .map(|&(m, t)| make(&per_mesh[m], t))
-            .collect()
-    }
-
-    /// Every instance's triangles moved to world space.
-    pub fn world_triangles(&self) -> Vec<[Vec3; 3]> {
-        let mut out = Vec::new();
-        for &(m, t) in self.instances {
-            let mesh = &self.meshes[m];
-            out.extend(
-                mesh.triangles
-                    .iter()
-                    .map(|tri| tri.map(|i| t.to_world_point(mesh.positions[i as usize]))),
-            );
-        }
-        out
-    }
-}
-
 /// The field instances of a frame: each instance's field (one per mesh, and its normal field
 /// where the kind reads them) placed by its transform.
 pub fn field_instances(
@@ -201,172 +124,6 @@ pub fn field_instances(
             }
         })
         .collect()
-}
-
-/// A method answering visibility in a moving scene.
-pub trait Mover {
-    fn name(&self) -> &'static str;
-    /// Brings the method to this frame (timed apart as `update_s`).
-    fn update(&mut self, frame: &FrameCasters) -> crate::experiment::Result<()>;
-    /// The frame's visibility (after [`Self::update`]).
-    fn vis(&self) -> &dyn Visibility;
-    /// Bytes kept for the scene, where known.
-    fn bytes(&self) -> Option<u64>;
-    /// Vertex AO at `points` (unit `normals`) on `rays`: the AO estimator through
-    /// [`Self::vis`]; a method that answers AO with no rays (AO fields) answers it directly.
-    fn ao(&self, points: &[Vec3], normals: &[Vec3], rays: &RaySet, opts: &AoOptions) -> Vec<f32> {
-        ao_at_points(self.vis(), points, normals, rays, opts)
-    }
-    /// A render kind's estimate at `at` on `rays` (an animated spec's query): `est` through
-    /// [`Self::vis`]; a method on the GPU runs its kernel instead.
-    fn estimate(
-        &self,
-        est: &dyn Estimator,
-        at: Points,
-        rays: &RaySet,
-    ) -> crate::experiment::Result<Vec<f32>> {
-        Ok(est.estimate(self.vis(), at, rays))
-    }
-}
-
-/// Our ray caster over the world triangles, its BVH rebuilt every frame.
-#[derive(Default)]
-pub struct WorldRebuild {
-    tracer: Option<Tracer>,
-}
-
-impl Mover for WorldRebuild {
-    fn name(&self) -> &'static str {
-        "world_rebuild"
-    }
-
-    fn update(&mut self, frame: &FrameCasters) -> crate::experiment::Result<()> {
-        self.tracer = Some(Tracer::new(&frame.world_triangles()));
-        Ok(())
-    }
-
-    fn vis(&self) -> &dyn Visibility {
-        self.tracer.as_ref().expect("updated before the query")
-    }
-
-    fn bytes(&self) -> Option<u64> {
-        self.tracer.as_ref().map(Tracer::bytes)
-    }
-}
-
-/// Embree's scene over the world triangles, built and committed every frame.
-#[cfg(feature = "embree")]
-#[derive(Default)]
-pub struct EmbreeRebuild {
-    tracer: Option<crate::trace::embree::EmbreeTracer>,
-}
-
-#[cfg(feature = "embree")]
-impl Mover for EmbreeRebuild {
-    fn name(&self) -> &'static str {
-        "embree_rebuild"
-    }
-
-    fn update(&mut self, frame: &FrameCasters) -> crate::experiment::Result<()> {
-        let t = crate::trace::embree::EmbreeTracer::new(&frame.world_triangles()).map_err(|e| {
-            crate::experiment::Error::invalid("dynamic: embree_rebuild", e.to_string())
-        })?;
-        self.tracer = Some(t);
-        Ok(())
-    }
-
-    fn vis(&self) -> &dyn Visibility {
-        self.tracer.as_ref().expect("updated before the query")
-    }
-
-    fn bytes(&self) -> Option<u64> {
-        None
-    }
-}
-
-/// Embree with instance geometries: each mesh's scene built once (the crowd's precompute), the
-/// transforms set and the top scene committed every frame.
-#[cfg(feature = "embree")]
-pub struct EmbreeInstanced {
-    pub tracer: crate::trace::embree_instances::EmbreeInstances,
-}
-
-#[cfg(feature = "embree")]
-impl EmbreeInstanced {
-    pub fn new(meshes: &[Arc<Mesh>]) -> crate::experiment::Result<EmbreeInstanced> {
-        let tracer = crate::trace::embree_instances::EmbreeInstances::new(&model_triangles(meshes))
-            .map_err(|e| {
-                crate::experiment::Error::invalid("dynamic: embree_instances", e.to_string())
-            })?;
-        Ok(EmbreeInstanced { tracer })
-    }
-}
-
-#[cfg(feature = "embree")]
-impl Mover for EmbreeInstanced {
-    fn name(&self) -> &'static str {
-        "embree_instances"
-    }
-
-    fn update(&mut self, frame: &FrameCasters) -> crate::experiment::Result<()> {
-        self.tracer.update(frame.instances).map_err(|e| {
-            crate::experiment::Error::invalid("dynamic: embree_instances", e.to_string())
-        })
-    }
-
-    fn vis(&self) -> &dyn Visibility {
-        &self.tracer
-    }
-
-    fn bytes(&self) -> Option<u64> {
-        None
-    }
-}
-
-/// Each mesh's triangles in model space.
-fn model_triangles(meshes: &[Arc<Mesh>]) -> Vec<Vec<[Vec3; 3]>> {
-    meshes
-        .iter()
-        .map(|m| {
-            m.triangles
-                .iter()
-                .map(|t| t.map(|i| m.positions[i as usize]))
-                .collect()
-        })
-        .collect()
-}
-
-/// Our ray caster in two levels: each mesh's BVH built once in model space (the crowd's
-/// precompute), the top level over the instances rebuilt every frame.
-pub struct TwoLevelRebuild {
-    pub tracer: crate::trace::two_level::TwoLevel,
-}
-
-impl TwoLevelRebuild {
-    pub fn new(meshes: &[Arc<Mesh>]) -> TwoLevelRebuild {
-        TwoLevelRebuild {
-            tracer: crate::trace::two_level::TwoLevel::new(&model_triangles(meshes)),
-        }
-    }
-}
-
-impl Mover for TwoLevelRebuild {
-    fn name(&self) -> &'static str {
-        "two_level"
-    }
-
-    fn update(&mut self, frame: &FrameCasters) -> crate::experiment::Result<()> {
-        self.tracer.update(frame.instances);
-        Ok(())
-    }
-
-    fn vis(&self) -> &dyn Visibility {
-        &self.tracer
-    }
-
-    fn bytes(&self) -> Option<u64> {
-        Some(self.tracer.bytes())
-    }
 }
 
 /// The casters' fields (one per mesh, shared by its instances) placed by the frame's

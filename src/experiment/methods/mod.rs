@@ -27,6 +27,7 @@
 
 pub mod aofield;
 pub mod embree;
+pub mod motion;
 pub mod raycast;
 pub mod rayquery;
 pub mod sdf;
@@ -42,11 +43,13 @@ pub use super::spec::MethodSpec;
 use super::spec::{default_backends, Backend, Spec, SpecError};
 use super::validate::Validator;
 use super::Result;
+use crate::geometry::Mesh;
 use crate::gpu::GpuContext;
 use crate::render::estimator::Estimator;
 use crate::visibility::Visibility;
 use glam::Vec3;
 use std::path::PathBuf;
+use std::sync::Arc;
 
 /// What a method precomputes from and answers through, on one scene.
 pub struct MethodContext<'a> {
@@ -174,6 +177,34 @@ pub trait Method: Send + Sync {
     }
     /// Its precompute on one scene (timed by the runner: the row's `precompute_s`).
     fn prepare(&self, ctx: &MethodContext) -> Result<Prepared>;
+    /// Its forms in a moving scene ([`motion::FrameForm`]: the names a spec's
+    /// `animation.methods` lists and the rows carry, and the GPU forms run beside them); none
+    /// by default: a method that follows motion lists them and builds its CPU forms in
+    /// [`Self::mover`].
+    fn frame_forms(&self) -> &'static [motion::FrameForm] {
+        &[]
+    }
+    /// Its CPU form `form` (one of [`Self::frame_forms`]) over the moving scene's `meshes`, its
+    /// per-mesh precompute done; each frame's transforms are applied by [`motion::Mover::update`].
+    fn mover(&self, form: &str, _meshes: &[Arc<Mesh>]) -> Result<Box<dyn motion::Mover>> {
+        Err(super::Error::invalid(
+            format!("method \"{}\"", self.name()),
+            format!("has no per-frame form \"{form}\""),
+        ))
+    }
+    /// Why this build cannot run its per-frame forms (a cargo feature), or none.
+    fn frame_unavailable(&self) -> Option<&'static str> {
+        None
+    }
+    /// Its answer over world triangles alone, where it is a ray caster over them (`raycast`,
+    /// `embree`): what `experiment performance` times beside the field. None where it is not
+    /// one or this build cannot run it; its builder's error otherwise.
+    fn world_caster(
+        &self,
+        _triangles: &[[Vec3; 3]],
+    ) -> Option<std::result::Result<Box<dyn Visibility + Send>, String>> {
+        None
+    }
     /// What [`Self::prepare`] will cost on `scene` ([`Precompute`]), from the spec and the
     /// built scene alone: the planner lists it and refuses it over the memory limit before
     /// any work. None where the method cannot say; an error (why) where the precompute would
@@ -279,6 +310,17 @@ pub fn lookup(name: &str) -> Option<MethodEntry> {
 /// Every registered method's name, built-in ones first.
 pub fn names() -> Vec<&'static str> {
     REGISTRY.names()
+}
+
+/// Every registered method's settings at its default options (`{"method": NAME}` alone), in
+/// registry order; a method whose options the defaults do not read has none here.
+pub fn default_settings() -> Vec<Box<dyn Method>> {
+    names()
+        .into_iter()
+        .filter_map(lookup)
+        .filter_map(|e| (e.read)(serde_json::Value::Object(Default::default())).ok())
+        .flat_map(|o| o.settings())
+        .collect()
 }
 
 /// One row source of `methods.csv`: a method's setting on a backend.

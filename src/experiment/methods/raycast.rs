@@ -3,20 +3,34 @@
 //! triangles is built as its precompute (timed), then the kind's estimator runs through it on
 //! the reference's rays. Its values are the reference's, ray for ray (its same-ray errors are
 //! zero by construction); the row is its cost with the BVH build counted, beside the others.
+//! In a moving scene it follows motion by rebuilding that BVH every frame ([`WorldRebuild`],
+//! `world_rebuild`, the reference of the other per-frame methods).
 
+use super::motion::{FrameCasters, FrameForm, Mover};
 use super::{Answer, Method, MethodContext, MethodEntry, MethodOptions, Precompute, Prepared};
 use crate::experiment::scenes::BuiltScene;
 use crate::experiment::spec::{Spec, SpecError};
 use crate::experiment::validate::Validator;
 use crate::experiment::Result;
+use crate::geometry::Mesh;
 use crate::trace::Tracer;
+use crate::visibility::Visibility;
+use glam::Vec3;
 use serde::{Deserialize, Serialize};
+use std::sync::Arc;
 
 pub const ENTRY: MethodEntry = MethodEntry {
     name: "raycast",
     about: "our ray caster (watertight triangles, CWBVH), the world BVH built as its precompute",
     read: super::read_as::<RaycastOptions>,
 };
+
+/// Its per-frame forms ([`Method::frame_forms`]): `world_rebuild`, the world BVH rebuilt every
+/// frame, the moving scene's reference; on the GPU `world_rebuild@gpu`.
+pub const FRAME_FORMS: &[FrameForm] = &[
+    FrameForm::cpu("world_rebuild"),
+    FrameForm::gpu("world_rebuild@gpu", "world_rebuild"),
+];
 
 /// `raycast` has no parameters.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -46,6 +60,21 @@ impl Method for Raycast {
         Ok(Some(world_bvh(scene)))
     }
 
+    fn frame_forms(&self) -> &'static [FrameForm] {
+        FRAME_FORMS
+    }
+
+    fn mover(&self, _form: &str, _meshes: &[Arc<Mesh>]) -> Result<Box<dyn Mover>> {
+        Ok(Box::<WorldRebuild>::default())
+    }
+
+    fn world_caster(
+        &self,
+        triangles: &[[Vec3; 3]],
+    ) -> Option<std::result::Result<Box<dyn Visibility + Send>, String>> {
+        Some(Ok(Box::new(Tracer::new(triangles))))
+    }
+
     fn prepare(&self, ctx: &MethodContext) -> Result<Prepared> {
         let tracer = Tracer::new(ctx.triangles);
         Ok(Prepared {
@@ -69,5 +98,30 @@ pub fn world_bvh(scene: &BuiltScene) -> Precompute {
         rays: 0,
         bytes,
         peak_bytes: bytes,
+    }
+}
+
+/// Our ray caster over the world triangles, its BVH rebuilt every frame.
+#[derive(Default)]
+pub struct WorldRebuild {
+    tracer: Option<Tracer>,
+}
+
+impl Mover for WorldRebuild {
+    fn name(&self) -> &'static str {
+        "world_rebuild"
+    }
+
+    fn update(&mut self, frame: &FrameCasters) -> Result<()> {
+        self.tracer = Some(Tracer::new(&frame.world_triangles()));
+        Ok(())
+    }
+
+    fn vis(&self) -> &dyn Visibility {
+        self.tracer.as_ref().expect("updated before the query")
+    }
+
+    fn bytes(&self) -> Option<u64> {
+        self.tracer.as_ref().map(Tracer::bytes)
     }
 }

@@ -13,6 +13,7 @@
 //! `setup_s`) sorts each mesh's triangles in Morton order, builds the acceleration structures
 //! and compiles the kernels.
 
+use super::motion::FrameForm;
 use super::{
     caster_mesh_triangles, Answer, GpuMethod, Method, MethodContext, MethodEntry, MethodOptions,
     NoRays, Prepared,
@@ -36,6 +37,10 @@ pub const ENTRY: MethodEntry = MethodEntry {
     read: super::read_as::<RayQueryOptions>,
 };
 
+/// Its per-frame forms ([`Method::frame_forms`]): `rayquery@gpu`, its TLAS rebuilt every
+/// frame, run beside `two_level` (its twin).
+pub const FRAME_FORMS: &[FrameForm] = &[FrameForm::gpu("rayquery@gpu", "two_level")];
+
 /// `rayquery` has no parameters.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -55,6 +60,10 @@ impl MethodOptions for RayQueryOptions {
 pub struct RayQuery;
 
 impl Method for RayQuery {
+    fn frame_forms(&self) -> &'static [FrameForm] {
+        FRAME_FORMS
+    }
+
     fn name(&self) -> &'static str {
         ENTRY.name
     }

@@ -4,8 +4,11 @@
 //! backend its twin, two-level GPU ray casting (`gpu::GpuTwoLevel`: each mesh's CWBVH uploaded
 //! once, the top level built on the host and uploaded), through the kind's own integrand. Its
 //! precompute is the per-mesh BVHs and the top level; its values are the world ray caster's up
-//! to moving the ray instead of the triangles (f32), so its same-ray error is near 0.
+//! to moving the ray instead of the triangles (f32), so its same-ray error is near 0. In a
+//! moving scene it follows motion by rebuilding its top level every frame ([`TwoLevelRebuild`],
+//! `two_level`).
 
+use super::motion::{model_triangles, FrameCasters, FrameForm, Mover};
 use super::Prepared;
 use super::{Answer, GpuMethod, Method, MethodContext, MethodEntry, MethodOptions, Precompute};
 use crate::experiment::backend::{Estimate, Eval};
@@ -15,19 +18,29 @@ use crate::experiment::scenes::BuiltScene;
 use crate::experiment::spec::{Spec, SpecError};
 use crate::experiment::validate::Validator;
 use crate::experiment::{Error, Result};
+use crate::geometry::Mesh;
 use crate::geometry::Similarity;
 use crate::gpu::{GpuContext, GpuTwoLevel};
 use crate::render::estimator::Points;
 use crate::sampling::rays::RaySet;
 use crate::trace::two_level::TwoLevel;
+use crate::visibility::Visibility;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
+use std::sync::Arc;
 
 pub const ENTRY: MethodEntry = MethodEntry {
     name: "two_level",
     about: "our ray caster in two levels: a BVH per distinct mesh, a top level over the instances (on the gpu backend: two-level GPU ray casting)",
     read: super::read_as::<TwoLevelOptions>,
 };
+
+/// Its per-frame forms ([`Method::frame_forms`]): `two_level`, its top level rebuilt every
+/// frame; on the GPU `two_level@gpu`.
+pub const FRAME_FORMS: &[FrameForm] = &[
+    FrameForm::cpu("two_level"),
+    FrameForm::gpu("two_level@gpu", "two_level"),
+];
 
 /// `two_level` has no parameters.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -68,6 +81,14 @@ fn instanced(scene: &BuiltScene) -> (ModelTriangles, Vec<(usize, Similarity)>) {
 }
 
 impl Method for TwoLevelMethod {
+    fn frame_forms(&self) -> &'static [FrameForm] {
+        FRAME_FORMS
+    }
+
+    fn mover(&self, _form: &str, meshes: &[Arc<Mesh>]) -> Result<Box<dyn Mover>> {
+        Ok(Box::new(TwoLevelRebuild::new(meshes)))
+    }
+
     fn name(&self) -> &'static str {
         ENTRY.name
     }
@@ -145,5 +166,38 @@ impl Eval for TwoLevelEval<'_> {
 
     fn setup_s(&self) -> Option<f64> {
         Some(self.caster.setup_time().as_secs_f64())
+    }
+}
+
+/// Our ray caster in two levels: each mesh's BVH built once in model space (the crowd's
+/// precompute), the top level over the instances rebuilt every frame.
+pub struct TwoLevelRebuild {
+    pub tracer: TwoLevel,
+}
+
+impl TwoLevelRebuild {
+    pub fn new(meshes: &[Arc<Mesh>]) -> TwoLevelRebuild {
+        TwoLevelRebuild {
+            tracer: TwoLevel::new(&model_triangles(meshes)),
+        }
+    }
+}
+
+impl Mover for TwoLevelRebuild {
+    fn name(&self) -> &'static str {
+        "two_level"
+    }
+
+    fn update(&mut self, frame: &FrameCasters) -> Result<()> {
+        self.tracer.update(frame.instances);
+        Ok(())
+    }
+
+    fn vis(&self) -> &dyn Visibility {
+        &self.tracer
+    }
+
+    fn bytes(&self) -> Option<u64> {
+        Some(self.tracer.bytes())
     }
 }

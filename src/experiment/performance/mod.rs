@@ -34,7 +34,6 @@ use crate::render::ao::{ao_at_points, AoOptions};
 use crate::render::receivers::Receivers;
 use crate::sampling::rays::RaySet;
 use crate::sampling::{Frame, LayoutKind, SphereKind};
-use crate::trace::Tracer;
 use crate::visibility::Visibility;
 use floor::{NoQuery, SphereCull};
 use glam::{Quat, Vec3};
@@ -320,27 +319,25 @@ fn rows(
         .collect()
 }
 
-/// The ray casters of a scene: ours and, with the feature, Embree.
+/// The ray casters of a scene: every registered method that is a ray caster over world
+/// triangles ([`super::methods::Method::world_caster`]), in registry order: ours and, with
+/// the feature, Embree.
 fn ray_casters(scene: &Scene) -> Vec<Backend<'static>> {
     let tris = scene.caster_triangles();
-    let t = Instant::now();
-    let tracer = Tracer::new(&tris);
-    #[allow(unused_mut)]
-    let mut v = vec![Backend {
-        name: "raycast",
-        vis: Rc::new(tracer),
-        setup_s: t.elapsed().as_secs_f64(),
-    }];
-    #[cfg(feature = "embree")]
-    {
+    let mut v = Vec::new();
+    for m in super::methods::default_settings() {
         let t = Instant::now();
-        match crate::trace::embree::EmbreeTracer::new(&tris) {
-            Ok(e) => v.push(Backend {
-                name: "embree",
-                vis: Rc::new(e),
+        match m.world_caster(&tris) {
+            Some(Ok(vis)) => v.push(Backend {
+                name: m.name(),
+                vis: Rc::<dyn Visibility + Send>::from(vis),
                 setup_s: t.elapsed().as_secs_f64(),
             }),
-            Err(e) => eprintln!("performance: Embree not timed: {e}"),
+            Some(Err(e)) if m.name() == "embree" => {
+                eprintln!("performance: Embree not timed: {e}")
+            }
+            Some(Err(e)) => eprintln!("performance: {} not timed: {e}", m.name()),
+            None => {}
         }
     }
     v

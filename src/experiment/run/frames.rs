@@ -6,7 +6,8 @@
 //! first seed's), each charged for the frame's motion (`update_s`: a BVH rebuilt, a top level
 //! rebuilt, a scene committed, an instance list) apart from the query (`query_s`).
 //!
-//! Per frame and method a row of `frames.csv` ([`FrameRow`]): the errors against the world
+//! Per frame and method a row of `frames.csv` ([`FrameRow`], its view
+//! [`crate::experiment::frame_row::FRAMES_CSV`]): the errors against the world
 //! rebuild's ray cast on the same rays (`rms_vs_raycast`) and against the frame's converged
 //! reference (`rms_vs_truth`, cached by frame: its key covers the frame's points and world
 //! triangles), and the frame's overlap counts (caster pairs whose bounding spheres overlap,
@@ -44,88 +45,11 @@ use crate::render::primary::{gbuffer, PrimaryScene};
 use crate::render::truth::TruthOptions;
 use crate::sampling::rays::RaySet;
 use rayon::prelude::*;
-use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
 use std::sync::Arc;
 use std::time::Instant;
 
-/// One per-frame method on one frame of one scene: a row of `frames.csv`.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct FrameRow {
-    pub scene: String,
-    pub frame: usize,
-    /// The frame's time, `frame × animation.time_step` (seconds).
-    pub time_s: f64,
-    /// `world_rebuild` (the reference), `two_level`, `embree_rebuild`, `embree_instances`,
-    /// `field_every_sphere`, `field`.
-    pub method: String,
-    /// The field cell of a field method (`Cell::id`); empty for the ray casters.
-    pub cell: String,
-    /// Evaluation points this frame, and those touching another surface.
-    pub points: usize,
-    pub crease_points: usize,
-    /// Rays of one evaluation: points × the kind's rays per point.
-    pub rays: u64,
-    pub caster_triangles: usize,
-    /// The frame's points (the kind's setup on the moved scene, with its G-buffer where there
-    /// is an image), the same for every method and in no method's `frame_s`.
-    pub points_s: f64,
-    /// What the frame's motion costs the method (seconds).
-    pub update_s: f64,
-    /// The kind's estimate on the frame's rays (seconds, all threads).
-    pub query_s: f64,
-    pub frame_s: f64,
-    /// rays / query_s, millions.
-    pub mrays_s: f64,
-    /// RMS over the points (0–255, unquantised) against `world_rebuild` on the same rays.
-    pub rms_vs_raycast: f64,
-    /// RMS over the points (0–255, unquantised) against the frame's converged reference.
-    pub rms_vs_truth: f64,
-    /// The converged reference's RMS standard error (0–255): the floor of `rms_vs_truth`.
-    pub truth_stderr: f64,
-    /// Mean value over the points (the answer's size, for reading the RMS).
-    pub mean_value: f64,
-    /// Bytes the method keeps for the scene, where it can say.
-    pub bytes: Option<u64>,
-    /// Caster pairs whose world bounding spheres overlap this frame.
-    pub sphere_overlaps: usize,
-    /// Points inside the bounding sphere of a caster other than their own instance.
-    pub points_in_spheres: usize,
-    /// Mean FLIP ([`crate::experiment::flip`]: 0–1, 67 pixels per degree) of the method's
-    /// image against `world_rebuild`'s on the same rays, over the pixels that show values;
-    /// none without an image (and in tables written before the column).
-    #[serde(default)]
-    pub flip_mean_vs_raycast: Option<f64>,
-    /// The FLIP pooling's weighted median of the same map.
-    #[serde(default)]
-    pub flip_weighted_median_vs_raycast: Option<f64>,
-    /// Mean FLIP against the frame's converged reference's image.
-    #[serde(default)]
-    pub flip_mean_vs_truth: Option<f64>,
-    /// Its weighted median.
-    #[serde(default)]
-    pub flip_weighted_median_vs_truth: Option<f64>,
-    /// Flicker from the previous frame ([`crate::experiment::metrics::flicker`], 0–255,
-    /// unquantised): the RMS of the method's frame-to-frame change minus the converged
-    /// reference's, over the pixels that show values on the same instance in both frames
-    /// (the camera is fixed), or without an image over the points (the same points in both
-    /// frames); none on the first frame.
-    #[serde(default)]
-    pub flicker: Option<f64>,
-    /// The same of `world_rebuild` (the same-ray ray cast) on the same frame pair.
-    #[serde(default)]
-    pub raycast_flicker: Option<f64>,
-    /// Pixels (or points) the flicker is taken over.
-    #[serde(default)]
-    pub flicker_points: Option<usize>,
-    /// Mean FLIP of the method's image at this frame against its image at the previous one,
-    /// over the flicker's pixels; none on the first frame and without an image.
-    #[serde(default)]
-    pub flip_frame_change: Option<f64>,
-    /// The same of the converged reference's images: the change the motion itself shows.
-    #[serde(default)]
-    pub truth_flip_frame_change: Option<f64>,
-}
+pub use crate::experiment::frame_row::FrameRow;
 
 /// What the flicker and FLIP columns of one frame read of an answer (a method's, or the
 /// converged reference's).
@@ -247,7 +171,7 @@ pub(super) fn run(
     let kind = crate::experiment::kinds::of(&spec.render);
     let gpu = if spec.backends.contains(&Backend::Gpu) {
         // The GPU twins of the CPU methods asked for.
-        for (cpu, twin) in gpu_movers::TWINS {
+        for (cpu, twin) in crate::experiment::methods::motion::gpu_twins(&movers::NAMES) {
             if names.contains(&cpu) {
                 names.push(twin);
             }
@@ -623,14 +547,14 @@ impl SceneRunner<'_> {
                 out.rows.push(FrameRow {
                     scene: bs.name.clone(),
                     frame: f,
-                    time_s: f as f64 * self.dt,
+                    time_s: Some(f as f64 * self.dt),
                     method: method.to_string(),
                     cell: cell.clone(),
                     points: setup.points.len(),
-                    crease_points: setup.points.crease_count(),
+                    crease_points: Some(setup.points.crease_count()),
                     rays,
                     caster_triangles: tris,
-                    points_s,
+                    points_s: Some(points_s),
                     update_s: r.update_s,
                     query_s: r.query_s,
                     frame_s: r.update_s + r.query_s,
@@ -652,6 +576,9 @@ impl SceneRunner<'_> {
                     flicker_points: moved.map(|m| m.1),
                     flip_frame_change: moved.and_then(|m| m.2),
                     truth_flip_frame_change: truth_flip_change,
+                    gap_radii: None,
+                    mesh_clearance: None,
+                    casters: None,
                 });
                 now.push((k, sig));
             }

@@ -205,7 +205,7 @@ pub(super) fn write(
     run: &FramesRun,
 ) -> Result<()> {
     let out = &opts.out;
-    crate::experiment::outputs::write_csv(&out.join("frames.csv"), &run.rows)?;
+    crate::experiment::frame_row::FRAMES_CSV.write(&out.join("frames.csv"), &run.rows)?;
     let kind = crate::experiment::kinds::of(&spec.render);
     draw(out, &run.rows, kind.name())?;
     for (name, size, frames) in &run.pictures {

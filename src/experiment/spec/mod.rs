@@ -72,8 +72,9 @@ pub struct AnimationSpec {
 }
 
 /// Every per-frame method an animation may name, in the order their rows are written: the ray
-/// casters (the world rebuild first: the reference of the others), then the fields
-/// (`experiment::dynamic::movers` builds them).
+/// casters (the world rebuild first: the reference of the others), then the fields: the CPU
+/// forms of the registered methods that follow motion and the field's
+/// (`experiment::methods::motion::frame_forms`, which a test holds this list to).
 pub const FRAME_METHODS: [&str; 6] = [
     "world_rebuild",
     "two_level",
