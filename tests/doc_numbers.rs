@@ -7,6 +7,10 @@
 //! number.
 
 mod common;
+#[path = "doc_numbers/flip.rs"]
+mod flip;
+#[path = "doc_numbers/gpu_moving.rs"]
+mod gpu_moving;
 
 use std::collections::HashMap;
 use std::path::Path;
@@ -1864,57 +1868,10 @@ fn crowd_instructions(c: &mut Claims) {
     c.quotes("docs/performance.md", &text, from);
 }
 
-/// The pairs of cells whose order under FLIP differs from their order under RMS, in the
-/// rerun still specs' `table.csv` (each scene and backend apart; against the same-ray ray cast,
-/// `rms_image` and `flip_mean`, and against the converged reference, `rms_vs_truth` and
-/// `flip_mean_vs_truth`), listed as docs/results.md lists them.
+/// The pairs of images whose order under FLIP differs from their order under RMS
+/// ([`flip::rankings`]), and the 1-bit field's ratios to u8 under both.
 fn flip_rankings(c: &mut Claims) {
-    let mut text = String::new();
-    for name in [
-        "selection",
-        "figure5",
-        "fibonacci",
-        "storage",
-        "figure7",
-        "figure7_linear",
-        "figure7_unbounded",
-    ] {
-        let from = format!("results/{name}/table.csv");
-        let rows: Vec<Row> = read(&from)
-            .into_iter()
-            .filter(|r| !r["flip_mean"].is_empty())
-            .collect();
-        let label = |r: &Row| {
-            let cell = r["cell"].as_str();
-            let cell = cell
-                .strip_prefix(&format!("{}-", r["scene"]))
-                .unwrap_or(cell);
-            cell.strip_suffix(&format!("-{}", r["backend"]))
-                .unwrap_or(cell)
-                .to_string()
-        };
-        for (i, a) in rows.iter().enumerate() {
-            for b in &rows[i + 1..] {
-                if a["scene"] != b["scene"] || a["backend"] != b["backend"] {
-                    continue;
-                }
-                for (against, rc, fc) in [
-                    ("the ray cast", "rms_image", "flip_mean"),
-                    ("the truth", "rms_vs_truth", "flip_mean_vs_truth"),
-                ] {
-                    let (ra, rb, fa, fb) = (f(a, rc), f(b, rc), f(a, fc), f(b, fc));
-                    if (ra - rb) * (fa - fb) < 0.0 {
-                        text.push_str(&format!(
-                            "| `{name}` | `{}` / `{}` | {against} | {ra:.3} / {rb:.3} | {fa:.4} / {fb:.4} |\n",
-                            label(a),
-                            label(b),
-                        ));
-                    }
-                }
-            }
-        }
-    }
-    c.quotes("docs/results.md", &text, "results/*/table.csv");
+    flip::rankings(c);
     let from = "results/figure7/table.csv";
     let rows = read(from);
     let at = |precision: &str| {
@@ -1947,6 +1904,7 @@ fn quoted_numbers_match_the_committed_csvs() {
     animated_figure8(&mut c);
     crowd_pixels(&mut c);
     gpu_frames(&mut c);
+    gpu_moving::gpu_moving(&mut c);
     paper_pixel_sets(&mut c);
     peers_gpu(&mut c);
     equal_bytes(&mut c);
