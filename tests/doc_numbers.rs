@@ -1418,28 +1418,13 @@ fn animated_figure8(c: &mut Claims) {
 /// The GPU path per frame (the "gpu" backend of `dynamic2008_figure8`): the GPU twins against
 /// their CPU twins on every frame, and their frame times.
 fn gpu_frames(c: &mut Claims) {
-    let (mut d_rms, mut d_mean, mut pairs) = (0.0f64, 0.0f64, 0);
-    for name in ["dynamic2008_figure8"] {
-        let rows = read(&format!("results/{name}/frames.csv"));
-        for (cpu, gpu) in [
-            ("world_rebuild", "world_rebuild@gpu"),
-            ("field_every_sphere", "field_every_sphere@gpu"),
-        ] {
-            for g in rows.iter().filter(|r| r["method"] == gpu) {
-                let twin = rows
-                    .iter()
-                    .find(|r| {
-                        r["method"] == cpu
-                            && r["frame"] == g["frame"]
-                            && r["cell"] == g["cell"].replace("-gpu", "-cpu")
-                    })
-                    .unwrap_or_else(|| panic!("{name}: no {cpu} twin of frame {}", g["frame"]));
-                d_rms = d_rms.max((f(g, "rms_vs_raycast") - f(twin, "rms_vs_raycast")).abs());
-                d_mean = d_mean.max((f(g, "mean_value") - f(twin, "mean_value")).abs());
-                pairs += 1;
-            }
-        }
-    }
+    let (d_rms, d_mean, pairs) = gpu_moving::twin_gaps(
+        &read("results/dynamic2008_figure8/frames.csv"),
+        &[
+            ("world_rebuild@gpu", "world_rebuild"),
+            ("field_every_sphere@gpu", "field_every_sphere"),
+        ],
+    );
     let from = "results/dynamic2008_figure8/frames.csv";
     let rows = read(from);
     let of = |m: &str| -> Vec<&Row> { rows.iter().filter(|r| r["method"] == m).collect() };

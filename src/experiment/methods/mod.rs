@@ -442,9 +442,18 @@ impl<'de> serde::Deserialize<'de> for MethodSpec {
         };
         let options = (entry.read)(serde_json::Value::Object(own))
             .map_err(|e| D::Error::custom(format!("\"{}\": {e}", entry.name)))?;
+        let options = options.to_json();
+        // Read again from what they wrote back (`MethodSpec::read_options`): a number its type
+        // cannot hold (1e39 as an f32, written back as null) is refused here.
+        (entry.read)(serde_json::Value::Object(options.clone())).map_err(|e| {
+            D::Error::custom(format!(
+                "method \"{}\": a number out of its type's range ({e} once read)",
+                entry.name
+            ))
+        })?;
         Ok(MethodSpec {
             method: entry.name,
-            options: options.to_json(),
+            options,
             backends,
         })
     }
