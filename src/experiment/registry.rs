@@ -64,3 +64,25 @@ impl<E: Entry> Registry<E> {
             .collect()
     }
 }
+
+/// JSON keys, as a spec and a plug-in's options write them.
+pub type Keys = serde_json::Map<String, serde_json::Value>;
+
+/// A plug-in's own keys read into its options by `read` and written back by `to_json`, as the
+/// spec keeps them; the written-back keys must read again (where a number its type cannot hold,
+/// 1e39 as an f32, was written back as null, they do not). The error names the entry: `what`
+/// ("render", "method") and its `name`.
+pub fn read_and_write_back<O: ?Sized>(
+    what: &str,
+    name: &str,
+    read: fn(serde_json::Value) -> Result<Box<O>, serde_json::Error>,
+    to_json: impl Fn(&O) -> Keys,
+    own: Keys,
+) -> Result<Keys, String> {
+    let options = read(serde_json::Value::Object(own)).map_err(|e| format!("\"{name}\": {e}"))?;
+    let keys = to_json(&options);
+    read(serde_json::Value::Object(keys.clone())).map_err(|e| {
+        format!("{what} \"{name}\": a number out of its type's range ({e} once read)")
+    })?;
+    Ok(keys)
+}

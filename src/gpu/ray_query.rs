@@ -24,7 +24,6 @@
 //! [`RayQueryScene::new`] refuses with [`GpuError::Unsupported`], saying why.
 
 use super::context::GpuContext;
-use super::integrand;
 use super::tracer::{
     any_hits, closest_hits, ray_queries, CasterHeaderGpu, RayQueries, CASTER_HEADER_WGSL,
     RAY_QUERIES_WGSL,
@@ -363,15 +362,7 @@ impl<'a> RayQueryScene<'a> {
             kernels: Kernels::new(super::loop_budget::DEFAULT_RAYS_PER_INVOCATION),
             setup: Duration::ZERO,
         };
-        for i in [
-            &QUERIES.any,
-            &QUERIES.closest,
-            &integrand::AO,
-            &integrand::SHADOWS,
-            &integrand::REFLECTIONS,
-        ] {
-            scene.kernels.compiled(&scene, i)?;
-        }
+        QUERIES.precompile(&scene, &scene.kernels)?;
         Ok(RayQueryScene {
             setup: start.elapsed(),
             ..scene

@@ -61,6 +61,27 @@ pub(super) struct RayQueries {
     pub closest: Integrand,
 }
 
+impl RayQueries {
+    /// Compiles, on `vis`, these queries and every kind's integrand (AO, shadows,
+    /// reflections), so that a visibility's setup time holds its pipelines.
+    pub(super) fn precompile(
+        &self,
+        vis: &dyn GpuVisibility,
+        kernels: &Kernels,
+    ) -> Result<(), GpuError> {
+        for i in [
+            &self.any,
+            &self.closest,
+            &integrand::AO,
+            &integrand::SHADOWS,
+            &integrand::REFLECTIONS,
+        ] {
+            kernels.compiled(vis, i)?;
+        }
+        Ok(())
+    }
+}
+
 /// A ray-casting visibility's [`RayQueries`]: `sources` are the queries they all share
 /// ([`RAY_QUERIES_WGSL`]), then the visibility's own WGSL (its `write_closest`).
 pub(super) const fn ray_queries(sources: &'static [&'static str]) -> RayQueries {
@@ -134,15 +155,7 @@ impl<'a> GpuTracer<'a> {
             kernels: Kernels::new(super::loop_budget::DEFAULT_RAYS_PER_INVOCATION),
             setup: Duration::ZERO,
         };
-        for i in [
-            &QUERIES.any,
-            &QUERIES.closest,
-            &integrand::AO,
-            &integrand::SHADOWS,
-            &integrand::REFLECTIONS,
-        ] {
-            tracer.kernels.compiled(&tracer, i)?;
-        }
+        QUERIES.precompile(&tracer, &tracer.kernels)?;
         Ok(GpuTracer {
             setup: start.elapsed(),
             ..tracer

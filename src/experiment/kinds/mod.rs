@@ -343,17 +343,15 @@ impl<'de> serde::de::Visitor<'de> for RenderVisitor {
             ))
         })?;
         let rays_per_point = rays.ok_or_else(|| A::Error::missing_field("rays_per_point"))?;
-        let options = (entry.read)(serde_json::Value::Object(own))
-            .map_err(|e| A::Error::custom(format!("\"{}\": {e}", entry.name)))?;
-        let options = options.to_json();
-        // The options are read again from what they wrote back (`options_of`): a number its
-        // type cannot hold (1e39 as an f32 is infinite, written back as null) is refused here.
-        (entry.read)(serde_json::Value::Object(options.clone())).map_err(|e| {
-            A::Error::custom(format!(
-                "render \"{}\": a number out of its type's range ({e} once read)",
-                entry.name
-            ))
-        })?;
+        // Read again by `options_of` from the keys written back here.
+        let options = super::registry::read_and_write_back(
+            "render",
+            entry.name,
+            entry.read,
+            |o| o.to_json(),
+            own,
+        )
+        .map_err(A::Error::custom)?;
         Ok(RenderSpec {
             what: entry.name,
             rays_per_point,

@@ -440,17 +440,15 @@ impl<'de> serde::Deserialize<'de> for MethodSpec {
                 b
             }
         };
-        let options = (entry.read)(serde_json::Value::Object(own))
-            .map_err(|e| D::Error::custom(format!("\"{}\": {e}", entry.name)))?;
-        let options = options.to_json();
-        // Read again from what they wrote back (`MethodSpec::read_options`): a number its type
-        // cannot hold (1e39 as an f32, written back as null) is refused here.
-        (entry.read)(serde_json::Value::Object(options.clone())).map_err(|e| {
-            D::Error::custom(format!(
-                "method \"{}\": a number out of its type's range ({e} once read)",
-                entry.name
-            ))
-        })?;
+        // Read again by `MethodSpec::read_options` from the keys written back here.
+        let options = super::registry::read_and_write_back(
+            "method",
+            entry.name,
+            entry.read,
+            |o| o.to_json(),
+            own,
+        )
+        .map_err(D::Error::custom)?;
         Ok(MethodSpec {
             method: entry.name,
             options,
