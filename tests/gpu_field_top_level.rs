@@ -24,6 +24,7 @@ use visfield::render::shadow::{shadow_at_points, ShadowOptions, SphereLight};
 use visfield::sampling::rays::RaySet;
 
 mod common;
+use common::unit;
 use common::{gpu_context as context, slater_params, supershape_2000 as caster};
 
 /// The caster's field (290 Slater maps × 16² concentric texels, 8-bit) and its 16-bit normal
@@ -36,14 +37,6 @@ fn field() -> &'static (Arc<VisibilityField>, Arc<NormalField>) {
             bake_mesh_with_normals(caster(), p, 16, &BakeOptions::default()).expect("bake");
         (Arc::new(f), Arc::new(n))
     })
-}
-
-/// A seeded value in [0, 1).
-fn unit(i: u64) -> f32 {
-    let mut x = i.wrapping_mul(0x9E37_79B9_7F4A_7C15);
-    x ^= x >> 29;
-    x = x.wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    ((x >> 40) as f32) / (1u64 << 24) as f32
 }
 
 /// A 4 × 4 crowd of the caster over the floor y = 0 at frame `frame`: each in its unit cell,

@@ -10,7 +10,7 @@
 
 use glam::{Quat, Vec3};
 use visfield::geometry::procedural::{supershape, uv_sphere, Supershape};
-use visfield::geometry::{Mesh, Similarity};
+use visfield::geometry::Similarity;
 use visfield::gpu::{GpuContext, GpuError, RayQueryScene};
 use visfield::render::ao::{ao_at_points, AoOptions};
 use visfield::render::reflect::{reflect_at_points, Gloss, ReflectOptions};
@@ -19,21 +19,7 @@ use visfield::sampling::rays::RaySet;
 use visfield::trace::{RayQuery, Tracer};
 
 mod common;
-
-fn tris(m: &Mesh) -> Vec<[Vec3; 3]> {
-    m.triangles
-        .iter()
-        .map(|t| t.map(|i| m.positions[i as usize]))
-        .collect()
-}
-
-/// A seeded value in [0, 1).
-fn unit(i: u64) -> f32 {
-    let mut x = i.wrapping_mul(0x9E37_79B9_7F4A_7C15);
-    x ^= x >> 29;
-    x = x.wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    ((x >> 40) as f32) / (1u64 << 24) as f32
-}
+use common::{triangles as tris, unit};
 
 /// Two meshes (a 3000-triangle supershape, a sphere) in model space.
 fn meshes() -> Vec<Vec<[Vec3; 3]>> {

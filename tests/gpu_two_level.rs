@@ -7,7 +7,7 @@
 
 use glam::{Quat, Vec3};
 use visfield::geometry::procedural::{supershape, uv_sphere, Supershape};
-use visfield::geometry::{Mesh, Similarity};
+use visfield::geometry::Similarity;
 use visfield::gpu::{GpuError, GpuTracer, GpuTwoLevel};
 use visfield::render::ao::{ao_at_points, AoOptions};
 use visfield::render::reflect::{reflect_at_points, Gloss, ReflectOptions};
@@ -19,21 +19,7 @@ use visfield::visibility::Visibility;
 
 mod common;
 use common::gpu_context as context;
-
-fn tris(m: &Mesh) -> Vec<[Vec3; 3]> {
-    m.triangles
-        .iter()
-        .map(|t| t.map(|i| m.positions[i as usize]))
-        .collect()
-}
-
-/// A seeded value in [0, 1) (tests/two_level.rs's).
-fn unit(i: u64) -> f32 {
-    let mut x = i.wrapping_mul(0x9E37_79B9_7F4A_7C15);
-    x ^= x >> 29;
-    x = x.wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    ((x >> 40) as f32) / (1u64 << 24) as f32
-}
+use common::{triangles as tris, unit};
 
 /// Nine instances of two meshes on a 3 × 3 grid, each moved, turned and scaled per frame
 /// (tests/two_level.rs's choreography).

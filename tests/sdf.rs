@@ -7,16 +7,15 @@
 use glam::{Quat, Vec3};
 use std::sync::Arc;
 use visfield::geometry::procedural::uv_sphere;
-use visfield::geometry::{Mesh, Similarity};
+use visfield::geometry::Similarity;
 use visfield::sampling::rays::seeded_sphere_direction;
 use visfield::sdf::storage::band;
 use visfield::sdf::{DistanceVolume, Precision, SdfInstance, SdfScene, SdfTrace};
 use visfield::trace::Tracer;
 use visfield::visibility::Visibility;
 
-fn tris(m: &Mesh) -> Vec<[Vec3; 3]> {
-    (0..m.triangle_count()).map(|i| m.triangle(i)).collect()
-}
+mod common;
+use common::triangles as tris;
 
 /// The unit sphere, 64 stacks × 128 slices: every point of the mesh lies within
 /// 1 − cos(π / 64) < 1.3·10⁻³ of the analytic sphere (the sagitta of a stack), so the mesh's

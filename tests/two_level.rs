@@ -3,25 +3,13 @@
 
 use glam::{Quat, Vec3};
 use visfield::geometry::procedural::{supershape, uv_sphere, Supershape};
-use visfield::geometry::{Mesh, Similarity};
+use visfield::geometry::Similarity;
 use visfield::trace::two_level::TwoLevel;
 use visfield::trace::Tracer;
+
+mod common;
+use common::{triangles as tris, unit};
 use visfield::visibility::Visibility;
-
-fn tris(m: &Mesh) -> Vec<[Vec3; 3]> {
-    m.triangles
-        .iter()
-        .map(|t| t.map(|i| m.positions[i as usize]))
-        .collect()
-}
-
-/// A seeded value in [0, 1).
-fn unit(i: u64) -> f32 {
-    let mut x = i.wrapping_mul(0x9E37_79B9_7F4A_7C15);
-    x ^= x >> 29;
-    x = x.wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    ((x >> 40) as f32) / (1u64 << 24) as f32
-}
 
 #[test]
 fn two_levels_answer_as_the_world_tracer_on_every_ray_of_every_frame() {

@@ -253,3 +253,16 @@ pub fn frames_of(
     assert_eq!(rows, report.frames);
     rows
 }
+
+/// A mesh's triangles as their three vertex positions, in the mesh's order.
+pub fn triangles(m: &visfield::geometry::Mesh) -> Vec<[glam::Vec3; 3]> {
+    (0..m.triangle_count()).map(|i| m.triangle(i)).collect()
+}
+
+/// A seeded value in [0, 1) (a 64-bit mix of `i`, its top 24 bits).
+pub fn unit(i: u64) -> f32 {
+    let mut x = i.wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    x ^= x >> 29;
+    x = x.wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    ((x >> 40) as f32) / (1u64 << 24) as f32
+}
