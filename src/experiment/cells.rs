@@ -1,10 +1,11 @@
 //! Cells, the unit every table row, threshold and shard is about: a field on a scene, read
 //! with a selection, on a backend ([`Cell`]); a spec profile's cells in plan order
 //! ([`cells_of`]: scenes × field settings × backends, × the normal field precisions of a kind
-//! that reads them); the field geometry cells share a bake by ([`Geometry`]); which cells a
-//! threshold applies to ([`threshold_matches`]).
+//! that reads them); the field geometry cells share a bake by ([`Geometry`]). A threshold and a
+//! paper cell say which cells they are about by their axes
+//! ([`super::spec::Threshold::matches`]).
 
-use super::spec::{Backend, Spec, Threshold};
+use super::spec::{Backend, Spec};
 use crate::field::{FieldParams, Precision, Selection};
 use crate::sampling::{LayoutKind, SphereKind};
 use std::collections::HashSet;
@@ -116,17 +117,4 @@ pub fn cells_of(spec: &Spec) -> Vec<Cell> {
         }
     }
     out
-}
-
-/// Whether threshold `t` applies to `cell` of the scene called `scene`.
-pub fn threshold_matches(t: &Threshold, scene: &str, cell: &Cell) -> bool {
-    let p: &FieldParams = &cell.params;
-    t.scene.as_ref().is_none_or(|s| s == scene)
-        && t.sphere.is_none_or(|s| s == p.sphere)
-        && t.positional_samples.is_none_or(|n| n == p.count)
-        && t.directional_res.is_none_or(|r| r == p.res)
-        && t.layout.is_none_or(|l| l == p.layout)
-        && t.precision.is_none_or(|x| x == p.precision)
-        && t.selection.is_none_or(|s| s == cell.selection)
-        && t.backend.is_none_or(|b| b == cell.backend)
 }

@@ -1,23 +1,21 @@
-//! `experiment check`: RMS thresholds per cell, and every cell against the committed run of the
-//! same spec and profile.
+//! `experiment check`: RMS thresholds per cell, and every row of a run against the committed
+//! run of the same spec and profile.
 //!
-//! A spec's threshold applies to every cell matching its axes (an axis left out matches any
-//! value); a cell fails when its RMS exceeds the maximum ([`check_rows`]). Besides, every cell's
-//! errors (`rms_vertex`, `rms_image`, `rms_vs_truth`) are compared with the same cell of the
-//! committed `table.csv` (`results/quick/NAME` for `--quick`, `results/NAME` for a full check):
-//! two-sided, a value more than [`COMMITTED_TOLERANCE`] times the committed one or less than
+//! A spec's threshold applies to every cell matching its axes ([`Threshold::matches`], an axis
+//! left out matching any value); a cell fails when its RMS exceeds the maximum ([`check_rows`]).
+//! Besides, each results file's rows are compared with the committed file's
+//! (`results/quick/NAME` for `--quick`, `results/NAME` for a full check) by one comparator
+//! ([`check_committed`]), each row with the committed row of the same name on three values,
+//! two-sided: a value more than [`COMMITTED_TOLERANCE`] times the committed one or less than
 //! its inverse fails, so a doubled error fails and so does an error that drops to 0 (a silent
-//! fallback to ray casting, a field that reads the reference) ([`check_committed`]). The rows
-//! of the spec's other methods (`methods.csv`) are compared the same way, each by its scene
-//! and setting ([`check_committed_methods`]), and an animated spec's frames (`frames.csv`)
-//! by scene, frame, method and field cell ([`check_committed_frames`]).
+//! fallback to ray casting, a field that reads the reference). What differs between the files
+//! is their [`Compared`]: which columns name a row, which values are compared, and whether rows
+//! are per-frame methods' ([`TABLE`], a spec's cells; [`METHODS`], its other methods' rows;
+//! [`FRAMES`], an animated spec's frames; [`DYNAMIC`], `experiment dynamic`'s rows).
 
-pub use super::cells::threshold_matches;
-use super::cells::Cell;
 use super::columns::NamedRow;
 use super::spec::Threshold;
 use super::table::Row;
-use crate::field::FieldParams;
 
 /// How far a cell's error may move from the committed run's, as a factor either way.
 pub const COMMITTED_TOLERANCE: f64 = 1.25;
@@ -36,11 +34,9 @@ pub enum Rule {
 /// A cell whose RMS broke a rule.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Failure {
-    /// The cell id.
+    /// The cell id, or the row's name ([`Compared::name`]).
     pub cell: String,
-    /// "rms_vertex", "rms_image" or "rms_vs_truth" (for `experiment dynamic`'s rows:
-    /// "rms_vs_raycast", "rms_vs_truth" or "mean_ao"; for an animated spec's frames:
-    /// "rms_vs_raycast", "rms_vs_truth" or "mean_value").
+    /// "rms_vertex", "rms_image" or "rms_vs_truth", or another of [`Compared::metrics`].
     pub metric: &'static str,
     pub value: f64,
     pub rule: Rule,
@@ -67,31 +63,14 @@ impl std::fmt::Display for Failure {
     }
 }
 
-fn row_cell(r: &Row) -> Cell {
-    Cell {
-        scene: 0,
-        params: FieldParams {
-            sphere: r.sphere,
-            count: r.positional_samples,
-            layout: r.layout,
-            res: r.directional_res,
-            precision: r.precision,
-        },
-        selection: r.selection,
-        backend: r.backend,
-        normal_bits: r.normal_bits,
-    }
-}
-
 /// Every (row, threshold) where a measured RMS exceeds the threshold's maximum. A missing
 /// measurement (no image) fails too: the threshold cannot be verified.
 pub fn check_rows(thresholds: &[Threshold], rows: &[Row]) -> Vec<Failure> {
     let mut out = Vec::new();
     for r in rows {
-        let cell = row_cell(r);
-        for t in thresholds
-            .iter()
-            .filter(|t| threshold_matches(t, &r.scene, &cell))
+        let params = r.params();
+        for t in
+            (thresholds.iter()).filter(|t| t.matches(&r.scene, &params, r.selection, r.backend))
         {
             for (metric, max, value) in [
                 ("rms_vertex", t.rms_vertex_max, r.rms_vertex),
@@ -113,200 +92,134 @@ pub fn check_rows(thresholds: &[Threshold], rows: &[Row]) -> Vec<Failure> {
     out
 }
 
-/// The errors of a row that the committed run is compared on.
-fn compared(r: &Row) -> Compared {
-    [
-        ("rms_vertex", r.rms_vertex),
-        ("rms_image", r.rms_image),
-        ("rms_vs_truth", r.rms_vs_truth),
-    ]
+/// What of a results file [`check_committed`] compares.
+pub struct Compared {
+    /// A row's name: it is compared with the committed row of the same name, and a failure
+    /// names it.
+    pub name: fn(&NamedRow) -> String,
+    /// The three values compared.
+    pub metrics: [&'static str; 3],
+    /// Whether the rows are per-frame methods': then the rows of a `method` the committed run
+    /// has none of (Embree's, in a build with the `embree` feature against a run without it)
+    /// are left out and counted, and a committed row the run lost fails (left out and counted
+    /// too where this build cannot run its method: Embree's without `--features embree`).
+    pub per_method: bool,
 }
 
-/// Every row's errors against the same cell (scene and cell id) of `committed`, two-sided:
-/// a value outside `committed / COMMITTED_TOLERANCE ..= committed × COMMITTED_TOLERANCE` fails,
-/// as does a value the run measured that the committed run lacks, or one it lost (NaN or
-/// missing where the committed run has one). A committed 0 admits only 0.
-pub fn check_committed(rows: &[Row], committed: &[Row]) -> Vec<Failure> {
-    let keyed = |rows: &[Row]| -> Vec<(String, String, Compared)> {
-        rows.iter()
-            .map(|r| (r.scene.clone(), r.cell.clone(), compared(r)))
-            .collect()
-    };
-    against_committed(&keyed(rows), &keyed(committed))
-}
+const ERRORS: [&str; 3] = ["rms_vertex", "rms_image", "rms_vs_truth"];
 
-/// [`check_committed`] for the rows of `methods.csv`: each row against the committed row of
-/// the same scene, setting and backend, on the same three errors (named `SCENE/SETTING`, with
-/// `@gpu` for a setting on the GPU).
-pub fn check_committed_methods(rows: &[NamedRow], committed: &[NamedRow]) -> Vec<Failure> {
-    let keyed = |rows: &[NamedRow]| -> Vec<(String, String, Compared)> {
-        rows.iter()
-            .map(|r| {
-                let (scene, setting) =
-                    (r.get("scene").unwrap_or(""), r.get("setting").unwrap_or(""));
-                // A setting on the GPU is its own row (`SCENE/SETTING@gpu`).
-                let on = match r.get("backend") {
-                    None | Some("") | Some("cpu") => String::new(),
-                    Some(b) => format!("@{b}"),
-                };
-                let metric = |m: &'static str| (m, r.number(m));
-                (
-                    scene.to_string(),
-                    format!("{scene}/{setting}{on}"),
-                    [
-                        metric("rms_vertex"),
-                        metric("rms_image"),
-                        metric("rms_vs_truth"),
-                    ],
-                )
-            })
-            .collect()
-    };
-    against_committed(&keyed(rows), &keyed(committed))
-}
+/// A spec's `table.csv`: each cell by its id.
+pub const TABLE: Compared = Compared {
+    name: |r| col(r, "cell").into(),
+    metrics: ERRORS,
+    per_method: false,
+};
 
-/// [`check_committed`] for the rows of `experiment dynamic`'s `table.csv`: each (sweep,
-/// casters, frame, gap, method) on its same-ray RMS, its RMS against the frame's converged
-/// reference and its mean AO, against the committed row with the same key (named
-/// `SWEEP/N=…/frame=…/METHOD`). Rows of methods the committed run has none of (Embree's, in a
-/// build with the `embree` feature against a run without it) are left out and counted in the
-/// second value returned.
-pub fn check_committed_dynamic(rows: &[NamedRow], committed: &[NamedRow]) -> (Vec<Failure>, usize) {
-    let id = |r: &NamedRow| {
-        let g = |k: &str| r.get(k).unwrap_or("");
-        let gap = match g("gap_radii") {
-            "" => String::new(),
-            v => format!("/gap={v}"),
+/// A spec's `methods.csv`: each row by its scene and setting, `SCENE/SETTING`, and `@gpu` after
+/// it for a setting on the GPU (its own row).
+pub const METHODS: Compared = Compared {
+    name: |r| {
+        let on = match col(r, "backend") {
+            "" | "cpu" => String::new(),
+            b => format!("@{b}"),
         };
-        (
-            g("sweep").to_string(),
-            format!(
-                "{}/N={}/frame={}{gap}/{}",
-                g("sweep"),
-                g("casters"),
-                g("frame"),
-                g("method")
-            ),
-        )
-    };
-    check_committed_per_method(
-        rows,
-        committed,
-        id,
-        ["rms_vs_raycast", "rms_vs_truth", "mean_ao"],
-    )
+        format!("{}/{}{on}", col(r, "scene"), col(r, "setting"))
+    },
+    metrics: ERRORS,
+    per_method: false,
+};
+
+/// `experiment dynamic`'s `table.csv`: each (sweep, casters, frame, gap, method),
+/// `SWEEP/N=…/frame=…/METHOD` (`/gap=…` before the method where set), on its same-ray RMS, its
+/// RMS against the frame's converged reference and its mean AO.
+pub const DYNAMIC: Compared = Compared {
+    name: |r| {
+        let (sweep, n, frame) = (col(r, "sweep"), col(r, "casters"), col(r, "frame"));
+        let gap = then("/gap=", col(r, "gap_radii"));
+        format!("{sweep}/N={n}/frame={frame}{gap}/{}", col(r, "method"))
+    },
+    metrics: ["rms_vs_raycast", "rms_vs_truth", "mean_ao"],
+    per_method: true,
+};
+
+/// An animated spec's `frames.csv`: each (scene, frame, method, field cell),
+/// `SCENE/frame=…/METHOD` and `/CELL` after it for a field method.
+pub const FRAMES: Compared = Compared {
+    name: |r| {
+        let (scene, frame, method) = (col(r, "scene"), col(r, "frame"), col(r, "method"));
+        let cell = then("/", col(r, "cell"));
+        format!("{scene}/frame={frame}/{method}{cell}")
+    },
+    metrics: ["rms_vs_raycast", "rms_vs_truth", "mean_value"],
+    per_method: true,
+};
+
+/// Column `name` of `r` (empty where it has none).
+fn col<'r>(r: &'r NamedRow, name: &str) -> &'r str {
+    r.get(name).unwrap_or("")
 }
 
-/// [`check_committed`] for an animated spec's `frames.csv`: each (scene, frame, method, field
-/// cell) on `rms_vs_raycast`, `rms_vs_truth` and `mean_value` against the committed row with
-/// the same key (named `SCENE/frame=…/METHOD` and `/CELL` for a field method); rows of
-/// methods the committed run has none of are left out and counted, as in
-/// [`check_committed_dynamic`].
-pub fn check_committed_frames(rows: &[NamedRow], committed: &[NamedRow]) -> (Vec<Failure>, usize) {
-    let id = |r: &NamedRow| {
-        let g = |k: &str| r.get(k).unwrap_or("");
-        let cell = match g("cell") {
-            "" => String::new(),
-            c => format!("/{c}"),
-        };
-        (
-            g("scene").to_string(),
-            format!("{}/frame={}/{}{cell}", g("scene"), g("frame"), g("method")),
-        )
-    };
-    check_committed_per_method(
-        rows,
-        committed,
-        id,
-        ["rms_vs_raycast", "rms_vs_truth", "mean_value"],
-    )
+/// `prefix` then `v`, or nothing where `v` is empty.
+fn then(prefix: &str, v: &str) -> String {
+    format!("{}{v}", if v.is_empty() { "" } else { prefix })
 }
 
-/// Rows of per-frame methods against the committed ones by `id` ((group, name)) on `metrics`:
-/// a committed row the run lost fails; rows of a `method` the committed run has none of are
-/// left out and counted.
-fn check_committed_per_method(
+/// Each of `rows` against the committed row of the same name (`file`'s) on `file`'s three
+/// values, two-sided: a value outside `committed / COMMITTED_TOLERANCE ..= committed ×
+/// COMMITTED_TOLERANCE` fails, as does a value the run measured that the committed run lacks,
+/// or one it lost (NaN or missing where the committed run has one). A committed 0 admits only
+/// 0. Also the rows left out and counted, for per-frame methods ([`Compared::per_method`]).
+pub fn check_committed(
+    file: &Compared,
     rows: &[NamedRow],
     committed: &[NamedRow],
-    id: impl Fn(&NamedRow) -> (String, String),
-    metrics: [&'static str; 3],
 ) -> (Vec<Failure>, usize) {
-    let has = |m: &str| committed.iter().any(|r| r.get("method") == Some(m));
-    let keyed = |rows: &[NamedRow]| -> Vec<(String, String, Compared)> {
-        rows.iter()
-            .map(|r| {
-                let (group, name) = id(r);
-                (group, name, metrics.map(|m| (m, r.number(m))))
-            })
-            .collect()
-    };
-    let (kept, left): (Vec<NamedRow>, Vec<NamedRow>) = rows
-        .iter()
-        .cloned()
-        .partition(|r| has(r.get("method").unwrap_or("")));
-    let (ours, theirs) = (keyed(&kept), keyed(committed));
-    let mut failures = against_committed(&ours, &theirs);
-    // A committed row the run lost (a method or a frame no longer run); the rows of a method
-    // this build lacks (Embree's without `--features embree`) are left out and counted.
-    let mut missing_here = 0;
-    for ((_, id, t), r) in theirs.iter().zip(committed) {
-        if !built(r.get("method").unwrap_or("")) {
-            missing_here += 1;
-            continue;
-        }
-        if !ours.iter().any(|(_, i, _)| i == id) {
-            failures.push(Failure {
-                cell: id.clone(),
-                metric: t[0].0,
-                value: f64::NAN,
-                rule: Rule::Committed(t[0].1.unwrap_or(f64::NAN)),
-            });
-        }
-    }
-    (failures, left.len() + missing_here)
-}
-
-/// Whether this build can run the per-frame method `method`: Embree's need `--features embree`.
-fn built(method: &str) -> bool {
-    cfg!(feature = "embree") || !method.starts_with("embree")
-}
-
-/// The errors a row is compared on, by name.
-type Compared = [(&'static str, Option<f64>); 3];
-
-/// Each (scene, id, errors) against the committed one of the same scene and id.
-fn against_committed(
-    rows: &[(String, String, Compared)],
-    committed: &[(String, String, Compared)],
-) -> Vec<Failure> {
+    let theirs: Vec<String> = committed.iter().map(file.name).collect();
+    let has = |m: &str| committed.iter().any(|c| col(c, "method") == m);
+    let (ours, left): (Vec<&NamedRow>, Vec<&NamedRow>) =
+        (rows.iter()).partition(|r| !file.per_method || has(col(r, "method")));
+    let names: Vec<String> = ours.iter().map(|r| (file.name)(r)).collect();
     let mut out = Vec::new();
-    for (scene, id, ours) in rows {
-        let theirs = committed
-            .iter()
-            .find(|(s, i, _)| s == scene && i == id)
-            .map(|(_, _, t)| t);
-        for (i, &(metric, value)) in ours.iter().enumerate() {
-            let base = theirs.and_then(|t| t[i].1).filter(|b| b.is_finite());
+    for (r, name) in ours.iter().zip(&names) {
+        let at = theirs.iter().position(|n| n == name);
+        for metric in file.metrics {
+            let base = at.and_then(|i| committed[i].number(metric));
             let fail = |value: f64, rule| Failure {
-                cell: id.clone(),
+                cell: name.clone(),
                 metric,
                 value,
                 rule,
             };
-            match (value, base) {
+            match (r.number(metric), base.filter(|b| b.is_finite())) {
                 (None, None) => {}
                 (Some(v), None) => out.push(fail(v, Rule::NotCommitted)),
                 (None, Some(b)) => out.push(fail(f64::NAN, Rule::Committed(b))),
                 (Some(v), Some(b)) => {
-                    let inside = v >= b / COMMITTED_TOLERANCE && v <= b * COMMITTED_TOLERANCE;
-                    if !inside {
+                    if !(b / COMMITTED_TOLERANCE..=b * COMMITTED_TOLERANCE).contains(&v) {
                         out.push(fail(v, Rule::Committed(b)));
                     }
                 }
             }
         }
     }
-    out
+    let mut left = left.len();
+    // A committed row the run lost (a method or a frame no longer run); the rows of a method
+    // this build lacks (Embree's without `--features embree`) are left out and counted.
+    for (c, name) in committed.iter().zip(&theirs).filter(|_| file.per_method) {
+        if !cfg!(feature = "embree") && col(c, "method").starts_with("embree") {
+            left += 1;
+        } else if !names.contains(name) {
+            let metric = file.metrics[0];
+            let rule = Rule::Committed(c.number(metric).unwrap_or(f64::NAN));
+            out.push(Failure {
+                cell: name.clone(),
+                metric,
+                value: f64::NAN,
+                rule,
+            });
+        }
+    }
+    (out, left)
 }
 
 #[cfg(test)]
@@ -328,14 +241,26 @@ mod tests {
         r
     }
 
+    /// Table rows against committed ones, read as named columns.
+    fn check_table(rows: &[Row], committed: &[Row]) -> Vec<Failure> {
+        let named = |rows: &[Row]| -> Vec<NamedRow> {
+            rows.iter()
+                .map(crate::experiment::columns::of_serialized)
+                .collect()
+        };
+        let (f, left) = check_committed(&TABLE, &named(rows), &named(committed));
+        assert_eq!(left, 0);
+        f
+    }
+
     #[test]
     fn the_committed_run_is_a_two_sided_bound() {
         let committed = [row("a", 2.0), row("b", 0.5)];
         // The same values pass, and so does a drift inside the factor.
-        assert!(check_committed(&committed, &committed).is_empty());
-        assert!(check_committed(&[row("a", 2.4)], &committed).is_empty());
+        assert!(check_table(&committed, &committed).is_empty());
+        assert!(check_table(&[row("a", 2.4)], &committed).is_empty());
         // A doubled error fails, naming the cell, the metric and the bound.
-        let f = check_committed(&[row("a", 4.0)], &committed);
+        let f = check_table(&[row("a", 4.0)], &committed);
         assert_eq!(
             f.iter().map(|f| f.metric).collect::<Vec<_>>(),
             ["rms_image", "rms_vs_truth"]
@@ -344,7 +269,7 @@ mod tests {
         // An error that drops to 0 fails too (rms_vs_truth stays at 1 inside 1.5 / 1.25).
         let mut zero = row("b", 0.0);
         zero.rms_vs_truth = Some(1.5);
-        let f = check_committed(&[zero], &committed);
+        let f = check_table(&[zero], &committed);
         assert_eq!(f.len(), 1);
         assert_eq!(
             (f[0].metric, f[0].rule),
@@ -353,8 +278,8 @@ mod tests {
         // A value lost, and a cell the committed run lacks.
         let mut lost = row("a", 2.0);
         lost.rms_image = None;
-        assert_eq!(check_committed(&[lost], &committed).len(), 1);
-        let f = check_committed(&[row("c", 1.0)], &committed);
+        assert_eq!(check_table(&[lost], &committed).len(), 1);
+        let f = check_table(&[row("c", 1.0)], &committed);
         assert!(f.iter().all(|f| f.rule == Rule::NotCommitted) && f.len() == 2);
     }
 
@@ -378,10 +303,11 @@ mod tests {
             frame("field", 0, 4.0),
             frame("field", 1, 4.2),
         ];
-        let (f, left) = check_committed_dynamic(&committed, &committed);
+        let (f, left) = check_committed(&DYNAMIC, &committed, &committed);
         assert!(f.is_empty() && left == 0);
         // A field error doubled on one frame fails, named by its key.
-        let (f, _) = check_committed_dynamic(
+        let (f, _) = check_committed(
+            &DYNAMIC,
             &[
                 frame("world_rebuild", 0, 0.0),
                 frame("field", 0, 8.0),
@@ -396,7 +322,8 @@ mod tests {
         );
         // The reference's own 0 admits only 0; a lost frame fails; a method the committed run
         // has none of is left out and counted.
-        let (f, left) = check_committed_dynamic(
+        let (f, left) = check_committed(
+            &DYNAMIC,
             &[
                 frame("world_rebuild", 0, 0.1),
                 frame("field", 0, 4.0),
@@ -412,7 +339,7 @@ mod tests {
         // A committed Embree row the run lacks: lost in a build with Embree, left out and
         // counted in one without it.
         let with_embree = [committed.to_vec(), vec![frame("embree_instances", 0, 0.0)]].concat();
-        let (f, left) = check_committed_dynamic(&committed, &with_embree);
+        let (f, left) = check_committed(&DYNAMIC, &committed, &with_embree);
         if cfg!(feature = "embree") {
             assert_eq!((f.len(), left), (1, 0));
             assert_eq!(f[0].cell, "crowd/N=4/frame=0/embree_instances");
@@ -440,10 +367,11 @@ mod tests {
             frame_row("field", "a", 0, 4.0),
             frame_row("field", "b", 0, 2.0),
         ];
-        let (f, left) = check_committed_frames(&committed, &committed);
+        let (f, left) = check_committed(&FRAMES, &committed, &committed);
         assert!(f.is_empty() && left == 0);
         // The cells of one method are told apart: b's error doubled fails, named with its cell.
-        let (f, _) = check_committed_frames(
+        let (f, _) = check_committed(
+            &FRAMES,
             &[
                 frame_row("world_rebuild", "", 0, 0.0),
                 frame_row("field", "a", 0, 4.0),
@@ -457,7 +385,8 @@ mod tests {
             ("multi/frame=0/field/b", "rms_vs_raycast")
         );
         // A lost cell fails; a method the committed run lacks is counted, not compared.
-        let (f, left) = check_committed_frames(
+        let (f, left) = check_committed(
+            &FRAMES,
             &[
                 frame_row("world_rebuild", "", 0, 0.0),
                 frame_row("field", "a", 0, 4.0),
@@ -470,5 +399,17 @@ mod tests {
             f.iter().map(|f| f.cell.as_str()).collect::<Vec<_>>(),
             ["multi/frame=0/field/b"]
         );
+    }
+
+    #[test]
+    fn method_rows_are_named_by_scene_setting_and_backend() {
+        let mut r = NamedRow::new();
+        r.push("scene", "s")
+            .push("setting", "embree")
+            .push("backend", "gpu")
+            .push("rms_image", 1.0);
+        assert_eq!((METHODS.name)(&r), "s/embree@gpu");
+        let (f, left) = check_committed(&METHODS, &[r], &[]);
+        assert_eq!((f.len(), left, f[0].rule), (1, 0, Rule::NotCommitted));
     }
 }

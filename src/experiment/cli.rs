@@ -1,5 +1,7 @@
 //! The `experiment` command line.
 
+use super::check::{self, check_committed};
+use super::columns::{of_serialized, read_csv};
 use super::discover;
 use super::fields::FieldSupply;
 use super::run::{staging, LoadedSpec, RunOptions};
@@ -379,7 +381,7 @@ fn list() -> Result<i32> {
 }
 
 /// Runs the specs and checks their thresholds and the committed runs
-/// ([`super::check::check_committed`]); exit code 1 naming each failure (a cell past its
+/// ([`check_committed`]); exit code 1 naming each failure (a cell past its
 /// threshold, a cell away from its committed value, a spec without a committed run, or a spec
 /// that failed to run).
 /// Every spec by default (the embedded quickstart too), or the ones named. Where no Vulkan
@@ -529,7 +531,7 @@ fn check(
         }
         match run_loaded(&ls, args, Some(&parent)) {
             Ok(report) => {
-                let mut f = super::check::check_rows(&report.thresholds, &report.rows);
+                let mut f = check::check_rows(&report.thresholds, &report.rows);
                 let animated = ls.spec.animation.is_some();
                 let table = if animated { "frames.csv" } else { "table.csv" };
                 let committed = committed_root.join(&name).join(table);
@@ -537,8 +539,9 @@ fn check(
                     let read = if animated {
                         committed_frames(&report.out, &committed)
                     } else {
-                        super::outputs::read_csv(&committed).and_then(|rows| {
-                            let mut f = super::check::check_committed(&report.rows, &rows);
+                        read_csv(&committed).and_then(|theirs| {
+                            let ours: Vec<_> = report.rows.iter().map(of_serialized).collect();
+                            let (mut f, _) = check_committed(&check::TABLE, &ours, &theirs);
                             f.extend(committed_methods(&report.out, &committed)?);
                             Ok(f)
                         })
@@ -618,14 +621,14 @@ fn check_flags(names: &[String], args: &RunArgs) -> Result<()> {
 }
 
 /// `experiment dynamic` run under `parent` and its rows checked against the committed run
-/// ([`super::check::check_committed_dynamic`]); the failures, named.
+/// ([`check::DYNAMIC`]); the failures, named.
 fn check_dynamic(args: &RunArgs, parent: &Path, committed_root: &Path) -> Result<Vec<String>> {
     args.embree_built("dynamic")?;
     let o = args.options("dynamic", Some(parent))?;
     let t = std::time::Instant::now();
     super::dynamic::run(&o.out, o.quick, &o.supply, o.allow_nonempty_out)?;
     let committed = committed_root.join("dynamic").join("table.csv");
-    let theirs = match super::columns::read_csv(&committed) {
+    let theirs = match read_csv(&committed) {
         Ok(rows) => rows,
         Err(e) => {
             return Ok(vec![format!(
@@ -635,8 +638,8 @@ fn check_dynamic(args: &RunArgs, parent: &Path, committed_root: &Path) -> Result
             )])
         }
     };
-    let ours = super::columns::read_csv(&o.out.join("table.csv"))?;
-    let (f, left) = super::check::check_committed_dynamic(&ours, &theirs);
+    let ours = read_csv(&o.out.join("table.csv"))?;
+    let (f, left) = check_committed(&check::DYNAMIC, &ours, &theirs);
     if left > 0 {
         println!(
             "dynamic: {left} row(s) of methods the committed run lacks (Embree's, in a build \
@@ -654,10 +657,10 @@ fn check_dynamic(args: &RunArgs, parent: &Path, committed_root: &Path) -> Result
 }
 
 /// An animated run's `frames.csv` (in `out`) against the committed one
-/// ([`super::check::check_committed_frames`]); an error where the committed file is missing.
-fn committed_frames(out: &Path, committed: &Path) -> Result<Vec<super::check::Failure>> {
-    let mut theirs = super::columns::read_csv(committed)?;
-    let ours = super::columns::read_csv(&out.join("frames.csv"))?;
+/// ([`check::FRAMES`]); an error where the committed file is missing.
+fn committed_frames(out: &Path, committed: &Path) -> Result<Vec<check::Failure>> {
+    let mut theirs = read_csv(committed)?;
+    let ours = read_csv(&out.join("frames.csv"))?;
     // The committed rows of a method this run skipped on its device (ray queries on an
     // adapter without them; run.json's `skipped_methods`) are not compared.
     let skipped: Vec<String> = read_run_json(out)["skipped_methods"]
@@ -676,7 +679,7 @@ fn committed_frames(out: &Path, committed: &Path) -> Result<Vec<super::check::Fa
             skipped.join(", ")
         );
     }
-    let (f, left) = super::check::check_committed_frames(&ours, &theirs);
+    let (f, left) = check_committed(&check::FRAMES, &ours, &theirs);
     if left > 0 {
         println!(
             "{}: {left} frame row(s) of methods the committed run lacks (Embree's, in a build \
@@ -691,8 +694,7 @@ fn committed_frames(out: &Path, committed: &Path) -> Result<Vec<super::check::Fa
 /// The run's `methods.csv` rows against the committed ones beside `committed_table` (the
 /// committed `table.csv`); a run without method rows compares nothing, and a run with them
 /// against a committed run without `methods.csv` fails each row as not committed.
-fn committed_methods(out: &Path, committed_table: &Path) -> Result<Vec<super::check::Failure>> {
-    use super::columns::read_csv;
+fn committed_methods(out: &Path, committed_table: &Path) -> Result<Vec<check::Failure>> {
     let ours = out.join("methods.csv");
     if !ours.is_file() {
         return Ok(Vec::new());
@@ -703,10 +705,7 @@ fn committed_methods(out: &Path, committed_table: &Path) -> Result<Vec<super::ch
     } else {
         Vec::new()
     };
-    Ok(super::check::check_committed_methods(
-        &read_csv(&ours)?,
-        &committed,
-    ))
+    Ok(check_committed(&check::METHODS, &read_csv(&ours)?, &committed).0)
 }
 
 /// Whether two paths name the same file.

@@ -78,18 +78,6 @@ pub struct RunTables<'a> {
     pub pairs: &'a [PairRow],
 }
 
-/// Whether `r` has every axis `c` sets (scene given separately, for sums).
-fn matches(c: &PaperCell, scene: Option<&str>, r: &Row) -> bool {
-    scene.is_none_or(|s| s == r.scene)
-        && c.sphere.is_none_or(|s| s == r.sphere)
-        && c.positional_samples
-            .is_none_or(|n| n == r.positional_samples)
-        && c.directional_res.is_none_or(|n| n == r.directional_res)
-        && c.layout.is_none_or(|l| l == r.layout)
-        && c.precision.is_none_or(|p| p == r.precision)
-        && c.selection.is_none_or(|s| s == r.selection)
-}
-
 /// The row's rays of one evaluation; none where its table predates the column (0).
 fn rays_of(r: &Row) -> Option<u64> {
     (r.rays_cast > 0).then_some(r.rays_cast)
@@ -135,10 +123,11 @@ fn versus(r: &Row, v: crate::field::Precision, pairs: &[PairRow]) -> (Option<f64
 
 /// Our side of `c`, from the source it names; none when this run has nothing for it.
 fn ours(c: &PaperCell, t: &RunTables) -> Option<Ours> {
-    let first = |scene: Option<&str>| t.rows.iter().find(|r| matches(c, scene, r));
+    let matching = |r: &&Row| c.matches(&r.scene, &r.params(), r.selection, r.backend);
+    let first = || t.rows.iter().find(matching);
     match &c.ours {
         OursSource::Table => {
-            let r = first(c.scene.as_deref())?;
+            let r = first()?;
             let mut o = from_row(r);
             if let Some(v) = c.versus_precision {
                 (o.rms_image, o.rms_vertex) = versus(r, v, t.pairs);
@@ -146,7 +135,7 @@ fn ours(c: &PaperCell, t: &RunTables) -> Option<Ours> {
             Some(o)
         }
         OursSource::RaycastSweep { rays_per_point: k } => {
-            let r = first(c.scene.as_deref())?;
+            let r = first()?;
             let s = t
                 .sweep
                 .iter()
@@ -166,13 +155,13 @@ fn ours(c: &PaperCell, t: &RunTables) -> Option<Ours> {
             })
         }
         OursSource::SumOfScenes { scenes } => {
-            let head = first(Some(scenes.first()?))?;
-            let rows: Vec<&Row> = scenes
-                .iter()
+            let on = |n: &String, r: &&Row| r.scene == *n && matching(r);
+            let head = (scenes.first()).and_then(|n| t.rows.iter().find(|r| on(n, r)))?;
+            let rows: Vec<&Row> = (scenes.iter())
                 .map(|n| {
                     t.rows
                         .iter()
-                        .find(|r| r.backend == head.backend && matches(c, Some(n), r))
+                        .find(|r| r.backend == head.backend && on(n, r))
                 })
                 .collect::<Option<_>>()?;
             let sum_u = |f: &dyn Fn(&Row) -> Option<u64>| rows.iter().map(|r| f(r)).sum();

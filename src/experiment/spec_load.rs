@@ -6,7 +6,7 @@
 //! methods and the cells: each kind's and method's own options, whether every setting answers
 //! the kind, whether every threshold matches a cell.
 
-use super::cells::{cells_of, threshold_matches};
+use super::cells::cells_of;
 use super::kinds::{self, Kind};
 use super::spec::{Backend, Spec, SpecError, Threshold};
 use super::validate::{
@@ -296,10 +296,9 @@ impl Validator<'_> {
                 format!("\"{}\" has no per-vertex values", kind.name()),
             ));
         }
-        let cells = cells_of(s);
-        if !cells
+        if !cells_of(s)
             .iter()
-            .any(|c| threshold_matches(t, &s.scenes[c.scene].name, c))
+            .any(|c| t.matches(&s.scenes[c.scene].name, &c.params, c.selection, c.backend))
         {
             return Err(self.err(path, "matches no cell of the spec".into()));
         }

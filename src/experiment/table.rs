@@ -21,7 +21,7 @@
 use super::columns::{self, NamedRow};
 use super::spec::Backend;
 use super::Result;
-use crate::field::{Precision, Selection};
+use crate::field::{FieldParams, Precision, Selection};
 use crate::sampling::{LayoutKind, SphereKind};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -362,6 +362,19 @@ impl TableRow {
             out.push(name.clone(), v);
         }
         out
+    }
+}
+
+impl Row {
+    /// The row's field.
+    pub fn params(&self) -> FieldParams {
+        FieldParams {
+            sphere: self.sphere,
+            count: self.positional_samples,
+            layout: self.layout,
+            res: self.directional_res,
+            precision: self.precision,
+        }
     }
 }
 

@@ -479,64 +479,82 @@ pub struct PaperNumbers {
     pub cells: Vec<PaperCell>,
 }
 
-/// One cell of a paper's table, and which of our cells it corresponds to (an axis left out
-/// matches any value; the first matching row on the first backend is used).
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct PaperCell {
-    /// Row label in `paper_vs_ours.csv`.
-    pub label: String,
-    /// Our scene (by name).
-    #[serde(default)]
-    pub scene: Option<String>,
-    /// Our positional sample set.
-    #[serde(default)]
-    pub sphere: Option<SphereKind>,
-    /// Positional samples (maps).
-    #[serde(default)]
-    pub positional_samples: Option<usize>,
-    /// Directional resolution (res × res).
-    #[serde(default)]
-    pub directional_res: Option<u32>,
-    /// Directional layout.
-    #[serde(default)]
-    pub layout: Option<LayoutKind>,
-    /// Stored precision.
-    #[serde(default)]
-    pub precision: Option<Precision>,
-    /// Map selection.
-    #[serde(default)]
-    pub selection: Option<Selection>,
-    /// When set, the paper's RMS is between this cell and the same cell at this precision (the
-    /// slides' 8 vs 16 bit), not against the reference.
-    #[serde(default)]
-    pub versus_precision: Option<Precision>,
-    /// Which of our measurements the cell pairs with, where the table's first matching row
-    /// is not it (default: that row).
-    #[serde(default)]
-    pub ours: OursSource,
-    /// Triangles of the paper's model.
-    #[serde(default)]
-    pub triangles: Option<u64>,
-    /// Rays the paper cast (receiver points × rays per point).
-    #[serde(default)]
-    pub rays_cast: Option<u64>,
-    /// The paper's ray-cast time, seconds.
-    #[serde(default)]
-    pub raycast_s: Option<f64>,
-    /// The paper's preprocessing (bake) time, seconds.
-    #[serde(default)]
-    pub preprocess_s: Option<f64>,
-    /// The paper's time of the estimate through the field (AO, shadows or reflections),
-    /// seconds (`ao_s` is read as this).
-    #[serde(default, alias = "ao_s")]
-    pub estimate_s: Option<f64>,
-    /// The paper's RMS (0–255, on images).
-    #[serde(default)]
-    pub rms: Option<f64>,
-    /// Remarks (uncertain cells, machines).
-    #[serde(default)]
-    pub note: Option<String>,
+/// A struct whose first fields are a cell's axes (each optional: absent, none) with their one
+/// matcher, `matches`: a threshold and a paper cell pick cells by them. Fields of each struct,
+/// not one struct flattened into both, so that serde's errors still name the field
+/// (`thresholds[0].sphere`) and an unknown key is refused (`deny_unknown_fields`).
+macro_rules! with_cell_axes {
+    ($(#[$attr:meta])* pub struct $name:ident { $($fields:tt)* }) => {
+        $(#[$attr])*
+        pub struct $name {
+            /// Scene name.
+            pub scene: Option<String>,
+            /// Positional sample set.
+            pub sphere: Option<SphereKind>,
+            /// Positional samples (maps).
+            pub positional_samples: Option<usize>,
+            /// Directional resolution (res × res).
+            pub directional_res: Option<u32>,
+            /// Directional layout.
+            pub layout: Option<LayoutKind>,
+            /// Stored precision.
+            pub precision: Option<Precision>,
+            /// Map selection.
+            pub selection: Option<Selection>,
+            /// Backend.
+            pub backend: Option<Backend>,
+            $($fields)*
+        }
+
+        impl $name {
+            /// Whether the cell on scene `scene` of field `p`, read with selection `s` on backend
+            /// `b`, has every axis this sets (an axis left out matches any value).
+            pub fn matches(&self, scene: &str, p: &FieldParams, s: Selection, b: Backend) -> bool {
+                self.scene.as_ref().is_none_or(|x| x == scene)
+                    && self.sphere.is_none_or(|x| x == p.sphere)
+                    && self.positional_samples.is_none_or(|x| x == p.count)
+                    && self.directional_res.is_none_or(|x| x == p.res)
+                    && self.layout.is_none_or(|x| x == p.layout)
+                    && self.precision.is_none_or(|x| x == p.precision)
+                    && self.selection.is_none_or(|x| x == s)
+                    && self.backend.is_none_or(|x| x == b)
+            }
+        }
+    };
+}
+
+with_cell_axes! {
+    /// One cell of a paper's table, and which of our cells it corresponds to: the first row
+    /// matching its axes (so the first backend's, unless `backend` names one).
+    #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+    #[serde(deny_unknown_fields)]
+    pub struct PaperCell {
+        /// Row label in `paper_vs_ours.csv`.
+        pub label: String,
+        /// When set, the paper's RMS is between this cell and the same cell at this precision
+        /// (the slides' 8 vs 16 bit), not against the reference.
+        pub versus_precision: Option<Precision>,
+        /// Which of our measurements the cell pairs with, where the table's first matching row
+        /// is not it (default: that row).
+        #[serde(default)]
+        pub ours: OursSource,
+        /// Triangles of the paper's model.
+        pub triangles: Option<u64>,
+        /// Rays the paper cast (receiver points × rays per point).
+        pub rays_cast: Option<u64>,
+        /// The paper's ray-cast time, seconds.
+        pub raycast_s: Option<f64>,
+        /// The paper's preprocessing (bake) time, seconds.
+        pub preprocess_s: Option<f64>,
+        /// The paper's time of the estimate through the field (AO, shadows or reflections),
+        /// seconds (`ao_s` is read as this).
+        #[serde(alias = "ao_s")]
+        pub estimate_s: Option<f64>,
+        /// The paper's RMS (0–255, on images).
+        pub rms: Option<f64>,
+        /// Remarks (uncertain cells, machines).
+        pub note: Option<String>,
+    }
 }
 
 /// Where a paper cell's `ours_*` values come from (see `experiment::paper`). Every source
@@ -558,40 +576,17 @@ pub enum OursSource {
     SumOfScenes { scenes: Vec<String> },
 }
 
-/// An RMS threshold for `experiment check`, over the cells matching its axes (all when unset).
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Threshold {
-    /// Scene name.
-    #[serde(default)]
-    pub scene: Option<String>,
-    /// Positional sample set.
-    #[serde(default)]
-    pub sphere: Option<SphereKind>,
-    /// Positional samples (maps).
-    #[serde(default)]
-    pub positional_samples: Option<usize>,
-    /// Directional resolution (res × res).
-    #[serde(default)]
-    pub directional_res: Option<u32>,
-    /// Directional layout.
-    #[serde(default)]
-    pub layout: Option<LayoutKind>,
-    /// Stored precision.
-    #[serde(default)]
-    pub precision: Option<Precision>,
-    /// Map selection.
-    #[serde(default)]
-    pub selection: Option<Selection>,
-    /// Backend.
-    #[serde(default)]
-    pub backend: Option<Backend>,
-    /// Largest allowed per-vertex RMS (0–255).
-    #[serde(default)]
-    pub rms_vertex_max: Option<f64>,
-    /// Largest allowed per-pixel RMS (0–255).
-    #[serde(default)]
-    pub rms_image_max: Option<f64>,
+with_cell_axes! {
+    /// An RMS threshold for `experiment check`, over the cells matching its axes (all when
+    /// unset).
+    #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+    #[serde(deny_unknown_fields)]
+    pub struct Threshold {
+        /// Largest allowed per-vertex RMS (0–255).
+        pub rms_vertex_max: Option<f64>,
+        /// Largest allowed per-pixel RMS (0–255).
+        pub rms_image_max: Option<f64>,
+    }
 }
 
 /// The `--quick` profile: each field given replaces the spec's; `thresholds` always replace the
