@@ -189,7 +189,7 @@ pub trait GpuQuantity: Send + Sync {
     fn fields<'s>(
         &'s self,
         ctx: &'s GpuContext,
-        fields: &'s FieldScene,
+        fields: &FieldScene,
         opts: &FieldGpuOptions,
     ) -> Result<Box<dyn Eval + 's>>;
     /// This quantity at `at` by its integrand on `vis` (the GPU ray caster, or any other

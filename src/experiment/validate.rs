@@ -67,7 +67,7 @@ impl Validator<'_> {
     /// once; each motion's own values ([`crate::geometry::motion::Motion::problem`]). An
     /// animated spec writes `frames.csv`, so the keys of the static table (`methods`, `paper`,
     /// `thresholds`, `reference.field_rays_sweep`) are refused in it; its "gpu" backend adds the
-    /// GPU twins of its methods (`dynamic::gpu_movers`).
+    /// GPU twins of its methods (`methods::motion::gpu_twins`).
     pub(crate) fn animation(&self, s: &Spec, p: &Paths) -> Result<(), SpecError> {
         let motions = s.scenes.iter().enumerate().flat_map(|(i, sc)| {
             let here = format!("{}[{i}]", p.scenes);

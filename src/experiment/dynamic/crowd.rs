@@ -1,9 +1,11 @@
 //! The crowd: N rigid casters over a receiver plane, each orbiting its grid cell's centre and
 //! tumbling, every method answering vertex AO at the plane's vertices frame after frame.
 
-use super::movers::{AoFields, FrameCasters, Mover, Sdfs};
 use super::FrameRow;
 use crate::experiment::fields::FieldSupply;
+use crate::experiment::methods::field::MeshFields;
+use crate::experiment::methods::motion::{self, FrameCasters, Mover, MoverInputs};
+use crate::experiment::methods::Method;
 use crate::experiment::metrics::{self, rms_unquantised};
 use crate::experiment::scenes::{mesh_sha256, LoadedMesh};
 use crate::experiment::truth_cache::{load_or_compute, TruthInputs};
@@ -131,6 +133,19 @@ impl Profile {
         })
     }
 
+    /// The per-object peers: the `sdf` and `aofield` methods at the profile's resolutions (their
+    /// other keys' defaults: f32, margin 2), read by the registry as a spec's `methods` entry is.
+    pub fn peers(&self) -> Vec<Box<dyn Method>> {
+        [("sdf", self.sdf_res), ("aofield", self.aofield_res)]
+            .into_iter()
+            .flat_map(|(name, res)| {
+                let entry = crate::experiment::methods::lookup(name).expect("a built-in method");
+                let options = (entry.read)(serde_json::json!({ "res": [res] }));
+                options.expect("the peer's options read").settings()
+            })
+            .collect()
+    }
+
     /// The model names that need a model folder (the generated ones need none).
     pub fn registered(&self) -> impl Iterator<Item = &'static str> + '_ {
         self.models
@@ -161,49 +176,6 @@ fn load(name: &str) -> Result<Mesh> {
     }
 }
 
-/// The per-object peers of `mesh`: its distance volume (f32, `p.sdf_res` samples along its
-/// box's longest side, margin 2) and its AO field (`p.aofield_res`² texels a face, the bake's
-/// other defaults, f32), from the run's cache where it holds them.
-fn peers(
-    p: &Profile,
-    mesh: &LoadedMesh,
-    supply: &FieldSupply,
-) -> Result<(
-    Arc<crate::sdf::DistanceVolume>,
-    Arc<crate::aofield::AoField>,
-)> {
-    let triangles: Vec<[Vec3; 3]> = (0..mesh.mesh.triangle_count())
-        .map(|t| mesh.mesh.triangle(t))
-        .collect();
-    let what = |peer: &str| format!("dynamic: {peer} of {}", mesh.label);
-    let (volume, _) = crate::sdf::cache::load_or_bake_in(
-        supply.cache.as_deref(),
-        &triangles,
-        &mesh.sha256,
-        (p.sdf_res, 2),
-        crate::sdf::Precision::F32,
-    )
-    .map_err(|e| Error::invalid(what("sdf"), e.to_string()))?;
-    let params = crate::aofield::BakeParams {
-        res: p.aofield_res,
-        ..crate::aofield::BakeParams::default()
-    };
-    let (fit, _) = crate::aofield::cache::load_or_bake(
-        supply.cache.as_deref(),
-        &mesh.sha256,
-        &triangles,
-        &params,
-    )
-    .map_err(|e| Error::invalid(what("aofield"), e.to_string()))?;
-    Ok((
-        Arc::new(volume),
-        Arc::new(crate::aofield::AoField::new(
-            &fit,
-            crate::aofield::Precision::F32,
-        )),
-    ))
-}
-
 /// One crowd: its meshes, fields, receiver points and rays.
 pub struct Crowd {
     /// `crowd` or `approach`.
@@ -213,10 +185,11 @@ pub struct Crowd {
     /// sphere radii (negative: the sphere cuts the plane).
     gaps: Option<Vec<f32>>,
     meshes: Vec<Arc<Mesh>>,
-    fields: Vec<Arc<crate::field::VisibilityField>>,
-    /// The per-object peers, one per mesh: mesh distance fields and AO fields.
-    volumes: Vec<Arc<crate::sdf::DistanceVolume>>,
-    ao_fields: Vec<Arc<crate::aofield::AoField>>,
+    /// One field per mesh (the field's forms read them).
+    fields: MeshFields,
+    /// The per-object peers ([`Profile::peers`]) and the cache their bakes are kept in.
+    peers: Vec<Box<dyn Method>>,
+    cache: Option<std::path::PathBuf>,
     /// Per caster: its mesh, its scale, the mesh's bounding sphere centre (model space), its
     /// orbit phase and tumble axis.
     casters: Vec<CasterMotion>,
@@ -255,7 +228,6 @@ impl Crowd {
         let used = p.models.len().min(n);
         let mut meshes = Vec::new();
         let mut fields = Vec::new();
-        let (mut volumes, mut ao_fields) = (Vec::new(), Vec::new());
         let (count, res, precision) = p.field;
         let params = FieldParams {
             sphere: SphereKind::Slater,
@@ -274,9 +246,6 @@ impl Crowd {
                 file: None,
             };
             fields.push(supply.obtain(&lm, params)?.field);
-            let (volume, ao_field) = peers(p, &lm, supply)?;
-            volumes.push(volume);
-            ao_fields.push(ao_field);
             meshes.push(mesh);
         }
         let width = side as f32 * CELL;
@@ -315,9 +284,13 @@ impl Crowd {
             n,
             gaps: None,
             meshes,
-            fields,
-            volumes,
-            ao_fields,
+            fields: MeshFields {
+                fields,
+                normals: Vec::new(),
+                options: LookupOptions::default(),
+            },
+            peers: p.peers(),
+            cache: supply.cache.clone(),
             casters,
             points: plane.positions.clone(),
             normals: plane.normals.clone(),
@@ -384,7 +357,7 @@ impl Crowd {
             .enumerate()
             .map(|(i, &(m, t))| (i, t.to_world_sphere(&self.meshes[m].bounding_sphere())))
             .collect();
-        super::movers::overlaps(&spheres, &self.points, |_| None)
+        motion::overlaps(&spheres, &self.points, |_| None)
     }
 
     /// The receiver points.
@@ -397,19 +370,23 @@ impl Crowd {
         self.points.len() * self.rays.len()
     }
 
-    /// The methods of this build, each with its precompute done (per-mesh BVHs or scenes,
-    /// the fields): the world rebuild first, the per-object peers last.
+    /// The methods of this build, each with its precompute done (per-mesh BVHs or scenes, the
+    /// peers' bakes): the world rebuild first, then the other ray casters, the field's forms
+    /// and the per-object peers ([`Profile::peers`]), each built by its method.
     pub fn movers(&self) -> Result<Vec<Box<dyn Mover>>> {
-        let names = &super::movers::NAMES;
-        let mut v = super::movers::ray_casters(&self.meshes, names)?;
-        v.extend(super::movers::field_methods(
-            &self.fields,
-            &[],
-            LookupOptions::default(),
-            names,
-        ));
-        v.push(Box::new(Sdfs::new(self.volumes.clone())));
-        v.push(Box::new(AoFields::new(self.ao_fields.clone())));
+        let names = &crate::experiment::spec::FRAME_METHODS;
+        let on = |fields| MoverInputs {
+            meshes: &self.meshes,
+            cache: self.cache.as_deref(),
+            fields,
+        };
+        let mut v = motion::movers(names, &on(None))?;
+        v.extend(motion::movers(names, &on(Some(&self.fields)))?);
+        for m in &self.peers {
+            for f in m.frame_forms() {
+                v.push(m.mover(f.name, &on(None))?);
+            }
+        }
         Ok(v)
     }
 
@@ -472,12 +449,12 @@ impl Crowd {
             let mut raycast_flicker = None;
             let mut now: Vec<(&'static str, Vec<f32>)> = Vec::new();
             for m in movers.iter_mut() {
-                let super::movers::Timed {
+                let motion::Timed {
                     update_s,
                     query_s,
                     values: ao,
                     ..
-                } = super::movers::timed(m.as_mut(), &casters, |m| {
+                } = motion::timed(m.as_mut(), &casters, |m| {
                     Ok(m.ao(&self.points, &self.normals, &self.rays, &self.opts))
                 })?;
                 let reference = reference.get_or_insert_with(|| ao.clone());

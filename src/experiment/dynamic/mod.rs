@@ -46,8 +46,6 @@
 
 pub mod animation;
 pub mod crowd;
-pub mod gpu_movers;
-pub mod movers;
 
 use super::fields::FieldSupply;
 use super::plot::{xy_plot, Axes, Series};

@@ -89,7 +89,7 @@ impl GpuQuantity for AoGpu {
     fn fields<'s>(
         &'s self,
         ctx: &'s GpuContext,
-        fields: &'s FieldScene,
+        fields: &FieldScene,
         opts: &FieldGpuOptions,
     ) -> Result<Box<dyn Eval + 's>> {
         Ok(Box::new(KernelEval {

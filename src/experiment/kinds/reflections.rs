@@ -212,7 +212,7 @@ impl GpuQuantity for ReflectGpu {
     fn fields<'s>(
         &'s self,
         ctx: &'s GpuContext,
-        fields: &'s FieldScene,
+        fields: &FieldScene,
         opts: &FieldGpuOptions,
     ) -> Result<Box<dyn Eval + 's>> {
         Ok(Box::new(KernelEval {

@@ -173,7 +173,7 @@ impl GpuQuantity for ShadowGpu {
     fn fields<'s>(
         &'s self,
         ctx: &'s GpuContext,
-        fields: &'s FieldScene,
+        fields: &FieldScene,
         opts: &FieldGpuOptions,
     ) -> Result<Box<dyn Eval + 's>> {
         Ok(Box::new(KernelEval {

@@ -19,6 +19,7 @@
 //! counts the whole occluder at any distance), and a scene with an instance that is both caster
 //! and receiver (an AO field does not model an occluder's occlusion of itself).
 
+use super::motion::{self, FrameCasters, FrameForm, Mover, MoverInputs};
 use super::{
     Answer, GpuMethod, Method, MethodContext, MethodEntry, MethodOptions, Precompute, Prepared,
 };
@@ -31,13 +32,16 @@ use crate::experiment::scenes::BuiltScene;
 use crate::experiment::spec::{Spec, SpecError};
 use crate::experiment::validate::Validator;
 use crate::experiment::{Error, Result};
+use crate::geometry::Mesh;
 use crate::gpu::{AoFieldKernel, GpuContext};
-use crate::render::ao::Falloff;
+use crate::render::ao::{AoOptions, Falloff};
 use crate::render::estimator::{Estimator, Points};
 use crate::render::truth::{Truth, TruthOptions};
 use crate::sampling::rays::RaySet;
 use crate::visibility::Visibility;
+use glam::Vec3;
 use serde::{Deserialize, Serialize};
+use std::path::Path;
 use std::sync::Arc;
 
 pub const ENTRY: MethodEntry = MethodEntry {
@@ -46,6 +50,11 @@ pub const ENTRY: MethodEntry = MethodEntry {
             radial functions giving its spherical cap; AO with no ray",
     read: super::read_as::<AoFieldOptions>,
 };
+
+/// Its per-frame form ([`Method::frame_forms`]): `aofield`, the fields placed by each frame's
+/// transforms ([`AoFields`]). `experiment dynamic`'s crowd measures it at its own `res` (the
+/// options have no default, so animated specs, which need rays for any kind, do not list it).
+pub const FRAME_FORMS: &[FrameForm] = &[FrameForm::cpu("aofield")];
 
 /// `aofield`'s keys.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -208,9 +217,52 @@ pub struct AoFieldMethod {
     inside: Inside,
 }
 
+impl AoFieldMethod {
+    /// The field of `mesh` (its fit from the cache in `cache` where it holds it) and whether
+    /// no bake ran.
+    fn field(
+        &self,
+        mesh: &Mesh,
+        cache: Option<&Path>,
+    ) -> std::result::Result<(Arc<AoField>, bool), String> {
+        let tris: Vec<_> = (0..mesh.triangle_count())
+            .map(|t| mesh.triangle(t))
+            .collect();
+        let sha = crate::experiment::scenes::mesh_sha256(mesh);
+        let (fitted, outcome) =
+            load_or_bake(cache, &sha, &tris, &self.params).map_err(|e| e.to_string())?;
+        if let Outcome::Baked {
+            rejected: Some(why),
+            ..
+        } = &outcome
+        {
+            eprintln!("aofield cache: {why}; rebaked");
+        }
+        let hit = !matches!(outcome, Outcome::Baked { .. });
+        Ok((Arc::new(AoField::new(&fitted, self.precision)), hit))
+    }
+}
+
 impl Method for AoFieldMethod {
     fn name(&self) -> &'static str {
         ENTRY.name
+    }
+
+    fn frame_forms(&self) -> &'static [FrameForm] {
+        FRAME_FORMS
+    }
+
+    /// Its fields (one per mesh, from the cache where it holds them) placed by each frame's
+    /// transforms.
+    fn mover(&self, _form: &str, on: &MoverInputs) -> Result<Box<dyn Mover>> {
+        let fields = motion::per_mesh(self, on, |mesh| Ok(self.field(mesh, on.cache)?.0))?;
+        Ok(Box::new(AoFields {
+            fields,
+            scene: AoFieldScene {
+                instances: Vec::new(),
+                inside: self.inside,
+            },
+        }))
     }
 
     fn params(&self) -> Vec<(&'static str, String)> {
@@ -304,20 +356,9 @@ impl Method for AoFieldMethod {
             let field = match fields.iter().find(|(m, _)| *m == mesh) {
                 Some((_, f)) => f.clone(),
                 None => {
-                    let tris: Vec<_> = (0..inst.mesh.triangle_count())
-                        .map(|t| inst.mesh.triangle(t))
-                        .collect();
-                    let sha = crate::experiment::scenes::mesh_sha256(&inst.mesh);
-                    let (fitted, outcome) =
-                        load_or_bake(ctx.cache.as_deref(), &sha, &tris, &self.params)
-                            .map_err(|e| Error::invalid(what(), e.to_string()))?;
-                    if let Outcome::Baked { rejected, .. } = &outcome {
-                        cached = false;
-                        if let Some(why) = rejected {
-                            eprintln!("aofield cache: {why}; rebaked");
-                        }
-                    }
-                    let f = Arc::new(AoField::new(&fitted, self.precision));
+                    let (f, hit) = (self.field(&inst.mesh, ctx.cache.as_deref()))
+                        .map_err(|e| Error::invalid(what(), e))?;
+                    cached &= hit;
                     fields.push((mesh, f.clone()));
                     f
                 }
@@ -400,5 +441,40 @@ impl Eval for AoFieldKernel<'_> {
 
     fn setup_s(&self) -> Option<f64> {
         Some(self.setup_time().as_secs_f64())
+    }
+}
+
+/// AO fields (one per mesh, shared by its instances) placed by the frame's transforms: AO at a
+/// point with no ray, the casters blended multiplicatively ([`Mover::ao`]); the update is the
+/// instance list. It answers AO only, and its [`Mover::vis`] refuses every ray.
+pub struct AoFields {
+    /// Per mesh, its field.
+    pub fields: Vec<Arc<AoField>>,
+    scene: AoFieldScene,
+}
+
+impl Mover for AoFields {
+    fn name(&self) -> &'static str {
+        FRAME_FORMS[0].name
+    }
+
+    fn update(&mut self, frame: &FrameCasters) -> Result<()> {
+        self.scene.instances = frame.place(&self.fields, |f, transform| AoFieldInstance {
+            field: f.clone(),
+            transform,
+        });
+        Ok(())
+    }
+
+    fn vis(&self) -> &dyn Visibility {
+        &super::NoRays
+    }
+
+    fn bytes(&self) -> Option<u64> {
+        Some(self.fields.iter().map(|f| f.bytes()).sum())
+    }
+
+    fn ao(&self, points: &[Vec3], normals: &[Vec3], _: &RaySet, _: &AoOptions) -> Vec<f32> {
+        self.scene.ao_at_points(points, normals)
     }
 }

@@ -12,7 +12,7 @@
 
 #[cfg(feature = "embree")]
 use super::motion::{model_triangles, FrameCasters};
-use super::motion::{FrameForm, Mover};
+use super::motion::{FrameForm, Mover, MoverInputs};
 #[cfg(feature = "embree")]
 use super::Answer;
 use super::{Method, MethodContext, MethodEntry, MethodOptions, Prepared};
@@ -110,8 +110,8 @@ impl Method for Embree {
         FRAME_FORMS
     }
 
-    fn mover(&self, form: &str, meshes: &[Arc<Mesh>]) -> Result<Box<dyn Mover>> {
-        mover(form, meshes)
+    fn mover(&self, form: &str, on: &MoverInputs) -> Result<Box<dyn Mover>> {
+        mover(form, on.meshes)
     }
 
     fn frame_unavailable(&self) -> Option<&'static str> {

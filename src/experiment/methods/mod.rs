@@ -27,6 +27,7 @@
 
 pub mod aofield;
 pub mod embree;
+pub mod field;
 pub mod motion;
 pub mod raycast;
 pub mod rayquery;
@@ -43,13 +44,11 @@ pub use super::spec::MethodSpec;
 use super::spec::{default_backends, Backend, Spec, SpecError};
 use super::validate::Validator;
 use super::Result;
-use crate::geometry::Mesh;
 use crate::gpu::GpuContext;
 use crate::render::estimator::Estimator;
 use crate::visibility::Visibility;
 use glam::Vec3;
 use std::path::PathBuf;
-use std::sync::Arc;
 
 /// What a method precomputes from and answers through, on one scene.
 pub struct MethodContext<'a> {
@@ -179,18 +178,26 @@ pub trait Method: Send + Sync {
     fn prepare(&self, ctx: &MethodContext) -> Result<Prepared>;
     /// Its forms in a moving scene ([`motion::FrameForm`]: the names a spec's
     /// `animation.methods` lists and the rows carry, and the GPU forms run beside them); none
-    /// by default: a method that follows motion lists them and builds its CPU forms in
-    /// [`Self::mover`].
+    /// by default: a method that follows motion lists them and builds them in [`Self::mover`]
+    /// and [`Self::gpu_mover`].
     fn frame_forms(&self) -> &'static [motion::FrameForm] {
         &[]
     }
-    /// Its CPU form `form` (one of [`Self::frame_forms`]) over the moving scene's `meshes`, its
-    /// per-mesh precompute done; each frame's transforms are applied by [`motion::Mover::update`].
-    fn mover(&self, form: &str, _meshes: &[Arc<Mesh>]) -> Result<Box<dyn motion::Mover>> {
-        Err(super::Error::invalid(
-            format!("method \"{}\"", self.name()),
-            format!("has no per-frame form \"{form}\""),
-        ))
+    /// Its CPU form `form` (one of [`Self::frame_forms`]) over the moving scene (`on`: its
+    /// meshes, the cache, the field's fields), its per-mesh precompute done; each frame's
+    /// transforms are applied by [`motion::Mover::update`].
+    fn mover(&self, form: &str, _on: &motion::MoverInputs) -> Result<Box<dyn motion::Mover>> {
+        Err(no_frame_form(self.name(), form))
+    }
+    /// Its GPU form `form` (one of [`Self::frame_forms`]) over the moving scene, uploaded before
+    /// the frames, or why this scene cannot run it (skipped there, saying why).
+    fn gpu_mover<'a>(
+        &self,
+        form: &str,
+        _on: &motion::MoverInputs,
+        _gpu: &motion::GpuInputs<'a>,
+    ) -> Result<motion::GpuMover<'a>> {
+        Err(no_frame_form(self.name(), form))
     }
     /// Why this build cannot run its per-frame forms (a cargo feature), or none.
     fn frame_unavailable(&self) -> Option<&'static str> {
@@ -214,7 +221,15 @@ pub trait Method: Send + Sync {
     }
 }
 
-impl dyn Method {
+/// The error of a method asked for a per-frame form it does not list.
+fn no_frame_form(method: &str, form: &str) -> super::Error {
+    super::Error::invalid(
+        format!("method \"{method}\""),
+        format!("has no per-frame form \"{form}\""),
+    )
+}
+
+impl dyn Method + '_ {
     /// The setting's id: the name, then each parameter's value (`sdf-64-f16`).
     pub fn id(&self) -> String {
         let mut s = self.name().to_string();

@@ -2,26 +2,34 @@
 //! scene by [`Mover::update`], which applies the frame's transforms ([`FrameCasters`]: Embree
 //! commits its instances, the field places its instances, our two-level caster rebuilds its top
 //! level, a world caster rebuilds its BVH), then answers the frame's rays; each charged for the
-//! update apart from the query ([`timed`]). A registered method that follows motion gives its
-//! movers beside its still form (`raycast.rs`: `world_rebuild`; `two_level.rs`: `two_level`;
-//! `embree.rs`: `embree_rebuild`, `embree_instances`); `experiment dynamic`'s crowd and every
-//! animated spec run them the same way.
+//! update apart from the query ([`timed`]). `experiment dynamic`'s crowd and every animated spec
+//! run them the same way.
 //!
-//! The registry says which methods follow motion: a registered method lists its per-frame
-//! forms ([`Method::frame_forms`], [`FrameForm`]: each CPU form with the GPU forms measured
-//! beside it) and builds its CPU forms ([`Method::mover`]); the field, a spec's `fields` axis
-//! rather than a registered method, has [`FIELD_FORMS`]. [`frame_forms`] gathers them for
-//! animated specs and `experiment dynamic`, [`gpu_twins`] the GPU forms beside each CPU one.
+//! The registry says which methods follow motion and builds their forms: a method lists its
+//! per-frame forms ([`Method::frame_forms`], [`FrameForm`]: each CPU form with the GPU forms
+//! measured beside it), builds its CPU forms ([`Method::mover`]) and its GPU forms
+//! ([`Method::gpu_mover`]) in its own file, each over the moving scene's meshes
+//! ([`MoverInputs`]; on the GPU [`GpuInputs`]). The field, a spec's `fields` axes rather than a
+//! registered method, gives its forms the same way (`field.rs`, [`super::field::FIELD`]).
+//! [`frame_forms`] gathers every method's at its default options for animated specs and
+//! `experiment dynamic` (a method whose options have no default, `sdf` and `aofield`, is
+//! given them by `experiment dynamic`, which measures them as the crowd's peers); [`movers`]
+//! and [`gpu_movers`] build the forms a run names; [`gpu_twins`] pairs each CPU form with the
+//! GPU forms beside it.
 
+use super::field::MeshFields;
 use super::Method;
+use crate::experiment::backend_gpu::GpuQuantity;
 use crate::experiment::spec::Backend;
 use crate::experiment::Result;
-use crate::geometry::{Mesh, Similarity};
+use crate::geometry::{Mesh, Similarity, Sphere};
+use crate::gpu::GpuContext;
 use crate::render::ao::{ao_at_points, AoOptions};
 use crate::render::estimator::{Estimator, Points};
 use crate::sampling::rays::RaySet;
 use crate::visibility::Visibility;
 use glam::Vec3;
+use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -138,6 +146,23 @@ pub fn model_triangles(meshes: &[Arc<Mesh>]) -> Vec<Vec<[Vec3; 3]>> {
         .collect()
 }
 
+/// `bake` of each of `on`'s meshes (a form's per-mesh precompute: a volume, a field), an error
+/// naming the method's setting and the mesh.
+pub fn per_mesh<T>(
+    method: &dyn Method,
+    on: &MoverInputs,
+    bake: impl Fn(&Mesh) -> std::result::Result<T, String>,
+) -> Result<Vec<T>> {
+    (on.meshes.iter())
+        .map(|mesh| {
+            bake(mesh).map_err(|e| {
+                let at = format!("per-frame method {}: mesh {}", method.id(), mesh.name);
+                crate::experiment::Error::invalid(at, e)
+            })
+        })
+        .collect()
+}
+
 /// One per-frame form of a method (see the module documentation).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct FrameForm {
@@ -147,6 +172,9 @@ pub struct FrameForm {
     /// The CPU form it runs beside, where that one is asked for: itself on the CPU; a GPU
     /// form's CPU twin (`rayquery@gpu` beside `two_level`).
     pub beside: &'static str,
+    /// It reads the field (the field's forms): built once per field cell of an animated spec,
+    /// over the cell's fields ([`MoverInputs::fields`]); the others once per scene.
+    pub reads_field: bool,
 }
 
 impl FrameForm {
@@ -156,6 +184,7 @@ impl FrameForm {
             name,
             backend: Backend::Cpu,
             beside: name,
+            reads_field: false,
         }
     }
 
@@ -165,37 +194,59 @@ impl FrameForm {
             name,
             backend: Backend::Gpu,
             beside,
+            reads_field: false,
+        }
+    }
+
+    /// This form, reading the field.
+    pub const fn reading_field(self) -> FrameForm {
+        FrameForm {
+            reads_field: true,
+            ..self
         }
     }
 }
 
-/// The field's per-frame forms: testing every sphere, and with the BVH over the spheres
-/// (`experiment::dynamic::movers::Fields`), each with its GPU twin (`gpu_movers::GpuFields`).
-pub const FIELD_FORMS: &[FrameForm] = &[
-    FrameForm::cpu("field_every_sphere"),
-    FrameForm::gpu("field_every_sphere@gpu", "field_every_sphere"),
-    FrameForm::cpu("field"),
-    FrameForm::gpu("field@gpu", "field"),
-];
-
-/// Every per-frame form: the registered methods' (in registry order, each with its method),
-/// then the field's (no method).
-pub fn frame_forms() -> Vec<(FrameForm, Option<Arc<dyn Method>>)> {
-    let mut out: Vec<(FrameForm, Option<Arc<dyn Method>>)> = Vec::new();
-    for m in super::default_settings() {
-        let m: Arc<dyn Method> = Arc::from(m);
-        out.extend(m.frame_forms().iter().map(|&f| (f, Some(m.clone()))));
-    }
-    out.extend(FIELD_FORMS.iter().map(|&f| (f, None)));
-    out
+/// What a method's per-frame forms are built over, before the frames.
+pub struct MoverInputs<'a> {
+    /// The moving scene's distinct caster meshes (a frame's [`FrameCasters::meshes`]).
+    pub meshes: &'a [Arc<Mesh>],
+    /// The run's cache folder, for a form that bakes per mesh (none: no cache).
+    pub cache: Option<&'a Path>,
+    /// The field's per-mesh fields (a field cell's, the crowd's): where given, [`movers`] and
+    /// [`gpu_movers`] build the forms that read them, and only those.
+    pub fields: Option<&'a MeshFields>,
 }
 
-/// The registered method whose CPU form is `name`, if any (the field's forms have none).
-pub fn method_of(name: &str) -> Option<Arc<dyn Method>> {
-    frame_forms()
-        .into_iter()
-        .find(|(f, _)| f.backend == Backend::Cpu && f.name == name)
-        .and_then(|(_, m)| m)
+/// What a GPU form is built with, beside its [`MoverInputs`].
+pub struct GpuInputs<'a> {
+    pub ctx: &'a GpuContext,
+    /// The kind's GPU kernels (its integrand on a visibility, its field kernel).
+    pub kernels: &'a dyn GpuQuantity,
+    /// The first frame's instances, each (mesh, transform): where a form that uploads its
+    /// placements starts.
+    pub first: &'a [(usize, Similarity)],
+}
+
+/// A GPU form built over a moving scene ([`Method::gpu_mover`]), or why this scene cannot run
+/// it (a world past one storage binding of the adapter).
+pub type GpuMover<'a> = std::result::Result<Box<dyn Mover + 'a>, String>;
+
+/// Every per-frame form with its method: the registered methods' at their default options (in
+/// registry order), then the field's.
+pub fn frame_forms() -> Vec<(FrameForm, Arc<dyn Method>)> {
+    let mut methods: Vec<Arc<dyn Method>> = (super::default_settings().into_iter())
+        .map(Arc::from)
+        .collect();
+    methods.push(Arc::new(super::field::FIELD));
+    (methods.iter())
+        .flat_map(|m| m.frame_forms().iter().map(move |&f| (f, m.clone())))
+        .collect()
+}
+
+/// The per-frame form named `name` and its method, if any.
+pub fn form(name: &str) -> Option<(FrameForm, Arc<dyn Method>)> {
+    frame_forms().into_iter().find(|(f, _)| f.name == name)
 }
 
 /// Each CPU form among `order` with a GPU form beside it, and that form's name: for each name
@@ -211,6 +262,68 @@ pub fn gpu_twins(order: &[&str]) -> Vec<(&'static str, &'static str)> {
         }
     }
     out
+}
+
+/// The forms among `names` on `backend` (in that order) that this build runs and `on` builds:
+/// those that read the field where it has one, the others where it has none.
+fn named(names: &[&str], backend: Backend, on: &MoverInputs) -> Vec<(FrameForm, Arc<dyn Method>)> {
+    (names.iter())
+        .filter_map(|n| form(n))
+        .filter(|(f, m)| {
+            f.backend == backend
+                && f.reads_field == on.fields.is_some()
+                && m.frame_unavailable().is_none()
+        })
+        .collect()
+}
+
+/// The CPU forms among `names` over `on` ([`Method::mover`]; see [`named`]).
+pub fn movers(names: &[&str], on: &MoverInputs) -> Result<Vec<Box<dyn Mover>>> {
+    (named(names, Backend::Cpu, on).iter())
+        .map(|(f, m)| m.mover(f.name, on))
+        .collect()
+}
+
+/// The GPU forms among `names` over `on` ([`Method::gpu_mover`]; see [`named`]), each named.
+pub fn gpu_movers<'a>(
+    names: &[&str],
+    on: &MoverInputs,
+    gpu: &GpuInputs<'a>,
+) -> Result<Vec<(&'static str, GpuMover<'a>)>> {
+    (named(names, Backend::Gpu, on).iter())
+        .map(|(f, m)| Ok((f.name, m.gpu_mover(f.name, on, gpu)?)))
+        .collect()
+}
+
+/// A frame's overlap counts: caster pairs whose world bounding spheres overlap, and points
+/// inside the sphere of some caster other than their own (`owner`: the caster a point belongs
+/// to, if any: a caster's own points always lie in its sphere, the intra-object case). Where
+/// the papers' "non-penetrating" assumption stops holding. `spheres`: each caster's
+/// (instance, world sphere); an overlap is a distance strictly below the sum of the radii.
+pub fn overlaps(
+    spheres: &[(usize, Sphere)],
+    points: &[Vec3],
+    owner: impl Fn(usize) -> Option<usize> + Sync,
+) -> (usize, usize) {
+    use rayon::prelude::*;
+    let mut pairs = 0;
+    for (i, (_, a)) in spheres.iter().enumerate() {
+        for (_, b) in &spheres[i + 1..] {
+            if a.center.distance(b.center) < a.radius + b.radius {
+                pairs += 1;
+            }
+        }
+    }
+    let inside = (0..points.len())
+        .into_par_iter()
+        .filter(|&j| {
+            let p = points[j];
+            spheres
+                .iter()
+                .any(|(inst, s)| owner(j) != Some(*inst) && p.distance(s.center) < s.radius)
+        })
+        .count();
+    (pairs, inside)
 }
 
 #[cfg(test)]
@@ -239,7 +352,8 @@ mod tests {
                 ("field", "field@gpu"),
             ]
         );
-        assert_eq!(method_of("embree_instances").unwrap().name(), "embree");
-        assert!(method_of("field").is_none());
+        assert_eq!(form("embree_instances").unwrap().1.name(), "embree");
+        assert_eq!(form("field@gpu").unwrap().1.name(), "field");
+        assert!(form("field").unwrap().0.reads_field && !form("two_level").unwrap().0.reads_field);
     }
 }

@@ -4,20 +4,27 @@
 //! the reference's rays. Its values are the reference's, ray for ray (its same-ray errors are
 //! zero by construction); the row is its cost with the BVH build counted, beside the others.
 //! In a moving scene it follows motion by rebuilding that BVH every frame ([`WorldRebuild`],
-//! `world_rebuild`, the reference of the other per-frame methods).
+//! `world_rebuild`, the reference of the other per-frame methods); on the GPU
+//! (`world_rebuild@gpu`, [`GpuWorldRebuild`]) the GPU ray caster (an obvhs CWBVH traversed in
+//! WGSL, [`GpuTracer`]) over the frame's world triangles, its BVH built on the host and
+//! uploaded every frame (`update_s`): one world BVH, no instance level, so a moving object
+//! costs a rebuild and an upload of the whole scene. Skipped, with the reason, on a scene whose
+//! world triangles pass one storage binding.
 
-use super::motion::{FrameCasters, FrameForm, Mover};
+use super::motion::{FrameCasters, FrameForm, GpuInputs, GpuMover, Mover, MoverInputs};
 use super::{Answer, Method, MethodContext, MethodEntry, MethodOptions, Precompute, Prepared};
+use crate::experiment::backend_gpu::GpuQuantity;
 use crate::experiment::scenes::BuiltScene;
 use crate::experiment::spec::{Spec, SpecError};
 use crate::experiment::validate::Validator;
 use crate::experiment::Result;
-use crate::geometry::Mesh;
+use crate::gpu::{GpuContext, GpuTracer};
+use crate::render::estimator::{Estimator, Points};
+use crate::sampling::rays::RaySet;
 use crate::trace::Tracer;
 use crate::visibility::Visibility;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
-use std::sync::Arc;
 
 pub const ENTRY: MethodEntry = MethodEntry {
     name: "raycast",
@@ -64,8 +71,34 @@ impl Method for Raycast {
         FRAME_FORMS
     }
 
-    fn mover(&self, _form: &str, _meshes: &[Arc<Mesh>]) -> Result<Box<dyn Mover>> {
+    fn mover(&self, _form: &str, _on: &MoverInputs) -> Result<Box<dyn Mover>> {
         Ok(Box::<WorldRebuild>::default())
+    }
+
+    /// Where the world's triangles, three `vec4` each, fit one storage binding of the adapter
+    /// (the GPU tracer would refuse them, `GpuError::TooLarge`); skipped otherwise.
+    fn gpu_mover<'a>(
+        &self,
+        _form: &str,
+        on: &MoverInputs,
+        gpu: &GpuInputs<'a>,
+    ) -> Result<GpuMover<'a>> {
+        let triangles: usize = (gpu.first.iter())
+            .map(|&(m, _)| on.meshes[m].triangle_count())
+            .sum();
+        let need = triangles as u64 * 48;
+        if need > gpu.ctx.max_binding() {
+            return Ok(Err(format!(
+                "the world's {triangles} triangles need {need} bytes in one storage binding; \
+                 the adapter allows {} (two_level@gpu uploads each mesh once)",
+                gpu.ctx.max_binding()
+            )));
+        }
+        Ok(Ok(Box::new(GpuWorldRebuild {
+            ctx: gpu.ctx,
+            quantity: gpu.kernels,
+            tracer: None,
+        })))
     }
 
     fn world_caster(
@@ -123,5 +156,37 @@ impl Mover for WorldRebuild {
 
     fn bytes(&self) -> Option<u64> {
         self.tracer.as_ref().map(Tracer::bytes)
+    }
+}
+
+/// The GPU ray caster over the world triangles, its BVH built and uploaded every frame.
+pub struct GpuWorldRebuild<'a> {
+    ctx: &'a GpuContext,
+    quantity: &'a dyn GpuQuantity,
+    tracer: Option<GpuTracer<'a>>,
+}
+
+impl Mover for GpuWorldRebuild<'_> {
+    fn name(&self) -> &'static str {
+        FRAME_FORMS[1].name
+    }
+
+    fn update(&mut self, frame: &FrameCasters) -> Result<()> {
+        self.tracer = None;
+        self.tracer = Some(GpuTracer::new(self.ctx, &frame.world_triangles())?);
+        Ok(())
+    }
+
+    fn vis(&self) -> &dyn Visibility {
+        &super::NoRays
+    }
+
+    fn bytes(&self) -> Option<u64> {
+        None
+    }
+
+    fn estimate(&self, _: &dyn Estimator, at: Points, rays: &RaySet) -> Result<Vec<f32>> {
+        let tracer = self.tracer.as_ref().expect("updated before the query");
+        Ok(self.quantity.trace(tracer, at, rays)?.values)
     }
 }

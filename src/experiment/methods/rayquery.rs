@@ -12,8 +12,14 @@
 //! mesh's model-space triangles and the instances' transforms; the upload (the row's
 //! `setup_s`) sorts each mesh's triangles in Morton order, builds the acceleration structures
 //! and compiles the kernels.
+//!
+//! In a moving scene, `rayquery@gpu` ([`GpuRayQuery`], run beside `two_level`, its twin): a
+//! BLAS per mesh built once before the frames, the TLAS over the frame's instances rebuilt per
+//! frame and waited for (`update_s`), the kind's integrand on it apart (`query_s`).
 
-use super::motion::FrameForm;
+use super::motion::{
+    model_triangles, FrameCasters, FrameForm, GpuInputs, GpuMover, Mover, MoverInputs,
+};
 use super::{
     caster_mesh_triangles, Answer, GpuMethod, Method, MethodContext, MethodEntry, MethodOptions,
     NoRays, Prepared,
@@ -24,9 +30,11 @@ use crate::experiment::kinds::Kind;
 use crate::experiment::spec::{Spec, SpecError};
 use crate::experiment::validate::Validator;
 use crate::experiment::{Error, Result};
+use crate::geometry::Similarity;
 use crate::gpu::{GpuContext, RayQueryScene};
-use crate::render::estimator::Points;
+use crate::render::estimator::{Estimator, Points};
 use crate::sampling::rays::RaySet;
+use crate::visibility::Visibility;
 use glam::{Mat4, Vec3};
 use serde::{Deserialize, Serialize};
 
@@ -83,6 +91,19 @@ impl Method for RayQuery {
 
     fn unavailable_on_gpu(&self, ctx: &GpuContext) -> Option<String> {
         ctx.ray_query_support().err()
+    }
+
+    fn gpu_mover<'a>(
+        &self,
+        _form: &str,
+        on: &MoverInputs,
+        gpu: &GpuInputs<'a>,
+    ) -> Result<GpuMover<'a>> {
+        let meshes = model_triangles(on.meshes);
+        Ok(Ok(Box::new(GpuRayQuery {
+            quantity: gpu.kernels,
+            scene: RayQueryScene::new(gpu.ctx, &meshes, &placements(gpu.first))?,
+        })))
     }
 
     fn prepare(&self, ctx: &MethodContext) -> Result<Prepared> {
@@ -149,5 +170,39 @@ impl Eval for RayQueryEval<'_> {
 
     fn setup_s(&self) -> Option<f64> {
         Some(self.scene.setup_time().as_secs_f64())
+    }
+}
+
+/// Hardware ray queries over the frame's instances: a BLAS per mesh built once, the TLAS
+/// rebuilt per frame.
+pub struct GpuRayQuery<'a> {
+    quantity: &'a dyn GpuQuantity,
+    scene: RayQueryScene<'a>,
+}
+
+/// Instances as (mesh, model-to-world matrix).
+fn placements(instances: &[(usize, Similarity)]) -> Vec<(usize, Mat4)> {
+    (instances.iter()).map(|&(m, t)| (m, t.to_mat4())).collect()
+}
+
+impl Mover for GpuRayQuery<'_> {
+    fn name(&self) -> &'static str {
+        FRAME_FORMS[0].name
+    }
+
+    fn update(&mut self, frame: &FrameCasters) -> Result<()> {
+        Ok(self.scene.place(&placements(frame.instances))?)
+    }
+
+    fn vis(&self) -> &dyn Visibility {
+        &NoRays
+    }
+
+    fn bytes(&self) -> Option<u64> {
+        None
+    }
+
+    fn estimate(&self, _: &dyn Estimator, at: Points, rays: &RaySet) -> Result<Vec<f32>> {
+        Ok(self.quantity.trace(&self.scene, at, rays)?.values)
     }
 }

@@ -6,9 +6,14 @@
 //! precompute is the per-mesh BVHs and the top level; its values are the world ray caster's up
 //! to moving the ray instead of the triangles (f32), so its same-ray error is near 0. In a
 //! moving scene it follows motion by rebuilding its top level every frame ([`TwoLevelRebuild`],
-//! `two_level`).
+//! `two_level`); on the GPU (`two_level@gpu`, [`GpuTwoLevelMover`]) each mesh's CWBVH is
+//! uploaded once before the frames, the top level over the instances' world boxes rebuilt on
+//! the host and uploaded every frame (`update_s`, which waits for the upload), rays moved into
+//! each instance's space on the device (`query_s`).
 
-use super::motion::{model_triangles, FrameCasters, FrameForm, Mover};
+use super::motion::{
+    model_triangles, FrameCasters, FrameForm, GpuInputs, GpuMover, Mover, MoverInputs,
+};
 use super::Prepared;
 use super::{Answer, GpuMethod, Method, MethodContext, MethodEntry, MethodOptions, Precompute};
 use crate::experiment::backend::{Estimate, Eval};
@@ -18,16 +23,14 @@ use crate::experiment::scenes::BuiltScene;
 use crate::experiment::spec::{Spec, SpecError};
 use crate::experiment::validate::Validator;
 use crate::experiment::{Error, Result};
-use crate::geometry::Mesh;
 use crate::geometry::Similarity;
 use crate::gpu::{GpuContext, GpuTwoLevel};
-use crate::render::estimator::Points;
+use crate::render::estimator::{Estimator, Points};
 use crate::sampling::rays::RaySet;
 use crate::trace::two_level::TwoLevel;
 use crate::visibility::Visibility;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
-use std::sync::Arc;
 
 pub const ENTRY: MethodEntry = MethodEntry {
     name: "two_level",
@@ -85,8 +88,22 @@ impl Method for TwoLevelMethod {
         FRAME_FORMS
     }
 
-    fn mover(&self, _form: &str, meshes: &[Arc<Mesh>]) -> Result<Box<dyn Mover>> {
-        Ok(Box::new(TwoLevelRebuild::new(meshes)))
+    fn mover(&self, _form: &str, on: &MoverInputs) -> Result<Box<dyn Mover>> {
+        Ok(Box::new(TwoLevelRebuild {
+            tracer: TwoLevel::new(&model_triangles(on.meshes)),
+        }))
+    }
+
+    fn gpu_mover<'a>(
+        &self,
+        _form: &str,
+        on: &MoverInputs,
+        gpu: &GpuInputs<'a>,
+    ) -> Result<GpuMover<'a>> {
+        Ok(Ok(Box::new(GpuTwoLevelMover {
+            quantity: gpu.kernels,
+            caster: GpuTwoLevel::new(gpu.ctx, &model_triangles(on.meshes))?,
+        })))
     }
 
     fn name(&self) -> &'static str {
@@ -175,14 +192,6 @@ pub struct TwoLevelRebuild {
     pub tracer: TwoLevel,
 }
 
-impl TwoLevelRebuild {
-    pub fn new(meshes: &[Arc<Mesh>]) -> TwoLevelRebuild {
-        TwoLevelRebuild {
-            tracer: TwoLevel::new(&model_triangles(meshes)),
-        }
-    }
-}
-
 impl Mover for TwoLevelRebuild {
     fn name(&self) -> &'static str {
         "two_level"
@@ -199,5 +208,34 @@ impl Mover for TwoLevelRebuild {
 
     fn bytes(&self) -> Option<u64> {
         Some(self.tracer.bytes())
+    }
+}
+
+/// Two-level ray casting on the GPU: each mesh's BVH uploaded once, the top level rebuilt and
+/// uploaded every frame.
+pub struct GpuTwoLevelMover<'a> {
+    quantity: &'a dyn GpuQuantity,
+    caster: GpuTwoLevel<'a>,
+}
+
+impl Mover for GpuTwoLevelMover<'_> {
+    fn name(&self) -> &'static str {
+        FRAME_FORMS[1].name
+    }
+
+    fn update(&mut self, frame: &FrameCasters) -> Result<()> {
+        Ok(self.caster.update(frame.instances)?)
+    }
+
+    fn vis(&self) -> &dyn Visibility {
+        &super::NoRays
+    }
+
+    fn bytes(&self) -> Option<u64> {
+        Some(self.caster.bytes())
+    }
+
+    fn estimate(&self, _: &dyn Estimator, at: Points, rays: &RaySet) -> Result<Vec<f32>> {
+        Ok(self.quantity.trace(&self.caster, at, rays)?.values)
     }
 }

@@ -2,9 +2,10 @@
 //! at every frame, its instances moved along their motions ([`crate::geometry::motion`]), the
 //! render kind evaluated at that frame's points (its `setup` on the frame's scene: receiver
 //! vertices, or the receiver pixels of the frame's G-buffer from the fixed camera) by every
-//! per-frame method of [`crate::experiment::dynamic::movers`] on the same seeded rays (the
-//! first seed's), each charged for the frame's motion (`update_s`: a BVH rebuilt, a top level
-//! rebuilt, a scene committed, an instance list) apart from the query (`query_s`).
+//! per-frame method (the forms of [`crate::experiment::methods::motion::frame_forms`], each
+//! built by its method) on the same seeded rays (the first seed's), each charged for the
+//! frame's motion (`update_s`: a BVH rebuilt, a top level rebuilt, a scene committed, an
+//! instance list) apart from the query (`query_s`).
 //!
 //! Per frame and method a row of `frames.csv` ([`FrameRow`], its view
 //! [`crate::experiment::frame_row::FRAMES_CSV`]): the errors against the world
@@ -14,30 +15,26 @@
 //! points inside another caster's sphere), where the papers' non-penetrating assumption stops
 //! holding. The ray casters are measured once per frame; the field methods once per field cell
 //! of the spec's `fields`, each cell's fields (one per caster mesh, shared by its instances)
-//! supplied once, before the frames. With the "gpu" backend, the GPU twins of the world rebuild,
-//! of the two-level caster and of the field testing every sphere run beside them
-//! ([`gpu_movers`]: the GPU tracer's world BVH rebuilt and uploaded each frame; hardware ray
-//! queries with their TLAS rebuilt each frame, skipped with the reason on an adapter without
-//! them; each "gpu" field cell's fields uploaded once and its instances moved on the device
-//! each frame). [`super::frames_write`] writes the outputs.
+//! supplied once, before the frames. With the "gpu" backend, the GPU forms beside the CPU ones
+//! asked for run too ([`motion::gpu_twins`], built by their methods: the GPU tracer's world BVH
+//! rebuilt and uploaded each frame; the two levels' top level; hardware ray queries with their
+//! TLAS rebuilt each frame, skipped with the reason on an adapter without them; each "gpu"
+//! field cell's fields uploaded once and its instances moved on the device each frame).
+//! [`super::frames_write`] writes the outputs.
 
 use super::{LoadedSpec, RunOptions};
-use crate::experiment::backend::{ComputeBackend, Quantity};
+use crate::experiment::backend::ComputeBackend;
 use crate::experiment::dynamic::animation::Frame;
-use crate::experiment::dynamic::gpu_movers;
-use crate::experiment::dynamic::movers::{self, FrameCasters, Mover, Timed};
 use crate::experiment::flip;
 use crate::experiment::kinds::Kind;
+use crate::experiment::methods::field::MeshFields;
+use crate::experiment::methods::motion::{self, FrameCasters, GpuInputs, Mover, MoverInputs};
 use crate::experiment::metrics::{self, rms_unquantised};
 use crate::experiment::plan::cells_of;
 use crate::experiment::scenes::{BuiltScene, Scenes};
-use crate::experiment::spec::{exact_sqrt, Backend, Spec};
+use crate::experiment::spec::{exact_sqrt, Backend, Spec, FRAME_METHODS};
 use crate::experiment::truth_cache::{load_or_compute, TruthInputs};
 use crate::experiment::{Error, Result};
-use crate::field::lookup::LookupOptions;
-use crate::field::normals::NormalField;
-use crate::field::scene::FieldScene;
-use crate::field::VisibilityField;
 use crate::geometry::{Mesh, Similarity, Sphere};
 use crate::render::image::Image;
 use crate::render::points::{EvalPoints, GBuffer, Support};
@@ -123,29 +120,25 @@ pub(super) struct FramesRun {
     pub(super) precompute: Vec<serde_json::Value>,
 }
 
-/// A method this build skips, and why.
-type Skipped = (&'static str, &'static str);
-
-/// Why `world_rebuild@gpu` is skipped on a scene (the details are printed).
-const WORLD_TOO_LARGE: &str = "a scene's world triangles pass one storage binding of the \
-     adapter (GpuError::TooLarge); two_level@gpu uploads each mesh once";
+/// A method this run skips, and why.
+type Skipped = (&'static str, String);
 
 /// The per-frame methods the spec asks for (`animation.methods`, default every one) that this
 /// build runs, and the ones it skips with the reason (`--require-embree` fails instead).
 fn methods(spec: &Spec, opts: &RunOptions) -> Result<(Vec<&'static str>, Vec<Skipped>)> {
     let asked = spec.animation.as_ref().and_then(|a| a.methods.as_ref());
     let (mut run, mut skipped) = (Vec::new(), Vec::new());
-    for name in movers::NAMES {
+    for name in FRAME_METHODS {
         if name != "world_rebuild" && asked.is_some_and(|m| !m.iter().any(|m| m == name)) {
             continue;
         }
-        match movers::unavailable(name) {
+        match motion::form(name).and_then(|(_, m)| m.frame_unavailable()) {
             Some(why) if opts.require_embree => {
                 return Err(Error::invalid(format!("animation method {name}"), why))
             }
             Some(why) => {
                 eprintln!("SKIPPED per-frame method {name}: {why}");
-                skipped.push((name, why));
+                skipped.push((name, why.to_string()));
             }
             None => run.push(name),
         }
@@ -170,21 +163,20 @@ pub(super) fn run(
     let (mut names, mut skipped) = methods(spec, opts)?;
     let kind = crate::experiment::kinds::of(&spec.render);
     let gpu = if spec.backends.contains(&Backend::Gpu) {
-        // The GPU twins of the CPU methods asked for.
-        for (cpu, twin) in crate::experiment::methods::motion::gpu_twins(&movers::NAMES) {
-            if names.contains(&cpu) {
-                names.push(twin);
-            }
-        }
         let be = crate::experiment::backend_gpu::open(Backend::Gpu, &opts.adapter)?;
         let ctx = be.gpu_context().expect("the gpu backend has a device");
-        if let (Err(why), Some(at)) = (
-            ctx.ray_query_support(),
-            names.iter().position(|&n| n == gpu_movers::RAYQUERY),
-        ) {
-            eprintln!("SKIPPED per-frame method {}: {why}", gpu_movers::RAYQUERY);
-            names.remove(at);
-            skipped.push((gpu_movers::RAYQUERY, gpu_movers::RAYQUERY_SKIPPED));
+        // The GPU twins of the CPU methods asked for, where the device runs their methods.
+        for (cpu, twin) in motion::gpu_twins(&FRAME_METHODS) {
+            if !names.contains(&cpu) {
+                continue;
+            }
+            match motion::form(twin).and_then(|(_, m)| m.unavailable_on_gpu(ctx)) {
+                Some(why) => {
+                    eprintln!("SKIPPED per-frame method {twin}: {why}");
+                    skipped.push((twin, why));
+                }
+                None => names.push(twin),
+            }
         }
         Some(be)
     } else {
@@ -219,7 +211,7 @@ pub(super) fn run(
 struct SceneRunner<'a> {
     spec: &'a Spec,
     opts: &'a RunOptions,
-    /// The GPU backend, where the spec asks for it (its methods: [`gpu_movers`]).
+    /// The GPU backend, where the spec asks for it (its methods' GPU forms).
     gpu: Option<&'a dyn ComputeBackend>,
     kind: &'a dyn Kind,
     rays: RaySet,
@@ -228,16 +220,14 @@ struct SceneRunner<'a> {
     dt: f64,
 }
 
-/// A field cell's methods on one scene, and its fields (per caster mesh, with its normal
-/// field where the kind reads them) for the GPU's.
+/// A field cell's CPU methods on one scene, and its fields (per caster mesh, with its normal
+/// field where the kind reads them), which they and the GPU's read.
 struct CellMovers {
     id: String,
-    /// A "gpu" cell: its method is the GPU's, `movers` empty.
+    /// A "gpu" cell: its methods are the GPU's, `movers` empty.
     gpu: bool,
     movers: Vec<Box<dyn Mover>>,
-    fields: Vec<Arc<VisibilityField>>,
-    normals: Vec<Option<Arc<NormalField>>>,
-    options: LookupOptions,
+    fields: MeshFields,
 }
 
 /// The instance each point lies on (vertices: their receiver's; pixels: the G-buffer hit's).
@@ -284,109 +274,76 @@ impl SceneRunner<'_> {
             .map(|i| i.mesh.bounding_sphere())
             .collect();
         let t = Instant::now();
-        let mut casters = movers::ray_casters(&meshes, self.names)?;
+        let on = MoverInputs {
+            meshes: &meshes,
+            cache: self.opts.supply.cache.as_deref(),
+            fields: None,
+        };
+        let mut casters = motion::movers(self.names, &on)?;
         let raycast_precompute_s = t.elapsed().as_secs_f64();
         let t = Instant::now();
         let mut cells = self.cells(scenes, s, bs, &global)?;
+        for c in cells.iter_mut().filter(|c| !c.gpu) {
+            let on = MoverInputs {
+                fields: Some(&c.fields),
+                ..on
+            };
+            c.movers = motion::movers(self.names, &on)?;
+        }
         let fields_s = t.elapsed().as_secs_f64();
         let frame_instances = |fbs: &BuiltScene| -> Vec<(usize, Similarity)> {
             (fbs.scene.casters())
                 .map(|(i, inst)| (local(bs.mesh_of[i]), inst.transform))
                 .collect()
         };
-        // The GPU's methods: the kind's kernels as the first frame sets them up (their options;
-        // rigid motion changes none), each cell's fields packed and uploaded once, placed as in
-        // the first frame.
+        // The GPU forms: the kind's kernels as the first frame sets them up (their options;
+        // rigid motion changes none), each built by its method, placed as in the first frame.
         let first = bs.at_frame(0);
         let first_setup = (self.gpu).map(|_| self.kind.setup(&first, self.view(&first).as_ref()));
         let first_instances = frame_instances(&first);
-        let first_frame = FrameCasters {
-            meshes: &meshes,
-            instances: &first_instances,
-        };
-        let gpu_scenes: Vec<FieldScene> = (cells.iter())
-            .filter(|c| c.gpu)
-            .map(|c| FieldScene {
-                instances: movers::field_instances(&c.fields, &c.normals, &first_frame),
-                options: c.options,
-            })
-            .collect();
         let t = Instant::now();
         let mut gpu_casters: Vec<Box<dyn Mover + '_>> = Vec::new();
         let mut gpu_cells: Vec<Vec<Box<dyn Mover + '_>>> = Vec::new();
         if let (Some(be), Some(setup)) = (self.gpu, &first_setup) {
-            let q = Quantity {
-                estimator: setup.estimator.as_ref(),
-                gpu: setup.gpu.as_deref(),
-            };
-            let Some(kernels) = q.gpu else {
+            let Some(kernels) = setup.gpu.as_deref() else {
                 return Err(Error::invalid(
                     "backends",
                     format!("no GPU kernel computes \"{}\"", self.kind.name()),
                 ));
             };
-            let ctx = be.gpu_context().expect("the gpu backend has a device");
-            if self.names.contains(&gpu_movers::WORLD_REBUILD) {
-                match gpu_movers::world_fits(ctx, bs.caster_triangles()) {
-                    Ok(()) => {
-                        gpu_casters.push(Box::new(gpu_movers::GpuWorldRebuild::new(ctx, kernels)))
-                    }
-                    Err(why) => {
-                        eprintln!(
-                            "SKIPPED per-frame method {} on scene {}: {why}",
-                            gpu_movers::WORLD_REBUILD,
-                            bs.name
-                        );
-                        out.methods.retain(|&m| m != gpu_movers::WORLD_REBUILD);
-                        if !out.skipped.iter().any(|s| s.0 == gpu_movers::WORLD_REBUILD) {
-                            out.skipped
-                                .push((gpu_movers::WORLD_REBUILD, WORLD_TOO_LARGE));
+            let gpu = GpuInputs {
+                ctx: be.gpu_context().expect("the gpu backend has a device"),
+                kernels,
+                first: &first_instances,
+            };
+            // Each cell's forms, the scene's first; a form this scene cannot run is skipped.
+            let mut built = |on: &MoverInputs| -> Result<Vec<Box<dyn Mover + '_>>> {
+                let mut v = Vec::new();
+                for (name, mover) in motion::gpu_movers(self.names, on, &gpu)? {
+                    match mover {
+                        Ok(m) => v.push(m),
+                        Err(why) => {
+                            eprintln!(
+                                "SKIPPED per-frame method {name} on scene {}: {why}",
+                                bs.name
+                            );
+                            out.methods.retain(|&m| m != name);
+                            if !out.skipped.iter().any(|s| s.0 == name) {
+                                out.skipped
+                                    .push((name, format!("scene {}: {why}", bs.name)));
+                            }
                         }
                     }
                 }
-            }
-            if self.names.contains(&gpu_movers::TWO_LEVEL) {
-                gpu_casters.push(Box::new(gpu_movers::GpuTwoLevelMover::new(
-                    ctx, kernels, &meshes,
-                )?));
-            }
-            if self.names.contains(&gpu_movers::RAYQUERY) {
-                gpu_casters.push(Box::new(gpu_movers::GpuRayQuery::new(
-                    ctx,
-                    kernels,
-                    &first_frame,
-                )?));
-            }
-            let mut scenes = gpu_scenes.iter();
+                Ok(v)
+            };
+            gpu_casters = built(&on)?;
             for c in &cells {
-                let mut v: Vec<Box<dyn Mover + '_>> = Vec::new();
-                if c.gpu {
-                    let scene = scenes.next().expect("a scene per gpu cell");
-                    if self.names.contains(&gpu_movers::FIELD_EVERY_SPHERE) {
-                        v.push(Box::new(gpu_movers::GpuFields::new(
-                            gpu_movers::FIELD_EVERY_SPHERE,
-                            be.fields(scene, q)?,
-                            c.fields.clone(),
-                            c.normals.clone(),
-                        )));
-                    }
-                    if self.names.contains(&gpu_movers::FIELD_TOP_LEVEL) {
-                        // The same kernel walking the instances' own top level (the layout
-                        // and the rest of the backend's defaults).
-                        let opts = crate::gpu::FieldGpuOptions {
-                            lookup: scene.options,
-                            top_level: true,
-                            ..Default::default()
-                        };
-                        v.push(Box::new(gpu_movers::GpuFields::new(
-                            gpu_movers::FIELD_TOP_LEVEL,
-                            kernels.fields(ctx, scene, &opts)?,
-                            c.fields.clone(),
-                            c.normals.clone(),
-                        )));
-                    }
-                }
-                gpu_cells.push(v);
+                let on = MoverInputs {
+                    fields: Some(&c.fields),
+                    ..on
+                };
+                gpu_cells.push(if c.gpu { built(&on)? } else { Vec::new() });
             }
         }
         out.precompute.push(serde_json::json!({
@@ -424,7 +381,7 @@ impl SceneRunner<'_> {
                 .collect();
             let owners = point_owners(&setup.points, view.as_ref());
             let (sphere_overlaps, points_in_spheres) =
-                movers::overlaps(&spheres, &setup.points.points, |j| owners[j]);
+                motion::overlaps(&spheres, &setup.points.points, |j| owners[j]);
             let frame = FrameCasters {
                 meshes: &meshes,
                 instances: &instances,
@@ -434,10 +391,10 @@ impl SceneRunner<'_> {
             let query = |m: &dyn Mover| m.estimate(est, at, &self.rays);
             // The ray casters, the world rebuild first: the frame's reference and the tracer
             // of its converged reference.
-            let mut measured: Vec<(&'static str, String, Timed, Option<u64>)> = Vec::new();
+            let mut measured: Vec<(&'static str, String, motion::Timed, Option<u64>)> = Vec::new();
             let mut truth = None;
             for m in casters.iter_mut() {
-                let r = movers::timed(m.as_mut(), &frame, query)?;
+                let r = motion::timed(m.as_mut(), &frame, query)?;
                 if truth.is_none() {
                     let world = frame.world_triangles();
                     let inputs = TruthInputs {
@@ -453,18 +410,18 @@ impl SceneRunner<'_> {
                 measured.push((m.name(), String::new(), r, m.bytes()));
             }
             for m in gpu_casters.iter_mut() {
-                let r = movers::timed(m.as_mut(), &frame, query)?;
+                let r = motion::timed(m.as_mut(), &frame, query)?;
                 measured.push((m.name(), String::new(), r, m.bytes()));
             }
             for c in cells.iter_mut() {
                 for m in c.movers.iter_mut() {
-                    let r = movers::timed(m.as_mut(), &frame, query)?;
+                    let r = motion::timed(m.as_mut(), &frame, query)?;
                     measured.push((m.name(), c.id.clone(), r, m.bytes()));
                 }
             }
             for (c, gpu) in cells.iter().zip(gpu_cells.iter_mut()) {
                 for m in gpu.iter_mut() {
-                    let r = movers::timed(m.as_mut(), &frame, query)?;
+                    let r = motion::timed(m.as_mut(), &frame, query)?;
                     measured.push((m.name(), c.id.clone(), r, m.bytes()));
                 }
             }
@@ -601,7 +558,7 @@ impl SceneRunner<'_> {
         Ok(())
     }
 
-    /// The field methods of every field cell of scene `s`, each cell's fields supplied once
+    /// Every field cell of scene `s` (its methods made by the caller), each cell's fields supplied once
     /// (one per caster mesh, `global`: the meshes' indices in `scenes`; their bytes were held
     /// against the memory limit before any work, `plan::check_animated_fields`).
     fn cells(
@@ -615,13 +572,8 @@ impl SceneRunner<'_> {
             .into_iter()
             .filter(|c| c.scene == s)
             .collect();
-        let field_names: Vec<&str> = self
-            .names
-            .iter()
-            .copied()
-            .filter(|n| n.starts_with("field"))
-            .collect();
-        if field_names.is_empty() {
+        let reads_field = |n: &&str| motion::form(n).is_some_and(|(f, _)| f.reads_field);
+        if !self.names.iter().any(reads_field) {
             return Ok(Vec::new());
         }
         let mut out = Vec::new();
@@ -641,19 +593,16 @@ impl SceneRunner<'_> {
                     }
                 }
             }
-            let options = self.kind.lookup_options(c.selection);
-            // A "gpu" cell's method is the GPU's ([`gpu_movers`], made by the caller).
-            let cpu_names: &[&str] = match c.backend {
-                Backend::Cpu => &field_names,
-                Backend::Gpu => &[],
+            let fields = MeshFields {
+                fields,
+                normals,
+                options: self.kind.lookup_options(c.selection),
             };
             out.push(CellMovers {
                 id: c.id(&bs.name),
                 gpu: c.backend == Backend::Gpu,
-                movers: movers::field_methods(&fields, &normals, options, cpu_names),
+                movers: Vec::new(),
                 fields,
-                normals,
-                options,
             });
         }
         Ok(out)

@@ -29,15 +29,19 @@
 mod cone;
 mod gpu;
 
+use super::motion::{self, FrameCasters, FrameForm, Mover, MoverInputs};
 use super::{Answer, Method, MethodContext, MethodEntry, MethodOptions, Precompute, Prepared};
 use crate::experiment::kinds::Kind;
 use crate::experiment::scenes::BuiltScene;
 use crate::experiment::spec::{Spec, SpecError};
 use crate::experiment::validate::Validator;
 use crate::experiment::{Error, Result};
+use crate::geometry::Mesh;
 use crate::sdf::SdfTrace;
 use crate::sdf::{cache, ConeSet, ConeTrace, DistanceVolume, Precision, SdfInstance, SdfScene};
+use crate::visibility::Visibility;
 use serde::{Deserialize, Serialize};
+use std::path::Path;
 use std::sync::Arc;
 
 pub const ENTRY: MethodEntry = MethodEntry {
@@ -45,6 +49,11 @@ pub const ENTRY: MethodEntry = MethodEntry {
     about: "mesh signed distance fields, sphere traced or cone traced (one volume per caster mesh, instanced)",
     read: super::read_as::<SdfOptions>,
 };
+
+/// Its per-frame form ([`Method::frame_forms`]): `sdf`, the volumes placed by each frame's
+/// transforms ([`Sdfs`]). `experiment dynamic`'s crowd measures it at its own `res` (the
+/// options have no default, so animated specs do not list it).
+pub const FRAME_FORMS: &[FrameForm] = &[FrameForm::cpu("sdf")];
 
 /// The largest `res` a spec may ask for (256³ f32 samples: 64 MiB per mesh).
 const MAX_RES: usize = 256;
@@ -238,6 +247,25 @@ pub struct Sdf {
 }
 
 impl Sdf {
+    /// The volume of `mesh` (from the cache in `cache` where it holds it) and whether no bake
+    /// ran.
+    fn volume(
+        &self,
+        mesh: &Mesh,
+        cache: Option<&Path>,
+    ) -> std::result::Result<(Arc<DistanceVolume>, bool), crate::sdf::SdfError> {
+        let tris: Vec<_> = (0..mesh.triangle_count())
+            .map(|t| mesh.triangle(t))
+            .collect();
+        let sha = crate::experiment::scenes::mesh_sha256(mesh);
+        let (v, outcome) =
+            cache::load_or_bake_in(cache, &tris, &sha, (self.res, self.margin), self.precision)?;
+        for why in outcome.iter().flat_map(|o| o.rejected()) {
+            eprintln!("  sdf cache entry rejected, rebaking: {why}");
+        }
+        Ok((Arc::new(v), outcome.is_some_and(|o| o.cached())))
+    }
+
     /// One volume per distinct caster mesh (from the cache where the run has one) and the
     /// instances; whether no bake ran.
     fn volumes(&self, ctx: &MethodContext, label: &str) -> Result<(SdfScene, u64, bool)> {
@@ -251,23 +279,10 @@ impl Sdf {
             let volume = match volumes.iter().find(|(m, _)| *m == mesh) {
                 Some((_, v)) => v.clone(),
                 None => {
-                    let tris: Vec<_> = (0..inst.mesh.triangle_count())
-                        .map(|t| inst.mesh.triangle(t))
-                        .collect();
-                    let sha = crate::experiment::scenes::mesh_sha256(&inst.mesh);
-                    let (v, outcome) = cache::load_or_bake_in(
-                        ctx.cache.as_deref(),
-                        &tris,
-                        &sha,
-                        (self.res, self.margin),
-                        self.precision,
-                    )
-                    .map_err(invalid)?;
-                    for why in outcome.iter().flat_map(|o| o.rejected()) {
-                        eprintln!("  sdf cache entry rejected, rebaking: {why}");
-                    }
-                    cached &= outcome.is_some_and(|o| o.cached());
-                    let v = Arc::new(v);
+                    let (v, hit) = self
+                        .volume(&inst.mesh, ctx.cache.as_deref())
+                        .map_err(invalid)?;
+                    cached &= hit;
                     volumes.push((mesh, v.clone()));
                     v
                 }
@@ -289,6 +304,25 @@ impl Sdf {
 impl Method for Sdf {
     fn name(&self) -> &'static str {
         ENTRY.name
+    }
+
+    fn frame_forms(&self) -> &'static [FrameForm] {
+        FRAME_FORMS
+    }
+
+    /// Its volumes (one per mesh, from the cache where it holds them) placed by each frame's
+    /// transforms and sphere traced (`query` aside).
+    fn mover(&self, _form: &str, on: &MoverInputs) -> Result<Box<dyn Mover>> {
+        let volumes = motion::per_mesh(self, on, |mesh| {
+            Ok(self.volume(mesh, on.cache).map_err(|e| e.to_string())?.0)
+        })?;
+        Ok(Box::new(Sdfs {
+            volumes,
+            scene: SdfScene {
+                instances: Vec::new(),
+                trace: self.trace,
+            },
+        }))
     }
 
     fn params(&self) -> Vec<(&'static str, String)> {
@@ -418,5 +452,36 @@ impl Method for Sdf {
             answer,
             gpu,
         })
+    }
+}
+
+/// Mesh signed distance fields as engines keep them for moving rigid objects (one volume per
+/// mesh, shared by its instances) placed by the frame's transforms and sphere traced on the
+/// same rays; the update is the instance list, nothing is rebuilt.
+pub struct Sdfs {
+    /// Per mesh, its volume.
+    pub volumes: Vec<Arc<DistanceVolume>>,
+    scene: SdfScene,
+}
+
+impl Mover for Sdfs {
+    fn name(&self) -> &'static str {
+        FRAME_FORMS[0].name
+    }
+
+    fn update(&mut self, frame: &FrameCasters) -> Result<()> {
+        self.scene.instances = frame.place(&self.volumes, |v, transform| SdfInstance {
+            volume: v.clone(),
+            transform,
+        });
+        Ok(())
+    }
+
+    fn vis(&self) -> &dyn Visibility {
+        &self.scene
+    }
+
+    fn bytes(&self) -> Option<u64> {
+        Some(self.volumes.iter().map(|v| v.bytes()).sum())
     }
 }
