@@ -165,7 +165,7 @@ pub fn check_committed_methods(rows: &[NamedRow], committed: &[NamedRow]) -> Vec
     against_committed(&keyed(rows), &keyed(committed))
 }
 
-/// [`check_committed`] for the rows of `experiment dynamic`'s `table.csv`: each (sweep,
+/// [`check_committed`] for the rows of `experiment dynamic`'s `sweep_frames.csv`: each (sweep,
 /// casters, frame, gap, method) on its same-ray RMS, its RMS against the frame's converged
 /// reference and its mean AO, against the committed row with the same key (named
 /// `SWEEP/N=…/frame=…/METHOD`). Rows of methods the committed run has none of (Embree's, in a
