@@ -13,7 +13,8 @@ mod flip;
 mod gpu_moving;
 
 use std::collections::HashMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use visfield::experiment::outputs::table_path;
 
 type Row = HashMap<String, String>;
 
@@ -21,8 +22,18 @@ fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
 }
 
+/// `rel` under the root; a command's table in a folder written before it had its name, under
+/// its former name (`outputs::table_path`).
+fn path(rel: &str) -> PathBuf {
+    let p = root().join(rel);
+    table_path(
+        p.parent().unwrap(),
+        p.file_name().unwrap().to_str().unwrap(),
+    )
+}
+
 fn read(rel: &str) -> Vec<Row> {
-    common::read_csv_maps(&root().join(rel))
+    common::read_csv_maps(&path(rel))
 }
 
 /// The columns named otherwise in tables written before the names said what they hold for
@@ -638,7 +649,7 @@ fn with_commas(n: u64) -> String {
 
 /// The performance table and the field's gain over Embree.
 fn performance(c: &mut Claims) {
-    let from = "results/performance/table.csv";
+    let from = "results/performance/backend_times.csv";
     let rows: Vec<Row> = read(from)
         .into_iter()
         .filter(|r| r["sweep"] == "triangles")
@@ -777,8 +788,8 @@ fn dynamic_table(rows: &[Row]) -> String {
 }
 
 fn dynamic(c: &mut Claims) {
-    let from = "results/dynamic/table.csv";
-    if !root().join(from).is_file() {
+    let from = "results/dynamic/sweep_frames.csv";
+    if !path(from).is_file() {
         c.missing
             .push(format!("{from} is missing: run `experiment dynamic`"));
         return;
@@ -958,7 +969,7 @@ fn gpu_and_figure8_lookups(c: &mut Claims) {
 /// README's Performance prose: the field's Mrays/s over the triangle sweep against Embree's, the
 /// entering sweep, Figure 8's multiple-object scene and lavapipe's ratio on Figure 6's rays.
 fn performance_prose(c: &mut Claims) {
-    let from = "results/performance/table.csv";
+    let from = "results/performance/backend_times.csv";
     let rows = read(from);
     let sweep = |s: &str, b: &str| -> Vec<&Row> {
         rows.iter()
@@ -1044,7 +1055,7 @@ fn performance_prose(c: &mut Claims) {
 /// README's Performance on the 2010 paper's other rays: the shadow and reflection sweeps of
 /// `experiment performance`, the 2010 scenes against Embree, and lavapipe's ratios.
 fn secondary_rays(c: &mut Claims) {
-    let from = "results/performance/table.csv";
+    let from = "results/performance/backend_times.csv";
     let rows = read(from);
     let get = |sweep: &str, caster: &str, backend: &str| -> &Row {
         rows.iter()
@@ -1708,9 +1719,9 @@ fn figure9_population(c: &mut Claims) {
 }
 
 /// The per-object peers in the moving crowd at 64 casters: mean frame and errors beside the
-/// field's and ray casting's (`results/dynamic/table.csv`).
+/// field's and ray casting's (`results/dynamic/sweep_frames.csv`).
 fn crowd_peers(c: &mut Claims) {
-    let from = "results/dynamic/table.csv";
+    let from = "results/dynamic/sweep_frames.csv";
     let rows: Vec<Row> = read(from)
         .into_iter()
         .filter(|r| r["sweep"] == "crowd" && r["casters"] == "64")
@@ -1747,10 +1758,10 @@ fn crowd_peers(c: &mut Claims) {
 }
 
 /// The field's flicker against ray casting's in the moving crowd, per caster count
-/// (`results/dynamic/table.csv`: the mean over the frame pairs of each method's `flicker`, the
+/// (`results/dynamic/sweep_frames.csv`: the mean over the frame pairs of each method's `flicker`, the
 /// ray cast being the world rebuild, whose rays every ray caster shares).
 fn crowd_flicker(c: &mut Claims) {
-    let from = "results/dynamic/table.csv";
+    let from = "results/dynamic/sweep_frames.csv";
     let rows: Vec<Row> = read(from)
         .into_iter()
         .filter(|r| r["sweep"] == "crowd" && !r["flicker"].is_empty())

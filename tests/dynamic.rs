@@ -15,22 +15,22 @@ fn the_quick_crowd_gives_every_method_every_frame_with_bounded_errors() {
         cache_limit: 0,
         memory_limit: 1 << 30,
     };
-    // A folder of the user's: their table.csv (once replaced), notes and an empty folder.
+    // A folder of the user's: their sweep_frames.csv (once replaced), notes and an empty folder.
     let dyn_out = out.path().join("dyn");
     std::fs::create_dir_all(dyn_out.join("drafts")).unwrap();
-    std::fs::write(dyn_out.join("table.csv"), "my table").unwrap();
+    std::fs::write(dyn_out.join("sweep_frames.csv"), "my table").unwrap();
     std::fs::write(dyn_out.join("notes.txt"), "my notes").unwrap();
     let refused = dynamic::run(&dyn_out, true, &supply, false).unwrap_err();
     assert!(refused.to_string().contains("no run.json"), "{refused}");
     let rows: Vec<FrameRow> = dynamic::run(&dyn_out, true, &supply, true).unwrap();
-    for f in ["table.csv", "run.json", "frame_time.png"] {
+    for f in ["sweep_frames.csv", "run.json", "frame_time.png"] {
         assert!(dyn_out.join(f).is_file(), "{f}");
     }
     let read = |f: &str| std::fs::read_to_string(dyn_out.join(f)).unwrap();
-    assert_eq!(read("table.csv.kept"), "my table");
+    assert_eq!(read("sweep_frames.csv.kept"), "my table");
     assert_eq!(read("notes.txt"), "my notes");
     assert!(dyn_out.join("drafts").is_dir());
-    assert!(read("table.csv").starts_with("sweep,"));
+    assert!(read("sweep_frames.csv").starts_with("sweep,"));
     let p = Profile::new(true);
     // World rebuild, two levels, the field with and without its sphere BVH, the mesh distance
     // fields and the AO fields; Embree rebuilt and instanced.

@@ -174,7 +174,7 @@ fn relief_quick_writes_tables_where_skipping_removes_fetches() {
     let out = dir.path().join("relief");
     let rows = run(&out, true, Some(AdapterPreference::from_env())).unwrap();
     for f in [
-        "table.csv",
+        "renderings.csv",
         "paper_vs_ours.csv",
         "fetches_vs_angle.png",
         "fetch_gain_vs_angle.png",

@@ -129,7 +129,7 @@ pub const METHODS: Compared = Compared {
     per_method: false,
 };
 
-/// `experiment dynamic`'s `table.csv`: each (sweep, casters, frame, gap, method),
+/// `experiment dynamic`'s `sweep_frames.csv`: each (sweep, casters, frame, gap, method),
 /// `SWEEP/N=…/frame=…/METHOD` (`/gap=…` before the method where set), on its same-ray RMS, its
 /// RMS against the frame's converged reference and its mean AO.
 pub const DYNAMIC: Compared = Compared {

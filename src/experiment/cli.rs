@@ -4,6 +4,7 @@ use super::check::{self, check_committed};
 use super::columns::{of_serialized, read_csv};
 use super::discover;
 use super::fields::FieldSupply;
+use super::outputs;
 use super::run::{staging, LoadedSpec, RunOptions};
 use super::spec::Backend;
 use super::{Error, Result};
@@ -627,7 +628,7 @@ fn check_dynamic(args: &RunArgs, parent: &Path, committed_root: &Path) -> Result
     let o = args.options("dynamic", Some(parent))?;
     let t = std::time::Instant::now();
     super::dynamic::run(&o.out, o.quick, &o.supply, o.allow_nonempty_out)?;
-    let committed = committed_root.join("dynamic").join("table.csv");
+    let committed = outputs::table_path(&committed_root.join("dynamic"), outputs::SWEEP_FRAMES_CSV);
     let theirs = match read_csv(&committed) {
         Ok(rows) => rows,
         Err(e) => {
@@ -638,7 +639,7 @@ fn check_dynamic(args: &RunArgs, parent: &Path, committed_root: &Path) -> Result
             )])
         }
     };
-    let ours = read_csv(&o.out.join("table.csv"))?;
+    let ours = read_csv(&o.out.join(outputs::SWEEP_FRAMES_CSV))?;
     let (f, left) = check_committed(&check::DYNAMIC, &ours, &theirs);
     if left > 0 {
         println!(
@@ -727,11 +728,23 @@ fn plots(names: &[String], quick: bool, dir: Option<&Path>) -> Result<()> {
             .filter(|d| d.join("table.csv").exists() || d.join("frames.csv").exists())
             .collect(),
     };
+    // Each folder by the table it holds: `experiment performance`'s (under its name before
+    // too, [`outputs::table_path`]), an animated spec's `frames.csv`, else a spec's `table.csv`.
     for d in dirs {
-        if super::performance::plots::is_performance_run(&d) {
+        if outputs::table_path(&d, outputs::BACKEND_TIMES_CSV).exists() {
             super::performance::plots::redraw(&d)?;
             println!("redrew the plots in {}", d.display());
             continue;
+        }
+        if let Some(t) = [outputs::SWEEP_FRAMES_CSV, outputs::RENDERINGS_CSV]
+            .into_iter()
+            .find(|t| d.join(t).exists())
+        {
+            return Err(Error::invalid(
+                d.join(t).display().to_string(),
+                "its plots are drawn by the command that wrote it (experiment dynamic or \
+                 relief); rerun that",
+            ));
         }
         // An animated run: its plots from frames.csv.
         if d.join("frames.csv").exists() && !d.join("table.csv").exists() {

@@ -1,11 +1,25 @@
-//! Rows of named columns, in the order their parts add them: the table of a run's method rows
-//! (`methods.csv`) is an ordered map per row, each part (the cell, the method, its times, the
-//! kind's metrics) contributing its own named columns, so a method with its own parameters or
-//! a kind with its own metrics adds columns without a struct field. The header is the ordered
-//! union of the rows' names (a row without a column leaves it empty), and names say what they
-//! hold for every kind (`estimate_s`, `rms_vs_truth`), not for AO. `table.csv` is written the
-//! same way (`experiment::table`): its standard columns in the order of its one column list
-//! ([`write_csv_with`]), a kind's own columns after them.
+//! One row schema mechanism: what defines the columns of every CSV a run writes.
+//!
+//! - A row is a serde struct of plain fields: its fields give the header, in order, and serde
+//!   the values (as the CSV serialiser writes them). [`crate::experiment::outputs::write_csv`]
+//!   writes it, `outputs::read_csv` reads it back by header name: a column's former name is a
+//!   `#[serde(alias)]`, a column added since a `#[serde(default)]`. So are `raycast_sweep.csv`,
+//!   `field_sweep.csv`, `pairs.csv`, `paper_vs_ours.csv` and the commands' tables
+//!   (`backend_times.csv`, `renderings.csv`, `cases.csv`, …).
+//! - Where a row has columns no struct field names (a kind's own metrics, a method's
+//!   parameters), it is a [`NamedRow`]: (name, value) pairs in the order its parts add them,
+//!   the header the ordered union of the rows' names ([`header`]) after the struct's
+//!   ([`write_csv_with`]), a struct's columns taken with serde's bytes ([`of_serialized`]).
+//!   `table.csv` is its struct, [`crate::experiment::table::Row`], whose columns are defined
+//!   once in `table_columns!` (name, former name, type, meaning, value), then the kind's own
+//!   columns; `frames.csv` and `sweep_frames.csv` are two views of one struct
+//!   ([`crate::experiment::frame_row`]: each a list of (name in the file, field));
+//!   `methods.csv` is built from its parts (the cell, the method and its parameters, its
+//!   times, each value's `Display`, [`Cell`]), its error columns those of `table.csv`'s list
+//!   ([`crate::experiment::table::ErrorColumns::push_to`]). Names say what a column holds for
+//!   every kind (`estimate_s`, `rms_vs_truth`), not for AO.
+//! - A file is named for what its rows hold; a folder written before a file had its name is
+//!   read under the former one ([`crate::experiment::outputs::table_path`]).
 
 use super::{Error, Result};
 use std::fmt::Display;
@@ -63,6 +77,29 @@ impl NamedRow {
     /// The columns in order.
     pub fn columns(&self) -> impl Iterator<Item = (&str, &str)> {
         self.0.iter().map(|(n, v)| (n.as_str(), v.as_str()))
+    }
+}
+
+/// A typed value as a [`NamedRow`] cell: its `Display` text, none as the empty cell (what
+/// [`NamedRow::push`] and [`NamedRow::push_opt`] write).
+pub trait Cell {
+    fn cell(&self) -> String;
+}
+
+macro_rules! display_cells {
+    ($($t:ty),*) => {$(
+        impl Cell for $t {
+            fn cell(&self) -> String {
+                self.to_string()
+            }
+        }
+    )*};
+}
+display_cells!(u32, f64, String);
+
+impl<T: Cell> Cell for Option<T> {
+    fn cell(&self) -> String {
+        self.as_ref().map_or_else(String::new, Cell::cell)
     }
 }
 

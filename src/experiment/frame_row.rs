@@ -1,6 +1,6 @@
 //! One row per (moving scene, frame, per-frame method): what a frame's motion cost the method
 //! and how its answer compares, the one record of an animated spec's `frames.csv`
-//! (`experiment::run::frames`) and of `experiment dynamic`'s `table.csv`
+//! (`experiment::run::frames`) and of `experiment dynamic`'s `sweep_frames.csv`
 //! (`experiment::dynamic`). The two files are views of it ([`FrameView`]: [`FRAMES_CSV`],
 //! [`DYNAMIC_CSV`]), each its own columns in its own order under its own names, written with
 //! the bytes serde gives the row ([`crate::experiment::columns::of_serialized`]); a column of
@@ -161,7 +161,7 @@ pub const FRAMES_CSV: FrameView = FrameView(&[
     ("truth_flip_frame_change", "truth_flip_frame_change"),
 ]);
 
-/// `experiment dynamic`'s `table.csv`.
+/// `experiment dynamic`'s `sweep_frames.csv`.
 pub const DYNAMIC_CSV: FrameView = FrameView(&[
     ("sweep", "scene"),
     ("gap_radii", "gap_radii"),
@@ -277,7 +277,10 @@ mod tests {
     fn each_view_reads_back_by_name() {
         let dir = tempfile::tempdir().unwrap();
         let r = row();
-        for (view, keep) in [(&FRAMES_CSV, "frames.csv"), (&DYNAMIC_CSV, "dynamic.csv")] {
+        for (view, keep) in [
+            (&FRAMES_CSV, "frames.csv"),
+            (&DYNAMIC_CSV, "sweep_frames.csv"),
+        ] {
             let p = dir.path().join(keep);
             view.write(&p, std::slice::from_ref(&r)).unwrap();
             let text = std::fs::read_to_string(&p).unwrap();

@@ -7,14 +7,18 @@
 //!   ([`FieldSweepRow`]), against the converged reference;
 //! - `pairs.csv`: RMS between cells that differ only in precision ([`PairRow`]; the slides'
 //!   8 vs 16 bit);
-//! - `paper_vs_ours.csv`: the paper's numbers beside ours, written by `experiment::paper`.
+//! - `paper_vs_ours.csv`: the paper's numbers beside ours, written by `experiment::paper`;
+//!
+//! and the commands' tables, each named for what its rows hold: [`BACKEND_TIMES_CSV`],
+//! [`SWEEP_FRAMES_CSV`], [`RENDERINGS_CSV`] (read under their former name by [`table_path`]).
+//! What defines each file's columns: [`super::columns`].
 
 use super::spec::Backend;
 use super::{Error, Result};
 use crate::field::{Precision, Selection};
 use crate::sampling::{LayoutKind, SphereKind};
 use serde::{de::DeserializeOwned, Deserialize, Serialize};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// The kind's estimate by ray casting at one ray count, against the reference. Column names
 /// as in `table.csv` (the same measurement at the render's ray count); tables written before
@@ -90,6 +94,36 @@ pub struct PairRow {
     pub cell_a: String,
     #[serde(default)]
     pub cell_b: String,
+}
+
+/// `experiment performance`'s table: one row per sweep point and backend, its time on the
+/// point's rays ([`super::performance::PerfRow`]).
+pub const BACKEND_TIMES_CSV: &str = "backend_times.csv";
+/// `experiment dynamic`'s table: one row per sweep (a crowd or the approach), frame and method
+/// ([`super::frame_row::DYNAMIC_CSV`]).
+pub const SWEEP_FRAMES_CSV: &str = "sweep_frames.csv";
+/// `experiment relief`'s table: one row per rendering (table, map, view, setting and caster;
+/// [`super::relief::ReliefRow`]).
+pub const RENDERINGS_CSV: &str = "renderings.csv";
+
+/// The file `name` in `dir`, or for a command's table in a folder written before the tables
+/// were named for what they hold, the file under its former name, `table.csv`, as a table's
+/// columns are read under their former names ([`super::table::FORMER_NAMES`]): where `name`
+/// is one of the command tables above and absent, and the folder is a command's run (its
+/// `run.json` and no `spec.json`: a spec's run writes `table.csv` of its own). The former name
+/// does not say which command wrote it: `experiment plots` reads it as performance's, the one
+/// command table it redraws.
+pub fn table_path(dir: &Path, name: &str) -> PathBuf {
+    let now = dir.join(name);
+    let former = dir.join("table.csv");
+    let command = [BACKEND_TIMES_CSV, SWEEP_FRAMES_CSV, RENDERINGS_CSV].contains(&name)
+        && dir.join("run.json").is_file()
+        && !dir.join("spec.json").exists();
+    if command && !now.exists() && former.is_file() {
+        former
+    } else {
+        now
+    }
 }
 
 /// Writes rows as CSV (header from the struct), atomically.

@@ -5,12 +5,14 @@
 //! bakes), the times ([`TimeColumns`]) and the kind's metrics ([`ErrorColumns`]: against the
 //! same-ray reference and the converged one). Every column is defined once, in the list of
 //! [`table_columns!`] below: its name, the names tables written before it used (read back as
-//! aliases), its type as readers read it, what it holds, and its value from the parts. That one
-//! list gives the header order ([`TABLE_COLUMNS`]), the typed reader's view ([`Row`], serde by
-//! header name, so `experiment plots`, `check` and `paper::rewrite` read the committed tables
-//! of either naming) and the writer ([`write_table`]). A kind's own metric columns
-//! ([`crate::experiment::kinds::Kind::own_metrics`]) follow the standard ones, read back by
-//! name ([`crate::experiment::columns::read_csv`]).
+//! aliases), its type as readers read it, what it holds, its value from the parts, and for an
+//! error column its place in `methods.csv`. That one list gives the header order
+//! ([`TABLE_COLUMNS`]), the typed reader's view ([`Row`], serde by header name, so `experiment
+//! plots`, `check` and `paper::rewrite` read the committed tables of either naming), the writer
+//! ([`write_table`]) and `methods.csv`'s error columns ([`ErrorColumns::push_to`]). A kind's own
+//! metric columns ([`crate::experiment::kinds::Kind::own_metrics`]) follow the standard ones,
+//! read back by name ([`crate::experiment::columns::read_csv`]). The mechanism every CSV
+//! follows: [`crate::experiment::columns`].
 //!
 //! Names say what a column holds for every kind: `estimate_s` is the estimate's time through
 //! the fields (AO, light fractions or reflected radiance), `signal_rms` the RMS of the
@@ -73,7 +75,8 @@ pub struct FieldColumns {
 }
 
 /// A row's errors (0–255): against the same-ray reference (the kind's metric columns) and
-/// against the converged reference. `methods.csv` writes the same under the same names.
+/// against the converged reference. Their columns are the `(errors N)` ones of
+/// [`table_columns!`]; `methods.csv` writes the same ([`ErrorColumns::push_to`]).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ErrorColumns {
     pub seeds: u32,
@@ -128,13 +131,20 @@ fn one() -> u32 {
     1
 }
 
-/// Defines the table's columns once, in header order: each `NAME (was OLD): TYPE = |parts|
-/// VALUE;` with its doc comment and serde attributes. Gives [`Row`] (serde by name, `OLD`
-/// read as an alias), [`TABLE_COLUMNS`], [`FORMER_NAMES`] and [`Row::from_parts`].
+/// Defines the table's columns once, in header order: each `NAME (was OLD) (errors N): TYPE =
+/// |p| VALUE;` with its doc comment and serde attributes. Gives [`Row`] (serde by name, `OLD`
+/// read as an alias), [`TABLE_COLUMNS`], [`FORMER_NAMES`] and [`Row::from_parts`]. A column
+/// marked `(errors N)` is one of the [`ErrorColumns`] (`p` is then the row's errors, not its
+/// parts): `methods.csv` writes those too, at place `N` of its error block
+/// ([`ErrorColumns::push_to`]).
 macro_rules! table_columns {
+    // What a column's `p` is: the row's parts, or an error column's errors.
+    (@of $parts:ident) => { $parts };
+    (@of $parts:ident $n:literal) => { &$parts.errors };
     ($(
         $(#[$attr:meta])*
-        $name:ident $((was $old:literal))?: $ty:ty = |$p:ident| $value:expr;
+        $name:ident $((was $old:literal))? $((errors $n:literal))?: $ty:ty =
+            |$p:ident| $value:expr;
     )*) => {
         /// One row of `table.csv` as its readers see it: every standard column, by header
         /// name (the names of older tables too, [`FORMER_NAMES`]). Times in seconds, RMS and
@@ -161,9 +171,27 @@ macro_rules! table_columns {
             pub fn from_parts(parts: &Parts) -> Row {
                 Row {
                     $($name: {
-                        let $p = parts;
+                        let $p = table_columns!(@of parts $($n)?);
                         $value
                     },)*
+                }
+            }
+        }
+
+        impl ErrorColumns {
+            /// Adds the error columns (those marked `errors N` in `table.csv`'s list, valued
+            /// as there) to a `methods.csv` row, in the order of their `N`, each as
+            /// [`NamedRow`] writes a value.
+            pub fn push_to(&self, row: &mut NamedRow) {
+                let mut cols: Vec<(u32, &str, String)> = vec![$($(
+                    ($n, stringify!($name), columns::Cell::cell(&{
+                        let $p = self;
+                        $value
+                    })),
+                )?)*];
+                cols.sort_by_key(|c| c.0);
+                for (_, name, value) in cols {
+                    row.push(name, value);
                 }
             }
         }
@@ -190,9 +218,9 @@ table_columns! {
     /// Ray casting the same estimate on the same rays and backend.
     raycast_s: Option<f64> = |p| p.times.raycast_s;
     /// Per receiver vertex RMS against the same-ray reference (none for the per-pixel kinds).
-    rms_vertex: Option<f64> = |p| p.errors.rms_vertex.map(|m| m.0);
+    rms_vertex (errors 1): Option<f64> = |e| e.rms_vertex.map(|m| m.0);
     /// Per image pixel RMS against the reference image (none without an image).
-    rms_image: Option<f64> = |p| p.errors.rms_image.map(|m| m.0);
+    rms_image (errors 3): Option<f64> = |e| e.rms_image.map(|m| m.0);
     /// Stored bytes of every caster's field (normal fields included).
     field_bytes: u64 = |p| p.fields.field_bytes;
     /// RMS over the evaluation points (receiver vertices, or pixels), unquantised, 0–255, of
@@ -200,10 +228,10 @@ table_columns! {
     /// over seeds. It includes the reference's own noise: E\[rms²\] = error² +
     /// `truth_stderr`².
     #[serde(default)]
-    rms_vs_truth: Option<f64> = |p| p.errors.rms_vs_truth.map(|m| m.0);
+    rms_vs_truth (errors 8): Option<f64> = |e| e.rms_vs_truth.map(|m| m.0);
     /// RMS over points of the converged reference's standard error (0–255): its noise floor.
     #[serde(default)]
-    truth_stderr: Option<f64> = |p| p.errors.truth_stderr;
+    truth_stderr (errors 15): Option<f64> = |e| e.truth_stderr;
     // Context.
     scene: String = |p| p.cell.scene.clone();
     sphere: SphereKind = |p| p.cell.sphere;
@@ -211,11 +239,11 @@ table_columns! {
     /// Evaluation points (receiver vertices, or receiver pixels).
     receiver_points: usize = |p| p.cell.receiver_points;
     caster_triangles: usize = |p| p.cell.caster_triangles;
-    max_error_vertex: Option<f64> = |p| p.errors.max_error_vertex;
-    max_error_image: Option<f64> = |p| p.errors.max_error_image;
+    max_error_vertex (errors 5): Option<f64> = |e| e.max_error_vertex;
+    max_error_image (errors 6): Option<f64> = |e| e.max_error_image;
     /// Share of receiver pixel values whose 8-bit level differs from the reference's by more
     /// than 1.
-    share_pixels_off_1: Option<f64> = |p| p.errors.share_pixels_off_1;
+    share_pixels_off_1 (errors 7): Option<f64> = |e| e.share_pixels_off_1;
     /// Rays the bakes traced.
     bake_rays: u64 = |p| p.fields.bake_rays;
     /// Every field came from the cache.
@@ -237,57 +265,57 @@ table_columns! {
     setup_s: Option<f64> = |p| p.times.setup_s;
     /// Seeds (per-point ray rotations) the RMS columns are averaged over.
     #[serde(default)]
-    seeds: u32 = |p| p.errors.seeds;
+    seeds (errors 0): u32 = |e| e.seeds;
     /// Standard deviation over seeds of `rms_vertex`.
     #[serde(default)]
-    rms_vertex_sd: Option<f64> = |p| p.errors.rms_vertex.and_then(|m| m.1);
+    rms_vertex_sd (errors 2): Option<f64> = |e| e.rms_vertex.and_then(|m| m.1);
     /// Standard deviation over seeds of `rms_image`.
     #[serde(default)]
-    rms_image_sd: Option<f64> = |p| p.errors.rms_image.and_then(|m| m.1);
+    rms_image_sd (errors 4): Option<f64> = |e| e.rms_image.and_then(|m| m.1);
     /// Standard deviation over seeds of `rms_vs_truth`.
     #[serde(default)]
-    rms_vs_truth_sd: Option<f64> = |p| p.errors.rms_vs_truth.and_then(|m| m.1);
+    rms_vs_truth_sd (errors 9): Option<f64> = |e| e.rms_vs_truth.and_then(|m| m.1);
     /// The same-ray ray-cast reference against the converged one (mean over seeds): the
     /// error a ray cast with the cell's rays makes.
     #[serde(default)]
-    raycast_rms_vs_truth: Option<f64> = |p| p.errors.raycast_rms_vs_truth;
+    raycast_rms_vs_truth (errors 17): Option<f64> = |e| e.raycast_rms_vs_truth;
     /// Rays per point of the converged reference.
     #[serde(default)]
-    truth_rays: Option<u32> = |p| p.errors.truth_rays;
+    truth_rays (errors 16): Option<u32> = |e| e.truth_rays;
     /// Evaluation points that touch another surface (see `render::contact`).
     #[serde(default)]
     crease_points: usize = |p| p.cell.crease_points;
     /// `rms_vs_truth` over the crease points only (none without crease points).
     #[serde(default)]
-    rms_vs_truth_crease: Option<f64> = |p| p.errors.rms_vs_truth_crease;
+    rms_vs_truth_crease (errors 10): Option<f64> = |e| e.rms_vs_truth_crease;
     /// `rms_vs_truth` over the other points.
     #[serde(default)]
-    rms_vs_truth_interior: Option<f64> = |p| p.errors.rms_vs_truth_interior;
+    rms_vs_truth_interior (errors 11): Option<f64> = |e| e.rms_vs_truth_interior;
     /// Evaluation points inside some caster's world bounding sphere (where the lookup starts
     /// inside a sphere: the intra-object test, or a receiver the sphere cuts).
     #[serde(default)]
     points_in_spheres: Option<usize> = |p| Some(p.cell.points_in_spheres);
     /// `rms_vs_truth` over the points inside some caster's sphere (none when there are none).
     #[serde(default)]
-    rms_vs_truth_in_spheres: Option<f64> = |p| p.errors.rms_vs_truth_in_spheres;
+    rms_vs_truth_in_spheres (errors 12): Option<f64> = |e| e.rms_vs_truth_in_spheres;
     /// `rms_vs_truth` over the points outside every caster's sphere.
     #[serde(default)]
-    rms_vs_truth_outside_spheres: Option<f64> = |p| p.errors.rms_vs_truth_outside_spheres;
+    rms_vs_truth_outside_spheres (errors 13): Option<f64> = |e| e.rms_vs_truth_outside_spheres;
     /// RMS over the points outside every caster's sphere (0–255, unquantised, first seed) of
     /// the values against the same-ray reference: the error where the lookup is the papers'
     /// inter-object case.
     #[serde(default)]
-    rms_outside_spheres: Option<f64> = |p| p.errors.rms_outside_spheres;
+    rms_outside_spheres (errors 14): Option<f64> = |e| e.rms_outside_spheres;
     /// The signal the errors are measured against: RMS over the points (and channels) of
     /// 255 · (1 − value) of the same-ray reference (for AO its occlusion; for shadows the
     /// light the casters take away). A caster that shades little gives small errors whatever
     /// the method; `rms_vertex` or `rms_image` over this compares casters.
     #[serde(default)]
-    signal_rms (was "occlusion_rms"): Option<f64> = |p| p.errors.signal_rms;
+    signal_rms (was "occlusion_rms") (errors 18): Option<f64> = |e| e.signal_rms;
     /// Graininess of the image's error against the reference image, first seed (see
     /// [`super::metrics::grain`]; none without an image).
     #[serde(default)]
-    grain: Option<f64> = |p| p.errors.grain;
+    grain (errors 19): Option<f64> = |e| e.grain;
     /// Rays of one evaluation: points × rays per point (× lights for shadows; every ray, those
     /// that miss a caster's sphere too, as the 2010 paper counts).
     #[serde(default)]
@@ -307,11 +335,11 @@ table_columns! {
     /// The name of the kind's second reference (reflections with a glossy lobe: "mirror");
     /// empty without one.
     #[serde(default)]
-    second_reference: Option<String> = |p| p.errors.second_reference.clone();
+    second_reference (errors 20): Option<String> = |e| e.second_reference.clone();
     /// RMS per pixel (0–255, as `rms_image`) of the first seed's image against the second
     /// reference's image, ray cast on the same points.
     #[serde(default)]
-    rms_image_vs_second: Option<f64> = |p| p.errors.rms_image_vs_second;
+    rms_image_vs_second (errors 21): Option<f64> = |e| e.rms_image_vs_second;
     /// Values per point: 1 for a scalar kind (every kind of the papers), 3 for an RGB or a
     /// direction; 1 in tables written before the column.
     #[serde(default = "one")]
@@ -321,30 +349,30 @@ table_columns! {
     /// drawn with its own shading, the same in both images) counting as exact, so
     /// `rms_image` × √(evaluated pixels / active pixels). None without an image.
     #[serde(default)]
-    rms_image_window: Option<f64> = |p| p.errors.rms_image_window;
+    rms_image_window (errors 22): Option<f64> = |e| e.rms_image_window;
     /// RMS per pixel (0–255) of the shaded image (each value × the kind's shading factor, the
     /// `-shaded.png` pictures: shadows × the unshadowed direct light) against the same-ray
     /// reference's shaded image, over the evaluated pixels, mean over seeds: the images the
     /// 2010 paper compares. None for a kind without shading.
     #[serde(default)]
-    rms_image_shaded: Option<f64> = |p| p.errors.rms_image_shaded;
+    rms_image_shaded (errors 23): Option<f64> = |e| e.rms_image_shaded;
     /// Mean FLIP (Andersson et al., HPG 2020: the perceptual error, 0–1,
     /// [`crate::experiment::flip`]) of the first seed's image against the same-ray
     /// reference's image, both read as their 8-bit PNGs (grey as equal RGB), at 67 pixels per
     /// degree, pooled over the pixels `rms_image` is taken over. None without an image.
     #[serde(default)]
-    flip_mean: Option<f64> = |p| p.errors.flip.map(|f| f.mean);
+    flip_mean (errors 24): Option<f64> = |e| e.flip.map(|f| f.mean);
     /// The FLIP pooling's weighted median of the same map: half of the pooled pixels' total
     /// FLIP error lies at or below it.
     #[serde(default)]
-    flip_weighted_median: Option<f64> = |p| p.errors.flip.map(|f| f.weighted_median);
+    flip_weighted_median (errors 25): Option<f64> = |e| e.flip.map(|f| f.weighted_median);
     /// `flip_mean` against the converged reference's image (none without one).
     #[serde(default)]
-    flip_mean_vs_truth: Option<f64> = |p| p.errors.flip_vs_truth.map(|f| f.mean);
+    flip_mean_vs_truth (errors 26): Option<f64> = |e| e.flip_vs_truth.map(|f| f.mean);
     /// `flip_weighted_median` against the converged reference's image.
     #[serde(default)]
-    flip_weighted_median_vs_truth: Option<f64> =
-        |p| p.errors.flip_vs_truth.map(|f| f.weighted_median);
+    flip_weighted_median_vs_truth (errors 27): Option<f64> =
+        |e| e.flip_vs_truth.map(|f| f.weighted_median);
 }
 
 /// A row as written: the standard columns, then the kind's own metric columns (name, value).

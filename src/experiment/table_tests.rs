@@ -210,3 +210,27 @@ fn the_committed_tables_read_and_keep_their_column_order() {
         assert_eq!(r.channels, 1);
     }
 }
+
+#[test]
+fn methods_csv_writes_the_error_columns_of_the_list_in_its_order() {
+    let p = parts();
+    let mut named = NamedRow::new();
+    p.errors.push_to(&mut named);
+    let names: Vec<&str> = named.columns().map(|c| c.0).collect();
+    // The committed methods.csv's error block, from `seeds` on, in its order.
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("results/quick/figure6/methods.csv");
+    let text = std::fs::read_to_string(path).unwrap();
+    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    let at = header.iter().position(|n| *n == "seeds").unwrap();
+    assert_eq!(names, header[at..at + names.len()]);
+    // Each value the table's, as `Display` writes it (`9`, where serde writes `9.0`).
+    let table = columns::of_serialized(&Row::from_parts(&p));
+    for (name, v) in named.columns() {
+        let t = table.get(name).unwrap();
+        assert_eq!(v.parse::<f64>().ok(), t.parse::<f64>().ok(), "{name}");
+        assert!(v == t || v.parse::<f64>().is_ok(), "{name}: {v} {t}");
+    }
+    assert_eq!(named.get("max_error_vertex"), Some("9"));
+    assert_eq!(named.get("rms_vs_truth_in_spheres"), Some(""));
+    assert_eq!(named.get("second_reference"), Some("mirror"));
+}

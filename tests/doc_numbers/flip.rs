@@ -4,6 +4,7 @@
 //! from their order under the RMS, recomputed from the files.
 
 use super::{read, Claims, Row};
+use visfield::experiment::outputs::{table_path, SWEEP_FRAMES_CSV};
 
 /// The committed runs whose tables carry FLIP columns, with the images they compare.
 pub const SPECS: [&str; 18] = [
@@ -179,7 +180,7 @@ fn every_committed_run_with_images_or_frames_has_flip_and_flicker() {
     let mut checked = 0;
     for dir in &runs {
         let wants = |file: &str, cols: &[&str]| {
-            let head = header(&dir.join(file));
+            let head = header(&table_path(dir, file));
             for c in cols {
                 assert!(
                     head.iter().any(|h| h == c),
@@ -204,7 +205,7 @@ fn every_committed_run_with_images_or_frames_has_flip_and_flicker() {
                 wants("methods.csv", &["flip_mean", "flip_mean_vs_truth"]);
             }
         } else if dir.file_name().is_some_and(|n| n == "dynamic") {
-            wants("table.csv", &["flicker", "raycast_flicker"]);
+            wants(SWEEP_FRAMES_CSV, &["flicker", "raycast_flicker"]);
         } else {
             continue;
         }

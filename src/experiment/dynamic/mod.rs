@@ -56,7 +56,7 @@ use std::path::Path;
 /// One method on one frame of one crowd (its view: [`super::frame_row::DYNAMIC_CSV`]).
 pub use super::frame_row::FrameRow;
 
-/// Runs the crowd sweep into `out` (`table.csv`, `run.json`, `frame_time.png`, …), written in
+/// Runs the crowd sweep into `out` (`sweep_frames.csv`, `run.json`, `frame_time.png`, …), written in
 /// a staging folder beside it and published only when whole, as a spec's run is
 /// ([`super::staging`]): a file at `out`, or a folder that holds files no run wrote, is
 /// refused before any work unless `allow_nonempty_out` (the folder's files are then kept).
@@ -102,7 +102,7 @@ fn write(
         (approach.plane_side, approach.plane_side),
         500,
     )?;
-    super::frame_row::DYNAMIC_CSV.write(&out.join("table.csv"), &rows)?;
+    super::frame_row::DYNAMIC_CSV.write(&out.join(super::outputs::SWEEP_FRAMES_CSV), &rows)?;
     let crowd_rows: Vec<FrameRow> = rows
         .iter()
         .filter(|r| r.scene == "crowd")

@@ -10,7 +10,7 @@
 //! each meets the same load on a shared machine, each timed pass right after an untimed one of
 //! the same backend (warm caches).
 //!
-//! Three sweeps, each written to `table.csv` (column `sweep`) and plotted, for AO rays and again
+//! Three sweeps, each written to `backend_times.csv` (column `sweep`) and plotted, for AO rays and again
 //! for the 2010 paper's shadow and reflection rays on the same casters, fields and receivers
 //! (sweeps `shadow_*` and `reflection_*`, [`secondary`]):
 //! - `triangles`: real models from 3.7k to 269k triangles, one field shape (4226 × 32² u8);
@@ -549,7 +549,7 @@ pub fn run(out: &Path, quick: bool, supply: &FieldSupply) -> Result<Vec<PerfRow>
         }
     }
     std::fs::create_dir_all(out).map_err(Error::io(out))?;
-    super::outputs::write_csv(&out.join("table.csv"), &table)?;
+    super::outputs::write_csv(&out.join(super::outputs::BACKEND_TIMES_CSV), &table)?;
     let rows: Vec<plots::PlotRow> = table.iter().map(plots::PlotRow::of).collect();
     plots::draw(out, &rows, Some(&plots::cache_sizes()))?;
     let json = out.join("run.json");

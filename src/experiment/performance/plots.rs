@@ -1,5 +1,5 @@
 //! The performance run's three growth plots, drawn from its rows (after the run, or from its
-//! `table.csv` by `experiment plots --dir results/performance`):
+//! `backend_times.csv` by `experiment plots --dir results/performance`):
 //!
 //! - `growth_triangles.png`: each caster is another model, so its points are not joined: a
 //!   line across models would read as one model's growth; the models are named under the plot;
@@ -11,12 +11,13 @@
 
 use super::PerfRow;
 use crate::experiment::figures::facet::Family;
+use crate::experiment::outputs;
 use crate::experiment::plot::{figure_plot, Axes, Figure, Panel, Series, Style, Styled};
 use crate::experiment::Result;
 use serde::Deserialize;
 use std::path::Path;
 
-/// The columns of a `table.csv` row the plots read.
+/// The columns of a `backend_times.csv` row the plots read.
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 pub struct PlotRow {
     pub sweep: String,
@@ -49,16 +50,11 @@ impl PlotRow {
     }
 }
 
-/// Whether `dir` holds a performance run (its `table.csv` starts with `sweep`, `caster`).
-pub fn is_performance_run(dir: &Path) -> bool {
-    std::fs::read_to_string(dir.join("table.csv"))
-        .map(|t| t.starts_with("sweep,caster,"))
-        .unwrap_or(false)
-}
-
-/// Redraws the plots of the performance run in `dir` from its `table.csv`.
+/// Redraws the plots of the performance run in `dir` from its `backend_times.csv` (or that
+/// table under its former name, [`outputs::table_path`]).
 pub fn redraw(dir: &Path) -> Result<()> {
-    let rows: Vec<PlotRow> = crate::experiment::outputs::read_csv(&dir.join("table.csv"))?;
+    let rows: Vec<PlotRow> =
+        outputs::read_csv(&outputs::table_path(dir, outputs::BACKEND_TIMES_CSV))?;
     draw(dir, &rows, None)
 }
 

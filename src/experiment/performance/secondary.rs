@@ -39,7 +39,7 @@ pub enum RayKind {
 }
 
 impl RayKind {
-    /// The sweep's name in `table.csv` for the base sweep `base` (`triangles`, `field_size`,
+    /// The sweep's name in `backend_times.csv` for the base sweep `base` (`triangles`, `field_size`,
     /// `entering`): the AO sweeps keep their names, the others are prefixed by the ray.
     pub fn sweep(self, base: &str) -> &'static str {
         match (self, base) {

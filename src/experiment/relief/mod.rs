@@ -3,7 +3,7 @@
 //! viewing angles, sample rates and bisection counts; every image compared with the exact
 //! intersection of the bilinear surface.
 //!
-//! Writes `table.csv` (one row per rendering and method; the pixels split into those whose ray
+//! Writes `renderings.csv` (one row per rendering and method; the pixels split into those whose ray
 //! meets the surface, those whose ray leaves without meeting it and those culled at the entry,
 //! each with its count and mean fetches), `paper_vs_ours.csv` (the paper's frame-rate gains
 //! from skipping beside ours in time and in fetches over the surface pixels), plots (fetches
@@ -528,7 +528,7 @@ pub fn run(out: &Path, quick: bool, gpu: Option<AdapterPreference>) -> Result<Ve
             run_pass(&pass, &zoned[..1], &settings, repeats, adapter, &mut rows)?;
         }
     }
-    super::outputs::write_csv(&out.join("table.csv"), &rows)?;
+    super::outputs::write_csv(&out.join(super::outputs::RENDERINGS_CSV), &rows)?;
     super::outputs::write_csv(&out.join("paper_vs_ours.csv"), &paper::compare(&rows))?;
     plots::plots(out, &rows, size)?;
     plots::exact_grid(&out.join("images.png"), &exact_60)?;

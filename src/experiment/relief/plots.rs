@@ -47,7 +47,7 @@ fn by_angle(rows: &[ReliefRow], skips: &[u32], f: &dyn Fn(&ReliefRow) -> f64) ->
     s
 }
 
-/// The plots of `table.csv`'s rows; `size` is the image side.
+/// The plots of `renderings.csv`'s rows; `size` is the image side.
 pub fn plots(out: &Path, rows: &[ReliefRow], size: u32) -> Result<()> {
     xy_plot(
         &out.join("fetches_vs_angle.png"),

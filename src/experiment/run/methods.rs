@@ -14,7 +14,6 @@ use crate::experiment::methods::{Answer, Method, MethodContext, NoRays};
 use crate::experiment::metrics::rms_unquantised;
 use crate::experiment::progress::{stage, stage_adaptive};
 use crate::experiment::spec::{Backend, Spec};
-use crate::experiment::table::ErrorColumns;
 use crate::render::estimator::Points;
 use crate::sampling::rays::RaySet;
 
@@ -199,7 +198,7 @@ impl Runner<'_> {
             row.push_opt("estimate_kernel_s", estimate_kernel_s);
         }
         // The metrics, the same as the field cells'.
-        push_errors(&mut row, &errors);
+        errors.push_to(&mut row);
         row.push("rms_vs_raycast", rms_unquantised(&values[0], &st.reference))
             .push("image", image);
         // The kind's own metrics, as in `table.csv`.
@@ -209,42 +208,4 @@ impl Runner<'_> {
         self.method_rows.push(row);
         Ok(())
     }
-}
-
-/// The error columns of a row, under the names of `table.csv` (0–255).
-fn push_errors(row: &mut NamedRow, e: &ErrorColumns) {
-    row.push("seeds", e.seeds)
-        .push_opt("rms_vertex", e.rms_vertex.map(|m| m.0))
-        .push_opt("rms_vertex_sd", e.rms_vertex.and_then(|m| m.1))
-        .push_opt("rms_image", e.rms_image.map(|m| m.0))
-        .push_opt("rms_image_sd", e.rms_image.and_then(|m| m.1))
-        .push_opt("max_error_vertex", e.max_error_vertex)
-        .push_opt("max_error_image", e.max_error_image)
-        .push_opt("share_pixels_off_1", e.share_pixels_off_1)
-        .push_opt("rms_vs_truth", e.rms_vs_truth.map(|m| m.0))
-        .push_opt("rms_vs_truth_sd", e.rms_vs_truth.and_then(|m| m.1))
-        .push_opt("rms_vs_truth_crease", e.rms_vs_truth_crease)
-        .push_opt("rms_vs_truth_interior", e.rms_vs_truth_interior)
-        .push_opt("rms_vs_truth_in_spheres", e.rms_vs_truth_in_spheres)
-        .push_opt(
-            "rms_vs_truth_outside_spheres",
-            e.rms_vs_truth_outside_spheres,
-        )
-        .push_opt("rms_outside_spheres", e.rms_outside_spheres)
-        .push_opt("truth_stderr", e.truth_stderr)
-        .push_opt("truth_rays", e.truth_rays)
-        .push_opt("raycast_rms_vs_truth", e.raycast_rms_vs_truth)
-        .push_opt("signal_rms", e.signal_rms)
-        .push_opt("grain", e.grain)
-        .push_opt("second_reference", e.second_reference.as_ref())
-        .push_opt("rms_image_vs_second", e.rms_image_vs_second)
-        .push_opt("rms_image_window", e.rms_image_window)
-        .push_opt("rms_image_shaded", e.rms_image_shaded)
-        .push_opt("flip_mean", e.flip.map(|f| f.mean))
-        .push_opt("flip_weighted_median", e.flip.map(|f| f.weighted_median))
-        .push_opt("flip_mean_vs_truth", e.flip_vs_truth.map(|f| f.mean))
-        .push_opt(
-            "flip_weighted_median_vs_truth",
-            e.flip_vs_truth.map(|f| f.weighted_median),
-        );
 }
