@@ -179,7 +179,7 @@ fn the_quick_performance_run_writes_every_sweep_with_exact_shares() {
             assert!(out.path().join("perf").join(&f).is_file(), "{f}");
         }
     }
-    for f in ["table.csv", "run.json"] {
+    for f in [visfield::experiment::outputs::BACKEND_TIMES_CSV, "run.json"] {
         assert!(out.path().join("perf").join(f).is_file(), "{f}");
     }
     let count = |sweep: &str| rows.iter().filter(|r| r.sweep == sweep).count();
