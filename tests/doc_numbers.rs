@@ -669,9 +669,16 @@ fn performance(c: &mut Claims) {
     let top = &gains[gains.len() - 2..];
     let (tlo, thi) = min_max(top.iter().map(|g| g.1));
     let igea67 = f(get("igea_67k", "field_nearest"), "vs_embree");
+    // A range whose ends round alike is one number.
+    let range = |lo: f64, hi: f64| match (format!("{lo:.1}"), format!("{hi:.1}")) {
+        (l, h) if l == h => l,
+        (l, h) => format!("{l}–{h}"),
+    };
     let text = format!(
-        "gains {slo:.1}–{shi:.1}× on small casters and {tlo:.1}–{thi:.1}× on the two largest \
-         ({igea67:.1}× on the 67k-triangle Igea)"
+        "gains {}× on small casters and {}× on the two largest ({igea67:.1}× on the 67k-triangle \
+         Igea)",
+        range(slo, shi),
+        range(tlo, thi)
     );
     c.quotes("README.md", &text, from);
     for caster in [

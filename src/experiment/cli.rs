@@ -58,9 +58,9 @@ pub enum Command {
     },
     /// The 2005 relief caster: Tables 1–3 (skips × viewing angle, sample rate, bisections).
     Relief {
-        /// Output folder.
-        #[arg(long, default_value = "results/relief")]
-        out: std::path::PathBuf,
+        /// Output folder (default: results/relief, results/quick/relief with --quick).
+        #[arg(long)]
+        out: Option<std::path::PathBuf>,
         /// Run into an output folder that holds files no earlier run wrote (no run.json); its
         /// files are kept, never deleted.
         #[arg(long)]
@@ -873,6 +873,8 @@ pub fn run(cli: Cli) -> Result<i32> {
             no_gpu,
         } => {
             let gpu = (!no_gpu).then(|| adapter_preference(adapter.as_deref()));
+            let root = if quick { "results/quick" } else { "results" };
+            let out = out.unwrap_or_else(|| Path::new(root).join("relief"));
             relief(&out, allow_nonempty_out, quick, gpu)?;
         }
         Command::Run { spec, opts } => {

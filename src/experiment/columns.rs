@@ -1,7 +1,7 @@
 //! One row schema mechanism: what defines the columns of every CSV a run writes.
 //!
 //! - A row is a serde struct of plain fields: its fields give the header, in order, and serde
-//!   the values (as the CSV serialiser writes them). [`crate::experiment::outputs::write_csv`]
+//!   the values (as the CSV serialiser writes them). `outputs::write_csv`
 //!   writes it, `outputs::read_csv` reads it back by header name: a column's former name is a
 //!   `#[serde(alias)]`, a column added since a `#[serde(default)]`. So are `raycast_sweep.csv`,
 //!   `field_sweep.csv`, `pairs.csv`, `paper_vs_ours.csv` and the commands' tables
@@ -10,16 +10,16 @@
 //!   parameters), it is a [`NamedRow`]: (name, value) pairs in the order its parts add them,
 //!   the header the ordered union of the rows' names ([`header`]) after the struct's
 //!   ([`write_csv_with`]), a struct's columns taken with serde's bytes ([`of_serialized`]).
-//!   `table.csv` is its struct, [`crate::experiment::table::Row`], whose columns are defined
+//!   `table.csv` is its struct, `table::Row`, whose columns are defined
 //!   once in `table_columns!` (name, former name, type, meaning, value), then the kind's own
 //!   columns; `frames.csv` and `sweep_frames.csv` are two views of one struct
-//!   ([`crate::experiment::frame_row`]: each a list of (name in the file, field));
+//!   (`frame_row`: each a list of (name in the file, field));
 //!   `methods.csv` is built from its parts (the cell, the method and its parameters, its
 //!   times, each value's `Display`, [`Cell`]), its error columns those of `table.csv`'s list
-//!   ([`crate::experiment::table::ErrorColumns::push_to`]). Names say what a column holds for
+//!   (`table::ErrorColumns::push_to`). Names say what a column holds for
 //!   every kind (`estimate_s`, `rms_vs_truth`), not for AO.
 //! - A file is named for what its rows hold; a folder written before a file had its name is
-//!   read under the former one ([`crate::experiment::outputs::table_path`]).
+//!   read under the former one (`outputs::table_path`).
 
 use super::{Error, Result};
 use std::fmt::Display;

@@ -97,18 +97,18 @@ pub struct PairRow {
 }
 
 /// `experiment performance`'s table: one row per sweep point and backend, its time on the
-/// point's rays ([`super::performance::PerfRow`]).
+/// point's rays (`performance::PerfRow`).
 pub const BACKEND_TIMES_CSV: &str = "backend_times.csv";
 /// `experiment dynamic`'s table: one row per sweep (a crowd or the approach), frame and method
-/// ([`super::frame_row::DYNAMIC_CSV`]).
+/// (`frame_row::DYNAMIC_CSV`).
 pub const SWEEP_FRAMES_CSV: &str = "sweep_frames.csv";
 /// `experiment relief`'s table: one row per rendering (table, map, view, setting and caster;
-/// [`super::relief::ReliefRow`]).
+/// `relief::ReliefRow`).
 pub const RENDERINGS_CSV: &str = "renderings.csv";
 
 /// The file `name` in `dir`, or for a command's table in a folder written before the tables
 /// were named for what they hold, the file under its former name, `table.csv`, as a table's
-/// columns are read under their former names ([`super::table::FORMER_NAMES`]): where `name`
+/// columns are read under their former names (`table::FORMER_NAMES`): where `name`
 /// is one of the command tables above and absent, and the folder is a command's run (its
 /// `run.json` and no `spec.json`: a spec's run writes `table.csv` of its own). The former name
 /// does not say which command wrote it: `experiment plots` reads it as performance's, the one

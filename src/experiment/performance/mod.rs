@@ -333,9 +333,6 @@ fn ray_casters(scene: &Scene) -> Vec<Backend<'static>> {
                 vis: Rc::<dyn Visibility + Send>::from(vis),
                 setup_s: t.elapsed().as_secs_f64(),
             }),
-            Some(Err(e)) if m.name() == "embree" => {
-                eprintln!("performance: Embree not timed: {e}")
-            }
             Some(Err(e)) => eprintln!("performance: {} not timed: {e}", m.name()),
             None => {}
         }
