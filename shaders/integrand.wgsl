@@ -8,8 +8,8 @@
 struct Params {
     // Receiver points (ray queries: rays) in this dispatch.
     point_count: u32,
-    // Rays per point (AO: the base directions in `dirs`; shadows: per light, the cone samples
-    // in `samples`; reflections: 1 for the mirror, k^2 for a Phong lobe; cones: cones).
+    // Rays per point (AO: the base directions in `dirs`; shadows: the cone samples in
+    // `samples` per light; reflections: 1 for the mirror, k^2 for a Phong lobe; cones: cones).
     rays_per_point: u32,
     // Invocations per row of the dispatch grid (i = gid.x + gid.y * row_stride).
     row_stride: u32,
@@ -21,13 +21,13 @@ struct Params {
     completion_trips: u32,
     // Ray origin offset along the normal.
     origin_offset: f32,
-    // AO and cones: the largest hit distance.
+    // The rays' far end, where an integrand's rays share one (AO, cones; shadows and
+    // reflections compute each ray's own).
     tmax: f32,
-    // Shadows: the lights.
-    light_count: u32,
     _pad0: u32,
     _pad1: u32,
     _pad2: u32,
+    _pad3: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: Params;

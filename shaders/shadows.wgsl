@@ -12,8 +12,8 @@
 
 @compute @workgroup_size(64)
 fn shadow_main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let cells = params.rays_per_point;
-    let run = run_of(gid, cells * params.light_count);
+    let cells = arrayLength(&samples);
+    let run = run_of(gid, params.rays_per_point);
     if !run.ok {
         return;
     }

@@ -153,10 +153,7 @@ pub fn shadows(
     let rays_n = cells
         .checked_mul(light_records.len() as u32)
         .ok_or_else(|| GpuError::Invalid("shadow rays per point overflow u32".into()))?;
-    let params = IntegrandParamsGpu {
-        light_count: light_records.len() as u32,
-        ..IntegrandParamsGpu::new(cells, opts.offset)
-    };
+    let params = IntegrandParamsGpu::new(rays_n, opts.offset);
     let own = [&samples_buf, &lights_buf];
     let each = dispatcher(vis, &SHADOWS, params, &recv, &own, 2)?;
     let budget = vis.kernels().budget(SHADOWS.slot);

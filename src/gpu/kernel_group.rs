@@ -16,7 +16,7 @@ use super::GpuError;
 pub(crate) struct IntegrandParamsGpu {
     /// Receiver points (ray queries: rays) in this dispatch.
     pub point_count: u32,
-    /// Rays per point (shadows: per light).
+    /// Rays per point (shadows: the cone samples per light, over every light).
     pub rays_per_point: u32,
     /// Invocations per row of the dispatch grid.
     pub row_stride: u32,
@@ -28,15 +28,15 @@ pub(crate) struct IntegrandParamsGpu {
     pub completion_trips: u32,
     /// Ray origin offset along the normal.
     pub origin_offset: f32,
-    /// AO and cones: the largest hit distance.
+    /// The rays' far end, where an integrand's rays share one (AO, cones; shadows and
+    /// reflections compute each ray's own). Nothing else of a kind's: its own inputs carry it
+    /// (the shadows' cone samples count themselves, `arrayLength`).
     pub tmax: f32,
-    /// Shadows: the lights.
-    pub light_count: u32,
-    pub _pad: [u32; 3],
+    pub _pad: [u32; 4],
 }
 const _: () = assert!(std::mem::size_of::<IntegrandParamsGpu>() == 48);
 const _: () = assert!(std::mem::offset_of!(IntegrandParamsGpu, invocations_per_point) == 16);
-const _: () = assert!(std::mem::offset_of!(IntegrandParamsGpu, light_count) == 32);
+const _: () = assert!(std::mem::offset_of!(IntegrandParamsGpu, tmax) == 28);
 
 impl IntegrandParamsGpu {
     /// The header of a call with `rays_per_point` rays per point from origins moved by
