@@ -230,14 +230,14 @@ mod toy_method {
     use super::{Quantity, Sphere, ToyGpu, RECORDED};
     use glam::Vec3;
     use visfield::experiment::backend::{Estimate, Eval};
-    use visfield::experiment::backend_gpu::GpuQuantity;
+    use visfield::experiment::backend_gpu::{integrand_of, GpuQuantity};
     use visfield::experiment::kinds::{Answers, Kind};
     use visfield::experiment::methods::{
         read_as, Answer, GpuMethod, Method, MethodContext, MethodEntry, MethodOptions, Prepared,
     };
     use visfield::experiment::spec::{Spec, SpecError};
     use visfield::experiment::validate::Validator;
-    use visfield::experiment::{Error, Result};
+    use visfield::experiment::Result;
     use visfield::gpu::GpuContext;
     use visfield::render::estimator::{Estimates, Points};
     use visfield::sampling::rays::RaySet;
@@ -327,12 +327,7 @@ mod toy_method {
             ctx: &'a GpuContext,
             quantity: Option<&'a dyn GpuQuantity>,
         ) -> Result<Box<dyn Eval + 'a>> {
-            let quantity = quantity.ok_or_else(|| {
-                Error::invalid(
-                    "methods \"analytic_sphere\"",
-                    "runs the kind's GPU integrand: needs the kind's GPU kernels",
-                )
-            })?;
+            let quantity = integrand_of(ENTRY.name, quantity)?;
             let start = std::time::Instant::now();
             let vis = ToyGpu::new(ctx, self.sphere);
             Ok(Box::new(SphereEval {

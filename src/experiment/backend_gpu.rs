@@ -26,9 +26,11 @@ use super::Result;
 use crate::field::scene::{FieldInstance, FieldScene};
 use crate::gpu::{
     AdapterPreference, FieldGpuOptions, FieldLayout, GpuContext, GpuError, GpuTiming, GpuTracer,
+    GpuVisibility,
 };
 use crate::render::estimator::Points;
 use crate::sampling::rays::RaySet;
+use std::time::Duration;
 
 /// The wgpu device a run's "gpu" cells use, opened once per run.
 pub struct GpuBackend {
@@ -114,20 +116,37 @@ fn quantity(q: Quantity<'_>) -> Result<&dyn GpuQuantity> {
         .ok_or_else(|| GpuError::Unsupported(format!("no GPU kernel computes \"{name}\"")).into())
 }
 
-/// Ray casting on the GPU tracer, the integrand of the estimator's quantity.
-struct TraceEval<'a> {
-    tracer: GpuTracer<'a>,
-    quantity: &'a dyn GpuQuantity,
+/// A GPU visibility running the kind's integrand ([`GpuQuantity::trace`]): the evaluation of
+/// every GPU ray caster (the CWBVH, the two levels, ray queries), charged `setup` (its build,
+/// uploads and compilation).
+pub struct TraceEval<'a, V> {
+    pub vis: V,
+    pub quantity: &'a dyn GpuQuantity,
+    pub setup: Duration,
 }
 
-impl Eval for TraceEval<'_> {
+impl<V: GpuVisibility> Eval for TraceEval<'_, V> {
     fn estimate(&self, at: Points, rays: &RaySet) -> Result<Estimate> {
-        self.quantity.trace(&self.tracer, at, rays)
+        self.quantity.trace(&self.vis, at, rays)
     }
 
     fn setup_s(&self) -> Option<f64> {
-        Some(self.tracer.setup_time().as_secs_f64())
+        Some(self.setup.as_secs_f64())
     }
+}
+
+/// The kind's GPU kernels a ray-casting `method` runs on its visibility, or the refusal
+/// naming the method where the kind has none.
+pub fn integrand_of<'a>(
+    method: &str,
+    quantity: Option<&'a dyn GpuQuantity>,
+) -> Result<&'a dyn GpuQuantity> {
+    quantity.ok_or_else(|| {
+        super::Error::invalid(
+            format!("methods \"{method}\""),
+            "casts the kind's rays through its GPU integrand: needs the kind's GPU kernels",
+        )
+    })
 }
 
 impl ComputeBackend for GpuBackend {
@@ -159,8 +178,13 @@ impl ComputeBackend for GpuBackend {
         q: Quantity<'s>,
     ) -> Result<Box<dyn Eval + 's>> {
         let quantity = quantity(q)?;
-        let tracer = GpuTracer::new(&self.ctx, casters.triangles)?;
-        Ok(Box::new(TraceEval { tracer, quantity }))
+        let vis = GpuTracer::new(&self.ctx, casters.triangles)?;
+        let setup = vis.setup_time();
+        Ok(Box::new(TraceEval {
+            vis,
+            quantity,
+            setup,
+        }))
     }
 }
 

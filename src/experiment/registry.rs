@@ -54,6 +54,19 @@ impl<E: Entry> Registry<E> {
         self.find(&extra, name)
     }
 
+    /// The entry named `name`, or the error a spec's `key` gets: the unknown name and every
+    /// name this build has.
+    pub fn lookup_for(&self, key: &str, name: &str) -> Result<E, String> {
+        self.lookup(name).ok_or_else(|| {
+            let names: Vec<String> = self.names().iter().map(|n| format!("\"{n}\"")).collect();
+            format!(
+                "`{key}`: unknown {} \"{name}\"; this build has {}",
+                self.what,
+                names.join(", ")
+            )
+        })
+    }
+
     /// Every entry's name, built-in ones first.
     pub fn names(&self) -> Vec<&'static str> {
         let extra = self.extra.read().unwrap_or_else(|e| e.into_inner());
@@ -85,4 +98,30 @@ pub fn read_and_write_back<O: ?Sized>(
         format!("{what} \"{name}\": a number out of its type's range ({e} once read)")
     })?;
     Ok(keys)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[derive(Clone, Copy)]
+    struct Named(&'static str);
+
+    impl Entry for Named {
+        fn name(&self) -> &'static str {
+            self.0
+        }
+    }
+
+    #[test]
+    fn an_unknown_name_is_refused_naming_the_key_and_every_entry() {
+        static R: Registry<Named> = Registry::new(&[Named("a"), Named("b")], "toy");
+        assert_eq!(R.register(Named("a")).unwrap_err(), "a toy \"a\" exists already");
+        R.register(Named("c")).unwrap();
+        assert_eq!(R.lookup_for("what", "c").map(|e| e.0), Ok("c"));
+        assert_eq!(
+            R.lookup_for("what", "d").map(|e| e.0).unwrap_err(),
+            "`what`: unknown toy \"d\"; this build has \"a\", \"b\", \"c\""
+        );
+    }
 }

@@ -332,16 +332,9 @@ impl<'de> serde::de::Visitor<'de> for RenderVisitor {
             }
         }
         let what = what.unwrap_or_else(|| BUILT_IN[0].name.to_string());
-        let entry = lookup(&what).ok_or_else(|| {
-            A::Error::custom(format!(
-                "`what`: unknown render kind \"{what}\"; this build has {}",
-                names()
-                    .iter()
-                    .map(|n| format!("\"{n}\""))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ))
-        })?;
+        let entry = REGISTRY
+            .lookup_for("what", &what)
+            .map_err(A::Error::custom)?;
         let rays_per_point = rays.ok_or_else(|| A::Error::missing_field("rays_per_point"))?;
         // Read again by `options_of` from the keys written back here.
         let options = super::registry::read_and_write_back(

@@ -305,7 +305,7 @@ impl Method for AoFieldMethod {
     /// cast, the stored fields kept ([`AoField::bytes_for`]), and at the peak the bake's f32
     /// fit of one mesh twice over (its per-texel fits, then the fitted field it is stored from).
     fn precompute(&self, scene: &BuiltScene) -> std::result::Result<Option<Precompute>, String> {
-        let meshes = super::caster_mesh_triangles(scene).len() as u64;
+        let meshes = scene.caster_meshes().len() as u64;
         let p = &self.params;
         let texels = 6 * (p.res as u64).pow(2);
         let fit = 2 * crate::aofield::storage::Stored::bytes_for(texels as usize, Precision::F32);

@@ -44,6 +44,7 @@ pub use super::spec::MethodSpec;
 use super::spec::{default_backends, Backend, Spec, SpecError};
 use super::validate::Validator;
 use super::Result;
+use crate::geometry::Similarity;
 use crate::gpu::GpuContext;
 use crate::render::estimator::Estimator;
 use crate::visibility::Visibility;
@@ -89,22 +90,26 @@ pub struct Precompute {
     pub peak_bytes: u64,
 }
 
+/// Per mesh, its model-space triangles.
+pub type ModelTriangles = Vec<Vec<[Vec3; 3]>>;
+
 /// Each distinct caster mesh of `scene` (one per mesh, as the methods bake them, in the order
-/// of their first instance) as its model-space triangles.
-pub fn caster_mesh_triangles(scene: &BuiltScene) -> Vec<Vec<[Vec3; 3]>> {
-    let mut seen = Vec::new();
-    let mut out = Vec::new();
+/// of their first instance) as its model-space triangles, and every caster as (its mesh's
+/// index there, its transform).
+pub fn caster_instances(scene: &BuiltScene) -> (ModelTriangles, Vec<(usize, Similarity)>) {
+    let meshes = scene.caster_meshes();
+    let mut model = vec![Vec::new(); meshes.len()];
+    let mut instances = Vec::new();
     for (i, inst) in scene.scene.casters() {
-        if !seen.contains(&scene.mesh_of[i]) {
-            seen.push(scene.mesh_of[i]);
-            out.push(
-                (0..inst.mesh.triangle_count())
-                    .map(|t| inst.mesh.triangle(t))
-                    .collect(),
-            );
+        let m = (meshes.iter().position(|&g| g == scene.mesh_of[i])).expect("a caster mesh");
+        if model[m].is_empty() {
+            model[m] = (0..inst.mesh.triangle_count())
+                .map(|t| inst.mesh.triangle(t))
+                .collect();
         }
+        instances.push((m, inst.transform));
     }
-    out
+    (model, instances)
 }
 
 /// A method prepared on one scene.
@@ -430,16 +435,9 @@ impl<'de> serde::Deserialize<'de> for MethodSpec {
             }
             None => return Err(D::Error::missing_field("method")),
         };
-        let entry = lookup(&name).ok_or_else(|| {
-            D::Error::custom(format!(
-                "`method`: unknown method \"{name}\"; this build has {}",
-                names()
-                    .iter()
-                    .map(|n| format!("\"{n}\""))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ))
-        })?;
+        let entry = REGISTRY
+            .lookup_for("method", &name)
+            .map_err(D::Error::custom)?;
         let backends = match own.remove("backends") {
             None => default_backends(),
             Some(v) => {

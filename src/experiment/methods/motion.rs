@@ -134,7 +134,7 @@ pub fn timed(
 }
 
 /// Each mesh's triangles in model space.
-pub fn model_triangles(meshes: &[Arc<Mesh>]) -> Vec<Vec<[Vec3; 3]>> {
+pub fn model_triangles(meshes: &[Arc<Mesh>]) -> super::ModelTriangles {
     meshes
         .iter()
         .map(|m| {

@@ -21,21 +21,21 @@ use super::motion::{
     model_triangles, FrameCasters, FrameForm, GpuInputs, GpuMover, Mover, MoverInputs,
 };
 use super::{
-    caster_mesh_triangles, Answer, GpuMethod, Method, MethodContext, MethodEntry, MethodOptions,
-    NoRays, Prepared,
+    caster_instances, Answer, GpuMethod, Method, MethodContext, MethodEntry, MethodOptions,
+    ModelTriangles, NoRays, Prepared,
 };
-use crate::experiment::backend::{Estimate, Eval};
-use crate::experiment::backend_gpu::GpuQuantity;
+use crate::experiment::backend::Eval;
+use crate::experiment::backend_gpu::{integrand_of, GpuQuantity, TraceEval};
 use crate::experiment::kinds::Kind;
 use crate::experiment::spec::{Spec, SpecError};
 use crate::experiment::validate::Validator;
-use crate::experiment::{Error, Result};
+use crate::experiment::Result;
 use crate::geometry::Similarity;
 use crate::gpu::{GpuContext, RayQueryScene};
 use crate::render::estimator::{Estimator, Points};
 use crate::sampling::rays::RaySet;
 use crate::visibility::Visibility;
-use glam::{Mat4, Vec3};
+use glam::Mat4;
 use serde::{Deserialize, Serialize};
 
 pub const ENTRY: MethodEntry = MethodEntry {
@@ -107,22 +107,8 @@ impl Method for RayQuery {
     }
 
     fn prepare(&self, ctx: &MethodContext) -> Result<Prepared> {
-        let scene = ctx.scene;
-        let meshes = caster_mesh_triangles(scene);
-        // Each caster mesh in the order of its first instance, as caster_mesh_triangles.
-        let mut seen = Vec::new();
-        let mut instances = Vec::new();
-        for (i, inst) in scene.scene.casters() {
-            let m = scene.mesh_of[i];
-            let local = match seen.iter().position(|&s| s == m) {
-                Some(l) => l,
-                None => {
-                    seen.push(m);
-                    seen.len() - 1
-                }
-            };
-            instances.push((local, inst.transform.to_mat4()));
-        }
+        let (meshes, instances) = caster_instances(ctx.scene);
+        let instances = placements(&instances);
         Ok(Prepared {
             answer: Answer::Rays(Box::new(NoRays)),
             bytes: None,
@@ -135,7 +121,7 @@ impl Method for RayQuery {
 
 /// The scene's meshes and instances, ready to build on a device.
 struct RayQueryGpu {
-    meshes: Vec<Vec<[Vec3; 3]>>,
+    meshes: ModelTriangles,
     instances: Vec<(usize, Mat4)>,
 }
 
@@ -145,31 +131,14 @@ impl GpuMethod for RayQueryGpu {
         ctx: &'a GpuContext,
         quantity: Option<&'a dyn GpuQuantity>,
     ) -> Result<Box<dyn Eval + 'a>> {
-        let quantity = quantity.ok_or_else(|| {
-            Error::invalid(
-                "methods \"rayquery\"",
-                "the render kind has no GPU integrand to run on ray queries",
-            )
-        })?;
-        Ok(Box::new(RayQueryEval {
-            scene: RayQueryScene::new(ctx, &self.meshes, &self.instances)?,
+        let quantity = integrand_of(ENTRY.name, quantity)?;
+        let vis = RayQueryScene::new(ctx, &self.meshes, &self.instances)?;
+        let setup = vis.setup_time();
+        Ok(Box::new(TraceEval {
+            vis,
             quantity,
+            setup,
         }))
-    }
-}
-
-struct RayQueryEval<'a> {
-    scene: RayQueryScene<'a>,
-    quantity: &'a dyn GpuQuantity,
-}
-
-impl Eval for RayQueryEval<'_> {
-    fn estimate(&self, at: Points, rays: &RaySet) -> Result<Estimate> {
-        self.quantity.trace(&self.scene, at, rays)
-    }
-
-    fn setup_s(&self) -> Option<f64> {
-        Some(self.scene.setup_time().as_secs_f64())
     }
 }
 

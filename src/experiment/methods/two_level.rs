@@ -14,22 +14,23 @@
 use super::motion::{
     model_triangles, FrameCasters, FrameForm, GpuInputs, GpuMover, Mover, MoverInputs,
 };
-use super::Prepared;
-use super::{Answer, GpuMethod, Method, MethodContext, MethodEntry, MethodOptions, Precompute};
-use crate::experiment::backend::{Estimate, Eval};
-use crate::experiment::backend_gpu::GpuQuantity;
+use super::{
+    caster_instances, Answer, GpuMethod, Method, MethodContext, MethodEntry, MethodOptions,
+    ModelTriangles, Precompute, Prepared,
+};
+use crate::experiment::backend::Eval;
+use crate::experiment::backend_gpu::{integrand_of, GpuQuantity, TraceEval};
 use crate::experiment::kinds::Kind;
 use crate::experiment::scenes::BuiltScene;
 use crate::experiment::spec::{Spec, SpecError};
 use crate::experiment::validate::Validator;
-use crate::experiment::{Error, Result};
+use crate::experiment::Result;
 use crate::geometry::Similarity;
 use crate::gpu::{GpuContext, GpuTwoLevel};
 use crate::render::estimator::{Estimator, Points};
 use crate::sampling::rays::RaySet;
 use crate::trace::two_level::TwoLevel;
 use crate::visibility::Visibility;
-use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 pub const ENTRY: MethodEntry = MethodEntry {
@@ -62,26 +63,6 @@ impl MethodOptions for TwoLevelOptions {
 
 /// The scene's casters in two levels.
 pub struct TwoLevelMethod;
-
-/// Per distinct caster mesh, its model-space triangles.
-type ModelTriangles = Vec<Vec<[Vec3; 3]>>;
-
-/// The distinct caster meshes' model-space triangles and every caster's (mesh, transform).
-fn instanced(scene: &BuiltScene) -> (ModelTriangles, Vec<(usize, Similarity)>) {
-    let meshes = scene.caster_meshes();
-    let mut model = vec![Vec::new(); meshes.len()];
-    let mut instances = Vec::new();
-    for (i, inst) in scene.scene.casters() {
-        let m = (meshes.iter().position(|&g| g == scene.mesh_of[i])).expect("a caster mesh");
-        if model[m].is_empty() {
-            model[m] = (0..inst.mesh.triangle_count())
-                .map(|t| inst.mesh.triangle(t))
-                .collect();
-        }
-        instances.push((m, inst.transform));
-    }
-    (model, instances)
-}
 
 impl Method for TwoLevelMethod {
     fn frame_forms(&self) -> &'static [FrameForm] {
@@ -118,7 +99,7 @@ impl Method for TwoLevelMethod {
 
     /// A BVH per distinct caster mesh, at the planner's bytes a triangle.
     fn precompute(&self, scene: &BuiltScene) -> std::result::Result<Option<Precompute>, String> {
-        let (model, instances) = instanced(scene);
+        let (model, instances) = caster_instances(scene);
         let triangles: u64 = model.iter().map(|m| m.len() as u64).sum();
         let bytes = triangles.saturating_mul(crate::experiment::methods::BVH_BYTES_PER_TRIANGLE);
         Ok(Some(Precompute {
@@ -134,7 +115,7 @@ impl Method for TwoLevelMethod {
     }
 
     fn prepare(&self, ctx: &MethodContext) -> Result<Prepared> {
-        let (model, instances) = instanced(ctx.scene);
+        let (model, instances) = caster_instances(ctx.scene);
         let mut tl = TwoLevel::new(&model);
         tl.update(&instances);
         Ok(Prepared {
@@ -159,30 +140,15 @@ impl GpuMethod for TwoLevelGpu {
         ctx: &'a GpuContext,
         quantity: Option<&'a dyn GpuQuantity>,
     ) -> Result<Box<dyn Eval + 'a>> {
-        let Some(quantity) = quantity else {
-            return Err(Error::invalid(
-                "methods \"two_level\"",
-                "casts the kind's rays through its GPU integrand: needs the kind's GPU kernels",
-            ));
-        };
-        let mut caster = GpuTwoLevel::new(ctx, &self.model)?;
-        caster.update(&self.instances)?;
-        Ok(Box::new(TwoLevelEval { caster, quantity }))
-    }
-}
-
-struct TwoLevelEval<'a> {
-    caster: GpuTwoLevel<'a>,
-    quantity: &'a dyn GpuQuantity,
-}
-
-impl Eval for TwoLevelEval<'_> {
-    fn estimate(&self, at: Points, rays: &RaySet) -> Result<Estimate> {
-        self.quantity.trace(&self.caster, at, rays)
-    }
-
-    fn setup_s(&self) -> Option<f64> {
-        Some(self.caster.setup_time().as_secs_f64())
+        let quantity = integrand_of(ENTRY.name, quantity)?;
+        let mut vis = GpuTwoLevel::new(ctx, &self.model)?;
+        vis.update(&self.instances)?;
+        let setup = vis.setup_time();
+        Ok(Box::new(TraceEval {
+            vis,
+            quantity,
+            setup,
+        }))
     }
 }
 

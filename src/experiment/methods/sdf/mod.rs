@@ -357,7 +357,7 @@ impl Method for Sdf {
     /// cast, and at the peak the f32 volume each bake (or cached f32 load) makes before a
     /// lower precision is stored.
     fn precompute(&self, scene: &BuiltScene) -> std::result::Result<Option<Precompute>, String> {
-        let meshes = super::caster_mesh_triangles(scene);
+        let (meshes, _) = super::caster_instances(scene);
         let (mut samples, mut largest) = (0u64, 0u64);
         for tris in &meshes {
             let n = DistanceVolume::samples_for(tris, self.res, self.margin)
