@@ -40,11 +40,7 @@ pub trait Visibility: Sync {
     /// # Panics
     /// If `dirs` and `out` differ in length.
     fn occluded_many(&self, origin: Vec3, dirs: &[Vec3], tmin: f32, tmax: f32, out: &mut [bool]) {
-        assert_eq!(
-            dirs.len(),
-            out.len(),
-            "occluded_many: dirs and out differ in length"
-        );
+        check_batch("occluded_many", dirs.len(), out.len());
         for (o, &d) in out.iter_mut().zip(dirs) {
             *o = self.occluded(origin, d, tmin, tmax);
         }
@@ -64,10 +60,7 @@ pub trait Visibility: Sync {
         tmaxs: &[f32],
         out: &mut [bool],
     ) {
-        assert!(
-            dirs.len() == out.len() && dirs.len() == tmaxs.len(),
-            "occluded_many_to: dirs, tmaxs and out differ in length"
-        );
+        check_batch_to(dirs.len(), tmaxs.len(), out.len());
         for ((o, &d), &t) in out.iter_mut().zip(dirs).zip(tmaxs) {
             *o = self.occluded(origin, d, tmin, t);
         }
@@ -87,11 +80,7 @@ pub trait Visibility: Sync {
         tmax: f32,
         out: &mut [Option<SurfaceHit>],
     ) {
-        assert_eq!(
-            dirs.len(),
-            out.len(),
-            "surface_hit_many: dirs and out differ in length"
-        );
+        check_batch("surface_hit_many", dirs.len(), out.len());
         for (o, &d) in out.iter_mut().zip(dirs) {
             *o = self.surface_hit(origin, d, tmin, tmax);
         }
@@ -118,4 +107,27 @@ impl<V: Visibility + ?Sized> Visibility for PerRay<'_, V> {
     fn surface_hit(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<SurfaceHit> {
         self.0.surface_hit(origin, dir, tmin, tmax)
     }
+}
+
+/// The batched queries' contract ([`Visibility::occluded_many`],
+/// [`Visibility::surface_hit_many`]): a result for every direction.
+///
+/// # Panics
+/// If `dirs` and `out` differ.
+#[track_caller]
+pub fn check_batch(query: &str, dirs: usize, out: usize) {
+    assert_eq!(dirs, out, "{query}: dirs and out differ in length");
+}
+
+/// [`check_batch`] for [`Visibility::occluded_many_to`]: a far end and a result for every
+/// direction.
+///
+/// # Panics
+/// If `dirs`, `tmaxs` and `out` differ.
+#[track_caller]
+pub fn check_batch_to(dirs: usize, tmaxs: usize, out: usize) {
+    assert!(
+        dirs == out && dirs == tmaxs,
+        "occluded_many_to: dirs, tmaxs and out differ in length"
+    );
 }

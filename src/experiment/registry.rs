@@ -116,7 +116,10 @@ mod tests {
     #[test]
     fn an_unknown_name_is_refused_naming_the_key_and_every_entry() {
         static R: Registry<Named> = Registry::new(&[Named("a"), Named("b")], "toy");
-        assert_eq!(R.register(Named("a")).unwrap_err(), "a toy \"a\" exists already");
+        assert_eq!(
+            R.register(Named("a")).unwrap_err(),
+            "a toy \"a\" exists already"
+        );
         R.register(Named("c")).unwrap();
         assert_eq!(R.lookup_for("what", "c").map(|e| e.0), Ok("c"));
         assert_eq!(

@@ -394,10 +394,7 @@ impl SphereBvhScene {
         tmaxs: &[f32],
         out: &mut [bool],
     ) {
-        assert!(
-            dirs.len() == out.len() && dirs.len() == tmaxs.len(),
-            "occluded_many_to: dirs, tmaxs and out differ in length"
-        );
+        crate::visibility::check_batch_to(dirs.len(), tmaxs.len(), out.len());
         self.occluded_from(isa, origin, dirs, tmin, |i| tmaxs[i], out);
     }
 
@@ -522,11 +519,7 @@ impl Visibility for SphereBvhScene {
     }
 
     fn occluded_many(&self, origin: Vec3, dirs: &[Vec3], tmin: f32, tmax: f32, out: &mut [bool]) {
-        assert_eq!(
-            dirs.len(),
-            out.len(),
-            "occluded_many: dirs and out differ in length"
-        );
+        crate::visibility::check_batch("occluded_many", dirs.len(), out.len());
         self.occluded_from(Isa::detect(), origin, dirs, tmin, |_| tmax, out);
     }
 

@@ -193,11 +193,7 @@ impl FieldScene {
         tmax: f32,
         out: &mut [Option<SurfaceHit>],
     ) {
-        assert_eq!(
-            dirs.len(),
-            out.len(),
-            "surface_hit_many: dirs and out differ in length"
-        );
+        crate::visibility::check_batch("surface_hit_many", dirs.len(), out.len());
         if dirs.len() < LANES {
             // Fewer rays than one step of lanes: one at a time costs less than the batch's
             // setup per instance (`examples/ray_cost.rs reflect4`: four rays a point, two

@@ -421,11 +421,7 @@ impl Committed {
         tmax: f32,
         out: &mut [bool],
     ) {
-        assert_eq!(
-            dirs.len(),
-            out.len(),
-            "occluded_many: dirs and out differ in length"
-        );
+        crate::visibility::check_batch("occluded_many", dirs.len(), out.len());
         self.any_hits(rays, origin, dirs, tmin, |_| tmax, out);
     }
 
@@ -442,10 +438,7 @@ impl Committed {
         tmaxs: &[f32],
         out: &mut [bool],
     ) {
-        assert!(
-            dirs.len() == out.len() && dirs.len() == tmaxs.len(),
-            "occluded_many_to: dirs, tmaxs and out differ in length"
-        );
+        crate::visibility::check_batch_to(dirs.len(), tmaxs.len(), out.len());
         self.any_hits(rays, origin, dirs, tmin, |i| tmaxs[i], out);
     }
 
@@ -603,11 +596,7 @@ impl Visibility for EmbreeTracer {
         tmax: f32,
         out: &mut [Option<SurfaceHit>],
     ) {
-        assert_eq!(
-            dirs.len(),
-            out.len(),
-            "surface_hit_many: dirs and out differ in length"
-        );
+        crate::visibility::check_batch("surface_hit_many", dirs.len(), out.len());
         out.fill(None);
         self.q()
             .closest_hits(self.rays, origin, dirs, tmin, tmax, |i, t, triangle| {

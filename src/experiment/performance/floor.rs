@@ -40,11 +40,7 @@ impl Visibility for NoQuery {
     }
 
     fn occluded_many(&self, _: Vec3, dirs: &[Vec3], _: f32, _: f32, out: &mut [bool]) {
-        assert_eq!(
-            dirs.len(),
-            out.len(),
-            "occluded_many: dirs and out differ in length"
-        );
+        crate::visibility::check_batch("occluded_many", dirs.len(), out.len());
         // The caller must still build the rays, although nothing reads them.
         std::hint::black_box(dirs);
         out.fill(false);
@@ -113,11 +109,7 @@ impl Visibility for SphereCull<'_> {
 
     /// The lookup's own batched cull and crossing ([`lanes::for_each_crossing`]).
     fn occluded_many(&self, origin: Vec3, dirs: &[Vec3], tmin: f32, tmax: f32, out: &mut [bool]) {
-        assert_eq!(
-            dirs.len(),
-            out.len(),
-            "occluded_many: dirs and out differ in length"
-        );
+        crate::visibility::check_batch("occluded_many", dirs.len(), out.len());
         self.cull_and_cross(origin, dirs, tmin, |_| tmax, out);
     }
 
@@ -130,10 +122,7 @@ impl Visibility for SphereCull<'_> {
         tmaxs: &[f32],
         out: &mut [bool],
     ) {
-        assert!(
-            dirs.len() == out.len() && dirs.len() == tmaxs.len(),
-            "occluded_many_to: dirs, tmaxs and out differ in length"
-        );
+        crate::visibility::check_batch_to(dirs.len(), tmaxs.len(), out.len());
         self.cull_and_cross(origin, dirs, tmin, |i| tmaxs[i], out);
     }
 }
