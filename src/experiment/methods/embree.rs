@@ -15,22 +15,19 @@ use super::motion::{model_triangles, FrameCasters};
 use super::motion::{FrameForm, Mover, MoverInputs};
 #[cfg(feature = "embree")]
 use super::Answer;
-use super::{Method, MethodContext, MethodEntry, MethodOptions, Prepared};
-use crate::experiment::spec::{Spec, SpecError};
-use crate::experiment::validate::Validator;
+use super::{Method, MethodContext, MethodEntry, Prepared};
 use crate::experiment::Result;
 use crate::geometry::Mesh;
 #[cfg(feature = "embree")]
 use crate::trace::{embree::EmbreeTracer, embree_instances::EmbreeInstances};
 use crate::visibility::Visibility;
 use glam::Vec3;
-use serde::{Deserialize, Serialize};
 use std::sync::Arc;
 
 pub const ENTRY: MethodEntry = MethodEntry {
     name: "embree",
     about: "Intel Embree 3 on the same rays (needs --features embree and libembree-dev)",
-    read: super::read_as::<EmbreeOptions>,
+    read: super::read_as::<super::NoOptions<Embree>>,
 };
 
 /// Its per-frame forms ([`Method::frame_forms`]): `embree_rebuild` and `embree_instances`; no
@@ -83,22 +80,8 @@ fn mover(form: &str, meshes: &[Arc<Mesh>]) -> Result<Box<dyn Mover>> {
     }
 }
 
-/// `embree` has no parameters.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct EmbreeOptions {}
-
-impl MethodOptions for EmbreeOptions {
-    fn validate(&self, _at: &str, _spec: &Spec, _v: &Validator) -> Result<(), SpecError> {
-        Ok(())
-    }
-
-    fn settings(&self) -> Vec<Box<dyn Method>> {
-        vec![Box::new(Embree)]
-    }
-}
-
 /// Embree's robust scene over the world triangles.
+#[derive(Default)]
 pub struct Embree;
 
 impl Method for Embree {

@@ -298,6 +298,49 @@ where
     Ok(Box::new(serde_json::from_value::<T>(v)?))
 }
 
+/// The options of a method without parameters, `M`: `{"method": NAME}` alone (any other key
+/// refused), its one setting `M::default()`. [`MethodEntry::read`] is `read_as::<NoOptions<M>>`.
+pub struct NoOptions<M>(std::marker::PhantomData<fn() -> M>);
+
+/// What [`NoOptions`] reads and writes: no key.
+#[derive(serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct NoKeys {}
+
+impl<M> Clone for NoOptions<M> {
+    fn clone(&self) -> Self {
+        NoOptions(std::marker::PhantomData)
+    }
+}
+
+impl<M> std::fmt::Debug for NoOptions<M> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("NoOptions")
+    }
+}
+
+impl<M> serde::Serialize for NoOptions<M> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        NoKeys {}.serialize(s)
+    }
+}
+
+impl<'de, M> serde::Deserialize<'de> for NoOptions<M> {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        NoKeys::deserialize(d).map(|NoKeys {}| NoOptions(std::marker::PhantomData))
+    }
+}
+
+impl<M: Method + Default + 'static> MethodOptions for NoOptions<M> {
+    fn validate(&self, _: &str, _: &Spec, _: &Validator) -> std::result::Result<(), SpecError> {
+        Ok(())
+    }
+
+    fn settings(&self) -> Vec<Box<dyn Method>> {
+        vec![Box::new(M::default())]
+    }
+}
+
 /// The methods of this build.
 pub const BUILT_IN: &[MethodEntry] = &[
     raycast::ENTRY,

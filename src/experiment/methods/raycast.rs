@@ -12,11 +12,9 @@
 //! world triangles pass one storage binding.
 
 use super::motion::{FrameCasters, FrameForm, GpuInputs, GpuMover, Mover, MoverInputs};
-use super::{Answer, Method, MethodContext, MethodEntry, MethodOptions, Precompute, Prepared};
+use super::{Answer, Method, MethodContext, MethodEntry, Precompute, Prepared};
 use crate::experiment::backend_gpu::GpuQuantity;
 use crate::experiment::scenes::BuiltScene;
-use crate::experiment::spec::{Spec, SpecError};
-use crate::experiment::validate::Validator;
 use crate::experiment::Result;
 use crate::gpu::{GpuContext, GpuTracer};
 use crate::render::estimator::{Estimator, Points};
@@ -24,12 +22,11 @@ use crate::sampling::rays::RaySet;
 use crate::trace::Tracer;
 use crate::visibility::Visibility;
 use glam::Vec3;
-use serde::{Deserialize, Serialize};
 
 pub const ENTRY: MethodEntry = MethodEntry {
     name: "raycast",
     about: "our ray caster (watertight triangles, CWBVH), the world BVH built as its precompute",
-    read: super::read_as::<RaycastOptions>,
+    read: super::read_as::<super::NoOptions<Raycast>>,
 };
 
 /// Its per-frame forms ([`Method::frame_forms`]): `world_rebuild`, the world BVH rebuilt every
@@ -39,22 +36,8 @@ pub const FRAME_FORMS: &[FrameForm] = &[
     FrameForm::gpu("world_rebuild@gpu", "world_rebuild"),
 ];
 
-/// `raycast` has no parameters.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct RaycastOptions {}
-
-impl MethodOptions for RaycastOptions {
-    fn validate(&self, _at: &str, _spec: &Spec, _v: &Validator) -> Result<(), SpecError> {
-        Ok(())
-    }
-
-    fn settings(&self) -> Vec<Box<dyn Method>> {
-        vec![Box::new(Raycast)]
-    }
-}
-
 /// Our tracer over the world triangles, rebuilt per prepare.
+#[derive(Default)]
 pub struct Raycast;
 
 impl Method for Raycast {

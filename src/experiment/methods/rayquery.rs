@@ -21,14 +21,12 @@ use super::motion::{
     model_triangles, FrameCasters, FrameForm, GpuInputs, GpuMover, Mover, MoverInputs,
 };
 use super::{
-    caster_instances, Answer, GpuMethod, Method, MethodContext, MethodEntry, MethodOptions,
-    ModelTriangles, NoRays, Prepared,
+    caster_instances, Answer, GpuMethod, Method, MethodContext, MethodEntry, ModelTriangles,
+    NoRays, Prepared,
 };
 use crate::experiment::backend::Eval;
 use crate::experiment::backend_gpu::{integrand_of, GpuQuantity, TraceEval};
 use crate::experiment::kinds::Kind;
-use crate::experiment::spec::{Spec, SpecError};
-use crate::experiment::validate::Validator;
 use crate::experiment::Result;
 use crate::geometry::Similarity;
 use crate::gpu::{GpuContext, RayQueryScene};
@@ -36,35 +34,20 @@ use crate::render::estimator::{Estimator, Points};
 use crate::sampling::rays::RaySet;
 use crate::visibility::Visibility;
 use glam::Mat4;
-use serde::{Deserialize, Serialize};
 
 pub const ENTRY: MethodEntry = MethodEntry {
     name: "rayquery",
     about: "hardware ray queries (a BLAS per mesh, a TLAS of the instances; gpu backend, where \
             the adapter offers them)",
-    read: super::read_as::<RayQueryOptions>,
+    read: super::read_as::<super::NoOptions<RayQuery>>,
 };
 
 /// Its per-frame forms ([`Method::frame_forms`]): `rayquery@gpu`, its TLAS rebuilt every
 /// frame, run beside `two_level` (its twin).
 pub const FRAME_FORMS: &[FrameForm] = &[FrameForm::gpu("rayquery@gpu", "two_level")];
 
-/// `rayquery` has no parameters.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct RayQueryOptions {}
-
-impl MethodOptions for RayQueryOptions {
-    fn validate(&self, _at: &str, _spec: &Spec, _v: &Validator) -> Result<(), SpecError> {
-        Ok(())
-    }
-
-    fn settings(&self) -> Vec<Box<dyn Method>> {
-        vec![Box::new(RayQuery)]
-    }
-}
-
 /// Hardware ray queries over the scene's caster instances.
+#[derive(Default)]
 pub struct RayQuery;
 
 impl Method for RayQuery {

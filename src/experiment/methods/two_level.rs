@@ -15,15 +15,13 @@ use super::motion::{
     model_triangles, FrameCasters, FrameForm, GpuInputs, GpuMover, Mover, MoverInputs,
 };
 use super::{
-    caster_instances, Answer, GpuMethod, Method, MethodContext, MethodEntry, MethodOptions,
-    ModelTriangles, Precompute, Prepared,
+    caster_instances, Answer, GpuMethod, Method, MethodContext, MethodEntry, ModelTriangles,
+    Precompute, Prepared,
 };
 use crate::experiment::backend::Eval;
 use crate::experiment::backend_gpu::{integrand_of, GpuQuantity, TraceEval};
 use crate::experiment::kinds::Kind;
 use crate::experiment::scenes::BuiltScene;
-use crate::experiment::spec::{Spec, SpecError};
-use crate::experiment::validate::Validator;
 use crate::experiment::Result;
 use crate::geometry::Similarity;
 use crate::gpu::{GpuContext, GpuTwoLevel};
@@ -31,12 +29,11 @@ use crate::render::estimator::{Estimator, Points};
 use crate::sampling::rays::RaySet;
 use crate::trace::two_level::TwoLevel;
 use crate::visibility::Visibility;
-use serde::{Deserialize, Serialize};
 
 pub const ENTRY: MethodEntry = MethodEntry {
     name: "two_level",
     about: "our ray caster in two levels: a BVH per distinct mesh, a top level over the instances (on the gpu backend: two-level GPU ray casting)",
-    read: super::read_as::<TwoLevelOptions>,
+    read: super::read_as::<super::NoOptions<TwoLevelMethod>>,
 };
 
 /// Its per-frame forms ([`Method::frame_forms`]): `two_level`, its top level rebuilt every
@@ -46,22 +43,8 @@ pub const FRAME_FORMS: &[FrameForm] = &[
     FrameForm::gpu("two_level@gpu", "two_level"),
 ];
 
-/// `two_level` has no parameters.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct TwoLevelOptions {}
-
-impl MethodOptions for TwoLevelOptions {
-    fn validate(&self, _at: &str, _spec: &Spec, _v: &Validator) -> Result<(), SpecError> {
-        Ok(())
-    }
-
-    fn settings(&self) -> Vec<Box<dyn Method>> {
-        vec![Box::new(TwoLevelMethod)]
-    }
-}
-
 /// The scene's casters in two levels.
+#[derive(Default)]
 pub struct TwoLevelMethod;
 
 impl Method for TwoLevelMethod {
