@@ -93,46 +93,67 @@ fn instance_surface_hit(inst: Instance, origin: vec3<f32>, dir: vec3<f32>, tmin:
     return res;
 }
 
-// `FieldScene::surface_hit` with the normal of the hit: the nearest hit over the instances
-// (every instance the ray meets is looked up and the nearest kept, since bounding spheres may
-// overlap; ties go to the instance the host tries first: the nearer sphere entry, then the
-// lower index), its normal from the instance's normal field turned to the world. The
-// visibility's `surface_hit` where the instances have no top level of their own.
-fn surface_hit_every_sphere(origin: vec3<f32>, dir: vec3<f32>, tmax: f32) -> SurfaceHit {
+// The nearest hit so far of a search over the instances: its distance, its sphere entry, the
+// instance (NO_INSTANCE: none yet) and its normal texel's word.
+struct Nearest {
+    t: f32,
+    entry: f32,
+    k: u32,
+    word: u32,
+}
+
+const NO_INSTANCE: u32 = 0xffffffffu;
+
+// Instance k's closest hit along the ray kept in `best` where it is nearer: the nearer
+// distance, then (ties as the host breaks them, in the order it tries instances) the nearer
+// sphere entry, then the lower index. Whether it was kept.
+fn keep_nearer(best: ptr<function, Nearest>, k: u32, origin: vec3<f32>, dir: vec3<f32>, tmax: f32) -> bool {
+    let inst = instances[k];
+    let h = instance_surface_hit(inst, origin, dir, 0.0, tmax, SELECTION,
+                                 field_params.intra_bias, field_params.intra_auto != 0u);
+    if !h.hit {
+        return false;
+    }
+    let t = h.t * inst.scale;
+    let entry = max(ray_sphere(origin, dir, inst.world_center, inst.world_radius).x, 0.0);
+    let b = *best;
+    let nearer = t < b.t || (t == b.t && (entry < b.entry || (entry == b.entry && k < b.k)));
+    if b.k != NO_INSTANCE && !nearer {
+        return false;
+    }
+    let texels = inst.resolution * inst.resolution;
+    *best = Nearest(t, entry, k, normals[normals[2u * k] + h.map * texels + h.texel]);
+    return true;
+}
+
+// A search's answer: no hit, or the nearest at its distance with its normal, read from the
+// instance's normal field, turned to the world.
+fn nearest_hit(best: Nearest) -> SurfaceHit {
     var res: SurfaceHit;
     res.hit = false;
-    var best_t = 0.0;
-    var best_entry = 0.0;
-    var best_k = 0xffffffffu;
-    var best_word = 0u;
-    for (var k = 0u; k < field_params.instance_count; k++) {
-        let inst = instances[k];
-        let h = instance_surface_hit(inst, origin, dir, 0.0, tmax, SELECTION,
-                                     field_params.intra_bias, field_params.intra_auto != 0u);
-        if !h.hit {
-            continue;
-        }
-        let t = h.t * inst.scale;
-        let entry = max(ray_sphere(origin, dir, inst.world_center, inst.world_radius).x, 0.0);
-        if best_k == 0xffffffffu || t < best_t || (t == best_t && entry < best_entry) {
-            best_t = t;
-            best_entry = entry;
-            best_k = k;
-            let texels = inst.resolution * inst.resolution;
-            best_word = normals[normals[2u * k] + h.map * texels + h.texel];
-        }
-    }
-    if best_k == 0xffffffffu {
+    if best.k == NO_INSTANCE {
         return res;
     }
-    let inst = instances[best_k];
-    let n_model = unpack_normal(best_word, normals[2u * best_k + 1u]);
+    let inst = instances[best.k];
+    let n_model = unpack_normal(best.word, normals[2u * best.k + 1u]);
     // The instance's model -> world rotation: the conjugate of its world -> model one.
     let to_world = vec4<f32>(-inst.rotation.xyz, inst.rotation.w);
     res.hit = true;
-    res.t = best_t;
+    res.t = best.t;
     res.normal = normalize_exact(quat_rotate(to_world, n_model));
     return res;
+}
+
+// `FieldScene::surface_hit` with the normal of the hit: the nearest hit over the instances
+// (every instance the ray meets is looked up and the nearest kept, since bounding spheres may
+// overlap), tried in index order. The visibility's `surface_hit` where the instances have no
+// top level of their own.
+fn surface_hit_every_sphere(origin: vec3<f32>, dir: vec3<f32>, tmax: f32) -> SurfaceHit {
+    var best = Nearest(0.0, 0.0, NO_INSTANCE, 0u);
+    for (var k = 0u; k < field_params.instance_count; k++) {
+        _ = keep_nearer(&best, k, origin, dir, tmax);
+    }
+    return nearest_hit(best);
 }
 
 // `unpack_normal` (src/field/normals.rs) of a texel word (component a in the low 16 bits, b in
