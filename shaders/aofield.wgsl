@@ -47,21 +47,6 @@ struct AoInside {
 const AO_F32: u32 = 0u;
 const AO_F16: u32 = 1u;
 
-// IEEE binary16 bits to f32, exactly (`half::f16::to_f32`).
-fn half_to_f32(h: u32) -> f32 {
-    let sign = (h & 0x8000u) << 16u;
-    let e = (h >> 10u) & 0x1fu;
-    let m = h & 0x3ffu;
-    if e == 0u {
-        let mag = f32(m) * 5.9604644775390625e-8;
-        return select(mag, -mag, sign != 0u);
-    }
-    if e == 31u {
-        return bitcast<f32>(sign | 0x7f800000u | (m << 13u));
-    }
-    return bitcast<f32>(sign | ((e + 112u) << 23u) | (m << 13u));
-}
-
 // Channel k of texel t, decoded (`Stored::texel`): f32 seven words a texel; f16 four words
 // (halves 2j, 2j + 1 in word j); u8 two words (bytes 4j … 4j + 3 in word j), read as
 // lo[k] + code · step[k] with lo and step at `decode`.
@@ -70,7 +55,7 @@ fn ao_channel(f: AoFieldRecord, t: u32, k: u32) -> f32 {
         return bitcast<f32>(ao_words[f.offset + 7u * t + k]);
     }
     if f.storage == AO_F16 {
-        return half_to_f32((ao_words[f.offset + 4u * t + k / 2u] >> (16u * (k % 2u))) & 0xffffu);
+        return f16_to_f32((ao_words[f.offset + 4u * t + k / 2u] >> (16u * (k % 2u))) & 0xffffu);
     }
     let code = (ao_words[f.offset + 2u * t + k / 4u] >> (8u * (k % 4u))) & 0xffu;
     return bitcast<f32>(ao_words[f.decode + k]) + f32(code) * bitcast<f32>(ao_words[f.decode + 7u + k]);

@@ -1,5 +1,5 @@
-// Constants, the orthonormal frame, and glam's rotation by a quaternion and normalisation,
-// shared by every kernel.
+// Constants, the orthonormal frame, glam's rotation by a quaternion and normalisation, and
+// the f16 decode of stored samples, shared by every kernel.
 
 const TAU: f32 = 6.283185307179586;
 const PI: f32 = 3.141592653589793;
@@ -42,4 +42,20 @@ fn quat_rotate(q: vec4<f32>, v: vec3<f32>) -> vec3<f32> {
 // glam's `normalize`: v * (1 / |v|).
 fn normalize_exact(v: vec3<f32>) -> vec3<f32> {
     return v * (1.0 / sqrt(dot(v, v)));
+}
+
+// IEEE binary16 bits to f32, exactly (`half::f16::to_f32`): normals by their bits, subnormals
+// as m 2^-24 (exact), infinities and NaNs kept.
+fn f16_to_f32(h: u32) -> f32 {
+    let sign = (h & 0x8000u) << 16u;
+    let e = (h >> 10u) & 0x1fu;
+    let m = h & 0x3ffu;
+    if e == 0u {
+        let mag = f32(m) * 5.9604644775390625e-8;
+        return select(mag, -mag, sign != 0u);
+    }
+    if e == 31u {
+        return bitcast<f32>(sign | 0x7f800000u | (m << 13u));
+    }
+    return bitcast<f32>(sign | ((e + 112u) << 23u) | (m << 13u));
 }

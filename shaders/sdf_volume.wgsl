@@ -53,22 +53,6 @@ struct SdfInstance {
 const SDF_F32: u32 = 0u;
 const SDF_F16: u32 = 1u;
 
-// IEEE binary16 bits to f32, exactly (`half::f16::to_f32`): normals by their bits, subnormals
-// as m 2^-24 (exact), infinities and NaNs kept.
-fn f16_to_f32(h: u32) -> f32 {
-    let sign = (h & 0x8000u) << 16u;
-    let e = (h >> 10u) & 0x1fu;
-    let m = h & 0x3ffu;
-    if e == 0u {
-        let mag = f32(m) * 5.9604644775390625e-8;
-        return select(mag, -mag, sign != 0u);
-    }
-    if e == 31u {
-        return bitcast<f32>(sign | 0x7f800000u | (m << 13u));
-    }
-    return bitcast<f32>(sign | ((e + 112u) << 23u) | (m << 13u));
-}
-
 // Sample i of volume v, decoded (`Samples::get`).
 fn sdf_stored(v: SdfVolume, i: u32) -> f32 {
     if v.storage == SDF_F32 {
