@@ -138,23 +138,58 @@ pub fn fit_solid_angle(s: &[f64], omega: &[f64], s0: f64) -> Quadratic {
 /// Levenberg–Marquardt on `ε_Ω` from a feasible start; every accepted step stays feasible and
 /// lowers the cost.
 fn refine_solid_angle(start: Quadratic, s: &[f64], omega: &[f64], s0: f64) -> (Quadratic, f64) {
-    let mut q = start;
-    let mut cost = solid_angle_cost(&q, s, omega);
+    let quadratic = |[a, b, c]: [f64; 3]| Quadratic { a, b, c };
+    let (p, cost) = levenberg_marquardt(
+        [start.a, start.b, start.c],
+        solid_angle_cost(&start, s, omega),
+        200,
+        |p, rows| {
+            let q = quadratic(p);
+            for (&si, &oi) in s.iter().zip(omega) {
+                let qi = q.at(si);
+                rows(
+                    [si * si / (qi * qi), si / (qi * qi), 1.0 / (qi * qi)],
+                    oi - 1.0 / qi,
+                );
+            }
+        },
+        |p| {
+            let q = quadratic(p);
+            if q.feasible(s0) {
+                solid_angle_cost(&q, s, omega)
+            } else {
+                f64::INFINITY
+            }
+        },
+    );
+    (quadratic(p), cost)
+}
+
+/// Levenberg–Marquardt on three parameters from `start` (of cost `cost`), at most `steps`
+/// steps: `rows(p, add)` adds each residual's Jacobian row and residual at `p` (`add(J_i, r_i)`,
+/// the normal equations `JᵀJ`, `Jᵀr` summed in that order); `cost_of` is a candidate's cost,
+/// infinite where it is not allowed. Every accepted step lowers the cost; the loop ends where a
+/// step gains nothing (relative 1e-15) or none is found within 12 dampings.
+fn levenberg_marquardt(
+    start: [f64; 3],
+    cost: f64,
+    steps: usize,
+    rows: impl Fn([f64; 3], &mut dyn FnMut([f64; 3], f64)),
+    cost_of: impl Fn([f64; 3]) -> f64,
+) -> ([f64; 3], f64) {
+    let (mut p, mut cost) = (start, cost);
     let mut lambda = 1e-3;
-    for _ in 0..200 {
+    for _ in 0..steps {
         let mut jtj = [[0.0; 3]; 3];
         let mut g = [0.0; 3];
-        for (&si, &oi) in s.iter().zip(omega) {
-            let qi = q.at(si);
-            let d = [si * si / (qi * qi), si / (qi * qi), 1.0 / (qi * qi)];
-            let r = oi - 1.0 / qi;
+        rows(p, &mut |d, r| {
             for a in 0..3 {
                 for b in 0..3 {
                     jtj[a][b] += d[a] * d[b];
                 }
                 g[a] += d[a] * r;
             }
-        }
+        });
         let mut accepted = false;
         for _ in 0..12 {
             let mut m = jtj;
@@ -168,19 +203,11 @@ fn refine_solid_angle(start: Quadratic, s: &[f64], omega: &[f64], s0: f64) -> (Q
                 lambda *= 10.0;
                 continue;
             };
-            let cand = Quadratic {
-                a: q.a - step[0],
-                b: q.b - step[1],
-                c: q.c - step[2],
-            };
-            let c = if cand.feasible(s0) {
-                solid_angle_cost(&cand, s, omega)
-            } else {
-                f64::INFINITY
-            };
+            let cand = [p[0] - step[0], p[1] - step[1], p[2] - step[2]];
+            let c = cost_of(cand);
             if c < cost {
                 let gain = cost - c;
-                q = cand;
+                p = cand;
                 cost = c;
                 lambda = (lambda / 10.0).max(1e-12);
                 accepted = gain > 1e-15 * cost.max(1e-300);
@@ -192,7 +219,7 @@ fn refine_solid_angle(start: Quadratic, s: &[f64], omega: &[f64], s0: f64) -> (Q
             break;
         }
     }
-    (q, cost)
+    (p, cost)
 }
 
 /// `Υ̃(s) = normalize(C − s ω)`, `−ω` where C − sω vanishes.
@@ -257,60 +284,31 @@ pub fn fit_centre(s: &[f64], dirs: &[DVec3], w: DVec3) -> DVec3 {
 /// Levenberg–Marquardt on `ε_Υ` within |C| ≤ [`C_MAX`]; accepted steps lower the cost.
 fn refine_centre(start: DVec3, s: &[f64], dirs: &[DVec3], w: DVec3) -> DVec3 {
     let valid = |c: DVec3| c.length() <= C_MAX && s.iter().all(|&si| (c - si * w).length() > 1e-9);
-    let mut c = if valid(start) { start } else { DVec3::ZERO };
-    let mut cost = direction_cost(c, s, dirs, w);
-    let mut lambda = 1e-3;
-    for _ in 0..100 {
-        let mut jtj = [[0.0; 3]; 3];
-        let mut g = [0.0; 3];
-        for (&si, &d) in s.iter().zip(dirs) {
-            let v = c - si * w;
-            let len = v.length();
-            let u = v / len;
-            let e = 1.0 - d.dot(u);
-            // ∂e/∂C = −(d − (d·u) u) / |C − sω|.
-            let j = -(d - d.dot(u) * u) / len;
-            for a in 0..3 {
-                for b in 0..3 {
-                    jtj[a][b] += j[a] * j[b];
-                }
-                g[a] += j[a] * e;
+    let c = if valid(start) { start } else { DVec3::ZERO };
+    let (p, _) = levenberg_marquardt(
+        c.to_array(),
+        direction_cost(c, s, dirs, w),
+        100,
+        |p, rows| {
+            let c = DVec3::from_array(p);
+            for (&si, &d) in s.iter().zip(dirs) {
+                let v = c - si * w;
+                let len = v.length();
+                let u = v / len;
+                // ∂e/∂C = −(d − (d·u) u) / |C − sω|.
+                rows((-(d - d.dot(u) * u) / len).to_array(), 1.0 - d.dot(u));
             }
-        }
-        let mut accepted = false;
-        for _ in 0..12 {
-            let mut m = jtj;
-            // Marquardt's scaling, with a floor so that a direction the cost does not yet
-            // see (a zero diagonal) still gets a damped step.
-            let floor = 1e-9 * (jtj[0][0] + jtj[1][1] + jtj[2][2]).max(1e-300);
-            for (k, row) in m.iter_mut().enumerate() {
-                row[k] += lambda * jtj[k][k].max(floor);
-            }
-            let Some(step) = solve3(m, g) else {
-                lambda *= 10.0;
-                continue;
-            };
-            let cand = c - DVec3::from_array(step);
-            let cc = if valid(cand) {
+        },
+        |p| {
+            let cand = DVec3::from_array(p);
+            if valid(cand) {
                 direction_cost(cand, s, dirs, w)
             } else {
                 f64::INFINITY
-            };
-            if cc < cost {
-                let gain = cost - cc;
-                c = cand;
-                cost = cc;
-                lambda = (lambda / 10.0).max(1e-12);
-                accepted = gain > 1e-15 * cost.max(1e-300);
-                break;
             }
-            lambda *= 10.0;
-        }
-        if !accepted {
-            break;
-        }
-    }
-    c
+        },
+    );
+    DVec3::from_array(p)
 }
 
 /// Solves the 3 × 3 system `m x = rhs` by Gaussian elimination with partial pivoting; none when
