@@ -74,6 +74,17 @@ struct Instance {
     cand_base: u32,
 }
 
+// Storage precisions (`Instance::storage_precision`), as the layouts' `load_distance` reads them.
+const PRECISION_F32: u32 = 0u;
+const PRECISION_U16: u32 = 1u;
+const PRECISION_U8: u32 = 2u;
+const PRECISION_BIT1: u32 = 3u;
+
+// Per-map mean of a 1-bit field: four means per table entry.
+fn bit1_mean(inst: Instance, m: u32) -> f32 {
+    return tables[inst.mean_base + m / 4u][m % 4u];
+}
+
 // Near and far roots of a unit-direction ray against a sphere (Haines et al., Ray Tracing
 // Gems ch. 7, in f32); z = 1 when it hits, 0 when it misses.
 fn ray_sphere(o: vec3<f32>, d: vec3<f32>, c: vec3<f32>, r: f32) -> vec3<f32> {

@@ -4,16 +4,6 @@
 // per texel with each map padded to 64-bit words and the per-map mean in `tables`.
 // The host prepends `WINDOW_WORDS`, the `win*` bindings and `load_word(address)`.
 
-const PRECISION_F32: u32 = 0u;
-const PRECISION_U16: u32 = 1u;
-const PRECISION_U8: u32 = 2u;
-const PRECISION_BIT1: u32 = 3u;
-
-// Per-map mean of a 1-bit field: four means per table entry.
-fn bit1_mean(inst: Instance, m: u32) -> f32 {
-    return tables[inst.mean_base + m / 4u][m % 4u];
-}
-
 fn load_distance(inst: Instance, m: u32, t: u32) -> f32 {
     let res = inst.resolution;
     let texels = res * res;

@@ -4,15 +4,6 @@
 // Instance fields: `data_base` is the first slice; `tiles_per_row`, `tiles_per_slice`,
 // `tile_width` and `tile_height` place the maps in it.
 
-const PRECISION_F32: u32 = 0u;
-const PRECISION_U16: u32 = 1u;
-const PRECISION_U8: u32 = 2u;
-const PRECISION_BIT1: u32 = 3u;
-
-fn bit1_mean(inst: Instance, m: u32) -> f32 {
-    return tables[inst.mean_base + m / 4u][m % 4u];
-}
-
 // Element `e` of map `m`'s tile.
 fn load_tile(inst: Instance, m: u32, e: u32) -> u32 {
     let per_slice = inst.tiles_per_slice;
