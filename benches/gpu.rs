@@ -96,7 +96,7 @@ fn gpu_ao(c: &mut Criterion) {
     group.bench_function(BenchmarkId::new("raycast_cwbvh", "any_hit"), |b| {
         b.iter_custom(|iters| {
             (0..iters)
-                .map(|_| kernel_or_wall(&tracer.ao(p, n, &rays, &opts).unwrap().1))
+                .map(|_| kernel_or_wall(&visfield::gpu::ao(&tracer, p, n, &rays, &opts).unwrap().1))
                 .sum()
         })
     });

@@ -117,7 +117,7 @@ fn main() {
         max_diff(&gf, &gd),
         max_diff(&gf, &gu)
     );
-    let (gt, _) = gtracer.ao(p, n, &rays, &opts).expect("gpu tracer");
+    let (gt, _) = visfield::gpu::ao(&gtracer, p, n, &rays, &opts).expect("gpu tracer");
     println!(
         "max |gpu field - cpu field| {:e}; max |gpu cwbvh - gpu field| {:e}",
         max_diff(&gf, &cpu_field),
@@ -132,7 +132,9 @@ fn main() {
     let mut s: [Vec<f64>; 6] = Default::default();
     for _ in 0..rounds {
         s[0].push(kern(&kernel.ao(p, n, &rays, &opts).unwrap().1));
-        s[1].push(kern(&gtracer.ao(p, n, &rays, &opts).unwrap().1));
+        s[1].push(kern(
+            &visfield::gpu::ao(&gtracer, p, n, &rays, &opts).unwrap().1,
+        ));
         s[2].push(wall(&|| drop(ao_at_points(&fs, p, n, &rays, &opts))));
         s[3].push(wall(&|| drop(ao_at_points(&tracer, p, n, &rays, &opts))));
         s[4].push(kern(&direct.ao(p, n, &rays, &opts).unwrap().1));

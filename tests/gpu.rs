@@ -814,7 +814,7 @@ fn gpu_ray_cast_ao_matches_the_cpu_and_serves_as_field_reference() {
     let cpu = ao_at_points(&Tracer::new(&tris), &p, &n, &rays, &opts);
     assert_occlusion_is_nontrivial(&cpu);
     let tracer = GpuTracer::new(ctx, &tris).unwrap();
-    let (gpu, timing) = tracer.ao(&p, &n, &rays, &opts).unwrap();
+    let (gpu, timing) = visfield::gpu::ao(&tracer, &p, &n, &rays, &opts).unwrap();
     let q = parity(&gpu, &cpu);
     eprintln!(
         "ray-cast AO, {} vertices × {} rays: max |Δ| {:.2}/255, {} over 1/255, RMS {:.4}/255; \
@@ -839,7 +839,7 @@ fn gpu_ray_cast_ao_matches_the_cpu_and_serves_as_field_reference() {
     let caster_tris: Vec<[Vec3; 3]> =
         tris[procedural::corner(17).unwrap().triangles.len()..].to_vec();
     let caster_tracer = GpuTracer::new(ctx, &caster_tris).unwrap();
-    let (reference, _) = caster_tracer.ao(&p, &n, &rays, &opts).unwrap();
+    let (reference, _) = visfield::gpu::ao(&caster_tracer, &p, &n, &rays, &opts).unwrap();
     let kernel = FieldAoKernel::new(ctx, &[inst], &FieldGpuOptions::default()).unwrap();
     let (lookup, _) = kernel.ao(&p, &n, &rays, &opts).unwrap();
     let corner_count = p.iter().filter(|q| q.min_element() == 0.0).count();
@@ -989,10 +989,8 @@ fn gpu_ray_cast_ao_at_4096_rays_per_point_matches_the_cpu() {
     let opts = AoOptions::for_scene_radius(1.0);
     let cpu = ao_at_points(&Tracer::new(&tris), &p, &n, &rays, &opts);
     assert_occlusion_is_nontrivial(&cpu);
-    let (gpu, timing) = GpuTracer::new(ctx, &tris)
-        .unwrap()
-        .ao(&p, &n, &rays, &opts)
-        .unwrap();
+    let tracer = GpuTracer::new(ctx, &tris).unwrap();
+    let (gpu, timing) = visfield::gpu::ao(&tracer, &p, &n, &rays, &opts).unwrap();
     let q = parity(&gpu, &cpu);
     eprintln!(
         "ray-cast AO, {} vertices × 4096 rays: max |Δ| {:.2}/255, {} over 1/255, RMS \

@@ -251,8 +251,8 @@ fn top_level_shadows_and_reflections_are_every_spheres_bit_for_bit() {
             instances: insts.clone(),
             options: LookupOptions::default(),
         };
-        let (t, _) = top_s.light_fractions(&p, &n, &rays, &sh).unwrap();
-        let (e, _) = every_s.light_fractions(&p, &n, &rays, &sh).unwrap();
+        let (t, _) = visfield::gpu::shadows(&top_s, &p, &n, &rays, &sh).unwrap();
+        let (e, _) = visfield::gpu::shadows(&every_s, &p, &n, &rays, &sh).unwrap();
         bit_identical(&format!("shadows frame {frame}"), &t, &e);
         let cpu = shadow_at_points(&scene, &p, &n, &rays, &sh);
         assert!(
@@ -275,8 +275,8 @@ fn top_level_shadows_and_reflections_are_every_spheres_bit_for_bit() {
             "shadows: {off} off, max {max}"
         );
 
-        let (t, _) = top_r.reflections(&p, &n, &rays, &refl).unwrap();
-        let (e, _) = every_r.reflections(&p, &n, &rays, &refl).unwrap();
+        let (t, _) = visfield::gpu::reflections(&top_r, &p, &n, &rays, &refl).unwrap();
+        let (e, _) = visfield::gpu::reflections(&every_r, &p, &n, &rays, &refl).unwrap();
         bit_identical(&format!("reflections frame {frame}"), &t, &e);
         let cpu = reflect_at_points(&scene, &p, &n, &rays, &refl);
         assert!(

@@ -1,7 +1,7 @@
 //! GPU glossy reflections (Gaitatzes, Andreadis, Papaioannou, Chrysanthou, WSCG 2010, §4.2)
 //! against the CPU path, per point, on the same fields, normal fields, casters, lights and
 //! rays: field lookup ([`FieldReflectKernel`]) against `reflect_at_points` over a `FieldScene`,
-//! and GPU ray casting ([`GpuTracer::reflections`]) against it over the CPU tracer; then a
+//! and GPU ray casting (`gpu::reflections` on a [`GpuTracer`]) against it over the CPU tracer; then a
 //! reflections run on both backends.
 //!
 //! The scene: two tilted supershape casters whose bounding spheres overlap (a ray may meet
@@ -319,10 +319,11 @@ fn field_reflections_match_the_cpu() {
                     // The negative control first: lavapipe compiles the kernel on its first
                     // dispatch, which the timed call should not include.
                     let (other_rays, other_opts) = control(&rays, &opts);
-                    let (neg, _) = kernel
-                        .reflections(&p, &n, &other_rays, &other_opts)
-                        .unwrap();
-                    let (gpu, timing) = kernel.reflections(&p, &n, &rays, &opts).unwrap();
+                    let (neg, _) =
+                        visfield::gpu::reflections(&kernel, &p, &n, &other_rays, &other_opts)
+                            .unwrap();
+                    let (gpu, timing) =
+                        visfield::gpu::reflections(&kernel, &p, &n, &rays, &opts).unwrap();
                     let m = kernel.rays_per_invocation().min(rays.len() as u32);
                     let close = scene_tolerance(&insts, &p, m, &opts);
                     let label =
@@ -361,10 +362,9 @@ fn ray_cast_reflections_match_the_cpu_tracer() {
         let cpu_s = t.elapsed();
         assert_reflections_are_nontrivial(&cpu, &opts);
         let (other_rays, other_opts) = control(&rays, &opts);
-        let (neg, _) = gpu_tracer
-            .reflections(&p, &n, &other_rays, &other_opts)
-            .unwrap();
-        let (gpu, timing) = gpu_tracer.reflections(&p, &n, &rays, &opts).unwrap();
+        let (neg, _) =
+            visfield::gpu::reflections(&gpu_tracer, &p, &n, &other_rays, &other_opts).unwrap();
+        let (gpu, timing) = visfield::gpu::reflections(&gpu_tracer, &p, &n, &rays, &opts).unwrap();
         let close = scene_tolerance(&insts, &p, rays.len() as u32, &opts);
         let label = format!("ray casting {gloss:?} k = {k}");
         eprintln!(
@@ -394,8 +394,8 @@ fn many_rays_split_over_invocations_match_the_cpu() {
     let cpu = reflect_at_points(&Tracer::new(&tris), &p, &n, &rays, &opts);
     assert_reflections_are_nontrivial(&cpu, &opts);
     let tracer = GpuTracer::new(ctx, &tris).unwrap();
-    let (gpu, _) = tracer.reflections(&p, &n, &rays, &opts).unwrap();
-    let (neg, _) = tracer.reflections(&p, &n, &other, &opts).unwrap();
+    let (gpu, _) = visfield::gpu::reflections(&tracer, &p, &n, &rays, &opts).unwrap();
+    let (neg, _) = visfield::gpu::reflections(&tracer, &p, &n, &other, &opts).unwrap();
     let close = scene_tolerance(&insts, &p, 144, &opts);
     check("ray casting, k = 12", &gpu, &cpu, &neg, &shares, close);
 
@@ -410,8 +410,8 @@ fn many_rays_split_over_invocations_match_the_cpu() {
     };
     let kernel = FieldReflectKernel::new(ctx, &insts, &gpu_opts).unwrap();
     assert_eq!(kernel.rays_per_invocation(), 40, "80 over two instances");
-    let (gpu, _) = kernel.reflections(&p, &n, &rays, &opts).unwrap();
-    let (neg, _) = kernel.reflections(&p, &n, &other, &opts).unwrap();
+    let (gpu, _) = visfield::gpu::reflections(&kernel, &p, &n, &rays, &opts).unwrap();
+    let (neg, _) = visfield::gpu::reflections(&kernel, &p, &n, &other, &opts).unwrap();
     let close = scene_tolerance(&insts, &p, kernel.rays_per_invocation(), &opts);
     check(
         "field, k = 12, 40 rays an invocation",
@@ -444,10 +444,10 @@ fn overlapping_spheres_give_the_nearest_hit_not_the_first() {
     let rays = RaySet::new(4, 11);
     let opts = reflect_opts(Gloss::Phong { exponent: 5.0 });
     let cpu = reflect_at_points(&scene, &p, &n, &rays, &opts);
-    let (gpu, _) = kernel.reflections(&p, &n, &rays, &opts).unwrap();
+    let (gpu, _) = visfield::gpu::reflections(&kernel, &p, &n, &rays, &opts).unwrap();
     let shares = one_ray_shares(&p, &n, &rays, &opts);
     let close = scene_tolerance(&insts, &p, 16, &opts);
-    let (neg, _) = kernel_first.reflections(&p, &n, &rays, &opts).unwrap();
+    let (neg, _) = visfield::gpu::reflections(&kernel_first, &p, &n, &rays, &opts).unwrap();
     // The second caster matters: dropping it changes many points on both backends.
     let cpu_first = reflect_at_points(&first_only, &p, &n, &rays, &opts);
     let changed = cpu.iter().zip(&cpu_first).filter(|(a, b)| a != b).count();
@@ -479,8 +479,8 @@ fn edge_cases_are_those_of_the_cpu() {
     let p = [Vec3::new(0.5, 1.5, 2.2), Vec3::new(-3.0, 0.0, 3.0)];
     let n = [Vec3::Y, Vec3::Y];
     let cpu = reflect_at_points(&Tracer::new(&tris), &p, &n, &rays, &opts);
-    let (g, _) = tracer.reflections(&p, &n, &rays, &opts).unwrap();
-    let (f, _) = kernel.reflections(&p, &n, &rays, &opts).unwrap();
+    let (g, _) = visfield::gpu::reflections(&tracer, &p, &n, &rays, &opts).unwrap();
+    let (f, _) = visfield::gpu::reflections(&kernel, &p, &n, &rays, &opts).unwrap();
     assert_eq!(cpu, vec![0.0, opts.sky]);
     // The sky's 16 rays summed in f32 on the device: within 16 roundings.
     let close = 16.0 * f32::EPSILON / 2.0;
@@ -491,13 +491,11 @@ fn edge_cases_are_those_of_the_cpu() {
         );
     }
     assert_eq!((g[0], f[0]), (0.0, 0.0));
-    assert!(tracer
-        .reflections(&[], &[], &rays, &opts)
+    assert!(visfield::gpu::reflections(&tracer, &[], &[], &rays, &opts)
         .unwrap()
         .0
         .is_empty());
-    assert!(kernel
-        .reflections(&[], &[], &rays, &opts)
+    assert!(visfield::gpu::reflections(&kernel, &[], &[], &rays, &opts)
         .unwrap()
         .0
         .is_empty());
@@ -507,11 +505,11 @@ fn edge_cases_are_those_of_the_cpu() {
         ..rays
     };
     assert!(matches!(
-        kernel.reflections(&p, &n, &jittered, &opts),
+        visfield::gpu::reflections(&kernel, &p, &n, &jittered, &opts),
         Err(GpuError::Unsupported(_))
     ));
     assert!(matches!(
-        tracer.reflections(&p, &n, &jittered, &opts),
+        visfield::gpu::reflections(&tracer, &p, &n, &jittered, &opts),
         Err(GpuError::Unsupported(_))
     ));
     // An instance without its normal field is refused, naming it.

@@ -1,7 +1,7 @@
 //! GPU soft shadows (Gaitatzes, Andreadis, Papaioannou, Chrysanthou, WSCG 2010, §4.2) against
 //! the CPU path, per point, on the same fields, casters, lights and rays: field lookup
 //! ([`FieldShadowKernel`]) against `shadow_at_points` over a `FieldScene`, and GPU ray casting
-//! ([`GpuTracer::shadows`]) against it over the CPU tracer; then a shadows run on both
+//! (`gpu::shadows` on a [`GpuTracer`]) against it over the CPU tracer; then a shadows run on both
 //! backends.
 //!
 //! The tolerance. A point's value is S = Σ_lit w / Σ w over its shadow rays. When GPU and CPU
@@ -294,8 +294,8 @@ fn field_shadows_match_the_cpu_for_both_selections_and_layouts() {
             kernel.lookup = lookup;
             // The negative control first: lavapipe compiles the kernel on its first dispatch,
             // which the timed call should not include.
-            let (neg, _) = kernel.light_fractions(&p, &n, &other, &opts).unwrap();
-            let (gpu, timing) = kernel.light_fractions(&p, &n, &rays, &opts).unwrap();
+            let (neg, _) = visfield::gpu::shadows(&kernel, &p, &n, &other, &opts).unwrap();
+            let (gpu, timing) = visfield::gpu::shadows(&kernel, &p, &n, &rays, &opts).unwrap();
             let label = format!("field {layout:?} {selection:?}");
             eprintln!(
                 "{label}: {} points × {m} rays: CPU {cpu_s:?} ({} threads), GPU kernel {:?}, \
@@ -327,10 +327,9 @@ fn ray_cast_shadows_match_the_cpu_tracer() {
         let cpu_s = t.elapsed();
         assert_shadows_are_nontrivial(&cpu);
         // The negative control first (lavapipe compiles on the first dispatch).
-        let (neg, _) = gpu_tracer
-            .shadows(&p, &n, &RaySet::new(k, 8), &opts)
-            .unwrap();
-        let (gpu, timing) = gpu_tracer.shadows(&p, &n, &rays, &opts).unwrap();
+        let (neg, _) =
+            visfield::gpu::shadows(&gpu_tracer, &p, &n, &RaySet::new(k, 8), &opts).unwrap();
+        let (gpu, timing) = visfield::gpu::shadows(&gpu_tracer, &p, &n, &rays, &opts).unwrap();
         let label = format!("ray casting, k = {k}");
         eprintln!(
             "{label}: {} points × {m} rays: CPU {cpu_s:?} ({} threads), GPU kernel {:?}, wall {:?}",
@@ -360,8 +359,8 @@ fn many_rays_split_over_invocations_across_lights_match_the_cpu() {
     let cpu = shadow_at_points(&Tracer::new(&tris), &p, &n, &rays, &opts);
     assert_shadows_are_nontrivial(&cpu);
     let tracer = GpuTracer::new(ctx, &tris).unwrap();
-    let (gpu, _) = tracer.shadows(&p, &n, &rays, &opts).unwrap();
-    let (neg, _) = tracer.shadows(&p, &n, &other, &opts).unwrap();
+    let (gpu, _) = visfield::gpu::shadows(&tracer, &p, &n, &rays, &opts).unwrap();
+    let (neg, _) = visfield::gpu::shadows(&tracer, &p, &n, &other, &opts).unwrap();
     check("ray casting, k = 12", &gpu, &cpu, &neg, &shares, 256);
 
     let scene = FieldScene {
@@ -374,8 +373,8 @@ fn many_rays_split_over_invocations_across_lights_match_the_cpu() {
         ..Default::default()
     };
     let kernel = FieldShadowKernel::new(ctx, &[inst], &gpu_opts).unwrap();
-    let (gpu, _) = kernel.light_fractions(&p, &n, &rays, &opts).unwrap();
-    let (neg, _) = kernel.light_fractions(&p, &n, &other, &opts).unwrap();
+    let (gpu, _) = visfield::gpu::shadows(&kernel, &p, &n, &rays, &opts).unwrap();
+    let (neg, _) = visfield::gpu::shadows(&kernel, &p, &n, &other, &opts).unwrap();
     check(
         "field, k = 12, 40 rays an invocation",
         &gpu,
@@ -404,8 +403,8 @@ fn edge_cases_are_those_of_the_cpu() {
     let n = [Vec3::Y, -Vec3::Y, Vec3::Y];
     let cpu = shadow_at_points(&Tracer::new(&tris), &p, &n, &rays, &opts);
     assert_eq!(cpu[1], 1.0);
-    let (g, _) = tracer.shadows(&p, &n, &rays, &opts).unwrap();
-    let (f, _) = kernel.light_fractions(&p, &n, &rays, &opts).unwrap();
+    let (g, _) = visfield::gpu::shadows(&tracer, &p, &n, &rays, &opts).unwrap();
+    let (f, _) = visfield::gpu::shadows(&kernel, &p, &n, &rays, &opts).unwrap();
     for (i, c) in cpu.iter().enumerate() {
         assert!(
             (g[i] - c).abs() <= close_tolerance(48),
@@ -419,18 +418,21 @@ fn edge_cases_are_those_of_the_cpu() {
         );
     }
     assert_eq!(f[1], 1.0);
-    assert!(tracer.shadows(&[], &[], &rays, &opts).unwrap().0.is_empty());
+    assert!(visfield::gpu::shadows(&tracer, &[], &[], &rays, &opts)
+        .unwrap()
+        .0
+        .is_empty());
     // Jittered ray sets have no shared samples: refused, not approximated.
     let jittered = RaySet {
         jitter: true,
         ..rays
     };
     assert!(matches!(
-        kernel.light_fractions(&p, &n, &jittered, &opts),
+        visfield::gpu::shadows(&kernel, &p, &n, &jittered, &opts),
         Err(GpuError::Unsupported(_))
     ));
     assert!(matches!(
-        tracer.shadows(&p, &n, &jittered, &opts),
+        visfield::gpu::shadows(&tracer, &p, &n, &jittered, &opts),
         Err(GpuError::Unsupported(_))
     ));
 }

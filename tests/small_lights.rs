@@ -193,8 +193,12 @@ fn gpu_images_hold_their_shadow_and_match_the_cpu() {
     .unwrap();
     kernel.lookup = scene.options;
     let gpu_tracer = GpuTracer::new(ctx, &tris).unwrap();
-    let field = |o: &ShadowOptions| kernel.light_fractions(&p, &n, &rays, o).unwrap().0;
-    let cast = |o: &ShadowOptions| gpu_tracer.shadows(&p, &n, &rays, o).unwrap().0;
+    let field = |o: &ShadowOptions| visfield::gpu::shadows(&kernel, &p, &n, &rays, o).unwrap().0;
+    let cast = |o: &ShadowOptions| {
+        visfield::gpu::shadows(&gpu_tracer, &p, &n, &rays, o)
+            .unwrap()
+            .0
+    };
     let gpu_field = images_hold_their_shadow("GPU field", &field);
     let gpu_cast = images_hold_their_shadow("GPU ray casting", &cast);
     sun_is_its_near_twin("GPU field", &field);

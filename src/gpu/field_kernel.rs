@@ -27,14 +27,10 @@ use super::integrand::{self, Integrand, RECEIVER_WGSL};
 use super::reflect_rays::normal_words;
 use super::shadow_rays::check_binding;
 use super::visibility::{GpuVisibility, Kernels};
-use super::{GpuError, GpuTiming};
+use super::GpuError;
 use crate::field::lookup::{IntraBias, LookupOptions};
 use crate::field::scene::FieldInstance;
 use crate::field::Selection;
-use crate::render::reflect::ReflectOptions;
-use crate::render::shadow::ShadowOptions;
-use crate::sampling::rays::RaySet;
-use glam::Vec3;
 use std::marker::PhantomData;
 use std::time::{Duration, Instant};
 
@@ -270,37 +266,6 @@ impl<'a, Q: FieldQuantity> FieldKernel<'a, Q> {
     /// Slices of the field texture (texture layout), `None` for the storage layout.
     pub fn texture_depth(&self) -> Option<u32> {
         self.field.texture_depth()
-    }
-}
-
-impl FieldKernel<'_, Shadows> {
-    /// The light fraction at every point (point `i` uses the square samples and rotation of
-    /// point index `i` of `rays`), as [`crate::render::shadow::shadow_at_points`] computes it
-    /// over a [`crate::field::scene::FieldScene`] of the same instances and lookup options.
-    pub fn light_fractions(
-        &self,
-        points: &[Vec3],
-        normals: &[Vec3],
-        rays: &RaySet,
-        opts: &ShadowOptions,
-    ) -> Result<(Vec<f32>, GpuTiming), GpuError> {
-        integrand::shadows(self, points, normals, rays, opts)
-    }
-}
-
-impl FieldKernel<'_, Reflections> {
-    /// The reflected radiance at every point (point `i` uses the square samples and rotation
-    /// of point index `i` of `rays`), as [`crate::render::reflect::reflect_at_points`]
-    /// computes it over a [`crate::field::scene::FieldScene`] of the same instances and lookup
-    /// options.
-    pub fn reflections(
-        &self,
-        points: &[Vec3],
-        normals: &[Vec3],
-        rays: &RaySet,
-        opts: &ReflectOptions,
-    ) -> Result<(Vec<f32>, GpuTiming), GpuError> {
-        integrand::reflections(self, points, normals, rays, opts)
     }
 }
 

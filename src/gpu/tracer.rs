@@ -1,19 +1,15 @@
 //! The GPU ray-cast reference: an obvhs CWBVH traversed in WGSL (Ylitie, Karras, Laine, HPG
 //! 2017) with the watertight triangle test (Woop, Benthin, Wald, JCGT 2013), so that GPU field
 //! lookup is compared with GPU ray casting on the same device: any-hit and closest-hit queries,
-//! vertex AO ([`GpuTracer::ao`]), soft shadows from spherical lights ([`GpuTracer::shadows`])
-//! and glossy reflections ([`GpuTracer::reflections`]; Gaitatzes, Andreadis, Papaioannou,
-//! Chrysanthou, WSCG 2010, §4.2), on the CPU path's rays.
+//! and, as a [`GpuVisibility`], every kind's integrand: vertex AO ([`super::ao`]), soft shadows
+//! from spherical lights ([`super::shadows`]) and glossy reflections ([`super::reflections`];
+//! Gaitatzes, Andreadis, Papaioannou, Chrysanthou, WSCG 2010, §4.2), on the CPU path's rays.
 
 use super::context::GpuContext;
 use super::integrand::{self, timing, Integrand, IntegrandParamsGpu};
 use super::shadow_rays::check_binding;
 use super::visibility::{GpuVisibility, Kernels, VisibilityGroup};
 use super::{GpuError, GpuTiming};
-use crate::render::ao::AoOptions;
-use crate::render::reflect::ReflectOptions;
-use crate::render::shadow::ShadowOptions;
-use crate::sampling::rays::RaySet;
 use crate::trace::RayQuery;
 use glam::Vec3;
 use obvhs::{aabb::Aabb, cwbvh::node::CwBvhNode};
@@ -183,45 +179,6 @@ impl<'a> GpuTracer<'a> {
                 triangle: w[1],
             })
         })
-    }
-
-    /// Vertex AO by ray casting with the same rays as [`crate::render::ao::ao_at_points`]
-    /// (the AO integrand on this visibility, src/gpu/integrand.rs).
-    pub fn ao(
-        &self,
-        points: &[Vec3],
-        normals: &[Vec3],
-        rays: &RaySet,
-        opts: &AoOptions,
-    ) -> Result<(Vec<f32>, GpuTiming), GpuError> {
-        integrand::ao(self, points, normals, rays, opts)
-    }
-
-    /// Soft shadows by ray casting: the light fraction at every point with the same shadow
-    /// rays as [`crate::render::shadow::shadow_at_points`] (the shadow integrand on this
-    /// visibility, each shadow ray an any-hit query to the near side of its light).
-    pub fn shadows(
-        &self,
-        points: &[Vec3],
-        normals: &[Vec3],
-        rays: &RaySet,
-        opts: &ShadowOptions,
-    ) -> Result<(Vec<f32>, GpuTiming), GpuError> {
-        integrand::shadows(self, points, normals, rays, opts)
-    }
-
-    /// Glossy reflections by ray casting: the reflected radiance at every point with the same
-    /// reflection rays as [`crate::render::reflect::reflect_at_points`] (the reflection
-    /// integrand on this visibility, the hit shaded with the triangle's unit geometric normal
-    /// as the CPU tracer's `Hit::normal`).
-    pub fn reflections(
-        &self,
-        points: &[Vec3],
-        normals: &[Vec3],
-        rays: &RaySet,
-        opts: &ReflectOptions,
-    ) -> Result<(Vec<f32>, GpuTiming), GpuError> {
-        integrand::reflections(self, points, normals, rays, opts)
     }
 }
 

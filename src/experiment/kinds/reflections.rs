@@ -218,7 +218,7 @@ impl GpuQuantity for ReflectGpu {
         Ok(Box::new(KernelEval {
             kernel: FieldReflectKernel::new(ctx, &fields.instances, opts)?,
             opts: self.0.clone(),
-            run: |k, at, rays, o| k.reflections(at.points, at.normals, rays, o),
+            run: |k, at, rays, o| crate::gpu::reflections(k, at.points, at.normals, rays, o),
             setup: FieldReflectKernel::setup_time,
             place: FieldReflectKernel::place,
         }))

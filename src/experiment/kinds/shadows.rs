@@ -179,7 +179,7 @@ impl GpuQuantity for ShadowGpu {
         Ok(Box::new(KernelEval {
             kernel: FieldShadowKernel::new(ctx, &fields.instances, opts)?,
             opts: self.0.clone(),
-            run: |k, at, rays, o| k.light_fractions(at.points, at.normals, rays, o),
+            run: |k, at, rays, o| crate::gpu::shadows(k, at.points, at.normals, rays, o),
             setup: FieldShadowKernel::setup_time,
             place: FieldShadowKernel::place,
         }))

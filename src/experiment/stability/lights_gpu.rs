@@ -47,13 +47,13 @@ pub fn gpu_rows(ctx: &crate::gpu::GpuContext) -> crate::experiment::Result<Vec<S
             Vec3::new(0.0, 0.0, d_o as f32),
         );
         let t = GpuTracer::new(ctx, &cover).map_err(gpu)?;
-        let (v, _) = t.shadows(&p, &n, &rays, &o).map_err(gpu)?;
+        let (v, _) = crate::gpu::shadows(&t, &p, &n, &rays, &o).map_err(gpu)?;
         covered = max2(covered, v.iter().map(|&x| x as f64).max_of());
         // Partly: radius 0.6 α, 0.5 α off the axis; the point light's ray passes beside it.
         let off = Vec3::new((0.5 * s * d_o) as f32, 0.0, d_o as f32);
         let part = icosphere(4, (0.6 * s.max(1e-7) * d_o) as f32, off);
         let t = GpuTracer::new(ctx, &part).map_err(gpu)?;
-        let (g, _) = t.shadows(&p, &n, &rays, &o).map_err(gpu)?;
+        let (g, _) = crate::gpu::shadows(&t, &p, &n, &rays, &o).map_err(gpu)?;
         let c = shadow_at_points(&Tracer::new(&part), &p, &n, &rays, &o);
         parity = max2(parity, max_diff(&g, &c));
     }
@@ -69,7 +69,7 @@ pub fn gpu_rows(ctx: &crate::gpu::GpuContext) -> crate::experiment::Result<Vec<S
     let kernel = FieldShadowKernel::new(ctx, &[inst], &FieldGpuOptions::default()).map_err(gpu)?;
     let mut field_parity = 0.0f64;
     for (o, pts, nrm) in super::lights::grazing_lights(&b) {
-        let (g, _) = kernel.light_fractions(&pts, &nrm, &rays, &o).map_err(gpu)?;
+        let (g, _) = crate::gpu::shadows(&kernel, &pts, &nrm, &rays, &o).map_err(gpu)?;
         let c = shadow_at_points(&fs, &pts, &nrm, &rays, &o);
         field_parity = max2(field_parity, max_diff(&g, &c));
     }
