@@ -267,8 +267,9 @@ pub fn gpu_twins(order: &[&str]) -> Vec<(&'static str, &'static str)> {
 /// The forms among `names` on `backend` (in that order) that this build runs and `on` builds:
 /// those that read the field where it has one, the others where it has none.
 fn named(names: &[&str], backend: Backend, on: &MoverInputs) -> Vec<(FrameForm, Arc<dyn Method>)> {
+    let forms = frame_forms();
     (names.iter())
-        .filter_map(|n| form(n))
+        .filter_map(|n| forms.iter().find(|(f, _)| f.name == *n).cloned())
         .filter(|(f, m)| {
             f.backend == backend
                 && f.reads_field == on.fields.is_some()
