@@ -1,4 +1,4 @@
-//! The moving scenes' GPU rows beside their CPU twins (README and docs/results.md): each
+//! The moving scenes' GPU rows beside their CPU twins (docs/results.md): each
 //! per-frame method's mean update and query per frame in the GPU crowds (per pixel and per
 //! vertex) and the animated 2008 Figure 8, and how far each GPU twin's answers are from its CPU
 //! twin's.
@@ -71,7 +71,6 @@ pub fn gpu_moving(c: &mut Claims) {
     let from =
         "results/{dynamic2010_crowd_gpu,dynamic2008_crowd_gpu,dynamic2008_figure8}/frames.csv";
     c.quotes("docs/results.md", &table, from);
-    c.quotes("README.md", &table, from);
     // Each GPU twin against its CPU method, frame by frame and cell by cell.
     let (mut d_rms, mut d_mean, mut pairs) = (0.0f64, 0.0f64, 0);
     for rows in &runs {
