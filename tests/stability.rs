@@ -81,10 +81,9 @@ fn unrebased_translation_fails_the_tolerance() {
 #[test]
 fn position_aware_offset_removes_self_intersection() {
     use visfield::experiment::stability::scale::translated_raycast_difference;
-    use visfield::experiment::stability::scene_ao::scene_bounds;
     use visfield::render::ao::{scene_epsilon, scene_epsilon_for};
     let sc = visfield::experiment::stability::scale::unrebased(1e4);
-    let b = scene_bounds(&sc);
+    let b = sc.bounding_sphere();
     let old = translated_raycast_difference(scene_epsilon(b.radius));
     let new = translated_raycast_difference(scene_epsilon_for(b));
     println!("translation 1e4: max AO difference {old} with 1e-4 R, {new} position-aware");
@@ -98,5 +97,5 @@ fn rows_fail_above_tolerance_and_on_nan() {
     assert!(StabilityRow::new("c", "q", 1.0, 1.0).pass);
     assert!(!StabilityRow::new("c", "q", 1.0 + 1e-12, 1.0).pass);
     assert!(!StabilityRow::new("c", "q", f64::NAN, 1.0).pass);
-    assert!(stability::max_of_for_tests(&[0.5, f64::NAN]).is_nan());
+    assert!(stability::max_of([0.5, f64::NAN]).is_nan());
 }

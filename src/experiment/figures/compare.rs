@@ -11,12 +11,12 @@
 //! where the run has them. Panels hold at most [`MAX_SERIES`](crate::experiment::plot::MAX_SERIES)
 //! series and share their axes.
 
-use super::facet::viridis;
-use super::facet::{front, pack, styled, Family, Group};
+use super::facet::{front, one_or_pack, pack, viridis, Family, Group};
 use super::labels::Devices;
-use super::{key, MethodRow, Metric, RunData};
+use super::{key_suffix, MethodRow, Metric, RunData};
 use crate::experiment::outputs::SweepRow;
-use crate::experiment::plot::{Axes, Figure, HLine, Marker, Panel, Series, Style, Styled};
+use crate::experiment::plot::{distinct, sorted_distinct, Axes, Figure, HLine, Marker, Panel};
+use crate::experiment::plot::{Series, Style, Styled};
 use crate::experiment::spec::Backend;
 use crate::experiment::table::Row;
 
@@ -38,7 +38,7 @@ pub fn pareto(run: &RunData) -> Figure {
         let on = |b: Backend| rows.iter().copied().filter(move |r| r.backend == b);
         let ray_cast = |b: Backend, shade: usize| {
             raycast_series(&run.sweep, sc, b, metric, |s| s.raycast_s, &devices)
-                .map(|s| styled(s, Family::RayCast.style(shade, 0)))
+                .map(|s| s.styled(Family::RayCast.style(shade, 0)))
         };
         // The field's points of one backend: each cell at the run's rays and at the field
         // sweep's.
@@ -59,14 +59,7 @@ pub fn pareto(run: &RunData) -> Figure {
         };
         let field_front = |b: Backend, label: String, shade: usize| {
             let pts: Vec<(f64, f64)> = on(b).flat_map(cell_points).collect();
-            styled(
-                Series {
-                    label,
-                    points: front(&pts),
-                    line: true,
-                },
-                Family::Field.style(shade, 0),
-            )
+            Series::line(label, front(&pts)).styled(Family::Field.style(shade, 0))
         };
         let cpu_front = field_front(first, "field: best settings (Pareto front)".into(), 0);
         let rc = ray_cast(first, 0);
@@ -77,19 +70,11 @@ pub fn pareto(run: &RunData) -> Figure {
         // The overview: each family's front.
         panels.extend(overview(&families, &context, &prefix));
         // The field's settings, by positional count.
-        let mut counts: Vec<usize> = on(first).map(|r| r.positional_samples).collect();
-        counts.dedup();
-        counts.sort_unstable();
-        counts.dedup();
+        let counts = sorted_distinct(on(first).map(|r| r.positional_samples));
         let all_res = res_ranks(&run.rows);
         // The settings other than the resolution (normal bits, precision, …), each a variant.
-        let mut others: Vec<String> = Vec::new();
-        for r in on(first) {
-            let o = key(&run.rows, r, &["scene", "res", "backend"]);
-            if !others.contains(&o) {
-                others.push(o);
-            }
-        }
+        let other = |r: &Row| key_suffix(&run.rows, r, &["scene", "res", "backend"]);
+        let others = distinct(on(first).map(other));
         let groups: Vec<Group> = counts
             .iter()
             .map(|&c| Group {
@@ -97,65 +82,30 @@ pub fn pareto(run: &RunData) -> Figure {
                 series: on(first)
                     .filter(|r| r.positional_samples == c)
                     .map(|r| {
-                        let mut rays: Vec<u32> = vec![r.rays_per_point];
-                        if metric == Metric::Truth {
-                            rays.extend(
-                                run.field_sweep
-                                    .iter()
-                                    .filter(|f| f.cell == r.cell)
-                                    .map(|f| f.rays_per_point),
-                            );
-                        }
-                        rays.sort_unstable();
-                        rays.dedup();
-                        let rays: Vec<String> = rays.iter().map(u32::to_string).collect();
-                        let other = key(&run.rows, r, &["scene", "res", "backend"]);
+                        let swept = run.field_sweep.iter().filter(|f| f.cell == r.cell);
+                        let swept = swept.filter(|_| metric == Metric::Truth);
+                        let rays = std::iter::once(r.rays_per_point)
+                            .chain(swept.map(|f| f.rays_per_point));
+                        let rays: Vec<String> =
+                            sorted_distinct(rays).iter().map(u32::to_string).collect();
+                        let other = other(r);
                         let variant = others.iter().position(|o| o == &other).unwrap_or(0);
-                        let other = if other == "field" {
-                            String::new()
-                        } else {
-                            format!(" {other}")
-                        };
                         let base =
                             Style::new(viridis(all_res.rank(r.directional_res)), Marker::Circle);
-                        styled(
-                            Series {
-                                label: format!(
-                                    "field {}×{}²{other} ({} rays)",
-                                    r.positional_samples,
-                                    r.directional_res,
-                                    rays.join("/")
-                                ),
-                                points: cell_points(r),
-                                line: true,
-                            },
-                            variant_style(base, variant),
-                        )
+                        let label = format!(
+                            "field {}×{}²{other} ({} rays)",
+                            r.positional_samples,
+                            r.directional_res,
+                            rays.join("/")
+                        );
+                        Series::line(label, cell_points(r)).styled(variant_style(base, variant))
                     })
                     .collect(),
             })
             .collect();
-        let fields_in_one = groups.iter().map(|g| g.series.len()).sum::<usize>()
-            + rc.iter().count()
-            <= crate::experiment::plot::MAX_SERIES;
-        if fields_in_one {
-            let series = rc
-                .iter()
-                .cloned()
-                .chain(groups.into_iter().flat_map(|g| g.series))
-                .collect();
-            panels.push(Panel {
-                title: format!("{prefix}visibility field ({})", devices.name(first)),
-                series,
-                hlines: Vec::new(),
-            });
-        } else {
-            panels.extend(pack(
-                groups,
-                &rc.iter().cloned().collect::<Vec<_>>(),
-                &prefix,
-            ));
-        }
+        let title = format!("{prefix}visibility field ({})", devices.name(first));
+        let rcs: Vec<Styled> = rc.iter().cloned().collect();
+        panels.extend(one_or_pack(groups, &rcs, title, &prefix));
         // The methods, beside ray casting and the field's front.
         panels.extend(method_panels(&families, &context, &prefix));
         // The GPU rows.
@@ -178,11 +128,10 @@ pub fn pareto(run: &RunData) -> Figure {
                     ..f
                 });
             }
-            panels.push(Panel {
-                title: format!("{prefix}GPU kernels on {g}, beside the CPU's"),
-                series: s,
-                hlines: Vec::new(),
-            });
+            panels.push(Panel::new(
+                format!("{prefix}GPU kernels on {g}, beside the CPU's"),
+                s,
+            ));
         }
     }
     add_floor(&mut panels, run, metric);
@@ -224,21 +173,10 @@ pub fn bytes(run: &RunData) -> Figure {
         let at = |r: &Row| metric.row(r).map(|y| (r.field_bytes as f64 / MB, y));
         // The field: a line over the directional resolution per other setting.
         let field_key = |r: &Row| {
-            let other = key(&run.rows, r, &["scene", "res", "backend"]);
-            let other = if other == "field" {
-                String::new()
-            } else {
-                format!(" {other}")
-            };
+            let other = key_suffix(&run.rows, r, &["scene", "res", "backend"]);
             format!("{} maps{other}", r.positional_samples)
         };
-        let mut keys: Vec<String> = Vec::new();
-        for r in &fields {
-            let k = field_key(r);
-            if !keys.contains(&k) {
-                keys.push(k);
-            }
-        }
+        let keys = distinct(fields.iter().map(|r| field_key(r)));
         let field_series: Vec<Styled> = keys
             .iter()
             .enumerate()
@@ -249,28 +187,15 @@ pub fn bytes(run: &RunData) -> Figure {
                     .map(|r| r.directional_res.to_string())
                     .collect();
                 res.dedup();
-                styled(
-                    Series {
-                        label: format!("field {k} ({}²)", res.join("/")),
-                        points: these.iter().filter_map(|r| at(r)).collect(),
-                        line: true,
-                    },
-                    Style::new(
-                        viridis(i as f64 / (keys.len().max(2) - 1) as f64),
-                        Marker::Circle,
-                    ),
-                )
+                let label = format!("field {k} ({}²)", res.join("/"));
+                let color = viridis(i as f64 / (keys.len().max(2) - 1) as f64);
+                Series::line(label, these.iter().filter_map(|r| at(r)).collect())
+                    .styled(Style::new(color, Marker::Circle))
             })
             .collect();
         let all: Vec<(f64, f64)> = fields.iter().filter_map(|r| at(r)).collect();
-        let field_front = styled(
-            Series {
-                label: "field: best settings (Pareto front)".into(),
-                points: front(&all),
-                line: true,
-            },
-            Family::Field.style(0, 0),
-        );
+        let field_front = Series::line("field: best settings (Pareto front)", front(&all))
+            .styled(Family::Field.style(0, 0));
         // Ray casting at its BVH's bytes.
         let bvh = run
             .methods
@@ -281,7 +206,7 @@ pub fn bytes(run: &RunData) -> Figure {
             raycast_series(&run.sweep, sc, Backend::Cpu, metric, |_| b / MB, &devices).map(
                 |mut s| {
                     s.label = format!("{} at its BVH's {:.1} MB", s.label, b / MB);
-                    styled(s, Family::RayCast.style(0, 0))
+                    s.styled(Family::RayCast.style(0, 0))
                 },
             )
         });
@@ -304,16 +229,12 @@ pub fn bytes(run: &RunData) -> Figure {
             &prefix,
         ));
         panels.extend(method_panels(&families, &context, &prefix));
-        let mut without: Vec<&str> = Vec::new();
-        for m in run
-            .methods
-            .iter()
-            .filter(|m| &m.scene == sc && m.bytes.is_none())
-        {
-            if !without.contains(&m.method.as_str()) {
-                without.push(&m.method);
-            }
-        }
+        let without = distinct(
+            run.methods
+                .iter()
+                .filter(|m| &m.scene == sc && m.bytes.is_none())
+                .map(|m| m.method.as_str()),
+        );
         if !without.is_empty() {
             notes.push(format!(
                 "{prefix}not on this plot (no bytes recorded): {}",
@@ -347,11 +268,7 @@ fn overview(families: &[FamilyGroup], context: &[Styled], prefix: &str) -> Optio
     } else {
         "every method at its best settings"
     };
-    Some(Panel {
-        title: format!("{prefix}{title}"),
-        series,
-        hlines: Vec::new(),
-    })
+    Some(Panel::new(format!("{prefix}{title}"), series))
 }
 
 /// The families' panels beside `context`; none where every family is one series (the
@@ -421,18 +338,14 @@ fn raycast_series(
         return None;
     }
     let counts: Vec<String> = these.iter().map(|s| s.rays_per_point.to_string()).collect();
-    Some(Series {
-        label: format!("ray cast, {} ({} rays)", devices.name(b), counts.join("/")),
-        points,
-        line: true,
-    })
+    let label = format!("ray cast, {} ({} rays)", devices.name(b), counts.join("/"));
+    Some(Series::line(label, points))
 }
 
 /// One method family of a scene: its series (one per setting other than `res`, a line over
 /// `res`) and its overview series (its front).
 #[derive(Clone, Debug)]
 pub struct FamilyGroup {
-    pub family: Family,
     pub group: Group,
     pub overview: Styled,
 }
@@ -451,12 +364,7 @@ pub fn method_groups(
         .iter()
         .filter(|m| m.scene == sc && matches!(m.backend.as_str(), "" | "cpu"))
         .collect();
-    let mut names: Vec<&str> = Vec::new();
-    for m in &rows {
-        if !names.contains(&m.method.as_str()) {
-            names.push(&m.method);
-        }
-    }
+    let names = distinct(rows.iter().map(|m| m.method.as_str()));
     let mut others = Vec::new();
     let mut out = Vec::new();
     let mut notes = Vec::new();
@@ -484,13 +392,7 @@ pub fn method_groups(
                 .map(|p| m.param(p).unwrap_or("").to_string())
                 .collect()
         };
-        let mut variants: Vec<Vec<String>> = Vec::new();
-        for m in &these {
-            let k = variant_key(m);
-            if !variants.contains(&k) {
-                variants.push(k);
-            }
-        }
+        let variants = distinct(these.iter().map(|m| variant_key(m)));
         let precision_at = varying.iter().position(|p| p == "precision");
         let rest = |k: &Vec<String>| -> Vec<String> {
             k.iter()
@@ -499,12 +401,7 @@ pub fn method_groups(
                 .map(|(_, v)| v.clone())
                 .collect()
         };
-        let mut rests: Vec<Vec<String>> = Vec::new();
-        for k in &variants {
-            if !rests.contains(&rest(k)) {
-                rests.push(rest(k));
-            }
-        }
+        let rests = distinct(variants.iter().map(rest));
         let mut dropped: Vec<&str> = Vec::new();
         let mut series = Vec::new();
         let mut all: Vec<(f64, f64)> = Vec::new();
@@ -537,10 +434,8 @@ pub fn method_groups(
                 label.push(' ');
                 label.push_str(v);
             }
-            if res.len() > 1 {
+            if !res.is_empty() {
                 label.push_str(&format!(" (res {})", res.join("/")));
-            } else if let Some(r) = res.first() {
-                label.push_str(&format!(" (res {r})"));
             }
             let shade = precision_at.map_or(0, |i| precision_rank(&k[i]));
             let variant = rests.iter().position(|r| r == &rest(k)).unwrap_or(0);
@@ -550,14 +445,7 @@ pub fn method_groups(
                 Family::RayCast => family.style(1, 3),
                 _ => family.style(shade, variant),
             };
-            series.push(styled(
-                Series {
-                    label,
-                    points,
-                    line: true,
-                },
-                style,
-            ));
+            series.push(Series::line(label, points).styled(style));
         }
         if !dropped.is_empty() {
             notes.push(format!(
@@ -571,17 +459,10 @@ pub fn method_groups(
         let overview = if series.len() == 1 {
             series[0].clone()
         } else {
-            styled(
-                Series {
-                    label: format!("{name}: best settings (Pareto front)"),
-                    points: front(&all),
-                    line: true,
-                },
-                family.style(0, 0),
-            )
+            let label = format!("{name}: best settings (Pareto front)");
+            Series::line(label, front(&all)).styled(family.style(0, 0))
         };
         out.push(FamilyGroup {
-            family,
             group: Group {
                 title: name.to_string(),
                 series,
@@ -624,8 +505,5 @@ impl ResRanks {
 }
 
 pub fn res_ranks(rows: &[Row]) -> ResRanks {
-    let mut v: Vec<u32> = rows.iter().map(|r| r.directional_res).collect();
-    v.sort_unstable();
-    v.dedup();
-    ResRanks(v)
+    ResRanks(sorted_distinct(rows.iter().map(|r| r.directional_res)))
 }

@@ -2,7 +2,7 @@
 //! comparison's families (the field, ray casting, each method: one colour and one marker
 //! each, variants in shades and dashes) and the Pareto front of a set of points.
 
-use crate::experiment::plot::{Marker, Panel, Series, Style, Styled, MAX_SERIES};
+use crate::experiment::plot::{Marker, Panel, Style, Styled, MAX_SERIES};
 use plotters::style::RGBColor;
 
 /// Series that belong in one panel (a family, a positional count), under a title.
@@ -47,13 +47,26 @@ pub fn pack(groups: Vec<Group>, context: &[Styled], prefix: &str) -> Vec<Panel> 
             let titles: Vec<&str> = b.iter().map(|g| g.title.as_str()).collect();
             let mut series = context.to_vec();
             series.extend(b.iter().flat_map(|g| g.series.iter().cloned()));
-            Panel {
-                title: format!("{prefix}{}", titles.join(", ")),
-                series,
-                hlines: Vec::new(),
-            }
+            Panel::new(format!("{prefix}{}", titles.join(", ")), series)
         })
         .collect()
+}
+
+/// One panel titled `title` of `context` and every group where they fit in [`MAX_SERIES`],
+/// else the groups [`pack`]ed beside `context`.
+pub fn one_or_pack(
+    groups: Vec<Group>,
+    context: &[Styled],
+    title: String,
+    prefix: &str,
+) -> Vec<Panel> {
+    let total: usize = context.len() + groups.iter().map(|g| g.series.len()).sum::<usize>();
+    if total > MAX_SERIES {
+        return pack(groups, context, prefix);
+    }
+    let mut series = context.to_vec();
+    series.extend(groups.into_iter().flat_map(|g| g.series));
+    vec![Panel::new(title, series)]
 }
 
 /// The points no other point beats in both coordinates (smaller is better in each), sorted
@@ -109,52 +122,27 @@ impl Family {
 
     /// Three shades, dark to light, and the marker.
     fn look(self) -> ([RGBColor; 3], Marker) {
-        match self {
+        let (shades, marker) = match self {
             Family::Field => (
-                [
-                    RGBColor(8, 69, 148),
-                    RGBColor(49, 130, 189),
-                    RGBColor(107, 174, 214),
-                ],
+                [(8, 69, 148), (49, 130, 189), (107, 174, 214)],
                 Marker::Circle,
             ),
-            Family::RayCast => (
-                [
-                    RGBColor(0, 0, 0),
-                    RGBColor(96, 96, 96),
-                    RGBColor(160, 160, 160),
-                ],
-                Marker::Square,
-            ),
+            Family::RayCast => ([(0, 0, 0), (96, 96, 96), (160, 160, 160)], Marker::Square),
             Family::Embree => (
-                [
-                    RGBColor(140, 81, 10),
-                    RGBColor(200, 120, 30),
-                    RGBColor(230, 180, 100),
-                ],
+                [(140, 81, 10), (200, 120, 30), (230, 180, 100)],
                 Marker::Diamond,
             ),
-            Family::Sdf => (
-                [
-                    RGBColor(0, 109, 44),
-                    RGBColor(49, 163, 84),
-                    RGBColor(120, 198, 121),
-                ],
-                Marker::Up,
-            ),
+            Family::Sdf => ([(0, 109, 44), (49, 163, 84), (120, 198, 121)], Marker::Up),
             Family::AoField => (
-                [
-                    RGBColor(84, 39, 143),
-                    RGBColor(128, 100, 190),
-                    RGBColor(180, 160, 220),
-                ],
+                [(84, 39, 143), (128, 100, 190), (180, 160, 220)],
                 Marker::Cross,
             ),
             Family::Other(i) => {
                 let c = Style::palette(i + 5).color;
-                ([c, c, c], Marker::Down)
+                ([(c.0, c.1, c.2); 3], Marker::Down)
             }
-        }
+        };
+        (shades.map(|(r, g, b)| RGBColor(r, g, b)), marker)
     }
 
     /// The style of a variant: `shade` (0 darkest; 3 and more cycle) and `variant` (0: filled
@@ -183,24 +171,13 @@ pub fn viridis(t: f64) -> RGBColor {
     RGBColor(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
 }
 
-/// `series` in `style`.
-pub fn styled(series: Series, style: Style) -> Styled {
-    Styled { series, style }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::experiment::plot::Series;
 
     fn s(label: &str) -> Styled {
-        styled(
-            Series {
-                label: label.into(),
-                points: vec![(1.0, 1.0)],
-                line: false,
-            },
-            Style::palette(0),
-        )
+        Series::scatter(label, vec![(1.0, 1.0)]).styled(Style::palette(0))
     }
 
     fn group(title: &str, n: usize) -> Group {

@@ -13,8 +13,9 @@
 //! parity). Images wider than [`GRID_CELL_MAX`] are shown reduced by an integer factor.
 
 use super::labels::Devices;
-use super::{key, metric, RunData, AXES};
-use crate::experiment::plot::{labelled_grid, Grid, GridBlock, GridCell, RgbImage};
+use super::{key_suffix, metric, RunData, AXES};
+use crate::experiment::plot::{distinct, labelled_grid, sorted_distinct, Grid, GridBlock};
+use crate::experiment::plot::{GridCell, RgbImage};
 use crate::experiment::spec::Backend;
 use crate::experiment::table::Row;
 use crate::experiment::{Error, Result};
@@ -163,38 +164,18 @@ pub fn grids(out: &Path, run: &RunData) -> Result<()> {
         .rev()
         .copied()
         .filter(|(n, _)| *n != "backend")
-        .max_by_key(|(_, f)| {
-            let mut v: Vec<String> = owned.iter().map(f).collect();
-            v.sort();
-            v.dedup();
-            v.len()
-        })
+        .max_by_key(|(_, f)| sorted_distinct(owned.iter().map(f)).len())
         .expect("axes");
-    let mut columns: Vec<String> = Vec::new();
-    for r in &owned {
-        let v = col_fn(r);
-        if !columns.contains(&v) {
-            columns.push(v);
-        }
-    }
+    let columns = distinct(owned.iter().map(col_fn));
     // Shaded images where every shown cell and the references have them.
     let shaded = owned
         .iter()
         .all(|r| out.join(r.image.replace(".png", "-shaded.png")).exists());
-    let backends: Vec<Backend> = {
-        let mut b: Vec<Backend> = rows.iter().map(|r| r.backend).collect();
-        b.sort();
-        b.dedup();
-        b
-    };
+    let backends = sorted_distinct(rows.iter().map(|r| r.backend));
     let q = run.quantity();
     let row_key = |r: &Row| {
-        let other = key(&owned, r, &[col_name, "scene", "backend"]);
-        if other == "field" {
-            format!("{} maps", r.positional_samples)
-        } else {
-            format!("{} maps {other}", r.positional_samples)
-        }
+        let other = key_suffix(&owned, r, &[col_name, "scene", "backend"]);
+        format!("{} maps{other}", r.positional_samples)
     };
     let mut images = Grid {
         title: run.title.clone(),
@@ -229,13 +210,7 @@ pub fn grids(out: &Path, run: &RunData) -> Result<()> {
         };
         tinted |= coverage.is_some();
         let pic = |p: &Path| -> Result<RgbImage> { Ok(Picture::load(p)?.rgb(coverage.as_ref())) };
-        let mut groups: Vec<String> = Vec::new();
-        for r in &in_scene {
-            let k = row_key(r);
-            if !groups.contains(&k) {
-                groups.push(k);
-            }
-        }
+        let groups = distinct(in_scene.iter().map(|r| row_key(r)));
         // The references: ray cast, then a second one (reflections' mirror) where written.
         let mut refs: Vec<GridCell> = Vec::new();
         let rc = run
@@ -264,23 +239,22 @@ pub fn grids(out: &Path, run: &RunData) -> Result<()> {
                 });
             }
         }
+        let heads = |first: &str| {
+            let heads = columns.iter().map(|c| head(col_name, c));
+            std::iter::once(first.to_string()).chain(heads).collect()
+        };
         let mut block = GridBlock {
             title: if run.scenes().len() > 1 {
                 sc.to_string()
             } else {
                 String::new()
             },
-            col_heads: std::iter::once("reference".to_string())
-                .chain(columns.iter().map(|c| head(col_name, c)))
-                .collect(),
+            col_heads: heads("reference"),
             row_heads: groups.clone(),
             rows: Vec::new(),
         };
         let mut dblock = GridBlock {
-            rows: Vec::new(),
-            col_heads: std::iter::once(String::new())
-                .chain(columns.iter().map(|c| head(col_name, c)))
-                .collect(),
+            col_heads: heads(""),
             ..block.clone()
         };
         for (gi, g) in groups.iter().enumerate() {
@@ -339,12 +313,10 @@ pub fn grids(out: &Path, run: &RunData) -> Result<()> {
         diffs.blocks.push(dblock);
     }
     if tinted {
-        images
-            .notes
-            .push("pale blue: no surface (empty space)".to_string());
-        diffs
-            .notes
-            .push("pale blue: no surface (empty space)".to_string());
+        for g in [&mut images, &mut diffs] {
+            g.notes
+                .push("pale blue: no surface (empty space)".to_string());
+        }
     }
     labelled_grid(&out.join("images.png"), &images)?;
     labelled_grid(&out.join("differences.png"), &diffs)

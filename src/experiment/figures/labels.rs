@@ -2,7 +2,7 @@
 //! it is), the quantity a kind estimates (so a shadow plot never reads "AO time"), and series
 //! of several devices that coincide (GPU parity), drawn once.
 
-use crate::experiment::plot::Series;
+use crate::experiment::plot::{distinct, Series};
 use crate::experiment::spec::Backend;
 use crate::experiment::table::Row;
 
@@ -56,41 +56,26 @@ pub type DevicePart = (String, String, Vec<(f64, f64)>);
 /// several devices and "KEY" where it has one. Keys keep their first order; each series comes
 /// with its key.
 pub fn merge_devices(parts: &[DevicePart], line: bool) -> Vec<(String, Series)> {
-    let mut keys: Vec<&str> = Vec::new();
-    for (k, _, _) in parts {
-        if !keys.contains(&k.as_str()) {
-            keys.push(k);
-        }
-    }
+    let series = |label: String, points: &Vec<(f64, f64)>| Series {
+        label,
+        points: points.clone(),
+        line,
+    };
     let mut out = Vec::new();
-    for k in keys {
+    for k in distinct(parts.iter().map(|(k, _, _)| k.as_str())) {
         let these: Vec<&DevicePart> = parts.iter().filter(|(key, _, _)| key == k).collect();
         if these.len() == 1 {
-            let s = Series {
-                label: k.to_string(),
-                points: these[0].2.clone(),
-                line,
-            };
-            out.push((k.to_string(), s));
-            continue;
-        }
-        if these[1..].iter().all(|p| coincide(&these[0].2, &p.2)) {
+            out.push((k.to_string(), series(k.to_string(), &these[0].2)));
+        } else if these[1..].iter().all(|p| coincide(&these[0].2, &p.2)) {
             let devices: Vec<&str> = these.iter().map(|p| p.1.as_str()).collect();
-            let s = Series {
-                label: format!("{k} ({})", devices.join(" = ")),
-                points: these[0].2.clone(),
-                line,
-            };
-            out.push((k.to_string(), s));
+            let label = format!("{k} ({})", devices.join(" = "));
+            out.push((k.to_string(), series(label, &these[0].2)));
         } else {
-            out.extend(these.iter().map(|(_, d, pts)| {
-                let s = Series {
-                    label: format!("{k}, {d}"),
-                    points: pts.clone(),
-                    line,
-                };
-                (k.to_string(), s)
-            }));
+            out.extend(
+                these
+                    .iter()
+                    .map(|(_, d, pts)| (k.to_string(), series(format!("{k}, {d}"), pts))),
+            );
         }
     }
     out

@@ -37,7 +37,7 @@ use super::cells::selection_name;
 use super::columns::NamedRow;
 use super::outputs::{read_csv, FieldSweepRow, SweepRow};
 use super::paper::PaperRow;
-use super::plot::{figure_plot, Axes, Figure, Panel, Series, Style, Styled};
+use super::plot::{distinct, figure_plot, sorted_distinct, Axes, Figure, Panel, Series, Style};
 use super::spec::Backend;
 use super::table::Row;
 use super::{Error, Result};
@@ -97,13 +97,7 @@ impl RunData {
 
     /// The scenes in row order.
     pub fn scenes(&self) -> Vec<&str> {
-        let mut out: Vec<&str> = Vec::new();
-        for r in &self.rows {
-            if !out.contains(&r.scene.as_str()) {
-                out.push(&r.scene);
-            }
-        }
-        out
+        distinct(self.rows.iter().map(|r| r.scene.as_str()))
     }
 
     /// What the run's kind estimates, as an axis names it ([`Quantity::label`]).
@@ -190,28 +184,25 @@ impl Metric {
         }
     }
 
-    pub fn row(self, r: &Row) -> Option<f64> {
+    /// The one of a row's (truth, image, vertex) errors this metric is.
+    fn pick(self, (truth, image, vertex): (Option<f64>, Option<f64>, Option<f64>)) -> Option<f64> {
         match self {
-            Metric::Truth => r.rms_vs_truth,
-            Metric::Image => r.rms_image,
-            Metric::Vertex => r.rms_vertex,
+            Metric::Truth => truth,
+            Metric::Image => image,
+            Metric::Vertex => vertex,
         }
+    }
+
+    pub fn row(self, r: &Row) -> Option<f64> {
+        self.pick((r.rms_vs_truth, r.rms_image, r.rms_vertex))
     }
 
     pub fn sweep(self, s: &SweepRow) -> Option<f64> {
-        match self {
-            Metric::Truth => s.rms_vs_truth,
-            Metric::Image => s.rms_image,
-            Metric::Vertex => s.rms_vertex,
-        }
+        self.pick((s.rms_vs_truth, s.rms_image, s.rms_vertex))
     }
 
     pub fn method(self, m: &MethodRow) -> Option<f64> {
-        match self {
-            Metric::Truth => m.rms_vs_truth,
-            Metric::Image => m.rms_image,
-            Metric::Vertex => m.rms_vertex,
-        }
+        self.pick((m.rms_vs_truth, m.rms_image, m.rms_vertex))
     }
 
     pub fn label(self) -> &'static str {
@@ -274,6 +265,14 @@ fn key(rows: &[Row], r: &Row, skip: &[&str]) -> String {
     }
 }
 
+/// [`key`] as " KEY", to follow another label; empty where no axis varies.
+fn key_suffix(rows: &[Row], r: &Row, skip: &[&str]) -> String {
+    match key(rows, r, skip) {
+        k if k == "field" => String::new(),
+        k => format!(" {k}"),
+    }
+}
+
 /// Every figure of a run, by file name (without drawing them).
 pub fn figures(run: &RunData) -> Vec<(&'static str, Figure)> {
     let mut out = vec![("rms_vs_positional.png", positional::figure(run))];
@@ -299,17 +298,12 @@ pub fn draw_all(out: &Path, title: &str) -> Result<()> {
 /// have casters of two sizes at least; points only (each x is another model, not a curve).
 fn times(run: &RunData) -> Option<Figure> {
     let rows = &run.rows;
-    let mut tris: Vec<usize> = rows.iter().map(|r| r.caster_triangles).collect();
-    tris.sort_unstable();
-    tris.dedup();
-    if tris.len() < 2 {
+    if sorted_distinct(rows.iter().map(|r| r.caster_triangles)).len() < 2 {
         return None;
     }
     let devices = Devices::of(rows);
     let scenes = run.scenes();
-    let mut backends: Vec<Backend> = rows.iter().map(|r| r.backend).collect();
-    backends.sort();
-    backends.dedup();
+    let backends = sorted_distinct(rows.iter().map(|r| r.backend));
     // Per backend, the first row of each scene.
     let first = |b: Backend| -> Vec<&Row> {
         scenes
@@ -322,14 +316,8 @@ fn times(run: &RunData) -> Option<Figure> {
             .filter_map(|r| f(r).map(|y| (r.caster_triangles as f64, y)))
             .collect()
     };
-    let point = |label: String, points, i: usize| Styled {
-        series: Series {
-            label,
-            points,
-            line: false,
-        },
-        style: Style::palette(i),
-    };
+    let point =
+        |label: String, points, i: usize| Series::scatter(label, points).styled(Style::palette(i));
     let q = run.quantity();
     let mut s = vec![point(
         "bake (preprocess)".into(),
@@ -358,11 +346,7 @@ fn times(run: &RunData) -> Option<Figure> {
             log_x: true,
             log_y: true,
         },
-        panels: vec![Panel {
-            title: String::new(),
-            series: s,
-            hlines: Vec::new(),
-        }],
+        panels: vec![Panel::new("", s)],
         notes: vec![format!(
             "scenes: {}",
             scenes

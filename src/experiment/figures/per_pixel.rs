@@ -10,27 +10,21 @@
 //!   series per scene and other varying axis, when the rows have it.
 
 use super::compare::res_ranks;
-use super::facet::{pack, styled, viridis, Family, Group};
+use super::facet::{one_or_pack, viridis, Family, Group};
 use super::labels::Devices;
 use super::{key, RunData};
-use crate::experiment::plot::{Axes, Figure, Marker, Panel, Series, Style, MAX_SERIES};
-use crate::experiment::spec::Backend;
+use crate::experiment::plot::{sorted_distinct, Axes, Figure, Marker, Panel, Series, Style};
 
 /// `time_vs_rays.png`, when `field_sweep.csv` has two ray counts or more.
 pub fn time_vs_rays(run: &RunData) -> Option<Figure> {
-    let mut counts: Vec<u32> = run.field_sweep.iter().map(|f| f.rays_per_point).collect();
-    counts.sort_unstable();
-    counts.dedup();
-    if counts.len() < 2 {
+    if sorted_distinct(run.field_sweep.iter().map(|f| f.rays_per_point)).len() < 2 {
         return None;
     }
     let rows = &run.rows;
     let devices = Devices::of(rows);
     let ranks = res_ranks(rows);
     let scenes = run.scenes();
-    let mut backends: Vec<Backend> = rows.iter().map(|r| r.backend).collect();
-    backends.sort();
-    backends.dedup();
+    let backends = sorted_distinct(rows.iter().map(|r| r.backend));
     let mut panels: Vec<Panel> = Vec::new();
     for &b in &backends {
         let d = devices.name(b);
@@ -51,14 +45,8 @@ pub fn time_vs_rays(run: &RunData) -> Option<Figure> {
                     String::new()
                 };
                 (!pts.is_empty()).then(|| {
-                    styled(
-                        Series {
-                            label: format!("ray cast{scene}, {d}"),
-                            points: pts,
-                            line: true,
-                        },
-                        Family::RayCast.style(0, 0),
-                    )
+                    Series::line(format!("ray cast{scene}, {d}"), pts)
+                        .styled(Family::RayCast.style(0, 0))
                 })
             })
             .collect();
@@ -76,14 +64,14 @@ pub fn time_vs_rays(run: &RunData) -> Option<Figure> {
             pts.sort_by(|a, b| a.0.total_cmp(&b.0));
             let varying = key(rows, r, &["backend"]);
             let title = format!("{d}, {} maps", r.positional_samples);
-            let s = styled(
-                Series {
-                    label: format!("field {} maps {varying}", r.positional_samples),
-                    points: pts,
-                    line: true,
-                },
-                Style::new(viridis(ranks.rank(r.directional_res)), Marker::Circle),
-            );
+            let s = Series::line(
+                format!("field {} maps {varying}", r.positional_samples),
+                pts,
+            )
+            .styled(Style::new(
+                viridis(ranks.rank(r.directional_res)),
+                Marker::Circle,
+            ));
             match groups.iter_mut().find(|g| g.title == title) {
                 Some(g) => g.series.push(s),
                 None => groups.push(Group {
@@ -92,18 +80,7 @@ pub fn time_vs_rays(run: &RunData) -> Option<Figure> {
                 }),
             }
         }
-        let total: usize = groups.iter().map(|g| g.series.len()).sum::<usize>() + context.len();
-        if total <= MAX_SERIES {
-            let mut series = context.clone();
-            series.extend(groups.into_iter().flat_map(|g| g.series));
-            panels.push(Panel {
-                title: d.to_string(),
-                series,
-                hlines: Vec::new(),
-            });
-        } else {
-            panels.extend(pack(groups, &context, ""));
-        }
+        panels.extend(one_or_pack(groups, &context, d.to_string(), ""));
     }
     let q = run.quantity();
     Some(Figure {
@@ -141,14 +118,7 @@ pub fn grain_vs_positional(run: &RunData) -> Option<Figure> {
             Some(s) => s.series.points.push(p),
             None => {
                 let n: usize = groups.iter().map(|g| g.series.len()).sum();
-                let s = styled(
-                    Series {
-                        label,
-                        points: vec![p],
-                        line: true,
-                    },
-                    Style::palette(n),
-                );
+                let s = Series::line(label, vec![p]).styled(Style::palette(n));
                 match groups.iter_mut().find(|g| g.title == r.scene) {
                     Some(g) => g.series.push(s),
                     None => groups.push(Group {
@@ -159,16 +129,7 @@ pub fn grain_vs_positional(run: &RunData) -> Option<Figure> {
             }
         }
     }
-    let total: usize = groups.iter().map(|g| g.series.len()).sum();
-    let panels = if total <= MAX_SERIES {
-        vec![Panel {
-            title: String::new(),
-            series: groups.into_iter().flat_map(|g| g.series).collect(),
-            hlines: Vec::new(),
-        }]
-    } else {
-        pack(groups, &[], "")
-    };
+    let panels = one_or_pack(groups, &[], String::new(), "");
     let notes = if rows.iter().any(|r| r.backend != first) {
         vec![format!(
             "{} rows (the other backends' images are the same to 1/255: GPU parity)",

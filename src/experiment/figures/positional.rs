@@ -3,18 +3,11 @@
 //! parity), and the paper's published values (`paper_vs_ours.csv`'s `paper_rms`, at the cell
 //! each names) on the same axes, outlined and dashed in the colour of ours.
 
-use super::facet::{pack, styled, Group};
+use super::facet::{pack, Group};
 use super::labels::{merge_devices, Devices};
 use super::{key, metric, RunData};
-use crate::experiment::plot::{Axes, Figure, Marker, Panel, Series, Style, MAX_SERIES};
+use crate::experiment::plot::{distinct, Axes, Figure, Marker, Panel, Series, Style, MAX_SERIES};
 use crate::experiment::table::Row;
-
-/// One key's series: its own line(s), then the paper's (`paper`: 1 or 0 of them).
-struct KeyGroup {
-    title: String,
-    series: Vec<crate::experiment::plot::Styled>,
-    paper: usize,
-}
 
 /// The figure (see the module's doc).
 pub fn figure(run: &RunData) -> Figure {
@@ -23,13 +16,7 @@ pub fn figure(run: &RunData) -> Figure {
     let scenes = run.scenes();
     let skip = ["backend", "scene"];
     // Every key in order, for a colour per key that is the same in every panel.
-    let mut keys: Vec<String> = Vec::new();
-    for r in &run.rows {
-        let k = key(&run.rows, r, &skip);
-        if !keys.contains(&k) {
-            keys.push(k);
-        }
-    }
+    let keys = distinct(run.rows.iter().map(|r| key(&run.rows, r, &skip)));
     let color = |k: &str| Style::palette(keys.iter().position(|o| o == k).unwrap_or(0)).color;
     let mut groups_by_scene: Vec<(String, Vec<Group>)> = Vec::new();
     let mut merged_any = false;
@@ -49,12 +36,13 @@ pub fn figure(run: &RunData) -> Figure {
         }
         let ours = merge_devices(&parts, true);
         merged_any |= ours.len() < parts.len();
-        let mut groups: Vec<KeyGroup> = Vec::new();
+        // Each key's group: its own line(s), then the paper's (the count: 1 or 0 of them).
+        let mut groups: Vec<(Group, usize)> = Vec::new();
         for (k, s) in ours {
-            let ours = styled(s, Style::new(color(&k), Marker::Circle));
+            let ours = s.styled(Style::new(color(&k), Marker::Circle));
             // A key's lines (one per device where they differ) and the paper's stay together.
-            if let Some(last) = groups.last_mut().filter(|l| l.title == k) {
-                last.series.insert(last.series.len() - last.paper, ours);
+            if let Some((last, paper)) = groups.last_mut().filter(|(l, _)| l.title == k) {
+                last.series.insert(last.series.len() - *paper, ours);
                 continue;
             }
             let mut g = vec![ours];
@@ -72,31 +60,17 @@ pub fn figure(run: &RunData) -> Figure {
             let has_paper = !paper.is_empty();
             if has_paper {
                 paper_any = true;
-                g.push(styled(
-                    Series {
-                        label: format!("paper: {k}"),
-                        points: paper,
-                        line: true,
-                    },
-                    Style::new(color(&k), Marker::Circle).hollow().dashed(),
-                ));
+                let style = Style::new(color(&k), Marker::Circle).hollow().dashed();
+                g.push(Series::line(format!("paper: {k}"), paper).styled(style));
             }
-            groups.push(KeyGroup {
+            let group = Group {
                 title: k,
                 series: g,
-                paper: has_paper as usize,
-            });
+            };
+            groups.push((group, has_paper as usize));
         }
-        groups_by_scene.push((
-            sc.to_string(),
-            groups
-                .into_iter()
-                .map(|g| Group {
-                    title: g.title,
-                    series: g.series,
-                })
-                .collect(),
-        ));
+        let groups = groups.into_iter().map(|(g, _)| g).collect();
+        groups_by_scene.push((sc.to_string(), groups));
     }
     let total: usize = groups_by_scene
         .iter()
@@ -116,11 +90,7 @@ pub fn figure(run: &RunData) -> Figure {
                 })
             })
             .collect();
-        vec![Panel {
-            title: String::new(),
-            series,
-            hlines: Vec::new(),
-        }]
+        vec![Panel::new("", series)]
     } else {
         // A panel per scene (more where a scene's lines do not fit one), titled by it.
         groups_by_scene

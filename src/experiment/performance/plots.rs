@@ -12,7 +12,8 @@
 use super::PerfRow;
 use crate::experiment::figures::facet::Family;
 use crate::experiment::outputs;
-use crate::experiment::plot::{figure_plot, Axes, Figure, Panel, Series, Style, Styled};
+use crate::experiment::plot::{distinct, figure_plot, sorted_distinct, Axes, Figure, Panel};
+use crate::experiment::plot::{Series, Style, Styled};
 use crate::experiment::Result;
 use serde::Deserialize;
 use std::path::Path;
@@ -73,13 +74,11 @@ fn style(backend: &str, i: usize) -> Style {
 
 /// The backends of a sweep, in order.
 fn backends<'a>(rows: &'a [PlotRow], sweep: &str) -> Vec<&'a str> {
-    let mut names: Vec<&str> = Vec::new();
-    for r in rows.iter().filter(|r| r.sweep == sweep) {
-        if !names.contains(&r.backend.as_str()) {
-            names.push(&r.backend);
-        }
-    }
-    names
+    distinct(
+        rows.iter()
+            .filter(|r| r.sweep == sweep)
+            .map(|r| r.backend.as_str()),
+    )
 }
 
 /// The kinds of ray: their sweeps' prefix, their plots' and their titles' names.
@@ -105,7 +104,6 @@ fn figures_of(
     caches: Option<&str>,
 ) -> Vec<(String, Figure)> {
     let named = |base: &str| format!("{prefix}{base}");
-    let file = |base: &str| format!("growth_{prefix}{base}.png");
     let axes = |title: String, x: &str, log_x: bool| Axes {
         title,
         x_label: x.to_string(),
@@ -113,75 +111,75 @@ fn figures_of(
         log_x,
         log_y: true,
     };
-    let one = |a: Axes, series: Vec<Styled>, notes: Vec<String>| Figure {
-        axes: a,
-        panels: vec![Panel {
-            title: String::new(),
-            series,
-            hlines: Vec::new(),
-        }],
-        notes,
-    };
     let mut out = Vec::new();
+    // A figure of one panel, where any of its series has points.
+    let mut add = |base: &str, axes: Axes, series: Vec<Styled>, notes: Vec<String>| {
+        if series.iter().any(|s| !s.series.points.is_empty()) {
+            let panels = vec![Panel::new("", series)];
+            out.push((
+                format!("growth_{prefix}{base}.png"),
+                Figure {
+                    axes,
+                    panels,
+                    notes,
+                },
+            ));
+        }
+    };
+    // A series per backend of `sweep`, at `x` of its rows.
+    let per_backend = |sweep: &str, x: fn(&PlotRow) -> f64, line: bool| -> Vec<Styled> {
+        let backends = backends(rows, sweep);
+        let of = |b: &str| -> Vec<(f64, f64)> {
+            rows.iter()
+                .filter(|r| r.sweep == sweep && r.backend == b)
+                .map(|r| (x(r), r.mrays_s))
+                .collect()
+        };
+        let series = |b: &str| Series {
+            label: b.to_string(),
+            points: of(b),
+            line,
+        };
+        let styled = backends.iter().enumerate();
+        styled
+            .map(|(i, &b)| series(b).styled(style(b, i)))
+            .collect()
+    };
 
     // Caster triangles: points per backend, never joined across models.
     let sweep = &*named("triangles");
-    let tri: Vec<Styled> = backends(rows, sweep)
-        .iter()
-        .enumerate()
-        .map(|(i, &b)| Styled {
-            series: Series {
-                label: b.to_string(),
-                points: rows
-                    .iter()
-                    .filter(|r| r.sweep == sweep && r.backend == b)
-                    .map(|r| (r.triangles as f64, r.mrays_s))
-                    .collect(),
-                line: false,
-            },
-            style: style(b, i),
-        })
-        .collect();
-    let mut models: Vec<(usize, &str)> = rows
-        .iter()
-        .filter(|r| r.sweep == sweep)
-        .map(|r| (r.triangles, r.caster.as_str()))
-        .collect();
-    models.sort_unstable();
-    models.dedup();
+    let models = sorted_distinct(
+        rows.iter()
+            .filter(|r| r.sweep == sweep)
+            .map(|r| (r.triangles, r.caster.as_str())),
+    );
     let field = rows
         .iter()
         .find(|r| r.sweep == sweep)
         .map_or(String::new(), |r| format!(" (field {})", r.field));
     let names: Vec<String> = models.iter().map(|(t, m)| format!("{m} {t}")).collect();
-    if !tri.iter().all(|s| s.series.points.is_empty()) {
-        out.push((
-            file("triangles"),
-            one(
-                axes(
-                    format!("{what} against caster triangles{field}"),
-                    "caster triangles (log; each a different model)",
-                    true,
-                ),
-                tri,
-                vec![
-                    "points, not curves: each x is another model".into(),
-                    format!("models (triangles): {}", names.join(", ")),
-                ],
-            ),
-        ));
-    }
+    add(
+        "triangles",
+        axes(
+            format!("{what} against caster triangles{field}"),
+            "caster triangles (log; each a different model)",
+            true,
+        ),
+        per_backend(sweep, |r| r.triangles as f64, false),
+        vec![
+            "points, not curves: each x is another model".into(),
+            format!("models (triangles): {}", names.join(", ")),
+        ],
+    );
 
     // Field size: a line per precision for the field's lookups; the backends that read no
     // field (ray casters, floors) as points, repeats on the same rays.
     let sweep = &*named("field_size");
-    let mut precisions: Vec<&str> = rows
-        .iter()
-        .filter(|r| r.sweep == sweep)
-        .map(PlotRow::precision)
-        .collect();
-    precisions.sort_unstable();
-    precisions.dedup();
+    let precisions = sorted_distinct(
+        rows.iter()
+            .filter(|r| r.sweep == sweep)
+            .map(PlotRow::precision),
+    );
     let mut size: Vec<Styled> = Vec::new();
     for (i, &b) in backends(rows, sweep).iter().enumerate() {
         let these = |p: Option<&str>| -> Vec<(f64, f64)> {
@@ -193,32 +191,19 @@ fn figures_of(
         };
         let st = style(b, i);
         if !b.starts_with("field") {
-            size.push(Styled {
-                series: Series {
-                    label: format!("{b} (reads no field)"),
-                    points: these(None),
-                    line: false,
-                },
-                style: Style {
-                    dashed: false,
-                    ..st
-                },
-            });
+            let series = Series::scatter(format!("{b} (reads no field)"), these(None));
+            size.push(series.styled(Style {
+                dashed: false,
+                ..st
+            }));
             continue;
         }
         for (k, &p) in precisions.iter().enumerate() {
             let points = these(Some(p));
-            if points.is_empty() {
-                continue;
+            if !points.is_empty() {
+                let style = if k % 2 == 1 { st.hollow().dashed() } else { st };
+                size.push(Series::line(format!("{b}, {p} fields"), points).styled(style));
             }
-            size.push(Styled {
-                series: Series {
-                    label: format!("{b}, {p} fields"),
-                    points,
-                    line: true,
-                },
-                style: if k % 2 == 1 { st.hollow().dashed() } else { st },
-            });
         }
     }
     let caster = rows
@@ -228,53 +213,28 @@ fn figures_of(
     let caches = caches
         .filter(|c| !c.is_empty())
         .map_or(String::new(), |c| format!(" ({c})"));
-    if !size.is_empty() {
-        out.push((
-            file("field_size"),
-            one(
-                axes(
-                    format!("{what} against field size{caches}"),
-                    &format!("{caster}field storage, MB (10⁶ bytes; log)"),
-                    true,
-                ),
-                size,
-                Vec::new(),
-            ),
-        ));
-    }
+    add(
+        "field_size",
+        axes(
+            format!("{what} against field size{caches}"),
+            &format!("{caster}field storage, MB (10⁶ bytes; log)"),
+            true,
+        ),
+        size,
+        Vec::new(),
+    );
 
     // The share of rays entering the caster's sphere.
-    let sweep = &*named("entering");
-    let enter: Vec<Styled> = backends(rows, sweep)
-        .iter()
-        .enumerate()
-        .map(|(i, &b)| Styled {
-            series: Series {
-                label: b.to_string(),
-                points: rows
-                    .iter()
-                    .filter(|r| r.sweep == sweep && r.backend == b)
-                    .map(|r| (r.entering_share, r.mrays_s))
-                    .collect(),
-                line: true,
-            },
-            style: style(b, i),
-        })
-        .collect();
-    if !enter.is_empty() {
-        out.push((
-            file("entering"),
-            one(
-                axes(
-                    format!("{what} against the share entering the caster's sphere"),
-                    "share of rays entering the bounding sphere",
-                    false,
-                ),
-                enter,
-                Vec::new(),
-            ),
-        ));
-    }
+    add(
+        "entering",
+        axes(
+            format!("{what} against the share entering the caster's sphere"),
+            "share of rays entering the bounding sphere",
+            false,
+        ),
+        per_backend(&named("entering"), |r| r.entering_share, true),
+        Vec::new(),
+    );
     out
 }
 

@@ -62,14 +62,11 @@ const CHAR_W: u32 = 9;
 pub fn labelled_grid(path: &Path, grid: &Grid) -> PlotResult {
     register_font();
     let cells = || grid.blocks.iter().flat_map(|b| b.rows.iter().flatten());
-    let cw = cells()
-        .filter_map(|c| c.image.as_ref().map(|i| i.width))
-        .max()
-        .unwrap_or(64);
-    let ch = cells()
-        .filter_map(|c| c.image.as_ref().map(|i| i.height))
-        .max()
-        .unwrap_or(64);
+    let largest = |side: fn(&RgbImage) -> u32| {
+        let sides = cells().filter_map(|c| c.image.as_ref().map(side));
+        sides.max().unwrap_or(64)
+    };
+    let (cw, ch) = (largest(|i| i.width), largest(|i| i.height));
     let caption_h = cells().map(|c| c.caption.len()).max().unwrap_or(0) as u32 * LINE + 6;
     let ncols = grid
         .blocks

@@ -44,6 +44,34 @@ pub struct Series {
     pub line: bool,
 }
 
+impl Series {
+    /// Points joined by a line.
+    pub fn line(label: impl Into<String>, points: Vec<(f64, f64)>) -> Series {
+        Series {
+            label: label.into(),
+            points,
+            line: true,
+        }
+    }
+
+    /// Points alone, not joined.
+    pub fn scatter(label: impl Into<String>, points: Vec<(f64, f64)>) -> Series {
+        Series {
+            label: label.into(),
+            points,
+            line: false,
+        }
+    }
+
+    /// The series in `style`.
+    pub fn styled(self, style: Style) -> Styled {
+        Styled {
+            series: self,
+            style,
+        }
+    }
+}
+
 /// A horizontal reference line (e.g. the reference's noise floor).
 #[derive(Clone, Debug)]
 pub struct HLine {
@@ -148,6 +176,37 @@ pub struct Panel {
     pub hlines: Vec<HLine>,
 }
 
+impl Panel {
+    /// A panel of `series` without reference lines.
+    pub fn new(title: impl Into<String>, series: Vec<Styled>) -> Panel {
+        Panel {
+            title: title.into(),
+            series,
+            hlines: Vec::new(),
+        }
+    }
+}
+
+/// The distinct values of `items` in the order they first come (a plot's series, panels and
+/// columns keep the order of the rows).
+pub fn distinct<T: PartialEq>(items: impl IntoIterator<Item = T>) -> Vec<T> {
+    let mut out = Vec::new();
+    for x in items {
+        if !out.contains(&x) {
+            out.push(x);
+        }
+    }
+    out
+}
+
+/// The distinct values of `items`, sorted.
+pub fn sorted_distinct<T: Ord>(items: impl IntoIterator<Item = T>) -> Vec<T> {
+    let mut out: Vec<T> = items.into_iter().collect();
+    out.sort();
+    out.dedup();
+    out
+}
+
 /// Panels on shared axes (the same ranges in every panel, so that panels compare), one title,
 /// and notes under them (what a plot leaves out, and why).
 #[derive(Clone, Debug)]
@@ -181,17 +240,15 @@ fn range(vals: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
 /// Draws series (and horizontal lines) to a PNG, with log axes where asked: a one-panel
 /// [`Figure`] in the default palette.
 pub fn xy_plot(path: &Path, axes: &Axes, series: &[Series], hlines: &[HLine]) -> PlotResult {
+    let styled = series.iter().enumerate();
     let panel = Panel {
-        title: String::new(),
-        series: series
-            .iter()
-            .enumerate()
-            .map(|(i, s)| Styled {
-                series: s.clone(),
-                style: Style::palette(i),
-            })
-            .collect(),
         hlines: hlines.to_vec(),
+        ..Panel::new(
+            "",
+            styled
+                .map(|(i, s)| s.clone().styled(Style::palette(i)))
+                .collect(),
+        )
     };
     figure_plot(
         path,
@@ -531,26 +588,7 @@ fn draw_panel<DB: DrawingBackend>(
                     .map_err(Error::plot(path))?;
             }
         }
-        let shape = outline(st.marker, 6.0);
-        if st.hollow {
-            let mut closed = shape.clone();
-            closed.push(shape[0]);
-            chart
-                .draw_series(pts.iter().map(|&p| {
-                    EmptyElement::at(p)
-                        + Polygon::new(shape.clone(), WHITE.filled())
-                        + PathElement::new(closed.clone(), color.stroke_width(2))
-                }))
-                .map_err(Error::plot(path))?;
-        } else {
-            chart
-                .draw_series(
-                    pts.iter().map(|&p| {
-                        EmptyElement::at(p) + Polygon::new(shape.clone(), color.filled())
-                    }),
-                )
-                .map_err(Error::plot(path))?;
-        }
+        draw_markers(path, chart.plotting_area(), pts, st)?;
     }
     draw_legend(path, area, layout, panel)
 }
@@ -577,30 +615,18 @@ fn draw_legend<DB: DrawingBackend>(
         let (x, y) = at(j);
         let st = s.style;
         if s.series.line {
-            let stroke = st.color.stroke_width(2);
-            if st.dashed {
-                area.draw(&PathElement::new(vec![(x, y), (x + 9, y)], stroke))
-                    .map_err(Error::plot(path))?;
-                area.draw(&PathElement::new(vec![(x + 17, y), (x + 26, y)], stroke))
-                    .map_err(Error::plot(path))?;
+            let dashes: &[(i32, i32)] = if st.dashed {
+                &[(0, 9), (17, 26)]
             } else {
-                area.draw(&PathElement::new(vec![(x, y), (x + 26, y)], stroke))
+                &[(0, 26)]
+            };
+            for (a, b) in dashes {
+                let stroke = st.color.stroke_width(2);
+                area.draw(&PathElement::new(vec![(x + a, y), (x + b, y)], stroke))
                     .map_err(Error::plot(path))?;
             }
         }
-        let shape = outline(st.marker, 6.0);
-        let c = (x + 13, y);
-        if st.hollow {
-            let mut closed = shape.clone();
-            closed.push(shape[0]);
-            area.draw(&(EmptyElement::at(c) + Polygon::new(shape.clone(), WHITE.filled())))
-                .map_err(Error::plot(path))?;
-            area.draw(&(EmptyElement::at(c) + PathElement::new(closed, st.color.stroke_width(2))))
-                .map_err(Error::plot(path))?;
-        } else {
-            area.draw(&(EmptyElement::at(c) + Polygon::new(shape, st.color.filled())))
-                .map_err(Error::plot(path))?;
-        }
+        draw_markers(path, area, [(x + 13, y)], st)?;
         area.draw_text(&s.series.label, &font, (x + 34, y - 9))
             .map_err(Error::plot(path))?;
     }
@@ -613,6 +639,33 @@ fn draw_legend<DB: DrawingBackend>(
         }
         area.draw_text(&h.label, &font, (x + 34, y - 9))
             .map_err(Error::plot(path))?;
+    }
+    Ok(())
+}
+
+/// Draws `st`'s marker at each of `at` on `area`: filled in its colour, or white inside its
+/// outline where hollow.
+fn draw_markers<DB: DrawingBackend, CT: CoordTranslate>(
+    path: &Path,
+    area: &DrawingArea<DB, CT>,
+    at: impl IntoIterator<Item = CT::From>,
+    st: Style,
+) -> PlotResult
+where
+    CT::From: Clone,
+{
+    let shape = outline(st.marker, 6.0);
+    let mut closed = shape.clone();
+    closed.push(shape[0]);
+    let fill = if st.hollow { WHITE } else { st.color };
+    for p in at {
+        area.draw(&(EmptyElement::at(p.clone()) + Polygon::new(shape.clone(), fill.filled())))
+            .map_err(Error::plot(path))?;
+        if st.hollow {
+            let stroke = st.color.stroke_width(2);
+            area.draw(&(EmptyElement::at(p) + PathElement::new(closed.clone(), stroke)))
+                .map_err(Error::plot(path))?;
+        }
     }
     Ok(())
 }
@@ -736,11 +789,10 @@ mod tests {
     fn plots_write_decodable_pngs_of_the_expected_size() {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("pareto.png");
-        let s = vec![Series {
-            label: "field".into(),
-            points: vec![(0.01, 2.0), (0.1, 1.0), (1.0, 0.5)],
-            line: true,
-        }];
+        let s = vec![Series::line(
+            "field",
+            vec![(0.01, 2.0), (0.1, 1.0), (1.0, 0.5)],
+        )];
         let floor = HLine {
             label: "floor".into(),
             y: 0.3,
@@ -768,19 +820,12 @@ mod tests {
     #[test]
     fn panels_share_one_figure_two_to_a_row() {
         let dir = tempfile::tempdir().unwrap();
-        let panel = |t: &str, k: usize| Panel {
-            title: t.into(),
-            series: (0..k)
-                .map(|i| Styled {
-                    series: Series {
-                        label: format!("s{i}"),
-                        points: vec![(1.0 + i as f64, 2.0), (3.0, 0.5 + i as f64)],
-                        line: true,
-                    },
-                    style: Style::palette(i).hollow(),
-                })
-                .collect(),
-            hlines: vec![],
+        let panel = |t: &str, k: usize| {
+            let series = (0..k).map(|i| {
+                let points = vec![(1.0 + i as f64, 2.0), (3.0, 0.5 + i as f64)];
+                Series::line(format!("s{i}"), points).styled(Style::palette(i).hollow())
+            });
+            Panel::new(t, series.collect())
         };
         let fig = Figure {
             axes: axes(true, true),

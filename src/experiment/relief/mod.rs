@@ -217,31 +217,28 @@ fn gpu_cells(
     })
 }
 
-/// Renders one setting `repeats` times (the fastest time kept) and scores it against the
-/// reference; with `gpu`, renders it there as often and compares the GPU frame with the CPU's.
+/// Renders one setting of `pass` `repeats` times with `cpu` (the fastest time kept) and scores
+/// it against the pass's reference; with `gpu` (its adapter and its render), renders it there as
+/// often and compares the GPU frame with the CPU's.
 fn measure(
-    map: &HeightMap,
-    zones: &SafetyZones,
-    v: &View,
-    p: &CastParams,
-    reference: &Reference,
+    pass: &Pass,
     repeats: usize,
-    gpu: Option<(&ReliefKernel, &str)>,
+    mut cpu: impl FnMut() -> Result<ReliefFrame>,
+    gpu: Option<(&str, impl FnMut() -> Result<(ReliefFrame, GpuTiming)>)>,
 ) -> Result<Measured> {
     let mut best = f64::INFINITY;
     let mut frame = None;
     for _ in 0..repeats.max(1) {
         let t = Instant::now();
-        let f = render(map, Some(zones), v, Some(p));
+        let f = cpu()?;
         best = best.min(t.elapsed().as_secs_f64());
         frame = Some(f);
     }
     let f = frame.expect("rendered once");
-    let scores = score(&f, &reference.frame, &reference.populations, map.width);
+    let reference = &pass.reference;
+    let scores = score(&f, &reference.frame, &reference.populations, pass.map.width);
     let cells = match gpu {
-        Some((kernel, adapter)) => gpu_cells(adapter, &f, repeats, || {
-            render_gpu(kernel, map, v, p).context(|| "relief".into())
-        })?,
+        Some((adapter, render)) => gpu_cells(adapter, &f, repeats, render)?,
         None => GpuCells::default(),
     };
     Ok(Measured {
@@ -252,22 +249,24 @@ fn measure(
     })
 }
 
-/// The GPU device for the relief columns: `None` when not asked for, or (with a note) when
-/// no Vulkan driver is installed and no adapter was named (`Auto`); an adapter asked for by
-/// name or kind that cannot be had is an error, as it is for a spec's "gpu" rows.
-fn gpu_context(pref: Option<AdapterPreference>) -> Result<Option<GpuContext>> {
+/// The GPU device of a run's GPU columns or rows (`what`: the run, for the error's context):
+/// `None` when not asked for, or (with the note `left_out`) when no Vulkan driver is installed
+/// and no adapter was named (`Auto`); an adapter asked for by name or kind that cannot be had
+/// is an error, as it is for a spec's "gpu" rows.
+pub(crate) fn gpu_context(
+    pref: Option<AdapterPreference>,
+    what: &str,
+    left_out: &str,
+) -> Result<Option<GpuContext>> {
     let Some(pref) = pref else { return Ok(None) };
     let fallback = matches!(pref, AdapterPreference::Auto);
     match GpuContext::new(pref) {
         Ok(c) => Ok(Some(c)),
         Err(GpuError::NoAdapter) if fallback => {
-            eprintln!(
-                "relief: no Vulkan adapter, GPU columns left empty ({})",
-                GpuError::NoAdapter
-            );
+            eprintln!("{left_out}");
             Ok(None)
         }
-        Err(e) => Err(Error::Gpu(e).context("relief")),
+        Err(e) => Err(Error::Gpu(e).context(what)),
     }
 }
 
@@ -284,30 +283,35 @@ struct Pass<'a> {
     dataset: Dataset,
     map: &'a HeightMap,
     view: View,
-    reference: &'a Reference,
+    reference: Reference,
+}
+
+impl<'a> Pass<'a> {
+    /// The pass, with the exact reference of `view`.
+    fn new(table: &'static str, dataset: Dataset, map: &'a HeightMap, view: View) -> Pass<'a> {
+        let reference = Reference::new(map, &view);
+        Pass {
+            table,
+            dataset,
+            map,
+            view,
+            reference,
+        }
+    }
 }
 
 /// Appends `row`, its gains taken against the 0-skip row of the same table, method, map, view
 /// and search settings.
 fn push(rows: &mut Vec<ReliefRow>, mut r: ReliefRow) {
-    if let Some(base) = rows.iter().rev().find(|b| {
-        b.skips == 0
-            && (
-                b.table,
-                b.method,
-                b.dataset,
-                b.view_deg,
-                b.samples_per_unit,
-                b.bisections,
-            ) == (
-                r.table,
-                r.method,
-                r.dataset,
-                r.view_deg,
-                r.samples_per_unit,
-                r.bisections,
-            )
-    }) {
+    let key = |r: &ReliefRow| {
+        let search = (r.view_deg, r.samples_per_unit, r.bisections);
+        (r.table, r.method, r.dataset, search)
+    };
+    if let Some(base) = rows
+        .iter()
+        .rev()
+        .find(|b| b.skips == 0 && key(b) == key(&r))
+    {
         r.time_speedup = base.time_s / r.time_s;
         r.surface_fetch_reduction = base.surface_fetches / r.surface_fetches;
         r.fetch_reduction = base.fetches_per_pixel / r.fetches_per_pixel;
@@ -386,16 +390,12 @@ fn run_pass(
                 bisections,
                 skips,
             };
-            let gpu = z.kernel.as_ref().zip(adapter);
-            let m = measure(
-                pass.map,
-                &z.zones,
-                &pass.view,
-                &p,
-                pass.reference,
-                repeats,
-                gpu,
-            )?;
+            let cpu = || Ok(render(pass.map, Some(&z.zones), &pass.view, Some(&p)));
+            let gpu = z.kernel.as_ref().zip(adapter).map(|(kernel, adapter)| {
+                let render = || render_gpu(kernel, pass.map, &pass.view, &p);
+                (adapter, move || render().context(|| "relief".into()))
+            });
+            let m = measure(pass, repeats, cpu, gpu)?;
             let s = &m.scores;
             let gpu_note = match (m.gpu.kernel_s, m.gpu.hit_mismatches_vs_cpu) {
                 (Some(k), Some(d)) => format!("; GPU kernel {k:.4} s, {d} pixel(s) differ"),
@@ -432,7 +432,11 @@ pub fn run(out: &Path, quick: bool, gpu: Option<AdapterPreference>) -> Result<Ve
     crate::experiment::progress::begin_run();
     crate::experiment::run::ensure_writable(out)?;
     let mut meta = crate::experiment::meta::RunMeta::collect(None);
-    let ctx = gpu_context(gpu)?;
+    let left_out = format!(
+        "relief: no Vulkan adapter, GPU columns left empty ({})",
+        GpuError::NoAdapter
+    );
+    let ctx = gpu_context(gpu, "relief", &left_out)?;
     let adapter = ctx.as_ref().map(|c| c.adapter_label());
     meta.gpu_adapter = adapter.clone();
     let (size, repeats) = if quick { (64, 1) } else { (256, 3) };
@@ -444,12 +448,8 @@ pub fn run(out: &Path, quick: bool, gpu: Option<AdapterPreference>) -> Result<Ve
             .into_iter()
             .map(|rule| -> Result<Zoned> {
                 let zones = SafetyZones::with_rule(&map, &PAPER_BOXES, rule);
-                let kernel = match &ctx {
-                    Some(c) => {
-                        Some(ReliefKernel::new(c, &map, &zones).context(|| "relief".into())?)
-                    }
-                    None => None,
-                };
+                let kernel = ctx.as_ref().map(|c| ReliefKernel::new(c, &map, &zones));
+                let kernel = kernel.transpose().context(|| "relief".into())?;
                 Ok(Zoned {
                     rule,
                     zones,
@@ -470,41 +470,22 @@ pub fn run(out: &Path, quick: bool, gpu: Option<AdapterPreference>) -> Result<Ve
             );
             d
         });
-        let peer_kernel = match (&ctx, &peer_data) {
-            (Some(c), Some(d)) => {
-                Some(ReliefPeersKernel::new(c, &map, d).context(|| "relief peers".into())?)
-            }
-            _ => None,
-        };
+        let peer_kernel = ctx.as_ref().zip(peer_data.as_ref());
+        let peer_kernel = peer_kernel.map(|(c, d)| ReliefPeersKernel::new(c, &map, d));
+        let peer_kernel = peer_kernel.transpose().context(|| "relief peers".into())?;
         for angle in ANGLES {
-            let view = View::lid(angle, size);
-            let reference = Reference::new(&map, &view);
-            let pass = Pass {
-                table: "angles",
-                dataset: dset,
-                map: &map,
-                view,
-                reference: &reference,
-            };
+            let pass = Pass::new("angles", dset, &map, View::lid(angle, size));
             run_pass(&pass, &zoned, &[(75.0, 2)], repeats, adapter, &mut rows)?;
             if let Some(data) = &peer_data {
                 let gpu = peer_kernel.as_ref().zip(adapter);
                 peers::run_peers(&pass, data, gpu, repeats, &mut rows)?;
             }
             if angle == 60.0 {
-                exact_60.push((reference.frame.image, dset));
+                exact_60.push((pass.reference.frame.image, dset));
             }
         }
         if dset == Dataset::Relief {
-            let view = View::close_up(45.0, size);
-            let reference = Reference::new(&map, &view);
-            let pass = Pass {
-                table: "rates",
-                dataset: dset,
-                map: &map,
-                view,
-                reference: &reference,
-            };
+            let pass = Pass::new("rates", dset, &map, View::close_up(45.0, size));
             run_pass(
                 &pass,
                 &zoned[..1],
@@ -515,15 +496,7 @@ pub fn run(out: &Path, quick: bool, gpu: Option<AdapterPreference>) -> Result<Ve
             )?;
         }
         if QUALITY_DATASETS.contains(&dset) {
-            let view = View::lid(QUALITY_ANGLE, size);
-            let reference = Reference::new(&map, &view);
-            let pass = Pass {
-                table: "quality",
-                dataset: dset,
-                map: &map,
-                view,
-                reference: &reference,
-            };
+            let pass = Pass::new("quality", dset, &map, View::lid(QUALITY_ANGLE, size));
             let settings = QUALITY_RATES.map(|r| (r, 2));
             run_pass(&pass, &zoned[..1], &settings, repeats, adapter, &mut rows)?;
         }

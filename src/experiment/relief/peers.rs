@@ -4,11 +4,10 @@
 //! exact reference and fetch accounting as the paper's search; with an adapter, each also on
 //! its WGSL twin (`gpu::ReliefPeersKernel`), compared with the CPU frame.
 
-use super::{gpu_cells, push, row, GpuCells, Measured, Pass, Setting};
+use super::{measure, push, row, Measured, Pass, Setting};
 use super::{ReliefRow, Result, ResultExt};
 use crate::gpu::ReliefPeersKernel;
 use crate::relief::peers::{render_peer, render_peer_gpu, Peer, PeerData};
-use std::time::Instant;
 
 /// The peers and their settings, with their `method` names.
 pub const PEERS: [(Peer, &str); 6] = [
@@ -41,35 +40,30 @@ pub(super) fn run_peers(
     repeats: usize,
     rows: &mut Vec<ReliefRow>,
 ) -> Result<()> {
-    let reference = pass.reference;
     for (peer, method) in PEERS {
-        let mut best = f64::INFINITY;
-        let mut frame = None;
-        for _ in 0..repeats.max(1) {
-            let t = Instant::now();
-            let f = render_peer(pass.map, data, &pass.view, &peer)
-                .map_err(|e| super::Error::invalid("relief peer", e))?;
-            best = best.min(t.elapsed().as_secs_f64());
-            frame = Some(f);
-        }
-        let f = frame.expect("rendered once");
-        let scores = super::score(&f, &reference.frame, &reference.populations, pass.map.width);
-        let cells = match gpu {
-            Some((kernel, adapter)) => gpu_cells(adapter, &f, repeats, || {
-                render_peer_gpu(kernel, pass.map, &pass.view, &peer)
-                    .context(|| format!("relief peer {method}"))
-            })?,
-            None => GpuCells::default(),
+        let cpu = || {
+            render_peer(pass.map, data, &pass.view, &peer)
+                .map_err(|e| super::Error::invalid("relief peer", e))
+        };
+        let gpu = gpu.map(|(kernel, adapter)| {
+            let render = || render_peer_gpu(kernel, pass.map, &pass.view, &peer);
+            (adapter, move || {
+                render().context(|| format!("relief peer {method}"))
+            })
+        });
+        let m = Measured {
+            setup_s: Some(data.build_time(&peer).as_secs_f64()),
+            ..measure(pass, repeats, cpu, gpu)?
         };
         eprintln!(
             "relief: {} {} {}° {method}: {:.1} fetches per surface pixel, {:.4} s, missed {:.2}%{}",
             pass.table,
             pass.dataset.name(),
             pass.view.angle_deg,
-            scores.surface.mean_fetches,
-            best,
-            100.0 * scores.missed_share,
-            cells
+            m.scores.surface.mean_fetches,
+            m.time_s,
+            100.0 * m.scores.missed_share,
+            m.gpu
                 .hit_mismatches_vs_cpu
                 .map_or(String::new(), |d| format!("; GPU {d} pixel(s) differ")),
         );
@@ -85,12 +79,6 @@ pub(super) fn run_peers(
             bisections,
             skips: 0,
             delta_rule: "",
-        };
-        let m = Measured {
-            time_s: best,
-            setup_s: Some(data.build_time(&peer).as_secs_f64()),
-            scores,
-            gpu: cells,
         };
         push(rows, row(pass, &at, &m));
     }

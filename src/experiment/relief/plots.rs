@@ -3,7 +3,7 @@
 //! side) with skips added and difference images against the exact intersection.
 
 use super::{ReliefRow, QUALITY_ANGLE, QUALITY_DATASETS};
-use crate::experiment::plot::{image_grid, xy_plot, Axes, Series};
+use crate::experiment::plot::{distinct, image_grid, xy_plot, Axes, Series};
 use crate::experiment::Result;
 use crate::relief::view::{render, View};
 use crate::relief::{CastParams, Dataset, SafetyZones, PAPER_BOXES};
@@ -13,14 +13,33 @@ use std::path::Path;
 /// Difference images are scaled by this (a shading difference of ¼ shows white).
 const DIFFERENCE_GAIN: f32 = 4.0;
 
-fn angle_axes(title: &str, y: &str) -> Axes {
-    Axes {
+/// Draws `series` against the viewing angle to `path`, titled `title`, `y` on the y axis.
+fn angle_plot(path: &Path, title: &str, y: &str, series: &[Series]) -> Result<()> {
+    let axes = Axes {
         title: title.into(),
         x_label: "viewing angle from the normal (degrees)".into(),
         y_label: y.into(),
         log_x: false,
         log_y: false,
-    }
+    };
+    xy_plot(path, &axes, series, &[])
+}
+
+/// `f` against the viewing angle over the `angles` table's rows of map `d` at `skips` and δ
+/// `rule`.
+fn at_angles(
+    rows: &[ReliefRow],
+    d: Dataset,
+    skips: u32,
+    rule: &str,
+    f: &dyn Fn(&ReliefRow) -> f64,
+) -> Vec<(f64, f64)> {
+    rows.iter()
+        .filter(|r| {
+            r.table == "angles" && r.delta_rule == rule && r.dataset == d.name() && r.skips == skips
+        })
+        .map(|r| (r.view_deg as f64, f(r)))
+        .collect()
 }
 
 /// One series per map and skip count over the `angles` table (paper's δ).
@@ -28,20 +47,8 @@ fn by_angle(rows: &[ReliefRow], skips: &[u32], f: &dyn Fn(&ReliefRow) -> f64) ->
     let mut s = Vec::new();
     for d in Dataset::ALL {
         for &k in skips {
-            s.push(Series {
-                label: format!("{} · {k} skip(s)", d.name()),
-                points: rows
-                    .iter()
-                    .filter(|r| {
-                        r.table == "angles"
-                            && r.delta_rule == "paper"
-                            && r.dataset == d.name()
-                            && r.skips == k
-                    })
-                    .map(|r| (r.view_deg as f64, f(r)))
-                    .collect(),
-                line: true,
-            });
+            let label = format!("{} · {k} skip(s)", d.name());
+            s.push(Series::line(label, at_angles(rows, d, k, "paper", f)));
         }
     }
     s
@@ -49,73 +56,49 @@ fn by_angle(rows: &[ReliefRow], skips: &[u32], f: &dyn Fn(&ReliefRow) -> f64) ->
 
 /// The plots of `renderings.csv`'s rows; `size` is the image side.
 pub fn plots(out: &Path, rows: &[ReliefRow], size: u32) -> Result<()> {
-    xy_plot(
+    angle_plot(
         &out.join("fetches_vs_angle.png"),
-        &angle_axes(
-            "Fetches per pixel whose ray meets the surface (75 samples/unit, 2 bisections, paper's δ)",
-            "mean fetches over surface pixels",
-        ),
+        "Fetches per pixel whose ray meets the surface (75 samples/unit, 2 bisections, paper's δ)",
+        "mean fetches over surface pixels",
         &by_angle(rows, &[0, 1, 2], &|r| r.surface_fetches),
-        &[],
     )?;
     let mut gains = Vec::new();
     for rule in ["paper", "half"] {
         for d in Dataset::ALL {
-            gains.push(Series {
-                label: format!("{} · 2 skips · δ {rule}", d.name()),
-                points: rows
-                    .iter()
-                    .filter(|r| {
-                        r.table == "angles"
-                            && r.delta_rule == rule
-                            && r.dataset == d.name()
-                            && r.skips == 2
-                    })
-                    .map(|r| (r.view_deg as f64, r.surface_fetch_reduction))
-                    .collect(),
-                line: true,
-            });
+            let points = at_angles(rows, d, 2, rule, &|r| r.surface_fetch_reduction);
+            gains.push(Series::line(
+                format!("{} · 2 skips · δ {rule}", d.name()),
+                points,
+            ));
         }
     }
-    xy_plot(
+    angle_plot(
         &out.join("fetch_gain_vs_angle.png"),
-        &angle_axes(
-            "Fetch reduction from 2 skips over surface pixels: paper's δ and half of it",
-            "fetches without skips / with",
-        ),
+        "Fetch reduction from 2 skips over surface pixels: paper's δ and half of it",
+        "fetches without skips / with",
         &gains,
-        &[],
     )?;
-    xy_plot(
+    angle_plot(
         &out.join("time_vs_angle.png"),
-        &angle_axes(
-            &format!("CPU time per {size}² frame (all pixels)"),
-            "seconds",
-        ),
+        &format!("CPU time per {size}² frame (all pixels)"),
+        "seconds",
         &by_angle(rows, &[0, 1, 2], &|r| r.time_s),
-        &[],
     )?;
-    xy_plot(
+    angle_plot(
         &out.join("missed_vs_angle.png"),
-        &angle_axes(
-            "Surface pixels missed or > 2 texels off (75 samples/unit, 2 bisections)",
-            "share of surface pixels",
-        ),
+        "Surface pixels missed or > 2 texels off (75 samples/unit, 2 bisections)",
+        "share of surface pixels",
         &by_angle(rows, &[0, 2], &|r| r.missed_share),
-        &[],
     )?;
     let mut missed = Vec::new();
     for d in QUALITY_DATASETS {
         for k in [0u32, 2] {
-            missed.push(Series {
-                label: format!("{} · {k} skip(s)", d.name()),
-                points: rows
-                    .iter()
-                    .filter(|r| r.table == "quality" && r.dataset == d.name() && r.skips == k)
-                    .map(|r| (r.samples_per_unit as f64, r.missed_share))
-                    .collect(),
-                line: true,
-            });
+            let points = rows
+                .iter()
+                .filter(|r| r.table == "quality" && r.dataset == d.name() && r.skips == k)
+                .map(|r| (r.samples_per_unit as f64, r.missed_share))
+                .collect();
+            missed.push(Series::line(format!("{} · {k} skip(s)", d.name()), points));
         }
     }
     xy_plot(
@@ -134,14 +117,13 @@ pub fn plots(out: &Path, rows: &[ReliefRow], size: u32) -> Result<()> {
     )?;
     gpu_plot(out, rows, size)?;
     let pareto: Vec<Series> = (0..=2u32)
-        .map(|skips| Series {
-            label: format!("relief 45° close-up · {skips} skip(s)"),
-            points: rows
+        .map(|skips| {
+            let points = rows
                 .iter()
                 .filter(|r| r.table == "rates" && r.skips == skips)
                 .map(|r| (r.time_s, r.rms_vs_exact))
-                .collect(),
-            line: false,
+                .collect();
+            Series::scatter(format!("relief 45° close-up · {skips} skip(s)"), points)
         })
         .collect();
     xy_plot(
@@ -174,24 +156,15 @@ fn methods_plots(out: &Path, rows: &[ReliefRow]) -> Result<()> {
         .filter(|r| r.table == "angles" && r.view_deg >= 45.0)
         .filter_map(|r| of(r).map(|m| (m, r)))
         .collect();
-    let mut names: Vec<&String> = Vec::new();
-    for (m, _) in &picked {
-        if !names.contains(&m) {
-            names.push(m);
-        }
-    }
+    let names = distinct(picked.iter().map(|(m, _)| m));
     let series = |x: &dyn Fn(&ReliefRow) -> f64| -> Vec<Series> {
+        let points = |n: &String| {
+            let of_n = picked.iter().filter(|(m, _)| m == n);
+            of_n.map(|(_, r)| (x(r), r.rms_vs_exact)).collect()
+        };
         names
             .iter()
-            .map(|&n| Series {
-                label: n.clone(),
-                points: picked
-                    .iter()
-                    .filter(|(m, _)| m == n)
-                    .map(|(_, r)| (x(r), r.rms_vs_exact))
-                    .collect(),
-                line: false,
-            })
+            .map(|&n| Series::scatter(n.clone(), points(n)))
             .collect()
     };
     let axes = |x: &str| Axes {
@@ -235,14 +208,11 @@ fn gpu_plot(out: &Path, rows: &[ReliefRow], size: u32) -> Result<()> {
     } else {
         ""
     };
-    xy_plot(
+    angle_plot(
         &out.join("gpu_time_vs_angle.png"),
-        &angle_axes(
-            &format!("GPU kernel time per {size}² frame ({name}{note})"),
-            "seconds",
-        ),
+        &format!("GPU kernel time per {size}² frame ({name}{note})"),
+        "seconds",
         &by_angle(rows, &[0, 1, 2], &|r| r.gpu_kernel_s.unwrap_or(f64::NAN)),
-        &[],
     )
 }
 

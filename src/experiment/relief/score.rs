@@ -2,7 +2,6 @@
 //! about their ray (meets the surface, leaves without meeting it, culled at the entry), the
 //! fetches of each population, and the error against the exact hits.
 
-use crate::experiment::metrics::rms_u8;
 use crate::relief::cast::culled;
 use crate::relief::view::{ReliefFrame, View};
 use crate::relief::HeightMap;
@@ -95,19 +94,7 @@ pub fn score(
                 .map(|(_, &f)| f),
         )
     };
-    let mask: Vec<bool> = frame
-        .hit
-        .iter()
-        .zip(&exact.hit)
-        .map(|(a, b)| *a || *b)
-        .collect();
-    let rms_vs_exact = rms_u8(&frame.image.data, &exact.image.data, Some(&mask));
-    let hit_mismatches = frame
-        .hit
-        .iter()
-        .zip(&exact.hit)
-        .filter(|(a, b)| a != b)
-        .count();
+    let (hit_mismatches, rms_vs_exact) = super::compare_frames(frame, exact);
     let (mut surface, mut missed, mut sq, mut found) = (0usize, 0usize, 0.0f64, 0usize);
     for (p, got) in pops.iter().zip(&frame.lambda) {
         if let Population::Surface(want) = *p {

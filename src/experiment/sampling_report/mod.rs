@@ -7,6 +7,7 @@
 //! over five passes of 2·10⁵ seeded queries (the machine is shared, the minimum is the least
 //! disturbed pass).
 
+use super::outputs::write_csv;
 use super::{Error, Result};
 use crate::io::write_atomic;
 use crate::sampling::rays::seeded_sphere_direction;
@@ -251,17 +252,6 @@ fn time_per_query<T>(items: &[T], f: impl Fn(&T) -> usize) -> f64 {
         best = best.min(start.elapsed().as_secs_f64() * 1e9 / items.len() as f64);
     }
     best
-}
-
-fn write_csv<R: serde::Serialize>(path: &Path, rows: &[R]) -> Result<()> {
-    let mut w = csv::Writer::from_writer(Vec::new());
-    for r in rows {
-        w.serialize(r).map_err(Error::csv(path))?;
-    }
-    let bytes = w
-        .into_inner()
-        .map_err(|e| Error::csv(path)(csv::Error::from(e.into_error())))?;
-    write_atomic(path, &bytes).map_err(Error::io(path))
 }
 
 #[cfg(test)]

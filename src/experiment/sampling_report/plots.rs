@@ -114,14 +114,9 @@ pub fn plot_layout_solid_angle(path: &Path, layout: &HemisphereLayout) -> Result
     let n = layout.texel_count() as u32;
     let omega: Vec<f64> = (0..n).map(|t| layout.solid_angle(t)).collect();
     let used = |t: u32| layout.is_used(t);
-    let lo = (0..n)
-        .filter(|&t| used(t))
-        .map(|t| omega[t as usize])
-        .fold(f64::INFINITY, f64::min);
-    let hi = (0..n)
-        .filter(|&t| used(t))
-        .map(|t| omega[t as usize])
-        .fold(0.0, f64::max);
+    let used_omega = (0..n).filter(|&t| used(t)).map(|t| omega[t as usize]);
+    let lo = used_omega.clone().fold(f64::INFINITY, f64::min);
+    let hi = used_omega.fold(0.0, f64::max);
     let (col_desc, row_desc) = match layout.kind {
         LayoutKind::Polar => ("column (azimuth φ)", "row (polar angle θ, 0 = zenith)"),
         _ => ("column (u)", "row (v)"),

@@ -1,7 +1,7 @@
 //! Determinism: the same bake, ray-cast AO, field AO and rendered image on 1 and on 2 threads
 //! are bit-identical (all randomness is a function of point, sample index and seed).
 
-use super::scene_ao::{bake_field, field_ao, raycast_ao, scene};
+use super::scene_ao::{bake_fields, field_ao, raycast_ao, scene};
 use super::StabilityRow;
 use crate::geometry::Similarity;
 use crate::render::primary::{gbuffer, shade_vertex_ao, PrimaryScene};
@@ -11,11 +11,7 @@ use crate::render::receivers::Receivers;
 fn outputs() -> Vec<(&'static str, Vec<u8>)> {
     let placed = super::scale::unit_scene();
     let sc = scene(&placed, Similarity::default());
-    let fields: Vec<_> = placed
-        .iter()
-        .filter(|p| p.2)
-        .map(|p| bake_field(&p.0))
-        .collect();
+    let fields = bake_fields(&placed);
     let storage: Vec<u8> = fields
         .iter()
         .flat_map(|f| match &f.storage {

@@ -18,7 +18,7 @@
 //!   cell measures 1.3 over an image; single casters here are closer and harder) and every
 //!   vertex within 0.25 of it (no lost or invented occluder).
 
-use super::scene_ao::{bake_field, field_ao, max_diff, options, raycast_ao, scene, Placed};
+use super::scene_ao::{bake_fields, field_ao, max_diff, options, raycast_ao, scene, Placed};
 use super::StabilityRow;
 use crate::experiment::metrics::rms_u8;
 use crate::geometry::{procedural, Mesh, Scene, Similarity};
@@ -51,11 +51,7 @@ fn compare(case: &str, placed: &[Placed], closed: Option<&ClosedForm>) -> Vec<St
     let sc = scene(placed, Similarity::default());
     let k = if closed.is_some() { 32 } else { 16 };
     let ray = raycast_ao(&sc, k);
-    let fields: Vec<_> = placed
-        .iter()
-        .filter(|p| p.2)
-        .map(|p| bake_field(&p.0))
-        .collect();
+    let fields = bake_fields(placed);
     let field = field_ao(&sc, &fields, k);
     let n = ray.len();
     let mut rows = Vec::new();
@@ -192,22 +188,24 @@ fn sphere_mesh(radius: f32) -> Mesh {
     procedural::uv_sphere(radius, 48, 96).expect("valid sphere")
 }
 
-fn plane(size: f32, n: usize) -> Mesh {
-    procedural::plane(size, n).expect("valid plane")
+/// The receiving plane, `size` wide with 33 × 33 vertices, at the origin.
+fn receiver_plane(size: f32) -> Placed {
+    let plane = procedural::plane(size, 33).expect("valid plane");
+    placed(plane, Similarity::default(), false, true)
+}
+
+/// [`compare`] of `caster` at `t` over the receiving plane 2 wide.
+fn over_plane(case: &str, caster: Mesh, t: Vec3, closed: Option<&ClosedForm>) -> Vec<StabilityRow> {
+    let caster = placed(caster, at(t), true, false);
+    compare(case, &[receiver_plane(2.0), caster], closed)
 }
 
 /// A sphere of radius 0.5 resting on a plane, touching it at the origin (the sphere's pole is a
 /// vertex of the plane): AO 0 at the contact, 1 − a³/(x² + a²)^{3/2} at distance x.
 pub fn touching() -> Vec<StabilityRow> {
-    let a = 0.5;
-    compare(
-        "receiver_touching_caster",
-        &[
-            placed(plane(2.0, 33), Similarity::default(), false, true),
-            placed(sphere_mesh(a), at(Vec3::new(0.0, a, 0.0)), true, false),
-        ],
-        Some(&sphere_ao(DVec3::new(0.0, a as f64, 0.0), a as f64)),
-    )
+    let (a, c) = (0.5, Vec3::new(0.0, 0.5, 0.0));
+    let closed = sphere_ao(c.as_dvec3(), a as f64);
+    over_plane("receiver_touching_caster", sphere_mesh(a), c, Some(&closed))
 }
 
 /// A zero-thickness disk (256-segment fan, circumradius r/cos(π/256)) of radius 0.5 at height
@@ -240,12 +238,10 @@ pub fn thin_sheet() -> Vec<StabilityRow> {
                 - (hh * hh + rho2 - a_eff * a_eff) / (s * s - 4.0 * a_eff * a_eff * rho2).sqrt());
         1.0 - f
     };
-    compare(
+    over_plane(
         "thin_sheet",
-        &[
-            placed(plane(2.0, 33), Similarity::default(), false, true),
-            placed(disk, at(Vec3::new(0.0, h as f32, 0.0)), true, false),
-        ],
+        disk,
+        Vec3::new(0.0, h as f32, 0.0),
         Some(&closed),
     )
 }
@@ -256,13 +252,12 @@ pub fn extreme_sizes() -> Vec<StabilityRow> {
     let mut rows = Vec::new();
     for (label, a) in [("1000x larger", 1000.0f32), ("1000x smaller", 1e-3)] {
         let c = Vec3::new(0.0, 2.0 * a, 0.0);
+        let sphere = placed(sphere_mesh(a), at(c), true, false);
+        let closed = sphere_ao(c.as_dvec3(), a as f64);
         let r = compare(
             "caster_1000x_larger_and_smaller",
-            &[
-                placed(plane(1.0, 33), Similarity::default(), false, true),
-                placed(sphere_mesh(a), at(c), true, false),
-            ],
-            Some(&sphere_ao(c.as_dvec3(), a as f64)),
+            &[receiver_plane(1.0), sphere],
+            Some(&closed),
         );
         rows.extend(r.into_iter().map(|mut row| {
             row.quantity = format!("{label}: {}", row.quantity);
@@ -276,14 +271,7 @@ pub fn extreme_sizes() -> Vec<StabilityRow> {
 /// sky through it: f64 brute force reference.
 pub fn concave() -> Vec<StabilityRow> {
     let cube = procedural::cube_with_hole(0.6, 0.3).expect("valid cube");
-    compare(
-        "concave_caster",
-        &[
-            placed(plane(2.0, 33), Similarity::default(), false, true),
-            placed(cube, at(Vec3::new(0.0, 0.45, 0.0)), true, false),
-        ],
-        None,
-    )
+    over_plane("concave_caster", cube, Vec3::new(0.0, 0.45, 0.0), None)
 }
 
 /// Three rotated cubes with holes whose bounding spheres overlap pairwise, over a plane: f64 brute force reference.
@@ -293,7 +281,7 @@ pub fn overlapping_spheres() -> Vec<StabilityRow> {
         (Vec3::new(0.2, 0.55, 0.05), 0.7),
         (Vec3::new(0.0, 0.7, -0.25), 1.1),
     ];
-    let mut p = vec![placed(plane(2.0, 33), Similarity::default(), false, true)];
+    let mut p = vec![receiver_plane(2.0)];
     for (c, angle) in boxes {
         let b = procedural::cube_with_hole(0.25, 0.05).expect("valid cube");
         p.push(placed(
@@ -313,12 +301,10 @@ pub fn overlapping_spheres() -> Vec<StabilityRow> {
 /// f64 brute force reference.
 pub fn inside_sphere() -> Vec<StabilityRow> {
     let cube = procedural::cube_with_hole(0.6, 0.3).expect("valid cube");
-    compare(
+    over_plane(
         "receiver_inside_caster_sphere",
-        &[
-            placed(plane(2.0, 33), Similarity::default(), false, true),
-            placed(cube, at(Vec3::new(0.0, 0.3, 0.0)), true, false),
-        ],
+        cube,
+        Vec3::new(0.0, 0.3, 0.0),
         None,
     )
 }

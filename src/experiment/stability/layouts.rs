@@ -246,11 +246,7 @@ fn distance_to_cell(layout: &HemisphereLayout, q: DVec2, t: u32) -> f64 {
 pub fn texels() -> Vec<StabilityRow> {
     let case = "layout_singular_directions";
     let mut rows = Vec::new();
-    for kind in [
-        LayoutKind::Polar,
-        LayoutKind::Rejection,
-        LayoutKind::Concentric,
-    ] {
+    for kind in LayoutKind::ALL {
         let (mut bad, mut worst, mut checked) = (0usize, 0.0f64, 0usize);
         for res in [1u32, 2, 3, 8, 32, 255, 256] {
             let layout = HemisphereLayout::new(kind, res);

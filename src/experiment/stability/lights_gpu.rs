@@ -24,7 +24,7 @@ pub fn gpu_rows(ctx: &crate::gpu::GpuContext) -> crate::experiment::Result<Vec<S
     use crate::trace::Tracer;
     let case = "gpu_sphere_lights";
     let unit = procedural::uv_sphere(1.0, 24, 48).expect("uv sphere");
-    let icosphere = |_: u32, radius: f32, centre: Vec3| -> Vec<[Vec3; 3]> {
+    let icosphere = |radius: f32, centre: Vec3| -> Vec<[Vec3; 3]> {
         (0..unit.triangle_count())
             .map(|i| unit.triangle(i).map(|v| centre + radius * v))
             .collect()
@@ -42,7 +42,6 @@ pub fn gpu_rows(ctx: &crate::gpu::GpuContext) -> crate::experiment::Result<Vec<S
         let o = opts(DVec3::new(0.0, 0.0, dl), s * dl);
         // Covering: an occluder of angular radius 1.5 α (α at least 1e-3, so that it is solid).
         let cover = icosphere(
-            4,
             (1.5 * s.max(1e-3) * d_o) as f32,
             Vec3::new(0.0, 0.0, d_o as f32),
         );
@@ -51,7 +50,7 @@ pub fn gpu_rows(ctx: &crate::gpu::GpuContext) -> crate::experiment::Result<Vec<S
         covered = max2(covered, v.iter().map(|&x| x as f64).max_of());
         // Partly: radius 0.6 α, 0.5 α off the axis; the point light's ray passes beside it.
         let off = Vec3::new((0.5 * s * d_o) as f32, 0.0, d_o as f32);
-        let part = icosphere(4, (0.6 * s.max(1e-7) * d_o) as f32, off);
+        let part = icosphere((0.6 * s.max(1e-7) * d_o) as f32, off);
         let t = GpuTracer::new(ctx, &part).map_err(gpu)?;
         let (g, _) = crate::gpu::shadows(&t, &p, &n, &rays, &o).map_err(gpu)?;
         let c = shadow_at_points(&Tracer::new(&part), &p, &n, &rays, &o);

@@ -104,35 +104,15 @@ pub fn run(out: &Path) -> Result<Vec<StabilityRow>> {
     let mut rows = Vec::new();
     for (name, case) in CASES {
         let t = std::time::Instant::now();
-        let r = case();
-        eprintln!(
-            "stability: {name}: {} row(s), {} failing ({:.2} s)",
-            r.len(),
-            r.iter().filter(|r| !r.pass).count(),
-            t.elapsed().as_secs_f64()
-        );
-        rows.extend(r);
+        rows.extend(report(name, t, case()));
     }
     // The GPU rows where an adapter runs ($VISFIELD_ADAPTER, else auto); without a Vulkan
     // driver they are left out, and said so.
-    let pref = crate::gpu::AdapterPreference::from_env();
-    let fallback = matches!(pref, crate::gpu::AdapterPreference::Auto);
-    match crate::gpu::GpuContext::new(pref) {
-        Ok(ctx) => {
-            let t = std::time::Instant::now();
-            let r = lights_gpu::gpu_rows(&ctx)?;
-            eprintln!(
-                "stability: gpu_sphere_lights: {} row(s), {} failing ({:.2} s)",
-                r.len(),
-                r.iter().filter(|r| !r.pass).count(),
-                t.elapsed().as_secs_f64()
-            );
-            rows.extend(r);
-        }
-        Err(crate::gpu::GpuError::NoAdapter) if fallback => {
-            eprintln!("stability: no Vulkan adapter, the GPU rows are left out");
-        }
-        Err(e) => return Err(Error::Gpu(e).context("stability")),
+    let pref = Some(crate::gpu::AdapterPreference::from_env());
+    let left_out = "stability: no Vulkan adapter, the GPU rows are left out";
+    if let Some(ctx) = super::relief::gpu_context(pref, "stability", left_out)? {
+        let t = std::time::Instant::now();
+        rows.extend(report("gpu_sphere_lights", t, lights_gpu::gpu_rows(&ctx)?));
     }
     crate::experiment::outputs::write_csv(&out.join("cases.csv"), &rows)?;
     let json = out.join("run.json");
@@ -164,6 +144,18 @@ pub fn run(out: &Path) -> Result<Vec<StabilityRow>> {
     }
 }
 
+/// Says on stderr how many rows case `name`, started at `t`, gave, how many fail and how long
+/// it took; returns the rows.
+fn report(name: &str, t: std::time::Instant, rows: Vec<StabilityRow>) -> Vec<StabilityRow> {
+    eprintln!(
+        "stability: {name}: {} row(s), {} failing ({:.2} s)",
+        rows.len(),
+        rows.iter().filter(|r| !r.pass).count(),
+        t.elapsed().as_secs_f64()
+    );
+    rows
+}
+
 /// The largest of `values` (0 for none; NaN propagates as a failure).
 pub fn max_of(values: impl IntoIterator<Item = f64>) -> f64 {
     values.into_iter().fold(0.0, |m, v| {
@@ -175,7 +167,6 @@ pub fn max_of(values: impl IntoIterator<Item = f64>) -> f64 {
     })
 }
 
-/// [`max_of`] for the tests: a NaN anywhere gives NaN.
 /// [`max_of`] as an iterator method: the largest value, NaN when any is.
 pub(super) trait MaxOf: Iterator<Item = f64> + Sized {
     fn max_of(self) -> f64 {
@@ -189,8 +180,4 @@ impl<I: Iterator<Item = f64>> MaxOf for I {}
 /// fails its case instead of vanishing into a running maximum.
 pub(super) fn max2(a: f64, b: f64) -> f64 {
     max_of([a, b])
-}
-
-pub fn max_of_for_tests(values: &[f64]) -> f64 {
-    max_of(values.iter().copied())
 }

@@ -17,7 +17,7 @@
 //! instance's offset): the corner's and the cube's AO do not change.
 
 use super::scene_ao::{
-    bake_field, field_ao, flattened, raycast_ao, raycast_ao_with, rebased_scene, scene, Placed,
+    bake_fields, field_ao, flattened, raycast_ao, raycast_ao_with, rebased_scene, scene, Placed,
 };
 use super::StabilityRow;
 use crate::geometry::{procedural, Similarity};
@@ -196,11 +196,7 @@ fn compare(case: &str, placements: Vec<Placement>) -> Vec<StabilityRow> {
     let placed = unit_scene();
     let k = 16;
     let unit = scene(&placed, Similarity::default());
-    let fields: Vec<_> = placed
-        .iter()
-        .filter(|p| p.2)
-        .map(|p| bake_field(&p.0))
-        .collect();
+    let fields = bake_fields(&placed);
     let mut rows = Vec::new();
     for (label, s, t) in placements {
         let sc = rebased_scene(&placed, s, t).scene;

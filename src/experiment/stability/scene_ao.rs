@@ -6,7 +6,7 @@ use crate::field::lookup::LookupOptions;
 use crate::field::scene::{FieldInstance, FieldScene};
 use crate::field::{FieldParams, Precision, VisibilityField};
 use crate::geometry::rebase::{rebase, PlacedMesh, Placement, Rebased};
-use crate::geometry::{Instance, Mesh, Scene, Similarity, Sphere};
+use crate::geometry::{Instance, Mesh, Scene, Similarity};
 use crate::render::ao::{ao_at_points, AoOptions};
 use crate::render::receivers::Receivers;
 use crate::sampling::rays::RaySet;
@@ -49,14 +49,9 @@ pub fn rebased_scene(placed: &[Placed], scale: f32, translation: glam::DVec3) ->
     rebase(&meshes)
 }
 
-/// The minimal bounding sphere of every instance's world vertices.
-pub fn scene_bounds(scene: &Scene) -> Sphere {
-    scene.bounding_sphere()
-}
-
 /// AO options of a scene: [`AoOptions::for_scene`] of its bounds.
 pub fn options(scene: &Scene) -> AoOptions {
-    AoOptions::for_scene(scene_bounds(scene))
+    AoOptions::for_scene(scene.bounding_sphere())
 }
 
 /// Ray-cast vertex AO at the receivers with `k²` rays per point (seed 1).
@@ -93,6 +88,15 @@ pub fn field_params() -> FieldParams {
 pub fn bake_field(mesh: &Mesh) -> Arc<VisibilityField> {
     let (f, _) = bake(mesh, field_params(), &BakeOptions::default()).expect("field bakes");
     Arc::new(f)
+}
+
+/// The fields of the casters of `placed`, in order ([`bake_field`]).
+pub fn bake_fields(placed: &[Placed]) -> Vec<Arc<VisibilityField>> {
+    placed
+        .iter()
+        .filter(|p| p.2)
+        .map(|p| bake_field(&p.0))
+        .collect()
 }
 
 /// Field-lookup vertex AO at the receivers with `k²` rays per point: every caster answered by

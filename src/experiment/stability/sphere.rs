@@ -102,19 +102,16 @@ impl Tally {
             self.mismatches as f64,
             0.0,
         )];
-        if with_entry {
+        let points = [
+            ("entry", with_entry, self.entry),
+            ("exit", with_exit, self.exit),
+        ];
+        for (point, _, errors) in points.into_iter().filter(|p| p.1) {
+            let quantity = format!("{what}: {point} point error (R, {} hits)", errors.len());
             rows.push(StabilityRow::new(
                 case,
-                format!("{what}: entry point error (R, {} hits)", self.entry.len()),
-                max_of(self.entry),
-                POINT_TOLERANCE_R,
-            ));
-        }
-        if with_exit {
-            rows.push(StabilityRow::new(
-                case,
-                format!("{what}: exit point error (R, {} hits)", self.exit.len()),
-                max_of(self.exit),
+                quantity,
+                max_of(errors),
                 POINT_TOLERANCE_R,
             ));
         }
