@@ -216,11 +216,6 @@ impl GpuContext {
         &self.info
     }
 
-    /// Whether this is a CPU adapter (lavapipe).
-    pub fn is_cpu_adapter(&self) -> bool {
-        is_cpu(&self.info)
-    }
-
     /// The device's limits (the adapter's best).
     pub fn limits(&self) -> &wgpu::Limits {
         &self.limits
@@ -391,18 +386,22 @@ impl GpuContext {
         Ok((bytes, kernel))
     }
 
+    /// Waits until the device has run all that was submitted; `what` says what for in the
+    /// error.
+    pub(crate) fn wait(&self, what: &'static str) -> Result<(), GpuError> {
+        let waited = self.device.poll(wgpu::PollType::wait_indefinitely());
+        waited
+            .map(drop)
+            .map_err(|source| GpuError::Poll { what, source })
+    }
+
     /// Maps a `MAP_READ` buffer and copies its contents out.
     fn read_buffer(&self, buffer: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
         let (tx, rx) = std::sync::mpsc::channel();
         buffer.map_async(wgpu::MapMode::Read, .., move |r| {
             let _ = tx.send(r);
         });
-        self.device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|source| GpuError::Poll {
-                what: "waiting for a read-back buffer's mapping",
-                source,
-            })?;
+        self.wait("waiting for a read-back buffer's mapping")?;
         rx.recv()
             .map_err(|source| GpuError::MapCallback {
                 what: "mapping a read-back buffer",
@@ -490,32 +489,33 @@ pub(crate) fn entry(binding: u32, resource: wgpu::BindingResource<'_>) -> wgpu::
     wgpu::BindGroupEntry { binding, resource }
 }
 
-/// A compute-stage storage-buffer layout entry.
-pub(crate) fn storage_layout_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
+/// A compute-stage layout entry.
+pub(crate) fn layout_entry(binding: u32, ty: wgpu::BindingType) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
+        ty,
         count: None,
     }
 }
 
+/// A compute-stage storage-buffer layout entry.
+pub(crate) fn storage_layout_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
+    buffer_layout_entry(binding, wgpu::BufferBindingType::Storage { read_only })
+}
+
 /// A compute-stage uniform-buffer layout entry.
 pub(crate) fn uniform_layout_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
+    buffer_layout_entry(binding, wgpu::BufferBindingType::Uniform)
+}
+
+fn buffer_layout_entry(binding: u32, ty: wgpu::BufferBindingType) -> wgpu::BindGroupLayoutEntry {
+    let ty = wgpu::BindingType::Buffer {
+        ty,
+        has_dynamic_offset: false,
+        min_binding_size: None,
+    };
+    layout_entry(binding, ty)
 }
 
 /// Splits `groups` workgroups into (x, y) with x ≤ `max_dim`, x·y ≥ groups.

@@ -7,7 +7,8 @@
 use super::{gpu_cells, push, row, GpuCells, Measured, Pass, Setting};
 use super::{ReliefRow, Result, ResultExt};
 use crate::gpu::ReliefPeersKernel;
-use crate::relief::peers::{render_peer, render_peer_gpu, Peer, PeerData};
+use crate::relief::peers::{render_peer, Peer, PeerData};
+use crate::relief::view::render_gpu;
 use std::time::Instant;
 
 /// The peers and their settings, with their `method` names.
@@ -56,7 +57,7 @@ pub(super) fn run_peers(
         let scores = super::score(&f, &reference.frame, &reference.populations, pass.map.width);
         let cells = match gpu {
             Some((kernel, adapter)) => gpu_cells(adapter, &f, repeats, || {
-                render_peer_gpu(kernel, pass.map, &pass.view, &peer)
+                render_gpu(kernel, pass.map, &pass.view, &peer)
                     .context(|| format!("relief peer {method}"))
             })?,
             None => GpuCells::default(),
