@@ -182,9 +182,8 @@ impl<'a> AoFieldKernel<'a> {
                     seen.len() - 1
                 }
             };
-            let q = inst.transform.rotation.inverse();
             instances.push(AoFieldInstanceGpu {
-                rotation: [q.x, q.y, q.z, q.w],
+                rotation: inst.transform.rotation.inverse().to_array(),
                 translation: inst.transform.translation.to_array(),
                 scale: inst.transform.scale,
                 field: index as u32,

@@ -251,26 +251,22 @@ impl GpuContext {
 
     /// A storage buffer of `size` bytes the kernel writes and the host reads back.
     pub(crate) fn output_buffer(&self, label: &str, size: u64) -> wgpu::Buffer {
+        let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
+        self.buffer(label, size.max(16), usage)
+    }
+
+    /// An unmapped buffer of `size` bytes.
+    fn buffer(&self, label: &str, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
         self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some(label),
-            size: size.max(16),
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            size,
+            usage,
             mapped_at_creation: false,
         })
     }
 
-    /// Compiles a WGSL compute shader with the layout derived from the shader, returning the
-    /// validation error instead of panicking.
-    pub(crate) fn compute_pipeline(
-        &self,
-        label: &str,
-        source: &str,
-        entry: &str,
-    ) -> Result<wgpu::ComputePipeline, GpuError> {
-        self.compute_pipeline_with_layout(label, source, entry, None)
-    }
-
-    /// [`Self::compute_pipeline`] with an explicit pipeline layout (`None`: derived).
+    /// Compiles a WGSL compute shader with `layout` (`None`: the layout derived from the
+    /// shader), returning the validation error instead of panicking.
     pub(crate) fn compute_pipeline_with_layout(
         &self,
         label: &str,
@@ -316,31 +312,17 @@ impl GpuContext {
         output: &wgpu::Buffer,
     ) -> Result<(Vec<u8>, Option<Duration>), GpuError> {
         let size = output.size();
-        let readback = self.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("readback"),
-            size,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let read = wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST;
+        let readback = self.buffer("readback", size, read);
         let queries = self.timestamps.then(|| {
             let set = self.device.create_query_set(&wgpu::QuerySetDescriptor {
                 label: Some("kernel time"),
                 ty: wgpu::QueryType::Timestamp,
                 count: 2,
             });
-            let resolve = self.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("timestamps"),
-                size: 16,
-                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            });
-            let read = self.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("timestamps readback"),
-                size: 16,
-                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-            (set, resolve, read)
+            let resolve_usage = wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC;
+            let resolve = self.buffer("timestamps", 16, resolve_usage);
+            (set, resolve, self.buffer("timestamps readback", 16, read))
         });
         let (gx, gy) = split_groups(groups, self.limits.max_compute_workgroups_per_dimension);
         let mut encoder = self

@@ -107,7 +107,7 @@ impl<'a> ReliefKernel<'a> {
             heights: ctx.storage_buffer("heights", bytemuck::cast_slice(&map.data)),
             dilation: ctx.storage_buffer("dilation", bytemuck::cast_slice(&zones.dilation)),
             erosion: ctx.storage_buffer("erosion", bytemuck::cast_slice(&zones.erosion)),
-            pipeline: ctx.compute_pipeline("relief", &source, "relief_main")?,
+            pipeline: ctx.compute_pipeline_with_layout("relief", &source, "relief_main", None)?,
             setup: start.elapsed(),
         })
     }

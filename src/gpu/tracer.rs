@@ -81,19 +81,18 @@ impl RayQueries {
 /// A ray-casting visibility's [`RayQueries`]: `sources` are the queries they all share
 /// ([`RAY_QUERIES_WGSL`]), then the visibility's own WGSL (its `write_closest`).
 pub(super) const fn ray_queries(sources: &'static [&'static str]) -> RayQueries {
+    let any = Integrand {
+        sources,
+        entry: "any_main",
+        own: 0,
+        slot: 0,
+    };
     RayQueries {
-        any: Integrand {
-            sources,
-            entry: "any_main",
-            own: 0,
-            slot: 0,
-        },
         closest: Integrand {
-            sources,
             entry: "closest_main",
-            own: 0,
-            slot: 0,
+            ..any
         },
+        any,
     }
 }
 
