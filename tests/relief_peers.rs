@@ -433,8 +433,7 @@ fn gpu_peers_refuse_bad_settings() {
     assert_eq!(got[0], data.cast(&map, &Peer::MaxMip, segs[0].0, segs[0].1));
     // A GPU frame is the CPU frame (every pixel's answer and fetches agreed above).
     let v = view(45.0);
-    let (gpu, _) =
-        visfield::relief::peers::render_peer_gpu(&kernel, &map, &v, &Peer::MaxMip).unwrap();
+    let (gpu, _) = visfield::relief::view::render_gpu(&kernel, &map, &v, &Peer::MaxMip).unwrap();
     let cpu = render_peer(&map, &data, &v, &Peer::MaxMip).unwrap();
     assert_eq!(gpu.hit, cpu.hit);
     assert_eq!(gpu.fetches, cpu.fetches);

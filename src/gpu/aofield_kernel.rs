@@ -32,9 +32,9 @@
 //! field's u8 `lo` and `step` follow its texels.
 
 use super::context::GpuContext;
-use super::integrand::{IntegrandParamsGpu, KernelGroup, HEADER_WGSL, RECEIVER_WGSL};
+use super::integrand::{timing, IntegrandParamsGpu, KernelGroup, HEADER_WGSL, RECEIVER_WGSL};
 use super::loop_budget::CUT_SHORT;
-use super::rays::ReceiverGpu;
+use super::rays::unrotated_receivers;
 use super::{GpuError, GpuTiming};
 use crate::aofield::storage::{Stored, CHANNELS};
 use crate::aofield::{AoField, AoFieldScene};
@@ -182,9 +182,8 @@ impl<'a> AoFieldKernel<'a> {
                     seen.len() - 1
                 }
             };
-            let q = inst.transform.rotation.inverse();
             instances.push(AoFieldInstanceGpu {
-                rotation: [q.x, q.y, q.z, q.w],
+                rotation: inst.transform.rotation.inverse().to_array(),
                 translation: inst.transform.translation.to_array(),
                 scale: inst.transform.scale,
                 field: index as u32,
@@ -244,22 +243,7 @@ impl<'a> AoFieldKernel<'a> {
     /// [`GpuError::Unsupported`] when the driver cut an invocation short.
     pub fn ao(&self, points: &[Vec3], normals: &[Vec3]) -> Result<(Vec<f32>, GpuTiming), GpuError> {
         let start = Instant::now();
-        if points.len() != normals.len() {
-            return Err(GpuError::Invalid(format!(
-                "{} points but {} normals",
-                points.len(),
-                normals.len()
-            )));
-        }
-        let recv: Vec<ReceiverGpu> = points
-            .iter()
-            .zip(normals)
-            .map(|(p, n)| ReceiverGpu {
-                position: p.to_array(),
-                normal: n.to_array(),
-                ..Default::default()
-            })
-            .collect();
+        let recv = unrotated_receivers(points, normals)?;
         let params = IntegrandParamsGpu::new(0, 0.0);
         let own: Vec<&wgpu::Buffer> = self.own.iter().collect();
         let (words, kernel, upload) =
@@ -271,14 +255,8 @@ impl<'a> AoFieldKernel<'a> {
                 self.instance_count
             )));
         }
-        Ok((
-            words.into_iter().map(f32::from_bits).collect(),
-            GpuTiming {
-                kernel,
-                upload,
-                wall: start.elapsed(),
-            },
-        ))
+        let ao = words.into_iter().map(f32::from_bits).collect();
+        Ok((ao, timing(kernel, upload, start)))
     }
 }
 

@@ -216,11 +216,6 @@ impl GpuContext {
         &self.info
     }
 
-    /// Whether this is a CPU adapter (lavapipe).
-    pub fn is_cpu_adapter(&self) -> bool {
-        is_cpu(&self.info)
-    }
-
     /// The device's limits (the adapter's best).
     pub fn limits(&self) -> &wgpu::Limits {
         &self.limits
@@ -256,26 +251,22 @@ impl GpuContext {
 
     /// A storage buffer of `size` bytes the kernel writes and the host reads back.
     pub(crate) fn output_buffer(&self, label: &str, size: u64) -> wgpu::Buffer {
+        let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
+        self.buffer(label, size.max(16), usage)
+    }
+
+    /// An unmapped buffer of `size` bytes.
+    fn buffer(&self, label: &str, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
         self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some(label),
-            size: size.max(16),
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            size,
+            usage,
             mapped_at_creation: false,
         })
     }
 
-    /// Compiles a WGSL compute shader with the layout derived from the shader, returning the
-    /// validation error instead of panicking.
-    pub(crate) fn compute_pipeline(
-        &self,
-        label: &str,
-        source: &str,
-        entry: &str,
-    ) -> Result<wgpu::ComputePipeline, GpuError> {
-        self.compute_pipeline_with_layout(label, source, entry, None)
-    }
-
-    /// [`Self::compute_pipeline`] with an explicit pipeline layout (`None`: derived).
+    /// Compiles a WGSL compute shader with `layout` (`None`: the layout derived from the
+    /// shader), returning the validation error instead of panicking.
     pub(crate) fn compute_pipeline_with_layout(
         &self,
         label: &str,
@@ -321,31 +312,17 @@ impl GpuContext {
         output: &wgpu::Buffer,
     ) -> Result<(Vec<u8>, Option<Duration>), GpuError> {
         let size = output.size();
-        let readback = self.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("readback"),
-            size,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let read = wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST;
+        let readback = self.buffer("readback", size, read);
         let queries = self.timestamps.then(|| {
             let set = self.device.create_query_set(&wgpu::QuerySetDescriptor {
                 label: Some("kernel time"),
                 ty: wgpu::QueryType::Timestamp,
                 count: 2,
             });
-            let resolve = self.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("timestamps"),
-                size: 16,
-                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            });
-            let read = self.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("timestamps readback"),
-                size: 16,
-                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-            (set, resolve, read)
+            let resolve_usage = wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC;
+            let resolve = self.buffer("timestamps", 16, resolve_usage);
+            (set, resolve, self.buffer("timestamps readback", 16, read))
         });
         let (gx, gy) = split_groups(groups, self.limits.max_compute_workgroups_per_dimension);
         let mut encoder = self
@@ -391,18 +368,22 @@ impl GpuContext {
         Ok((bytes, kernel))
     }
 
+    /// Waits until the device has run all that was submitted; `what` says what for in the
+    /// error.
+    pub(crate) fn wait(&self, what: &'static str) -> Result<(), GpuError> {
+        let waited = self.device.poll(wgpu::PollType::wait_indefinitely());
+        waited
+            .map(drop)
+            .map_err(|source| GpuError::Poll { what, source })
+    }
+
     /// Maps a `MAP_READ` buffer and copies its contents out.
     fn read_buffer(&self, buffer: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
         let (tx, rx) = std::sync::mpsc::channel();
         buffer.map_async(wgpu::MapMode::Read, .., move |r| {
             let _ = tx.send(r);
         });
-        self.device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|source| GpuError::Poll {
-                what: "waiting for a read-back buffer's mapping",
-                source,
-            })?;
+        self.wait("waiting for a read-back buffer's mapping")?;
         rx.recv()
             .map_err(|source| GpuError::MapCallback {
                 what: "mapping a read-back buffer",
@@ -490,32 +471,33 @@ pub(crate) fn entry(binding: u32, resource: wgpu::BindingResource<'_>) -> wgpu::
     wgpu::BindGroupEntry { binding, resource }
 }
 
-/// A compute-stage storage-buffer layout entry.
-pub(crate) fn storage_layout_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
+/// A compute-stage layout entry.
+pub(crate) fn layout_entry(binding: u32, ty: wgpu::BindingType) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
+        ty,
         count: None,
     }
 }
 
+/// A compute-stage storage-buffer layout entry.
+pub(crate) fn storage_layout_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
+    buffer_layout_entry(binding, wgpu::BufferBindingType::Storage { read_only })
+}
+
 /// A compute-stage uniform-buffer layout entry.
 pub(crate) fn uniform_layout_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
+    buffer_layout_entry(binding, wgpu::BufferBindingType::Uniform)
+}
+
+fn buffer_layout_entry(binding: u32, ty: wgpu::BufferBindingType) -> wgpu::BindGroupLayoutEntry {
+    let ty = wgpu::BindingType::Buffer {
+        ty,
+        has_dynamic_offset: false,
+        min_binding_size: None,
+    };
+    layout_entry(binding, ty)
 }
 
 /// Splits `groups` workgroups into (x, y) with x ≤ `max_dim`, x·y ≥ groups.

@@ -18,7 +18,7 @@
 
 use super::field_kernel::{Ao, FieldKernel, AO_QUEUE};
 use super::integrand::{self, Integrand, IntegrandParamsGpu};
-use super::rays::ReceiverGpu;
+use super::rays::records;
 use super::visibility::GpuVisibility;
 use super::{GpuError, GpuTiming};
 use crate::render::ao::AoOptions;
@@ -72,22 +72,7 @@ impl FieldKernel<'_, Ao> {
     /// distance under both selections, for comparison with [`crate::field::VisibilityField`]'s
     /// `points.nearest`, `layout.to_texel` and `sample`.
     pub fn probe(&self, u: &[Vec3], dirs: &[Vec3]) -> Result<Vec<LookupProbe>, GpuError> {
-        if u.len() != dirs.len() {
-            return Err(GpuError::Invalid(format!(
-                "{} positions but {} directions",
-                u.len(),
-                dirs.len()
-            )));
-        }
-        let recv: Vec<ReceiverGpu> = u
-            .iter()
-            .zip(dirs)
-            .map(|(p, d)| ReceiverGpu {
-                position: p.to_array(),
-                normal: d.to_array(),
-                ..Default::default()
-            })
-            .collect();
+        let recv = records(u, dirs, ("positions", "directions"), |_| (0.0, 0.0))?;
         let k = self.kernels().compiled(self, &PROBE)?;
         // The probe reads no ray directions; the shared layout wants a buffer all the same.
         let no_dirs = self.ctx.storage_buffer("no ray directions", &[]);

@@ -25,9 +25,10 @@
 //! 2 `mesh`, 3 `instances`, 4 `normals` (where bound), then the windows `win0`, `win1`, …
 //! (storage layout) or `field_tex` (texture layout), then `sphere_nodes` (with the top level).
 
-use super::context::{entry, storage_layout_entry, uniform_layout_entry, GpuContext};
+use super::context::{entry, layout_entry, uniform_layout_entry, GpuContext};
 use super::field_data::{field_words, placed, FieldInstanceGpu, PackedFields};
 use super::texture::FieldTexture;
+use super::visibility::READ_ONLY_STORAGE;
 use super::GpuError;
 use crate::field::scene::{FieldInstance, MAY_MEET_SLACK};
 use crate::field::sphere_bvh::SphereBvh;
@@ -128,33 +129,49 @@ struct FieldResources {
     top: Option<wgpu::Buffer>,
 }
 
+/// A binding of the field group: its number, type and resource.
+type Binding<'a> = (u32, wgpu::BindingType, wgpu::BindingResource<'a>);
+
 impl FieldResources {
-    /// Layout entries of the field group.
-    fn layout_entries(&self) -> Vec<wgpu::BindGroupLayoutEntry> {
-        let mut entries = vec![uniform_layout_entry(0)];
-        entries.extend((1..=TABLE_BUFFERS).map(|b| storage_layout_entry(b, true)));
-        if self.normals.is_some() {
-            entries.push(storage_layout_entry(NORMALS_BINDING, true));
+    /// The field group's bindings after the header (a uniform at binding 0), in order.
+    fn bindings(&self) -> Vec<Binding<'_>> {
+        fn storage(b: u32, buffer: &wgpu::Buffer) -> Binding<'_> {
+            (b, READ_ONLY_STORAGE, buffer.as_entire_binding())
         }
+        let mut out = vec![
+            storage(1, &self.tables),
+            storage(2, &self.mesh),
+            storage(3, &self.instances),
+        ];
+        out.extend(self.normals.iter().map(|n| storage(NORMALS_BINDING, n)));
         match &self.store {
-            FieldStore::Windows { buffers, .. } => entries.extend(
-                (0..buffers.len() as u32)
-                    .map(|i| storage_layout_entry(FIRST_STORE_BINDING + i, true)),
+            FieldStore::Windows { buffers, .. } => out.extend(
+                (FIRST_STORE_BINDING..)
+                    .zip(buffers)
+                    .map(|(b, w)| storage(b, w)),
             ),
-            FieldStore::Texture { texture, .. } => entries.push(wgpu::BindGroupLayoutEntry {
-                binding: FIRST_STORE_BINDING,
-                visibility: wgpu::ShaderStages::COMPUTE,
-                ty: wgpu::BindingType::Texture {
+            FieldStore::Texture { texture, view } => out.push((
+                FIRST_STORE_BINDING,
+                wgpu::BindingType::Texture {
                     sample_type: texture.sample_type(),
                     view_dimension: wgpu::TextureViewDimension::D3,
                     multisampled: false,
                 },
-                count: None,
-            }),
+                wgpu::BindingResource::TextureView(view),
+            )),
         }
-        if self.top.is_some() {
-            entries.push(storage_layout_entry(self.top_binding(), true));
-        }
+        out.extend(self.top.iter().map(|t| storage(self.top_binding(), t)));
+        out
+    }
+
+    /// Layout entries of the field group.
+    fn layout_entries(&self) -> Vec<wgpu::BindGroupLayoutEntry> {
+        let mut entries = vec![uniform_layout_entry(0)];
+        entries.extend(
+            self.bindings()
+                .into_iter()
+                .map(|(b, ty, _)| layout_entry(b, ty)),
+        );
         entries
     }
 
@@ -169,29 +186,8 @@ impl FieldResources {
 
     /// Bind-group entries of the field group, in the order of [`Self::layout_entries`].
     fn entries<'b>(&'b self, header: &'b wgpu::Buffer) -> Vec<wgpu::BindGroupEntry<'b>> {
-        let mut entries = vec![
-            entry(0, header.as_entire_binding()),
-            entry(1, self.tables.as_entire_binding()),
-            entry(2, self.mesh.as_entire_binding()),
-            entry(3, self.instances.as_entire_binding()),
-        ];
-        if let Some(n) = &self.normals {
-            entries.push(entry(NORMALS_BINDING, n.as_entire_binding()));
-        }
-        match &self.store {
-            FieldStore::Windows { buffers, .. } => {
-                for (i, w) in buffers.iter().enumerate() {
-                    entries.push(entry(FIRST_STORE_BINDING + i as u32, w.as_entire_binding()));
-                }
-            }
-            FieldStore::Texture { view, .. } => entries.push(entry(
-                FIRST_STORE_BINDING,
-                wgpu::BindingResource::TextureView(view),
-            )),
-        }
-        if let Some(top) = &self.top {
-            entries.push(entry(self.top_binding(), top.as_entire_binding()));
-        }
+        let mut entries = vec![entry(0, header.as_entire_binding())];
+        entries.extend(self.bindings().into_iter().map(|(b, _, r)| entry(b, r)));
         entries
     }
 
@@ -391,13 +387,7 @@ impl FieldBinding {
                 .write_buffer(top, 0, bytemuck::cast_slice(&sphere_nodes(instances)));
         }
         ctx.queue.submit([]);
-        ctx.device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|source| GpuError::Poll {
-                what: "waiting for the instances' upload",
-                source,
-            })?;
-        Ok(())
+        ctx.wait("waiting for the instances' upload")
     }
 
     /// Field instances bound.

@@ -241,10 +241,9 @@ impl PackedFields {
 /// entries kept.
 pub(super) fn placed(inst: &FieldInstance, record: FieldInstanceGpu) -> FieldInstanceGpu {
     let tr = &inst.transform;
-    let q = tr.rotation.inverse();
     let b = &inst.field.bounds;
     FieldInstanceGpu {
-        rotation: [q.x, q.y, q.z, q.w],
+        rotation: tr.rotation.inverse().to_array(),
         translation: tr.translation.to_array(),
         scale: tr.scale,
         world_center: inst.world_center.to_array(),

@@ -10,10 +10,10 @@
 //! estimators that cast no ray (SDF cones, AO fields) share the group and its header.
 
 pub(crate) use super::kernel_group::{Integrand, IntegrandParamsGpu, KernelGroup, HEADER_WGSL};
-use super::loop_budget::{free_fractions, weighted_fractions, weighted_means, Dispatched};
+use super::loop_budget::{free_fractions, weighted_means, Dispatched};
 use super::rays::{base_directions, receivers, ReceiverGpu};
 use super::reflect_rays::{lobe_directions, rays_per_point, shading};
-use super::shadow_rays::{check_binding, cone_samples, light_records, lights};
+use super::shadow_rays::{check_binding, cone_samples, light_records};
 use super::visibility::GpuVisibility;
 use super::{GpuError, GpuTiming};
 use crate::render::ao::AoOptions;
@@ -57,26 +57,29 @@ pub(crate) const REFLECTIONS: Integrand = Integrand {
     slot: 2,
 };
 
-/// The dispatch of `integrand` on `vis` over `recv` with `own` inputs, `words_per_thread`
-/// words per invocation, as the split functions of src/gpu/loop_budget.rs call it with
-/// (rays per invocation, invocations per point).
-fn dispatcher<'a>(
+/// The dispatch of `integrand` on `vis` (with `group` as its group 1; `None`: the
+/// visibility's own, [`GpuVisibility::bind_group`]) over `recv` with `own` inputs,
+/// `words_per_thread` words per invocation (`None`: one a ray, the rays per invocation), as
+/// the split functions of src/gpu/loop_budget.rs call it with (rays per invocation,
+/// invocations per point).
+pub(crate) fn dispatcher<'a>(
     vis: &'a dyn GpuVisibility,
     integrand: &Integrand,
+    group: Option<wgpu::BindGroup>,
     params: IntegrandParamsGpu,
     recv: &'a [ReceiverGpu],
     own: &'a [&'a wgpu::Buffer],
-    words_per_thread: u32,
+    words_per_thread: Option<u32>,
 ) -> Result<impl FnMut(u32, u32) -> Result<Dispatched, GpuError> + 'a, GpuError> {
     let kernel = vis.kernels().compiled(vis, integrand)?;
-    let group = vis.bind_group();
+    let group = group.unwrap_or_else(|| vis.bind_group());
     Ok(move |per_invocation: u32, per_point: u32| {
         let params = IntegrandParamsGpu {
             rays_per_invocation: per_invocation,
             invocations_per_point: per_point,
             ..params
         };
-        let shape = (per_point, words_per_thread);
+        let shape = (per_point, words_per_thread.unwrap_or(per_invocation));
         let groups = [&group];
         (kernel.group).run(
             vis.context(),
@@ -123,7 +126,7 @@ pub(crate) fn ao_with(
         ..IntegrandParamsGpu::new(rays_n, opts.offset)
     };
     let own = [&dirs];
-    let each = dispatcher(vis, integrand, params, &recv, &own, 1)?;
+    let each = dispatcher(vis, integrand, None, params, &recv, &own, Some(1))?;
     let budget = vis.kernels().budget(integrand.slot);
     let (ao, kernel, upload) = free_fractions(budget, rays_n, recv.len(), each)?;
     Ok((ao, timing(kernel, upload, start)))
@@ -142,7 +145,7 @@ pub fn shadows(
 ) -> Result<(Vec<f32>, GpuTiming), GpuError> {
     let start = Instant::now();
     let samples = cone_samples(rays)?;
-    let light_records = lights(opts);
+    let light_records = light_records(&opts.lights);
     let recv = receivers(points, normals, rays)?;
     let ctx = vis.context();
     check_binding::<super::shadow_rays::ConeSampleGpu>(ctx, "cone samples", samples.len())?;
@@ -155,9 +158,9 @@ pub fn shadows(
         .ok_or_else(|| GpuError::Invalid("shadow rays per point overflow u32".into()))?;
     let params = IntegrandParamsGpu::new(rays_n, opts.offset);
     let own = [&samples_buf, &lights_buf];
-    let each = dispatcher(vis, &SHADOWS, params, &recv, &own, 2)?;
+    let each = dispatcher(vis, &SHADOWS, None, params, &recv, &own, Some(2))?;
     let budget = vis.kernels().budget(SHADOWS.slot);
-    let (values, kernel, upload) = weighted_fractions(budget, rays_n, recv.len(), each)?;
+    let (values, kernel, upload) = weighted_means(budget, rays_n, recv.len(), 1.0, each)?;
     Ok((values, timing(kernel, upload, start)))
 }
 
@@ -186,7 +189,7 @@ pub fn reflections(
     let rays_n = rays_per_point(rays, opts.gloss);
     let params = IntegrandParamsGpu::new(rays_n, opts.offset);
     let own = [&lobe_buf, &lights_buf, &shading_buf];
-    let each = dispatcher(vis, &REFLECTIONS, params, &recv, &own, 2)?;
+    let each = dispatcher(vis, &REFLECTIONS, None, params, &recv, &own, Some(2))?;
     let budget = vis.kernels().budget(REFLECTIONS.slot);
     let (values, kernel, upload) = weighted_means(budget, rays_n, recv.len(), 0.0, each)?;
     Ok((values, timing(kernel, upload, start)))

@@ -13,7 +13,7 @@
 //! counts, or lit and total weights, the host adds up), and each invocation ends with a loop
 //! whose trip count only the host knows (shaders/loop_budget.wgsl): when that loop is cut short
 //! the budget was spent, the invocation writes [`CUT_SHORT`], and [`complete_runs`] (under
-//! [`free_fractions`] and [`weighted_fractions`]) halves the rays per invocation and runs
+//! [`free_fractions`] and [`weighted_means`]) halves the rays per invocation and runs
 //! again. Drivers without such a budget never cut anything short.
 
 use super::GpuError;
@@ -110,26 +110,14 @@ pub(crate) fn free_fractions(
     Ok((ao, kernel, upload))
 }
 
-/// Light fractions (`render::shadow::light_fraction`) of `points` points with `rays` shadow
-/// rays each, from `dispatch(rays_per_invocation, invocations_per_point)`, which returns two
-/// words per invocation, point-major: the f32 bits of the weight of the invocation's unblocked
-/// rays and of all its rays (or [`CUT_SHORT`] first, [`complete_runs`]). A point's partial sums
-/// are added in f64 and divided as on the host; a point without weight is lit (1).
-///
-/// Errors: [`GpuError::Unsupported`] when even one ray per invocation is cut short.
-pub(crate) fn weighted_fractions(
-    split: &AtomicU32,
-    rays: u32,
-    points: usize,
-    dispatch: impl FnMut(u32, u32) -> Result<Dispatched, GpuError>,
-) -> Result<(Vec<f32>, Option<Duration>, Duration), GpuError> {
-    weighted_means(split, rays, points, 1.0, dispatch)
-}
-
-/// [`weighted_fractions`] with `empty` for a point without weight: the means of reflected
-/// radiance (`render::reflect::reflect_at_points`), whose invocations write the sum of their
-/// kept rays' radiance and the number of those rays, and whose points without a kept ray
-/// are 0.
+/// Light fractions (`render::shadow::light_fraction`, `empty` 1) of `points` points with
+/// `rays` shadow rays each, from `dispatch(rays_per_invocation, invocations_per_point)`, which
+/// returns two words per invocation, point-major: the f32 bits of the weight of the
+/// invocation's unblocked rays and of all its rays (or [`CUT_SHORT`] first, [`complete_runs`]).
+/// A point's partial sums are added in f64 and divided as on the host; a point without weight
+/// is `empty`. With `empty` 0, the means of reflected radiance
+/// (`render::reflect::reflect_at_points`), whose invocations write the sum of their kept rays'
+/// radiance and the number of those rays, and whose points without a kept ray are 0.
 ///
 /// Errors: [`GpuError::Unsupported`] when even one ray per invocation is cut short.
 pub(crate) fn weighted_means(
@@ -289,7 +277,7 @@ mod tests {
             }
             Ok((words, None, Duration::ZERO))
         };
-        let (v, _, _) = weighted_fractions(&split, rays, points, dispatch).unwrap();
+        let (v, _, _) = weighted_means(&split, rays, points, 1.0, dispatch).unwrap();
         assert_eq!(calls, vec![4, 2]);
         assert_eq!(split.load(Ordering::Relaxed), 2);
         for (p, &f) in v.iter().enumerate() {
@@ -297,11 +285,12 @@ mod tests {
             assert_eq!(f, (lit as f64 / 21.0) as f32, "point {p}");
         }
         // No rays, or no weight: lit.
-        let (v, _, _) = weighted_fractions(&split, 0, 2, |_, _| unreachable!()).unwrap();
+        let (v, _, _) = weighted_means(&split, 0, 2, 1.0, |_, _| unreachable!()).unwrap();
         assert_eq!(v, vec![1.0; 2]);
-        let (v, _, _) =
-            weighted_fractions(&split, 2, 1, |_, _| Ok((vec![0, 0], None, Duration::ZERO)))
-                .unwrap();
+        let (v, _, _) = weighted_means(&split, 2, 1, 1.0, |_, _| {
+            Ok((vec![0, 0], None, Duration::ZERO))
+        })
+        .unwrap();
         assert_eq!(v, vec![1.0]);
     }
 

@@ -25,8 +25,8 @@
 
 use super::context::GpuContext;
 use super::tracer::{
-    any_hits, closest_hits, ray_queries, CasterHeaderGpu, RayQueries, CASTER_HEADER_WGSL,
-    RAY_QUERIES_WGSL,
+    any_hits, closest_hits, ray_queries, triangle_records, CasterHeaderGpu, RayQueries,
+    CASTER_HEADER_WGSL, RAY_QUERIES_WGSL,
 };
 use super::visibility::{GpuVisibility, Kernels, VisibilityGroup, READ_ONLY_STORAGE};
 use super::{GpuError, GpuTiming};
@@ -129,12 +129,8 @@ impl Placement<'_> {
             .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
         encoder.build_acceleration_structures(blas, [&*tlas]);
         self.ctx.queue.submit([encoder.finish()]);
-        (self.ctx.device)
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|source| GpuError::Poll {
-                what: "waiting for the acceleration structures' build",
-                source,
-            })?;
+        self.ctx
+            .wait("waiting for the acceleration structures' build")?;
         Ok(instances.len() as u32)
     }
 }
@@ -250,12 +246,7 @@ impl<'a> RayQueryScene<'a> {
         let mut first_triangle = Vec::with_capacity(meshes.len());
         for tris in meshes {
             first_triangle.push((data.len() / 3) as u32);
-            for i in morton_order(tris) {
-                let [a, b, c] = tris[i as usize];
-                data.push([a.x, a.y, a.z, f32::from_bits(i)]);
-                data.push(b.extend(0.0).to_array());
-                data.push(c.extend(0.0).to_array());
-            }
+            data.extend(triangle_records(tris, &morton_order(tris)));
         }
         if data.is_empty() {
             data.resize(3, [0.0; 4]);

@@ -50,11 +50,35 @@ pub(crate) fn receivers(
     normals: &[Vec3],
     rays: &RaySet,
 ) -> Result<Vec<ReceiverGpu>, GpuError> {
+    records(points, normals, ("points", "normals"), |i| {
+        rotation(rays, i)
+    })
+}
+
+/// Receiver records without a rotation (the direct estimators, which read no ray set).
+pub(crate) fn unrotated_receivers(
+    points: &[Vec3],
+    normals: &[Vec3],
+) -> Result<Vec<ReceiverGpu>, GpuError> {
+    records(points, normals, ("points", "normals"), |_| (0.0, 0.0))
+}
+
+/// Receiver records for `points` and `normals` (the probe's positions and directions), the
+/// lists named by `names` in the error when their lengths differ, point i turned by
+/// `rotation(i)`, (cos, sin).
+pub(crate) fn records(
+    points: &[Vec3],
+    normals: &[Vec3],
+    names: (&str, &str),
+    rotation: impl Fn(u32) -> (f32, f32),
+) -> Result<Vec<ReceiverGpu>, GpuError> {
     if points.len() != normals.len() {
         return Err(GpuError::Invalid(format!(
-            "{} points but {} normals",
+            "{} {} but {} {}",
             points.len(),
-            normals.len()
+            names.0,
+            normals.len(),
+            names.1
         )));
     }
     Ok(points
@@ -62,7 +86,7 @@ pub(crate) fn receivers(
         .zip(normals)
         .enumerate()
         .map(|(i, (p, n))| {
-            let (c, s) = rotation(rays, i as u32);
+            let (c, s) = rotation(i as u32);
             ReceiverGpu {
                 position: p.to_array(),
                 rotation_cos: c,

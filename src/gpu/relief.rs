@@ -12,6 +12,7 @@
 //! shader over the rasterised prism; zones in f32, not 8-bit RGBA textures.
 
 use super::context::{entry, GpuContext};
+use super::integrand::timing;
 use super::loop_budget::{COMPLETION_TRIPS, CUT_SHORT};
 use super::{GpuError, GpuTiming};
 use crate::relief::{Cast, CastParams, HeightMap, SafetyZones};
@@ -54,11 +55,12 @@ const _: () = assert!(std::mem::offset_of!(ReliefParamsGpu, trips) == 48);
 /// The hit word of a ray that misses, in both relief kernels.
 const MISS: u32 = u32::MAX;
 
-/// Loop iterations one invocation may take: lavapipe ends every invocation's loops after
-/// 65,535 iterations in all, silently (see `loop_budget`). Settings that could need more are
-/// refused before the dispatch; an invocation cut short all the same (the shared completion
-/// check, `loops_completed`) makes the call an error, never a wrong answer.
-const MAX_ITERATIONS: f64 = 60_000.0;
+/// Loop iterations one invocation of either relief kernel may take: lavapipe ends every
+/// invocation's loops after 65,535 iterations in all, silently (see `loop_budget`). Settings
+/// that could need more are refused before the dispatch; an invocation cut short all the same
+/// (the shared completion check, `loops_completed`) makes the call an error, never a wrong
+/// answer.
+pub(super) const MAX_ITERATIONS: f64 = 60_000.0;
 
 /// One displacement map and its safety zones, uploaded.
 pub struct ReliefKernel<'a> {
@@ -105,7 +107,7 @@ impl<'a> ReliefKernel<'a> {
             heights: ctx.storage_buffer("heights", bytemuck::cast_slice(&map.data)),
             dilation: ctx.storage_buffer("dilation", bytemuck::cast_slice(&zones.dilation)),
             erosion: ctx.storage_buffer("erosion", bytemuck::cast_slice(&zones.erosion)),
-            pipeline: ctx.compute_pipeline("relief", &source, "relief_main")?,
+            pipeline: ctx.compute_pipeline_with_layout("relief", &source, "relief_main", None)?,
             setup: start.elapsed(),
         })
     }
@@ -156,11 +158,13 @@ impl<'a> ReliefKernel<'a> {
                 params.samples_per_unit, params.bisections
             )));
         }
-        let ctx = self.ctx;
-        cast_segments(ctx, &self.pipeline, segments, start, |part, stride, out| {
-            let uniform = ReliefParamsGpu {
+        let layout = self.pipeline.get_bind_group_layout(0);
+        let maps = [&self.heights, &self.dilation, &self.erosion];
+        let kernel = (&self.pipeline, &layout, "relief");
+        cast_segments(self.ctx, kernel, maps, segments, start, |count, stride| {
+            ReliefParamsGpu {
                 size: self.size,
-                count: part.len() as u32,
+                count,
                 stride,
                 samples_per_unit: params.samples_per_unit,
                 bisections: params.bisections,
@@ -171,21 +175,7 @@ impl<'a> ReliefKernel<'a> {
                 step: 1.0 / params.samples_per_unit,
                 _pad1: 0,
                 _pad2: 0,
-            };
-            let uniform = ctx.uniform_buffer("relief params", bytemuck::bytes_of(&uniform));
-            let rays = ctx.storage_buffer("segments", bytemuck::cast_slice(part));
-            ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("relief"),
-                layout: &self.pipeline.get_bind_group_layout(0),
-                entries: &[
-                    entry(0, uniform.as_entire_binding()),
-                    entry(1, self.heights.as_entire_binding()),
-                    entry(2, self.dilation.as_entire_binding()),
-                    entry(3, self.erosion.as_entire_binding()),
-                    entry(4, rays.as_entire_binding()),
-                    entry(5, out.as_entire_binding()),
-                ],
-            })
+            }
         })
     }
 }
@@ -194,22 +184,44 @@ impl<'a> ReliefKernel<'a> {
 pub(super) type SegmentGpu = [[f32; 4]; 2];
 
 /// Runs a relief kernel (`shaders/relief.wgsl` or `shaders/relief_peers.wgsl`, which share the
-/// segment input and the (hit, fetches) output) over `segments` in batches: `bind(part, stride,
-/// out)` binds one batch's segments and parameters. The casts, or an error when the driver's
-/// loop budget cut any ray short; `start` is when the caller began (the wall time includes its
-/// checks).
-pub(super) fn cast_segments(
+/// segment input and the (hit, fetches) output) over `segments` in batches: `kernel` is its
+/// pipeline, the layout of its group and the group's label, the group binds `params(count,
+/// stride)` of a batch (a uniform at binding 0), `maps` (bindings 1 to 3), the batch's
+/// segments and the output. The casts, or an error when the driver's loop budget cut any ray
+/// short; `start` is when the caller began (the wall time includes its checks).
+pub(super) fn cast_segments<P: bytemuck::Pod>(
     ctx: &GpuContext,
-    pipeline: &wgpu::ComputePipeline,
+    (pipeline, layout, label): (&wgpu::ComputePipeline, &wgpu::BindGroupLayout, &str),
+    maps: [&wgpu::Buffer; 3],
     segments: &[(Vec3, Vec3)],
     start: Instant,
-    bind: impl FnMut(&[SegmentGpu], u32, &wgpu::Buffer) -> wgpu::BindGroup,
+    params: impl Fn(u32, u32) -> P,
 ) -> Result<(Vec<Cast>, GpuTiming), GpuError> {
     let data: Vec<SegmentGpu> = segments
         .iter()
         .map(|(e, x)| [e.extend(1.0).to_array(), x.extend(0.0).to_array()])
         .collect();
     let packed = start.elapsed();
+    let bind = |part: &[SegmentGpu], stride, out: &wgpu::Buffer| {
+        let uniform = params(part.len() as u32, stride);
+        let uniform = ctx.uniform_buffer(label, bytemuck::bytes_of(&uniform));
+        let rays = ctx.storage_buffer("segments", bytemuck::cast_slice(part));
+        let mut entries = vec![entry(0, uniform.as_entire_binding())];
+        entries.extend(
+            (1..)
+                .zip(maps)
+                .map(|(i, m)| entry(i, m.as_entire_binding())),
+        );
+        entries.extend([
+            entry(4, rays.as_entire_binding()),
+            entry(5, out.as_entire_binding()),
+        ]);
+        ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(label),
+            layout,
+            entries: &entries,
+        })
+    };
     let (words, kernel, upload) =
         ctx.run_batched(pipeline, &[], &data, "relief segment", (1, 2), bind)?;
     let upload = packed + upload;
@@ -228,14 +240,7 @@ pub(super) fn cast_segments(
             fetches: w[1],
         })
         .collect();
-    Ok((
-        casts,
-        GpuTiming {
-            kernel,
-            upload,
-            wall: start.elapsed(),
-        },
-    ))
+    Ok((casts, timing(kernel, upload, start)))
 }
 
 impl crate::relief::view::SegmentCaster<CastParams> for ReliefKernel<'_> {

@@ -11,9 +11,9 @@
 //! Deviation from the papers: compute shaders over host-clipped segments, storage buffers read
 //! with the CPU's formulas instead of texture units (parity with the CPU, not speed).
 
-use super::context::{entry, storage_layout_entry, uniform_layout_entry, GpuContext};
+use super::context::{storage_layout_entry, uniform_layout_entry, GpuContext};
 use super::loop_budget::COMPLETION_TRIPS;
-use super::relief::cast_segments;
+use super::relief::{cast_segments, MAX_ITERATIONS};
 use super::{GpuError, GpuTiming};
 use crate::relief::peers::{in_prism, Peer, PeerData};
 use crate::relief::{Cast, HeightMap};
@@ -55,10 +55,6 @@ const _: () = assert!(std::mem::offset_of!(PeersParamsGpu, offsets) == 48);
 
 /// Max-mip levels the uniform holds: maps up to 32,766 texels a side.
 const MAX_LEVELS: usize = 16;
-
-/// Loop iterations one invocation may take (lavapipe stops every invocation's loops after
-/// 65,535 in all: `loop_budget`); settings that could need more are refused.
-const MAX_ITERATIONS: f64 = 60_000.0;
 
 /// One map and its peer structures, uploaded, with the three kernels compiled.
 pub struct ReliefPeersKernel<'a> {
@@ -214,11 +210,12 @@ impl<'a> ReliefPeersKernel<'a> {
             Peer::Cone { steps } | Peer::RelaxedCone { steps, .. } => steps,
             _ => 0,
         };
-        let ctx = self.ctx;
-        cast_segments(ctx, pipeline, segments, start, |part, stride, out| {
-            let uniform = PeersParamsGpu {
+        let maps = [&self.heights, &self.mips, cones];
+        let kernel = (pipeline, &self.group, "relief peers");
+        cast_segments(self.ctx, kernel, maps, segments, start, |count, stride| {
+            PeersParamsGpu {
                 size: self.size,
-                count: part.len() as u32,
+                count,
                 stride,
                 mip_size: self.mip_size,
                 mip_top: self.mip_top,
@@ -229,21 +226,7 @@ impl<'a> ReliefPeersKernel<'a> {
                 _pad0: 0,
                 _pad1: 0,
                 offsets: self.offsets,
-            };
-            let uniform = ctx.uniform_buffer("peers params", bytemuck::bytes_of(&uniform));
-            let rays = ctx.storage_buffer("segments", bytemuck::cast_slice(part));
-            ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("relief peers"),
-                layout: &self.group,
-                entries: &[
-                    entry(0, uniform.as_entire_binding()),
-                    entry(1, self.heights.as_entire_binding()),
-                    entry(2, self.mips.as_entire_binding()),
-                    entry(3, cones.as_entire_binding()),
-                    entry(4, rays.as_entire_binding()),
-                    entry(5, out.as_entire_binding()),
-                ],
-            })
+            }
         })
     }
 }

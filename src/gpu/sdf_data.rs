@@ -101,9 +101,8 @@ pub(super) fn pack(scene: &SdfScene) -> Result<PackedSdf, GpuError> {
                 seen.len() - 1
             }
         };
-        let q = inst.transform.rotation.inverse();
         packed.instances.push(SdfInstanceGpu {
-            rotation: [q.x, q.y, q.z, q.w],
+            rotation: inst.transform.rotation.inverse().to_array(),
             translation: inst.transform.translation.to_array(),
             scale: inst.transform.scale,
             volume: index as u32,

@@ -37,9 +37,9 @@
 //! point inside the light or below its horizon) is still marched, and its value unused.
 
 use super::context::GpuContext;
-use super::integrand::{self, timing, Integrand, IntegrandParamsGpu, RECEIVER_WGSL};
+use super::integrand::{self, dispatcher, timing, Integrand, IntegrandParamsGpu, RECEIVER_WGSL};
 use super::loop_budget::ray_words;
-use super::rays::ReceiverGpu;
+use super::rays::unrotated_receivers;
 use super::sdf_data::pack;
 use super::shadow_rays::check_binding;
 use super::visibility::{GpuVisibility, Kernels, VisibilityGroup};
@@ -207,51 +207,21 @@ impl<'a> SdfKernel<'a> {
         tan: f32,
         trace: &ConeTrace,
     ) -> Result<(Vec<f32>, Option<Duration>, Duration), GpuError> {
-        if points.len() != normals.len() {
-            return Err(GpuError::Invalid(format!(
-                "{} points but {} normals",
-                points.len(),
-                normals.len()
-            )));
-        }
-        let recv: Vec<ReceiverGpu> = points
-            .iter()
-            .zip(normals)
-            .map(|(p, n)| ReceiverGpu {
-                position: p.to_array(),
-                normal: n.to_array(),
-                ..Default::default()
-            })
-            .collect();
+        let recv = unrotated_receivers(points, normals)?;
         check_binding::<[f32; 4]>(self.ctx, "cones", dirs.len())?;
         let buf = self.ctx.storage_buffer("cones", bytemuck::cast_slice(dirs));
         let params = IntegrandParamsGpu {
             tmax: tmax.min(f32::MAX),
             ..IntegrandParamsGpu::new(dirs.len() as u32, offset)
         };
-        let k = self.kernels.compiled(self, integrand)?;
         let group = self.header(trace.max_steps, (trace.step, tan));
+        let own = [&buf];
+        let each = dispatcher(self, integrand, Some(group), params, &recv, &own, None)?;
         let (words, kernel, upload) = ray_words(
             &self.cones_per_invocation,
             dirs.len() as u32,
             recv.len(),
-            |per_invocation, per_point| {
-                let params = IntegrandParamsGpu {
-                    rays_per_invocation: per_invocation,
-                    invocations_per_point: per_point,
-                    ..params
-                };
-                let shape = (per_point, per_invocation);
-                (k.group).run(
-                    self.ctx,
-                    &k.pipeline,
-                    &[&group],
-                    params,
-                    &recv,
-                    &[&buf],
-                    shape,
-                )
-            },
+            each,
         )?;
         Ok((
             words.into_iter().map(f32::from_bits).collect(),

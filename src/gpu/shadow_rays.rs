@@ -16,7 +16,7 @@
 
 use super::context::GpuContext;
 use super::GpuError;
-use crate::render::shadow::{ShadowOptions, SphereLight};
+use crate::render::shadow::SphereLight;
 use crate::sampling::rays::RaySet;
 use crate::sampling::warp::square_to_concentric_disk;
 
@@ -53,11 +53,6 @@ pub(crate) struct ConeSampleGpu {
 }
 const _: () = assert!(std::mem::size_of::<ConeSampleGpu>() == 16);
 const _: () = assert!(std::mem::offset_of!(ConeSampleGpu, radius_sq) == 8);
-
-/// The lights of `opts`, as the kernels read them.
-pub(crate) fn lights(opts: &ShadowOptions) -> Vec<LightGpu> {
-    light_records(&opts.lights)
-}
 
 /// `lights` as the kernels read them.
 pub(crate) fn light_records(lights: &[SphereLight]) -> Vec<LightGpu> {

@@ -242,17 +242,15 @@ impl FieldTexture {
     /// The texture binding (`@group(group) @binding(binding)`) and
     /// `load_element(coords) -> u32` (raw bits of one element).
     pub fn prelude(&self, group: u32, binding: u32) -> String {
-        if self.format == wgpu::TextureFormat::R32Float {
-            format!(
-                "@group({group}) @binding({binding}) var field_tex: texture_3d<f32>;\n\
-                 fn load_element(c: vec3<u32>) -> u32 {{ return bitcast<u32>(textureLoad(field_tex, c, 0).x); }}\n"
-            )
+        let (ty, load) = if self.format == wgpu::TextureFormat::R32Float {
+            ("f32", "bitcast<u32>(textureLoad(field_tex, c, 0).x)")
         } else {
-            format!(
-                "@group({group}) @binding({binding}) var field_tex: texture_3d<u32>;\n\
-                 fn load_element(c: vec3<u32>) -> u32 {{ return textureLoad(field_tex, c, 0).x; }}\n"
-            )
-        }
+            ("u32", "textureLoad(field_tex, c, 0).x")
+        };
+        format!(
+            "@group({group}) @binding({binding}) var field_tex: texture_3d<{ty}>;\n\
+             fn load_element(c: vec3<u32>) -> u32 {{ return {load}; }}\n"
+        )
     }
 
     /// The sample type of the texture binding: unfilterable float for r32float (read with

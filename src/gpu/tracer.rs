@@ -81,19 +81,18 @@ impl RayQueries {
 /// A ray-casting visibility's [`RayQueries`]: `sources` are the queries they all share
 /// ([`RAY_QUERIES_WGSL`]), then the visibility's own WGSL (its `write_closest`).
 pub(super) const fn ray_queries(sources: &'static [&'static str]) -> RayQueries {
+    let any = Integrand {
+        sources,
+        entry: "any_main",
+        own: 0,
+        slot: 0,
+    };
     RayQueries {
-        any: Integrand {
-            sources,
-            entry: "any_main",
-            own: 0,
-            slot: 0,
-        },
         closest: Integrand {
-            sources,
             entry: "closest_main",
-            own: 0,
-            slot: 0,
+            ..any
         },
+        any,
     }
 }
 
@@ -226,10 +225,7 @@ pub(super) fn packed_cwbvh(
         return Err(GpuError::Invalid("triangle vertices must be finite".into()));
     }
     check_binding::<[f32; 4]>(ctx, "triangle vertices", triangles.len() * 3)?;
-    let (lo, hi) = triangles.iter().flatten().fold(
-        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-        |(lo, hi), &v| (lo.min(v), hi.max(v)),
-    );
+    let (lo, hi) = bounding_box(triangles);
     let extent = (hi - lo).max_element().max(0.0);
     let pad = glam::Vec3A::splat(BOX_PAD_RELATIVE * extent);
     let boxes: Vec<Aabb> = triangles
@@ -243,14 +239,31 @@ pub(super) fn packed_cwbvh(
     // quadratic time (fans, nested or turned copies of a triangle).
     let bvh = crate::trace::bvh_build::build(&boxes);
     check_binding::<CwBvhNode>(ctx, "CWBVH nodes", bvh.nodes.len())?;
-    let mut tri_data: Vec<[f32; 4]> = Vec::with_capacity(bvh.primitive_indices.len() * 3);
-    for &i in &bvh.primitive_indices {
-        let [a, b, c] = triangles[i as usize];
-        tri_data.push([a.x, a.y, a.z, f32::from_bits(i)]);
-        tri_data.push(b.extend(0.0).to_array());
-        tri_data.push(c.extend(0.0).to_array());
-    }
+    let tri_data = triangle_records(triangles, &bvh.primitive_indices);
     Ok((bvh.nodes, tri_data))
+}
+
+/// The box of every vertex of `triangles` (lo, hi).
+pub(super) fn bounding_box(triangles: &[[Vec3; 3]]) -> (Vec3, Vec3) {
+    triangles.iter().flatten().fold(
+        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+        |(lo, hi), &v| (lo.min(v), hi.max(v)),
+    )
+}
+
+/// `triangles` in the order `order`, three `vec4` each: v0 with the original index's bits in
+/// w, v1, v2.
+pub(super) fn triangle_records(triangles: &[[Vec3; 3]], order: &[u32]) -> Vec<[f32; 4]> {
+    (order.iter())
+        .flat_map(|&i| {
+            let [a, b, c] = triangles[i as usize];
+            [
+                [a.x, a.y, a.z, f32::from_bits(i)],
+                b.extend(0.0).to_array(),
+                c.extend(0.0).to_array(),
+            ]
+        })
+        .collect()
 }
 
 /// One query ray per invocation of `integrand` (a ray-casting visibility's own any- or

@@ -26,7 +26,7 @@ use super::context::GpuContext;
 use super::integrand;
 use super::shadow_rays::check_binding;
 use super::tracer::{
-    any_hits, closest_hits, packed_cwbvh, ray_queries, CasterHeaderGpu, RayQueries,
+    any_hits, bounding_box, closest_hits, packed_cwbvh, ray_queries, CasterHeaderGpu, RayQueries,
     CASTER_HEADER_WGSL, RAY_QUERIES_WGSL,
 };
 use super::visibility::{GpuVisibility, Kernels, VisibilityGroup, READ_ONLY_STORAGE};
@@ -279,13 +279,7 @@ impl<'a> GpuTwoLevel<'a> {
         q.write_buffer(&self.top.order, 0, bytemuck::cast_slice(&tree.order));
         q.write_buffer(&self.top.placements, 0, bytemuck::cast_slice(&placements));
         q.submit([]);
-        self.ctx
-            .device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|source| GpuError::Poll {
-                what: "waiting for the top level's upload",
-                source,
-            })?;
+        self.ctx.wait("waiting for the top level's upload")?;
         self.top_node_count = nodes.len() as u32;
         self.instance_count = instances.len() as u32;
         Ok(())
@@ -328,10 +322,7 @@ impl<'a> GpuTwoLevel<'a> {
 /// A mesh's model-space bounding sphere as [`crate::trace::two_level::TwoLevel`] takes it: the
 /// centre of its box and the farthest vertex from it.
 fn bounds(tris: &[[Vec3; 3]]) -> (Vec3, f32) {
-    let (lo, hi) = tris.iter().flatten().fold(
-        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-        |(lo, hi), &v| (lo.min(v), hi.max(v)),
-    );
+    let (lo, hi) = bounding_box(tris);
     let c = 0.5 * (lo + hi);
     let r = (tris.iter().flatten())
         .map(|v| v.distance(c))

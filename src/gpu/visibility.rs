@@ -13,7 +13,7 @@
 //! SDF sphere trace ([`super::SdfKernel`]) are three visibilities, and any other (a test's
 //! analytic sphere, tests/gpu_toy_visibility.rs) runs the same integrands.
 
-use super::context::{entry, storage_layout_entry, uniform_layout_entry, GpuContext};
+use super::context::{entry, layout_entry, storage_layout_entry, uniform_layout_entry, GpuContext};
 use super::kernel_group::{Integrand, KernelGroup, HEADER_WGSL};
 use super::GpuError;
 use std::collections::HashMap;
@@ -137,14 +137,9 @@ impl VisibilityGroup {
         let mut entries = vec![uniform_layout_entry(0)];
         entries.extend((1..=data.len() as u32).map(|b| storage_layout_entry(b, true)));
         entries.extend(
-            (more.iter().zip(data.len() as u32 + 1..)).map(|(&ty, binding)| {
-                wgpu::BindGroupLayoutEntry {
-                    binding,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty,
-                    count: None,
-                }
-            }),
+            (data.len() as u32 + 1..)
+                .zip(more)
+                .map(|(b, &ty)| layout_entry(b, ty)),
         );
         let layout = ctx
             .device

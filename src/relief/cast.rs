@@ -29,6 +29,19 @@ pub struct Cast {
     pub fetches: u32,
 }
 
+/// A hit at `l` after `fetches` reads.
+pub(crate) fn hit(l: f32, fetches: u32) -> Cast {
+    Cast {
+        hit: Some(l),
+        fetches,
+    }
+}
+
+/// A miss after `fetches` reads.
+pub(crate) fn miss(fetches: u32) -> Cast {
+    Cast { hit: None, fetches }
+}
+
 /// Zone-map reads per round of skips: the dilation forward, dilation and erosion backward.
 pub const FETCHES_PER_SKIP_ROUND: u32 = 3;
 
@@ -67,16 +80,12 @@ pub fn intersect(
 ) -> Cast {
     let len = (x - e).length();
     let mut fetches = 1;
-    let miss = |fetches| Cast { hit: None, fetches };
     let de = d(map, e);
     if de < 0.0 || len.is_nan() || len <= 0.0 {
         return miss(fetches);
     }
     if de <= 0.0 {
-        return Cast {
-            hit: Some(0.0),
-            fetches,
-        };
+        return hit(0.0, fetches);
     }
     let r = (x - e) / len;
     let at = |l: f32| if l >= len { x } else { e + l * r };
@@ -103,10 +112,7 @@ pub fn intersect(
     };
     if da <= 0.0 {
         // Every point before λ1 lies in a zone above the surface; only rounding lands here.
-        return Cast {
-            hit: Some(la),
-            fetches,
-        };
+        return hit(la, fetches);
     }
     loop {
         k += 1;
@@ -114,11 +120,8 @@ pub fn intersect(
         let db = d(map, at(lb));
         fetches += 1;
         if db <= 0.0 {
-            let hit = bisect(map, at, (la, da), (lb, db), params.bisections, &mut fetches);
-            return Cast {
-                hit: Some(hit),
-                fetches,
-            };
+            let l = bisect(map, at, (la, da), (lb, db), params.bisections, &mut fetches);
+            return hit(l, fetches);
         }
         if lb >= l2 {
             return miss(fetches);

@@ -148,21 +148,27 @@ pub fn render(
     view: &View,
     params: Option<&CastParams>,
 ) -> ReliefFrame {
-    let (w, h) = (view.width, view.height);
-    let px: Vec<Pixel> = (0..w * h)
+    render_with(map, view, |e, x| match params {
+        Some(p) => intersect(map, zones, e, x, p),
+        None => Cast {
+            hit: exact(map, e, x),
+            fetches: 0,
+        },
+    })
+}
+
+/// Renders `view` with `cast` answering each pixel's segment `(E, X)` (in parallel), the hits
+/// shaded.
+pub(crate) fn render_with(
+    map: &HeightMap,
+    view: &View,
+    cast: impl Fn(Vec3, Vec3) -> Cast + Sync,
+) -> ReliefFrame {
+    let px: Vec<Pixel> = (0..view.width * view.height)
         .into_par_iter()
-        .map(|k| {
-            let Some((e, x)) = view.segment(k) else {
-                return (0.0, None, 0);
-            };
-            let (hit, fetches) = match params {
-                Some(p) => {
-                    let c = intersect(map, zones, e, x, p);
-                    (c.hit, c.fetches)
-                }
-                None => (exact(map, e, x), 0),
-            };
-            shade_pixel(map, e, x, hit, fetches)
+        .map(|k| match view.segment(k) {
+            Some((e, x)) => shade_pixel(map, e, x, &cast(e, x)),
+            None => (0.0, None, 0),
         })
         .collect();
     assemble(view, px)
@@ -200,32 +206,26 @@ pub fn render_gpu<P: ?Sized, K: SegmentCaster<P>>(
     let (casts, timing) = kernel.cast_segments(&segments, params)?;
     let mut px = vec![(0.0, None, 0); (w * h) as usize];
     for (&(k, (e, x)), c) in pixels.iter().zip(&casts) {
-        px[k as usize] = shade_pixel(map, e, x, c.hit, c.fetches);
+        px[k as usize] = shade_pixel(map, e, x, c);
     }
     Ok((assemble(view, px), timing))
 }
 
 /// A pixel's shade, hit λ and fetches.
-pub(crate) type Pixel = (f32, Option<f32>, u32);
+type Pixel = (f32, Option<f32>, u32);
 
-/// A pixel's (shade, hit, fetches) for the answer `hit` on its segment `E → X`.
-pub(crate) fn shade_pixel(
-    map: &HeightMap,
-    e: Vec3,
-    x: Vec3,
-    hit: Option<f32>,
-    fetches: u32,
-) -> Pixel {
-    match hit {
+/// A pixel's (shade, hit, fetches) for the answer `c` on its segment `E → X`.
+fn shade_pixel(map: &HeightMap, e: Vec3, x: Vec3, c: &Cast) -> Pixel {
+    match c.hit {
         Some(l) => {
             let p = e + l * (x - e).normalize();
-            (shade(map, Vec2::new(p.x, p.y)), hit, fetches)
+            (shade(map, Vec2::new(p.x, p.y)), c.hit, c.fetches)
         }
-        None => (0.0, None, fetches),
+        None => (0.0, None, c.fetches),
     }
 }
 
-pub(crate) fn assemble(view: &View, px: Vec<Pixel>) -> ReliefFrame {
+fn assemble(view: &View, px: Vec<Pixel>) -> ReliefFrame {
     ReliefFrame {
         image: GrayImage {
             width: view.width,

@@ -7,7 +7,8 @@
 use super::{measure, push, row, Measured, Pass, Setting};
 use super::{ReliefRow, Result, ResultExt};
 use crate::gpu::ReliefPeersKernel;
-use crate::relief::peers::{render_peer, render_peer_gpu, Peer, PeerData};
+use crate::relief::peers::{render_peer, Peer, PeerData};
+use crate::relief::view::render_gpu;
 
 /// The peers and their settings, with their `method` names.
 pub const PEERS: [(Peer, &str); 6] = [
@@ -46,7 +47,7 @@ pub(super) fn run_peers(
                 .map_err(|e| super::Error::invalid("relief peer", e))
         };
         let gpu = gpu.map(|(kernel, adapter)| {
-            let render = || render_peer_gpu(kernel, pass.map, &pass.view, &peer);
+            let render = || render_gpu(kernel, pass.map, &pass.view, &peer);
             (adapter, move || {
                 render().context(|| format!("relief peer {method}"))
             })

@@ -5,7 +5,7 @@
 //! of the peers: one fetch per cell visited, a gather of the cell's four texels.
 
 use super::grid::{gather, solve_cell, CellAnswer, GridRay};
-use crate::relief::cast::Cast;
+use crate::relief::cast::{hit, miss, Cast};
 use crate::relief::height::HeightMap;
 use glam::Vec3;
 
@@ -14,10 +14,7 @@ use glam::Vec3;
 /// crosses up to the hit.
 pub fn cast(map: &HeightMap, e: Vec3, x: Vec3) -> Cast {
     let Some(ray) = GridRay::new(map, e, x) else {
-        return Cast {
-            hit: None,
-            fetches: 0,
-        };
+        return miss(0);
     };
     let (w, h) = (map.width as isize, map.height as isize);
     let mut i = (ray.o.x.floor() as isize).clamp(-1, w - 1);
@@ -60,17 +57,6 @@ pub(crate) fn step_of(k: f32) -> isize {
     } else {
         0
     }
-}
-
-pub(crate) fn hit(l: f32, fetches: u32) -> Cast {
-    Cast {
-        hit: Some(l),
-        fetches,
-    }
-}
-
-pub(crate) fn miss(fetches: u32) -> Cast {
-    Cast { hit: None, fetches }
 }
 
 #[cfg(test)]

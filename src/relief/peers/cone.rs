@@ -43,9 +43,8 @@
 //! paper bisects the last step always), and a walk that never lands below answers its last
 //! point, as cone step mapping does.
 
-use super::cellwalk::{hit, miss};
 use super::maxmip::MaxMip;
-use crate::relief::cast::Cast;
+use crate::relief::cast::{hit, miss, Cast};
 use crate::relief::height::HeightMap;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
@@ -73,18 +72,6 @@ pub struct ConeMaps {
 }
 
 impl ConeMaps {
-    /// Both ratio maps of `map` (`mip` built from `map`), texels in parallel.
-    pub fn new(map: &HeightMap, mip: &MaxMip) -> ConeMaps {
-        let conservative = conservative_ratios(map, mip);
-        let relaxed = relaxed_ratios(map, &conservative);
-        ConeMaps {
-            width: map.width,
-            height: map.height,
-            conservative,
-            relaxed,
-        }
-    }
-
     /// Bytes of one ratio map.
     pub fn bytes_each(&self) -> usize {
         self.conservative.len() * 4

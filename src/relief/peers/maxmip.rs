@@ -14,9 +14,8 @@
 //! nodes; a leaf is not read from the tree but gathered (its maximum is that of the gather,
 //! the read the intersection needs anyway).
 
-use super::cellwalk::{hit, miss};
 use super::grid::{gather, solve_cell, CellAnswer, GridRay};
-use crate::relief::cast::Cast;
+use crate::relief::cast::{hit, miss, Cast};
 use crate::relief::height::HeightMap;
 use glam::Vec3;
 

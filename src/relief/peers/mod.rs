@@ -29,11 +29,10 @@ pub mod maxmip;
 
 use super::cast::Cast;
 use super::height::HeightMap;
-use super::view::{assemble, render_gpu, shade_pixel, Pixel, ReliefFrame, SegmentCaster, View};
+use super::view::{render_with, ReliefFrame, View};
 pub use cone::{ConeMaps, CONE_CAP, RELAXED_AZIMUTHS, RELAXED_RINGS};
 use glam::Vec3;
 pub use maxmip::MaxMip;
-use rayon::prelude::*;
 use std::time::{Duration, Instant};
 
 /// The most cone steps or bisections accepted (the GPU path loops at most this often per ray,
@@ -202,27 +201,5 @@ pub fn render_peer(
             data.cones.width, data.cones.height, map.width, map.height
         ));
     }
-    let px: Vec<Pixel> = (0..view.width * view.height)
-        .into_par_iter()
-        .map(|k| match view.segment(k) {
-            Some((e, x)) => {
-                let c = data.cast(map, peer, e, x);
-                shade_pixel(map, e, x, c.hit, c.fetches)
-            }
-            None => (0.0, None, 0),
-        })
-        .collect();
-    Ok(assemble(view, px))
-}
-
-/// Renders `view` with the GPU twin of `peer` (`kernel`, made for `map` and its
-/// [`PeerData`]; src/gpu/relief_peers.rs); the hits are shaded on the host as in
-/// [`render_peer`].
-pub fn render_peer_gpu<K: SegmentCaster<Peer>>(
-    kernel: &K,
-    map: &HeightMap,
-    view: &View,
-    peer: &Peer,
-) -> Result<(ReliefFrame, K::Timing), K::Error> {
-    render_gpu(kernel, map, view, peer)
+    Ok(render_with(map, view, |e, x| data.cast(map, peer, e, x)))
 }
