@@ -256,15 +256,10 @@ impl RunArgs {
 
     /// The output folder of the spec called `name` (see [`Self::options`]).
     fn out(&self, name: &str, parent: Option<&Path>) -> PathBuf {
-        let default_root = if self.quick {
-            PathBuf::from("results/quick")
-        } else {
-            PathBuf::from("results")
-        };
         match (parent, &self.out) {
             (Some(p), _) => p.join(name),
             (None, Some(o)) => o.clone(),
-            (None, None) => default_root.join(name),
+            (None, None) => Path::new(results_root(self.quick)).join(name),
         }
     }
 }
@@ -319,6 +314,15 @@ fn performance(o: &RunOptions) -> Result<()> {
     })?;
     println!("performance: {} row(s) -> {}", rows.len(), o.out.display());
     Ok(())
+}
+
+/// The folder of the committed results: `results/quick` for the quick profile, else `results`.
+fn results_root(quick: bool) -> &'static str {
+    if quick {
+        "results/quick"
+    } else {
+        "results"
+    }
 }
 
 /// `mib` MiB in bytes, or the error naming `flag` when that overflows.
@@ -381,13 +385,6 @@ fn list() -> Result<i32> {
     Ok(code)
 }
 
-/// Runs the specs and checks their thresholds and the committed runs
-/// ([`check_committed`]); exit code 1 naming each failure (a cell past its
-/// threshold, a cell away from its committed value, a spec without a committed run, or a spec
-/// that failed to run).
-/// Every spec by default (the embedded quickstart too), or the ones named. Where no Vulkan
-/// driver is installed and no adapter was named, the specs' "gpu" rows are left out, loudly,
-/// unless `require_gpu` makes that a failure.
 /// A command's results folder as a spec's run has it: `out` refused before any work when it is
 /// a file or holds files no run wrote (unless `allow_nonempty_out`), or when it cannot be
 /// written; `work` run in a staging folder beside it and published whole
@@ -449,6 +446,13 @@ fn sampling(out: &Path, allow_nonempty_out: bool) -> Result<()> {
     Ok(())
 }
 
+/// Runs the specs and checks their thresholds and the committed runs
+/// ([`check_committed`]); exit code 1 naming each failure (a cell past its
+/// threshold, a cell away from its committed value, a spec without a committed run, or a spec
+/// that failed to run).
+/// Every spec by default (the embedded quickstart too), or the ones named. Where no Vulkan
+/// driver is installed and no adapter was named, the specs' "gpu" rows are left out, loudly,
+/// unless `require_gpu` makes that a failure.
 fn check(
     names: &[String],
     args: &RunArgs,
@@ -480,13 +484,7 @@ fn check(
             });
         }
     }
-    let committed_root = against.map(Path::to_path_buf).unwrap_or_else(|| {
-        PathBuf::from(if args.quick {
-            "results/quick"
-        } else {
-            "results"
-        })
-    });
+    let committed_root = against.map_or_else(|| results_root(args.quick).into(), Path::to_path_buf);
     let parent = args.out.clone().unwrap_or_else(|| {
         std::env::temp_dir().join(if args.quick {
             "visfield-check-quick"
@@ -718,7 +716,7 @@ fn same_file(a: &Path, b: &Path) -> bool {
 }
 
 fn plots(names: &[String], quick: bool, dir: Option<&Path>) -> Result<()> {
-    let root = PathBuf::from(if quick { "results/quick" } else { "results" });
+    let root = PathBuf::from(results_root(quick));
     let dirs: Vec<PathBuf> = match (dir, names.is_empty()) {
         (Some(d), _) => vec![d.to_path_buf()],
         (None, false) => names.iter().map(|n| root.join(n)).collect(),
@@ -873,8 +871,7 @@ pub fn run(cli: Cli) -> Result<i32> {
             no_gpu,
         } => {
             let gpu = (!no_gpu).then(|| adapter_preference(adapter.as_deref()));
-            let root = if quick { "results/quick" } else { "results" };
-            let out = out.unwrap_or_else(|| Path::new(root).join("relief"));
+            let out = out.unwrap_or_else(|| Path::new(results_root(quick)).join("relief"));
             relief(&out, allow_nonempty_out, quick, gpu)?;
         }
         Command::Run { spec, opts } => {

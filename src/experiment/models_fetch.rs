@@ -127,16 +127,12 @@ pub fn fetch_model(entry: &ModelEntry, dir: &Path, opts: &FetchOptions) -> Resul
         None => source,
     };
     std::fs::create_dir_all(dir).map_err(Error::io(dir))?;
-    match (&entry.member, &entry.convert) {
+    let got = match (&entry.member, &entry.convert) {
         (None, None) => {
             let part = dir.join(format!(".{}.part", entry.file));
             let got = download(url, &part, entry.bytes, &entry.sha256, &what, opts)?;
             std::fs::rename(&part, &target).map_err(Error::io(&target))?;
-            Ok(Fetched::Downloaded {
-                path: target,
-                resumed_from: got.resumed_from,
-                notes: got.notes,
-            })
+            got
         }
         (member, _) => {
             let (Some(archive_sha), Some(archive_bytes)) =
@@ -177,13 +173,14 @@ pub fn fetch_model(entry: &ModelEntry, dir: &Path, opts: &FetchOptions) -> Resul
             }
             crate::io::write_atomic(&target, &bytes).map_err(Error::io(&target))?;
             std::fs::remove_file(&part).map_err(Error::io(&part))?;
-            Ok(Fetched::Downloaded {
-                path: target,
-                resumed_from: got.resumed_from,
-                notes: got.notes,
-            })
+            got
         }
-    }
+    };
+    Ok(Fetched::Downloaded {
+        path: target,
+        resumed_from: got.resumed_from,
+        notes: got.notes,
+    })
 }
 
 /// What [`download`] did: the bytes resumed from, and what the user should be told.

@@ -648,22 +648,11 @@ impl<P: Fn(usize) -> u64> GroupPlanner<'_, P> {
             .map(|(m, _)| *m)
             .collect();
         let mut group_fields = Vec::new();
-        let normals = self.normal_precisions > 0;
         let normal_bytes = normal_field_bytes(&geometry, self.normal_precisions);
         for &m in &shared {
             let params = geometry.with(Precision::F32);
-            self.steps.push(Step::Bake {
-                mesh: m,
-                params,
-                rays: bake_rays,
-                bytes: f32_bytes + normal_bytes,
-                normals,
-            });
-            if normals {
-                self.with_normals.insert((m, params));
-            }
+            self.bake(m, params, bake_rays, f32_bytes + normal_bytes);
             group_fields.push((m, params));
-            self.live += f32_bytes + normal_bytes;
         }
         self.peak = self.peak.max(self.live);
         for &p in &precisions {
@@ -689,18 +678,8 @@ impl<P: Fn(usize) -> u64> GroupPlanner<'_, P> {
                             what: format!("caster {}", self.scenes.meshes[*m].label),
                             source,
                         })?;
-                    self.steps.push(Step::Bake {
-                        mesh: *m,
-                        params,
-                        rays: bake_rays,
-                        bytes: bytes + normal_bytes,
-                        normals,
-                    });
-                    if normals {
-                        self.with_normals.insert((*m, params));
-                    }
+                    self.bake(*m, params, bake_rays, bytes + normal_bytes);
                     stage_fields.push((*m, params));
-                    self.live += bytes + normal_bytes;
                 }
             }
             self.peak = self.peak.max(self.live);
@@ -715,6 +694,23 @@ impl<P: Fn(usize) -> u64> GroupPlanner<'_, P> {
         }
         self.release(group_fields);
         Ok(())
+    }
+
+    /// Bakes `params` of mesh `m` (with its normal fields where the kind reads them): `bytes`
+    /// live from now on.
+    fn bake(&mut self, m: usize, params: FieldParams, rays: u64, bytes: u64) {
+        let normals = self.normal_precisions > 0;
+        self.steps.push(Step::Bake {
+            mesh: m,
+            params,
+            rays,
+            bytes,
+            normals,
+        });
+        if normals {
+            self.with_normals.insert((m, params));
+        }
+        self.live += bytes;
     }
 
     /// Per caster mesh the precisions its cells need, and every precision, in first-use order.

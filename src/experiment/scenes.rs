@@ -82,19 +82,9 @@ impl BuiltScene {
             origin = frame.origin;
         }
         BuiltScene {
+            name: self.name.clone(),
             scene,
             origin,
-            frames: Vec::new(),
-            ..self.clone_static()
-        }
-    }
-
-    /// This scene without its frames' transforms (cloned).
-    fn clone_static(&self) -> BuiltScene {
-        BuiltScene {
-            name: self.name.clone(),
-            scene: Scene::default(),
-            origin: self.origin,
             mesh_of: self.mesh_of.clone(),
             camera: self.camera,
             frames: Vec::new(),
@@ -184,6 +174,11 @@ impl Scenes {
         memory_limit: u64,
     ) -> Result<Scenes, SpecError> {
         user_mesh::precheck(spec, file, path, memory_limit)?;
+        let invalid = |field: String, message: String| SpecError::Invalid {
+            file: file.to_path_buf(),
+            field,
+            message,
+        };
         let mut out = Scenes::default();
         let mut sources: Vec<MeshSource> = Vec::new();
         for (si, sc) in spec.scenes.iter().enumerate() {
@@ -194,12 +189,8 @@ impl Scenes {
                 let m = match sources.iter().position(|s| s == &inst.mesh) {
                     Some(m) => m,
                     None => {
-                        let (mesh, record) =
-                            build_mesh(&inst.mesh, file).map_err(|e| SpecError::Invalid {
-                                file: file.to_path_buf(),
-                                field: at.clone(),
-                                message: e.chain(),
-                            })?;
+                        let (mesh, record) = build_mesh(&inst.mesh, file)
+                            .map_err(|e| invalid(at.clone(), e.chain()))?;
                         let (mesh, model_origin) = centred_mesh(mesh);
                         sources.push(inst.mesh.clone());
                         out.meshes.push(LoadedMesh {
@@ -228,20 +219,13 @@ impl Scenes {
             let (Rebased { scene, origin }, frames) = match &motion {
                 None => {
                     if let Some(message) = extent_problem(&instances) {
-                        return Err(SpecError::Invalid {
-                            file: file.to_path_buf(),
-                            field: format!("{path}[{si}].instances"),
-                            message,
-                        });
+                        return Err(invalid(format!("{path}[{si}].instances"), message));
                     }
                     (rebase(&instances), Vec::new())
                 }
                 Some(m) => {
-                    let at = |field: String, message| SpecError::Invalid {
-                        file: file.to_path_buf(),
-                        field: format!("{path}[{si}].{field}"),
-                        message,
-                    };
+                    let at =
+                        |field: String, message| invalid(format!("{path}[{si}].{field}"), message);
                     m.rebased(&instances, &sc.instances, at)?
                 }
             };
@@ -252,15 +236,14 @@ impl Scenes {
                 let too_far =
                     |p: &Vec3| !p.is_finite() || p.abs().max_element() > MAX_WORLD_COORDINATE;
                 if let Some(bad) = inst.world_triangles().flatten().find(too_far) {
-                    return Err(SpecError::Invalid {
-                        file: file.to_path_buf(),
-                        field: format!("{path}[{si}].instances[{ii}].transform"),
-                        message: format!(
+                    return Err(invalid(
+                        format!("{path}[{si}].instances[{ii}].transform"),
+                        format!(
                             "places a vertex at {bad}, outside ±{MAX_WORLD_COORDINATE:e}, the \
                              f32 range in which the geometry's squares and cross products stay \
                              finite (coordinates in the scene's frame, centred on its instances)"
                         ),
-                    });
+                    ));
                 }
             }
             // The BVH builders order triangles by Morton codes over the scene's box, 2²¹
@@ -271,15 +254,14 @@ impl Scenes {
             for (ii, inst) in scene.instances.iter().enumerate() {
                 let r = inst.world_bounding_sphere().radius;
                 if r < scene_radius * MIN_INSTANCE_TO_SCENE {
-                    return Err(SpecError::Invalid {
-                        file: file.to_path_buf(),
-                        field: format!("{path}[{si}].instances[{ii}].transform"),
-                        message: format!(
+                    return Err(invalid(
+                        format!("{path}[{si}].instances[{ii}].transform"),
+                        format!(
                             "an instance of radius {r:e} in a scene of radius {scene_radius:e}: \
                              below 2⁻²¹ of the scene, the resolution at which the ray casters' \
                              BVH builders order triangles"
                         ),
-                    });
+                    ));
                 }
             }
             out.scenes.push(BuiltScene {

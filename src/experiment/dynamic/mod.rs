@@ -178,37 +178,7 @@ fn plot_flicker(path: &Path, rows: &[FrameRow]) -> Result<()> {
             methods.push(&r.method);
         }
     }
-    let series: Vec<Series> = methods
-        .iter()
-        .map(|&m| {
-            let mut counts: Vec<usize> = Vec::new();
-            for n in rows
-                .iter()
-                .filter(|r| r.method == m)
-                .filter_map(|r| r.casters)
-            {
-                if !counts.contains(&n) {
-                    counts.push(n);
-                }
-            }
-            let points = counts
-                .iter()
-                .filter_map(|&n| {
-                    let f: Vec<f64> = (rows.iter())
-                        .filter(|r| r.method == m && r.casters == Some(n))
-                        .filter_map(|r| r.flicker)
-                        .collect();
-                    (!f.is_empty()).then(|| (n as f64, f.iter().sum::<f64>() / f.len() as f64))
-                })
-                .collect();
-            Series {
-                label: m.to_string(),
-                points,
-                line: true,
-            }
-        })
-        .filter(|s: &Series| !s.points.is_empty())
-        .collect();
+    let series = mean_against_count(rows, &methods, |r| r.flicker);
     if series.is_empty() {
         return Ok(());
     }
@@ -230,33 +200,7 @@ fn plot_frame_time(path: &Path, rows: &[FrameRow]) -> Result<()> {
     methods.dedup();
     methods.sort_unstable();
     methods.dedup();
-    let series: Vec<Series> = methods
-        .iter()
-        .map(|&m| {
-            let mut counts: Vec<usize> = rows
-                .iter()
-                .filter(|r| r.method == m)
-                .filter_map(|r| r.casters)
-                .collect();
-            counts.dedup();
-            let points = counts
-                .iter()
-                .map(|&n| {
-                    let t: Vec<f64> = rows
-                        .iter()
-                        .filter(|r| r.method == m && r.casters == Some(n))
-                        .map(|r| r.frame_s)
-                        .collect();
-                    (n as f64, t.iter().sum::<f64>() / t.len().max(1) as f64)
-                })
-                .collect();
-            Series {
-                label: m.to_string(),
-                points,
-                line: true,
-            }
-        })
-        .collect();
+    let series = mean_against_count(rows, &methods, |r| Some(r.frame_s));
     let axes = Axes {
         title: "moving casters: frame time (update + vertex AO) against their count".into(),
         x_label: "casters".into(),
@@ -265,4 +209,43 @@ fn plot_frame_time(path: &Path, rows: &[FrameRow]) -> Result<()> {
         log_y: true,
     };
     xy_plot(path, &axes, &series, &[])
+}
+
+/// One line per method of `methods`: per caster count (in row order), the mean of `of` over
+/// its rows that have a value; counts without one, and methods without any, left out.
+fn mean_against_count(
+    rows: &[FrameRow],
+    methods: &[&str],
+    of: impl Fn(&FrameRow) -> Option<f64>,
+) -> Vec<Series> {
+    (methods.iter())
+        .map(|&m| {
+            let mut counts: Vec<usize> = Vec::new();
+            for n in rows
+                .iter()
+                .filter(|r| r.method == m)
+                .filter_map(|r| r.casters)
+            {
+                if !counts.contains(&n) {
+                    counts.push(n);
+                }
+            }
+            let points = counts
+                .iter()
+                .filter_map(|&n| {
+                    let v: Vec<f64> = (rows.iter())
+                        .filter(|r| r.method == m && r.casters == Some(n))
+                        .filter_map(&of)
+                        .collect();
+                    (!v.is_empty()).then(|| (n as f64, v.iter().sum::<f64>() / v.len() as f64))
+                })
+                .collect();
+            Series {
+                label: m.to_string(),
+                points,
+                line: true,
+            }
+        })
+        .filter(|s: &Series| !s.points.is_empty())
+        .collect()
 }

@@ -21,15 +21,13 @@ use std::marker::PhantomData;
 
 /// The options of the AO kinds.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct AoRender {
     /// AO radius in world units: farther hits do not occlude (none: unlimited, the papers).
-    #[serde(default)]
     pub max_distance: Option<f32>,
     /// How a hit within `max_distance` occludes: "step" (binary, the papers' V; default) or
     /// "linear" (a hit at t occludes by 1 − t/max_distance; needs `max_distance`). Applied
     /// identically to the ray cast, the field lookup and the converged reference.
-    #[serde(default)]
     pub falloff: Falloff,
 }
 

@@ -466,10 +466,6 @@ impl Mover for AoFields {
         Ok(())
     }
 
-    fn vis(&self) -> &dyn Visibility {
-        &super::NoRays
-    }
-
     fn bytes(&self) -> Option<u64> {
         Some(self.fields.iter().map(|f| f.bytes()).sum())
     }

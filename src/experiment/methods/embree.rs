@@ -170,10 +170,6 @@ impl Mover for EmbreeRebuild {
     fn vis(&self) -> &dyn Visibility {
         self.tracer.as_ref().expect("updated before the query")
     }
-
-    fn bytes(&self) -> Option<u64> {
-        None
-    }
 }
 
 /// Embree with instance geometries: each mesh's scene built once (the crowd's precompute), the
@@ -207,9 +203,5 @@ impl Mover for EmbreeInstanced {
 
     fn vis(&self) -> &dyn Visibility {
         &self.tracer
-    }
-
-    fn bytes(&self) -> Option<u64> {
-        None
     }
 }

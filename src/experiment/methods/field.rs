@@ -198,10 +198,6 @@ impl Mover for GpuFields<'_> {
             .place(&self.fields.placed(frame.instances).instances)
     }
 
-    fn vis(&self) -> &dyn Visibility {
-        &super::NoRays
-    }
-
     fn bytes(&self) -> Option<u64> {
         Some(self.fields.bytes())
     }

@@ -38,10 +38,16 @@ pub trait Mover {
     fn name(&self) -> &'static str;
     /// Brings the method to this frame (timed apart as `update_s`).
     fn update(&mut self, frame: &FrameCasters) -> Result<()>;
-    /// The frame's visibility (after [`Self::update`]).
-    fn vis(&self) -> &dyn Visibility;
-    /// Bytes kept for the scene, where known.
-    fn bytes(&self) -> Option<u64>;
+    /// The frame's visibility (after [`Self::update`]); by default [`super::NoRays`], for a
+    /// method that answers without casting rays through it (its own [`Self::ao`] or
+    /// [`Self::estimate`]).
+    fn vis(&self) -> &dyn Visibility {
+        &super::NoRays
+    }
+    /// Bytes kept for the scene, where known (by default not).
+    fn bytes(&self) -> Option<u64> {
+        None
+    }
     /// Vertex AO at `points` (unit `normals`) on `rays`: the AO estimator through
     /// [`Self::vis`]; a method that answers AO with no rays (AO fields) answers it directly.
     fn ao(&self, points: &[Vec3], normals: &[Vec3], rays: &RaySet, opts: &AoOptions) -> Vec<f32> {

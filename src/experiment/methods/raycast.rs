@@ -160,14 +160,6 @@ impl Mover for GpuWorldRebuild<'_> {
         Ok(())
     }
 
-    fn vis(&self) -> &dyn Visibility {
-        &super::NoRays
-    }
-
-    fn bytes(&self) -> Option<u64> {
-        None
-    }
-
     fn estimate(&self, _: &dyn Estimator, at: Points, rays: &RaySet) -> Result<Vec<f32>> {
         let tracer = self.tracer.as_ref().expect("updated before the query");
         Ok(self.quantity.trace(tracer, at, rays)?.values)

@@ -32,7 +32,6 @@ use crate::geometry::Similarity;
 use crate::gpu::{GpuContext, RayQueryScene};
 use crate::render::estimator::{Estimator, Points};
 use crate::sampling::rays::RaySet;
-use crate::visibility::Visibility;
 use glam::Mat4;
 
 pub const ENTRY: MethodEntry = MethodEntry {
@@ -144,14 +143,6 @@ impl Mover for GpuRayQuery<'_> {
 
     fn update(&mut self, frame: &FrameCasters) -> Result<()> {
         Ok(self.scene.place(&placements(frame.instances))?)
-    }
-
-    fn vis(&self) -> &dyn Visibility {
-        &NoRays
-    }
-
-    fn bytes(&self) -> Option<u64> {
-        None
     }
 
     fn estimate(&self, _: &dyn Estimator, at: Points, rays: &RaySet) -> Result<Vec<f32>> {

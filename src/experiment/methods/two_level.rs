@@ -176,10 +176,6 @@ impl Mover for GpuTwoLevelMover<'_> {
         Ok(self.caster.update(frame.instances)?)
     }
 
-    fn vis(&self) -> &dyn Visibility {
-        &super::NoRays
-    }
-
     fn bytes(&self) -> Option<u64> {
         Some(self.caster.bytes())
     }

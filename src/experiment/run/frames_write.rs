@@ -39,22 +39,25 @@ fn series_of<'r>(rows: &'r [FrameRow], scene: &str) -> Vec<(String, Vec<&'r Fram
 
 /// Frame time (update + query) against the frame, one line per method.
 fn plot_frame_time(path: &Path, rows: &[FrameRow], scene: &str, kind: &str) -> Result<()> {
-    let series: Vec<Series> = series_of(rows, scene)
-        .into_iter()
-        .map(|(label, rs)| Series {
-            label,
-            points: rs.iter().map(|r| (r.frame as f64, r.frame_s)).collect(),
-            line: true,
-        })
-        .collect();
-    let axes = Axes {
-        title: format!("{scene}: frame time (motion update + {kind}) per method"),
+    let series = per_method(rows, scene, |r| Some(r.frame_s));
+    let title = format!("{scene}: frame time (motion update + {kind}) per method");
+    xy_plot(
+        path,
+        &frame_axes(title, "frame time (s)", true),
+        &series,
+        &[],
+    )
+}
+
+/// Axes against the frame.
+fn frame_axes(title: String, y_label: &str, log_y: bool) -> Axes {
+    Axes {
+        title,
         x_label: "frame".into(),
-        y_label: "frame time (s)".into(),
+        y_label: y_label.into(),
         log_x: false,
-        log_y: true,
-    };
-    xy_plot(path, &axes, &series, &[])
+        log_y,
+    }
 }
 
 /// The error against the frame's converged reference per method, and the field methods'
@@ -81,14 +84,8 @@ fn plot_error(path: &Path, rows: &[FrameRow], scene: &str) -> Result<()> {
             });
         }
     }
-    let axes = Axes {
-        title: format!("{scene}: error per frame"),
-        x_label: "frame".into(),
-        y_label: "RMS (0-255)".into(),
-        log_x: false,
-        log_y: false,
-    };
-    xy_plot(path, &axes, &series, &[])
+    let title = format!("{scene}: error per frame");
+    xy_plot(path, &frame_axes(title, "RMS (0-255)", false), &series, &[])
 }
 
 /// One line per method of a per-frame column (`of`: none where the row has no value), on
@@ -120,16 +117,15 @@ fn plot_flicker(path: &Path, rows: &[FrameRow], scene: &str) -> Result<()> {
     if series.is_empty() {
         return Ok(());
     }
-    let axes = Axes {
-        title: format!(
-            "{scene}: flicker from the previous frame (change minus the converged reference's)"
-        ),
-        x_label: "frame".into(),
-        y_label: "flicker: RMS (0-255)".into(),
-        log_x: false,
-        log_y: false,
-    };
-    xy_plot(path, &axes, &series, &[])
+    let title = format!(
+        "{scene}: flicker from the previous frame (change minus the converged reference's)"
+    );
+    xy_plot(
+        path,
+        &frame_axes(title, "flicker: RMS (0-255)", false),
+        &series,
+        &[],
+    )
 }
 
 /// FLIP against the frame's converged reference per method, and between consecutive frames
@@ -140,14 +136,8 @@ fn plot_flip(path: &Path, change_path: &Path, rows: &[FrameRow], scene: &str) ->
     if series.is_empty() {
         return Ok(());
     }
-    let axes = Axes {
-        title: format!("{scene}: mean FLIP against the converged reference (67 px/degree)"),
-        x_label: "frame".into(),
-        y_label: "mean FLIP".into(),
-        log_x: false,
-        log_y: false,
-    };
-    xy_plot(path, &axes, &series, &[])?;
+    let title = format!("{scene}: mean FLIP against the converged reference (67 px/degree)");
+    xy_plot(path, &frame_axes(title, "mean FLIP", false), &series, &[])?;
     let mut series = per_method(rows, scene, |r| r.flip_frame_change);
     let truth: Vec<(f64, f64)> = (rows.iter())
         .filter(|r| r.scene == scene && r.method == "world_rebuild")
@@ -163,11 +153,8 @@ fn plot_flip(path: &Path, change_path: &Path, rows: &[FrameRow], scene: &str) ->
     if series.is_empty() {
         return Ok(());
     }
-    let axes = Axes {
-        title: format!("{scene}: mean FLIP between consecutive frames"),
-        y_label: "mean FLIP, frame against the previous".into(),
-        ..axes
-    };
+    let title = format!("{scene}: mean FLIP between consecutive frames");
+    let axes = frame_axes(title, "mean FLIP, frame against the previous", false);
     xy_plot(change_path, &axes, &series, &[])
 }
 

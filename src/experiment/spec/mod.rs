@@ -203,21 +203,17 @@ impl MeshSource {
 /// its own sphere centre (this is `geometry::procedural::over_corner` with C = (0.5, 0.45, 0.5),
 /// ρ = 0.35).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct TransformSpec {
     /// Fit the mesh's minimal bounding sphere to this sphere.
-    #[serde(default)]
     pub fit: Option<FitSpec>,
     /// Rotation: angles in degrees about x, y and z, composed as R = R_y · R_x · R_z (glam's
     /// `EulerRot::YXZ`: yaw, then pitch, then roll).
-    #[serde(default)]
     pub rotate_deg: Option<Vec3>,
     /// Uniform scale (positive).
-    #[serde(default)]
     pub scale: Option<f32>,
     /// Translation (read in f64: a scene far from the origin keeps its exact placement, and
     /// the runner moves it next to the origin before forming f32 coordinates).
-    #[serde(default)]
     pub translate: Option<glam::DVec3>,
 }
 
@@ -592,37 +588,28 @@ with_cell_axes! {
 /// The `--quick` profile: each field given replaces the spec's; `thresholds` always replace the
 /// full profile's (absent: none), since the full profile's cells are not the quick ones.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct QuickProfile {
     /// Replaces `scenes`.
-    #[serde(default)]
     pub scenes: Option<Vec<SceneSpec>>,
     /// Replaces `fields`.
-    #[serde(default)]
     pub fields: Option<Vec<FieldAxes>>,
     /// Replaces both `render.rays_per_point` and `reference.rays_per_point`.
-    #[serde(default)]
     pub rays_per_point: Option<u32>,
     /// Replaces `render.image`.
-    #[serde(default)]
     pub image: Option<ImageSpec>,
     /// Replaces `reference.raycast_sweep`.
-    #[serde(default)]
     pub raycast_sweep: Option<Vec<u32>>,
     /// Replaces `backends` (e.g. a GPU run too slow for the quick profile on lavapipe).
-    #[serde(default)]
     pub backends: Option<Vec<Backend>>,
     /// Replaces `reference.field_rays_sweep`.
-    #[serde(default)]
     pub field_rays_sweep: Option<Vec<u32>>,
     /// Replaces `reference.truth.max_rays`.
-    #[serde(default)]
     pub truth_max_rays: Option<u32>,
     /// Replaces `animation.frames`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub frames: Option<u32>,
     /// The quick profile's thresholds.
-    #[serde(default)]
     pub thresholds: Vec<Threshold>,
 }
 
