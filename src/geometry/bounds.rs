@@ -213,10 +213,7 @@ fn shuffle<T>(v: &mut [T], seed: u64) {
     let mut state = seed;
     let mut next = || {
         state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
+        crate::sampling::rays::mix64(state)
     };
     for i in (1..v.len()).rev() {
         let j = (next() % (i as u64 + 1)) as usize;
@@ -318,20 +315,24 @@ mod tests {
         }
     }
 
+    /// The minimal sphere of `pts` encloses them and has the brute force's radius.
+    fn check_against_brute_force(pts: &[Vec3], what: &str) {
+        let s = minimal_bounding_sphere(pts);
+        assert_encloses(&s, pts);
+        let expected = brute_force(pts);
+        let rel = (f64::from(s.radius) - expected).abs() / expected.max(1e-30);
+        assert!(
+            rel < 1e-6,
+            "{what}: radius {} vs brute force {expected}",
+            s.radius
+        );
+    }
+
     #[test]
     fn matches_brute_force_on_small_random_sets() {
         for seed in 0..40u64 {
             let n = 8 + (seed as usize % 5);
-            let pts = points(seed, n);
-            let s = minimal_bounding_sphere(&pts);
-            assert_encloses(&s, &pts);
-            let expected = brute_force(&pts);
-            let rel = (f64::from(s.radius) - expected).abs() / expected;
-            assert!(
-                rel < 1e-6,
-                "seed {seed}: radius {} vs brute force {expected}",
-                s.radius
-            );
+            check_against_brute_force(&points(seed, n), &format!("seed {seed}"));
         }
     }
 
@@ -351,11 +352,7 @@ mod tests {
                     Vec3::new(c(0), c(1), c(2))
                 })
                 .collect();
-            let sphere = minimal_bounding_sphere(&pts);
-            assert_encloses(&sphere, &pts);
-            let expected = brute_force(&pts);
-            let rel = (f64::from(sphere.radius) - expected).abs() / expected.max(1e-30);
-            assert!(rel < 1e-6, "case {case}: {} vs {expected}", sphere.radius);
+            check_against_brute_force(&pts, &format!("case {case}"));
         }
     }
 

@@ -3,7 +3,7 @@
 use super::{minimal_bounding_sphere, Similarity, Sphere};
 use glam::{DVec3, Vec3};
 use std::collections::HashMap;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Errors from loading or validating geometry. Each names the file (or mesh) and the place.
 #[derive(Debug, thiserror::Error)]
@@ -23,6 +23,14 @@ impl GeometryError {
         GeometryError::Invalid {
             file: file.into(),
             message: message.into(),
+        }
+    }
+
+    /// The error of reading `path` that failed with `source`, for `map_err`.
+    pub(crate) fn io(path: &Path) -> impl Fn(std::io::Error) -> GeometryError + Copy + '_ {
+        move |source| GeometryError::Io {
+            path: path.to_path_buf(),
+            source,
         }
     }
 }
@@ -193,12 +201,7 @@ impl Mesh {
     /// The three corners of triangle `i`.
     #[inline]
     pub fn triangle(&self, i: usize) -> [Vec3; 3] {
-        let [a, b, c] = self.triangles[i];
-        [
-            self.positions[a as usize],
-            self.positions[b as usize],
-            self.positions[c as usize],
-        ]
+        self.triangles[i].map(|v| self.positions[v as usize])
     }
 
     pub fn vertex_count(&self) -> usize {
@@ -326,6 +329,11 @@ mod tests {
         (p, vec![[0, 1, 2], [0, 2, 3]])
     }
 
+    /// The error [`Mesh::from_parts`] refuses these parts with.
+    fn refusal(name: &str, p: Vec<Vec3>, t: Vec<[u32; 3]>) -> String {
+        Mesh::from_parts(name, p, t).unwrap_err().to_string()
+    }
+
     #[test]
     fn builds_normals_and_area() {
         let (p, t) = quad();
@@ -358,11 +366,11 @@ mod tests {
     fn rejects_non_finite_naming_mesh_and_vertex() {
         let (mut p, t) = quad();
         p[2].y = f32::NAN;
-        let e = Mesh::from_parts("bad-quad", p, t).unwrap_err().to_string();
+        let e = refusal("bad-quad", p, t);
         assert!(e.contains("bad-quad") && e.contains("vertex 2"), "{e}");
         let (mut p, t) = quad();
         p[3].x = f32::INFINITY;
-        let e = Mesh::from_parts("m", p, t).unwrap_err().to_string();
+        let e = refusal("m", p, t);
         assert!(e.contains("vertex 3"), "{e}");
     }
 
@@ -370,7 +378,7 @@ mod tests {
     fn rejects_out_of_range_index_naming_triangle() {
         let (p, mut t) = quad();
         t[1][2] = 4;
-        let e = Mesh::from_parts("m", p, t).unwrap_err().to_string();
+        let e = refusal("m", p, t);
         assert!(e.contains("triangle 1") && e.contains("index 4"), "{e}");
     }
 
@@ -386,43 +394,35 @@ mod tests {
         // Vertex 4 is unused now: it gets the documented +Y.
         assert_eq!(m.normals[4], Vec3::Y);
         let line = vec![Vec3::ZERO, Vec3::X, 2.0 * Vec3::X];
-        let e = Mesh::from_parts("flat", line, vec![[0, 1, 2]])
-            .unwrap_err()
-            .to_string();
+        let e = refusal("flat", line, vec![[0, 1, 2]]);
         assert!(e.contains("flat") && e.contains("no triangles"), "{e}");
     }
 
     #[test]
     fn rejects_empty_single_point_and_out_of_range_scales() {
-        let e = Mesh::from_parts("empty", vec![], vec![])
-            .unwrap_err()
-            .to_string();
+        let e = refusal("empty", vec![], vec![]);
         assert!(
             e.contains("empty") && e.contains("no triangles left (0 given"),
             "{e}"
         );
         let (p, _) = quad();
-        let e = Mesh::from_parts("no-faces", p, vec![])
-            .unwrap_err()
-            .to_string();
+        let e = refusal("no-faces", p, vec![]);
         assert!(
             e.contains("no-faces") && e.contains("no triangles left (0 given"),
             "{e}"
         );
         // A single point, alone or repeated: a zero-radius bounding sphere.
         for p in [vec![Vec3::ONE], vec![Vec3::ONE; 3]] {
-            let e = Mesh::from_parts("point", p, vec![[0, 0, 0]])
-                .unwrap_err()
-                .to_string();
+            let e = refusal("point", p, vec![[0, 0, 0]]);
             assert!(e.contains("point") && e.contains("radius 0"), "{e}");
         }
         let (mut p, t) = quad();
         p[1].z = -2e15;
-        let e = Mesh::from_parts("huge", p, t).unwrap_err().to_string();
+        let e = refusal("huge", p, t);
         assert!(e.contains("vertex 1") && e.contains("outside ±1e15"), "{e}");
         let (p, t) = quad();
         let p = p.into_iter().map(|v| v * 1e-20).collect();
-        let e = Mesh::from_parts("tiny", p, t).unwrap_err().to_string();
+        let e = refusal("tiny", p, t);
         assert!(e.contains("tiny") && e.contains("below 1e-15"), "{e}");
         // Small and large but representable scales are fine.
         for s in [1e-12f32, 1e12] {

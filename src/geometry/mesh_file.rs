@@ -91,10 +91,7 @@ impl Mesh {
         match MeshFormat::of(path)? {
             MeshFormat::Obj => Mesh::load_obj_with(path, progress),
             MeshFormat::Ply => {
-                let io = |source| GeometryError::Io {
-                    path: path.to_path_buf(),
-                    source,
-                };
+                let io = GeometryError::io(path);
                 let mut file = std::fs::File::open(path).map_err(io)?;
                 let mut bytes = Vec::new();
                 let mut chunk = vec![0u8; 4 << 20];
@@ -218,10 +215,7 @@ fn drop_unused(positions: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> (Vec<Vec3>, Ve
 }
 
 fn obj_counts(path: &Path) -> Result<MeshFileCounts, GeometryError> {
-    let io = |source| GeometryError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
+    let io = GeometryError::io(path);
     let mut reader = BufReader::with_capacity(1 << 20, std::fs::File::open(path).map_err(io)?);
     let mut line = Vec::new();
     let (mut vertices, mut triangles) = (0u64, 0u64);

@@ -30,7 +30,6 @@
 use super::{GeometryError, Mesh};
 use sha2::Digest;
 use std::collections::HashMap;
-use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, OnceLock};
 use std::time::SystemTime;
@@ -378,19 +377,8 @@ pub fn sha256_file_cached(path: &Path) -> Result<String, ModelError> {
     }
     let mut file = std::fs::File::open(path).map_err(io)?;
     let mut hasher = sha2::Sha256::new();
-    let mut buf = vec![0u8; 1 << 16];
-    loop {
-        let n = file.read(&mut buf).map_err(io)?;
-        if n == 0 {
-            break;
-        }
-        hasher.update(&buf[..n]);
-    }
-    let hex: String = hasher
-        .finalize()
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect();
+    std::io::copy(&mut file, &mut hasher).map_err(io)?;
+    let hex = crate::io::hex(&hasher.finalize());
     cache
         .lock()
         .unwrap_or_else(|p| p.into_inner())
@@ -508,7 +496,7 @@ mod tests {
     fn hash_cache_returns_the_streamed_hash() {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("f.bin");
-        // Larger than the 64 KiB read buffer, to cover several reads.
+        // Far larger than a read buffer, to cover several reads.
         let bytes: Vec<u8> = (0..200_000u32).map(|i| (i * 7 % 251) as u8).collect();
         std::fs::write(&p, &bytes).unwrap();
         let first = sha256_file_cached(&p).unwrap();

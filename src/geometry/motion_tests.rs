@@ -15,6 +15,15 @@ fn placement(translation: DVec3) -> Placement {
     }
 }
 
+/// A key of a [`Motion`]'s keyframes.
+fn key(time: f64, translate: DVec3, rotate_deg: DVec3) -> Keyframe {
+    Keyframe {
+        time,
+        translate,
+        rotate_deg,
+    }
+}
+
 const M: Vec3 = Vec3::new(0.5, -0.25, 1.0);
 
 /// A model point's world position under the placement moved by `pose`.
@@ -40,11 +49,7 @@ fn the_identity_keeps_the_placement_bit_for_bit() {
     let p = placement(DVec3::new(1e4, -3.0, 2.0));
     assert_eq!(Pose::IDENTITY.apply(&p, M), p);
     let still = Motion {
-        keyframes: vec![Keyframe {
-            time: 0.0,
-            translate: DVec3::ZERO,
-            rotate_deg: DVec3::ZERO,
-        }],
+        keyframes: vec![key(0.0, DVec3::ZERO, DVec3::ZERO)],
         ..Motion::default()
     };
     assert_eq!(still.pose(3, 0.1, &p, M), Pose::IDENTITY);
@@ -54,16 +59,8 @@ fn the_identity_keeps_the_placement_bit_for_bit() {
 fn keys_interpolate_linearly_and_by_slerp_and_hold_at_the_ends() {
     let m = Motion {
         keyframes: vec![
-            Keyframe {
-                time: 1.0,
-                translate: DVec3::ZERO,
-                rotate_deg: DVec3::ZERO,
-            },
-            Keyframe {
-                time: 3.0,
-                translate: DVec3::new(2.0, 0.0, -4.0),
-                rotate_deg: DVec3::new(0.0, 90.0, 0.0),
-            },
+            key(1.0, DVec3::ZERO, DVec3::ZERO),
+            key(3.0, DVec3::new(2.0, 0.0, -4.0), DVec3::new(0.0, 90.0, 0.0)),
         ],
         ..Motion::default()
     };
@@ -85,11 +82,7 @@ fn keys_about_a_pivot_move_every_instance_as_one_rigid_body() {
     let pivot = DVec3::new(0.5, 0.0, 0.5);
     let (r, d) = (DVec3::new(30.0, -45.0, 10.0), DVec3::new(0.25, 1.0, -0.5));
     let m = Motion {
-        keyframes: vec![Keyframe {
-            time: 0.0,
-            translate: d,
-            rotate_deg: r,
-        }],
+        keyframes: vec![key(0.0, d, r)],
         pivot: Some(pivot),
         ..Motion::default()
     };
@@ -234,16 +227,8 @@ fn a_translated_scene_moves_as_the_untranslated_one() {
     let shift = DVec3::new(1048576.0, -2097152.0, 65536.0);
     let m = |s: DVec3| Motion {
         keyframes: vec![
-            Keyframe {
-                time: 0.0,
-                translate: DVec3::ZERO,
-                rotate_deg: DVec3::ZERO,
-            },
-            Keyframe {
-                time: 1.0,
-                translate: DVec3::new(0.5, 0.0, 0.25),
-                rotate_deg: DVec3::new(0.0, 60.0, 20.0),
-            },
+            key(0.0, DVec3::ZERO, DVec3::ZERO),
+            key(1.0, DVec3::new(0.5, 0.0, 0.25), DVec3::new(0.0, 60.0, 20.0)),
         ],
         pivot: Some(DVec3::new(0.5, 0.25, 0.5) + s),
         orbit: Some(Orbit {
@@ -302,16 +287,8 @@ fn a_move_by_a_multiple_of_the_step_keeps_the_coordinates() {
 fn keys_at_the_ends_of_f64_still_interpolate() {
     let m = |a: f64, b: f64| Motion {
         keyframes: vec![
-            Keyframe {
-                time: a,
-                translate: DVec3::ZERO,
-                rotate_deg: DVec3::ZERO,
-            },
-            Keyframe {
-                time: b,
-                translate: DVec3::new(2.0, 0.0, -4.0),
-                rotate_deg: DVec3::new(0.0, 90.0, 0.0),
-            },
+            key(a, DVec3::ZERO, DVec3::ZERO),
+            key(b, DVec3::new(2.0, 0.0, -4.0), DVec3::new(0.0, 90.0, 0.0)),
         ],
         ..Motion::default()
     };
@@ -369,16 +346,8 @@ fn poses_over_a_run_equal_the_per_frame_sums() {
         plane_normal,
     };
     let keys = vec![
-        Keyframe {
-            time: 0.0,
-            translate: DVec3::ZERO,
-            rotate_deg: DVec3::ZERO,
-        },
-        Keyframe {
-            time: 9.0,
-            translate: DVec3::ZERO,
-            rotate_deg: DVec3::new(10.0, 80.0, -20.0),
-        },
+        key(0.0, DVec3::ZERO, DVec3::ZERO),
+        key(9.0, DVec3::ZERO, DVec3::new(10.0, 80.0, -20.0)),
     ];
     let (frames, dt) = (300, 0.05);
     for n in [None, Some(DVec3::new(0.0, 0.0, 2.0))] {

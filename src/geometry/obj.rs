@@ -32,10 +32,7 @@ impl Mesh {
 
     /// [`Mesh::load_obj`], calling `progress` with the bytes read so far every few MiB.
     pub fn load_obj_with(path: &Path, progress: &dyn Fn(u64)) -> Result<Mesh, GeometryError> {
-        let file = std::fs::File::open(path).map_err(|source| GeometryError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let file = std::fs::File::open(path).map_err(GeometryError::io(path))?;
         let display = path.display().to_string();
         let mut reader = LineCountingReader::new(BufReader::with_capacity(1 << 16, file));
         reader.progress = Some(progress);
@@ -247,13 +244,7 @@ impl<R: BufRead> Read for LineCountingReader<'_, R> {
 impl<R: BufRead> BufRead for LineCountingReader<'_, R> {
     fn fill_buf(&mut self) -> std::io::Result<&[u8]> {
         self.check_line()?;
-        match self.inner.fill_buf() {
-            Ok(b) => Ok(b),
-            Err(e) => {
-                self.io_error = true;
-                Err(e)
-            }
-        }
+        self.inner.fill_buf().inspect_err(|_| self.io_error = true)
     }
 
     fn consume(&mut self, amt: usize) {
@@ -304,76 +295,55 @@ mod tests {
         assert!(e.to_string().contains("/nonexistent/dir/x.obj"), "{e}");
     }
 
+    /// Each bad file's error names the file and what is wrong with it.
     #[test]
-    fn parse_error_names_file_and_line() {
+    fn bad_files_are_errors_naming_file_and_fault() {
         let dir = tempfile::tempdir().unwrap();
-        let p = write(
-            dir.path(),
-            "bad.obj",
-            "v 0 0 0\nv 1 0 0\nv 0 oops 1\nf 1 2 3\n",
-        );
-        let e = Mesh::load_obj(&p).unwrap_err().to_string();
-        assert!(e.contains("bad.obj") && e.contains("line 3"), "{e}");
-    }
-
-    #[test]
-    fn non_finite_vertex_names_its_line() {
-        let dir = tempfile::tempdir().unwrap();
-        let p = write(
-            dir.path(),
-            "nan.obj",
-            "# header\nv 0 0 0\n\nv 1 0 0\nv 0 nan 1\nf 1 2 3\n",
-        );
-        let e = Mesh::load_obj(&p).unwrap_err().to_string();
-        assert!(
-            e.contains("nan.obj") && e.contains("line 5") && e.contains("vertex 3"),
-            "{e}"
-        );
-    }
-
-    #[test]
-    fn out_of_range_face_index_is_an_error() {
-        let dir = tempfile::tempdir().unwrap();
-        let p = write(
-            dir.path(),
-            "oob.obj",
-            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n",
-        );
-        let e = Mesh::load_obj(&p).unwrap_err().to_string();
-        assert!(e.contains("oob.obj") && e.contains("out of bounds"), "{e}");
-    }
-
-    #[test]
-    fn degenerate_only_file_is_an_error() {
-        let dir = tempfile::tempdir().unwrap();
-        let p = write(
-            dir.path(),
-            "flat.obj",
-            "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n",
-        );
-        let e = Mesh::load_obj(&p).unwrap_err().to_string();
-        assert!(e.contains("flat.obj") && e.contains("no triangles"), "{e}");
-    }
-
-    #[test]
-    fn file_without_faces_or_with_a_single_point_is_an_error() {
-        let dir = tempfile::tempdir().unwrap();
-        let p = write(dir.path(), "nofaces.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n");
-        let e = Mesh::load_obj(&p).unwrap_err().to_string();
-        assert!(
-            e.contains("nofaces.obj") && e.contains("no triangles left (0 given"),
-            "{e}"
-        );
-        let p = write(dir.path(), "empty.obj", "");
-        let e = Mesh::load_obj(&p).unwrap_err().to_string();
-        assert!(e.contains("empty.obj") && e.contains("no triangles"), "{e}");
-        let p = write(
-            dir.path(),
-            "point.obj",
-            "v 1 2 3\nv 1 2 3\nv 1 2 3\nf 1 2 3\n",
-        );
-        let e = Mesh::load_obj(&p).unwrap_err().to_string();
-        assert!(e.contains("point.obj") && e.contains("radius 0"), "{e}");
+        let cases: [(&str, &str, &[&str]); 7] = [
+            // A parse error names its line.
+            (
+                "bad.obj",
+                "v 0 0 0\nv 1 0 0\nv 0 oops 1\nf 1 2 3\n",
+                &["line 3"],
+            ),
+            // A non-finite vertex names its line and its vertex number.
+            (
+                "nan.obj",
+                "# header\nv 0 0 0\n\nv 1 0 0\nv 0 nan 1\nf 1 2 3\n",
+                &["line 5", "vertex 3"],
+            ),
+            (
+                "oob.obj",
+                "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n",
+                &["out of bounds"],
+            ),
+            (
+                "flat.obj",
+                "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n",
+                &["no triangles"],
+            ),
+            // No faces, an empty file, a single point.
+            (
+                "nofaces.obj",
+                "v 0 0 0\nv 1 0 0\nv 0 1 0\n",
+                &["no triangles left (0 given"],
+            ),
+            ("empty.obj", "", &["no triangles"]),
+            (
+                "point.obj",
+                "v 1 2 3\nv 1 2 3\nv 1 2 3\nf 1 2 3\n",
+                &["radius 0"],
+            ),
+        ];
+        for (name, text, wants) in cases {
+            let e = Mesh::load_obj(&write(dir.path(), name, text))
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.contains(name) && wants.iter().all(|w| e.contains(w)),
+                "{e}"
+            );
+        }
     }
 
     /// A file cut short inside a vertex or face line is an error naming the file, never a mesh

@@ -106,15 +106,19 @@ struct Header {
     body_line: usize,
 }
 
+impl Header {
+    /// The element the header declares as `name`.
+    fn element(&self, name: &str) -> Option<&Element> {
+        self.elements.iter().find(|e| e.name == name)
+    }
+}
+
 /// The vertex and face counts a PLY file's header declares, read without the body (to check a
 /// file against a memory limit before loading it).
 pub fn ply_header_counts(path: &Path) -> Result<(u64, u64), GeometryError> {
     use std::io::Read;
     let display = path.display().to_string();
-    let io = |source| GeometryError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
+    let io = GeometryError::io(path);
     let mut head = Vec::new();
     std::fs::File::open(path)
         .map_err(io)?
@@ -122,12 +126,7 @@ pub fn ply_header_counts(path: &Path) -> Result<(u64, u64), GeometryError> {
         .read_to_end(&mut head)
         .map_err(io)?;
     let h = parse_header(&head, &display)?;
-    let count = |name: &str| {
-        h.elements
-            .iter()
-            .find(|e| e.name == name)
-            .map_or(0, |e| e.count)
-    };
+    let count = |name: &str| h.element(name).map_or(0, |e| e.count);
     Ok((count("vertex"), count("face")))
 }
 
@@ -136,10 +135,7 @@ impl Mesh {
     /// Vertices used by no face are dropped (as [`Mesh::load_obj`] does); vertices are not
     /// welded (a PLY file shares them by index). The mesh is named by the file name.
     pub fn load_ply(path: &Path) -> Result<Mesh, GeometryError> {
-        let bytes = std::fs::read(path).map_err(|source| GeometryError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let bytes = std::fs::read(path).map_err(GeometryError::io(path))?;
         Mesh::ply_from_bytes(&bytes, path)
     }
 
@@ -285,9 +281,7 @@ struct Layout {
 fn layout(h: &Header, file: &str) -> Result<Layout, GeometryError> {
     let bad = |m: String| GeometryError::invalid(file, m);
     let vertex = h
-        .elements
-        .iter()
-        .find(|e| e.name == "vertex")
+        .element("vertex")
         .ok_or_else(|| bad("the header declares no `vertex` element".into()))?;
     let scalar = |name: &str| {
         vertex
@@ -302,9 +296,7 @@ fn layout(h: &Header, file: &str) -> Result<Layout, GeometryError> {
     };
     let xyz = [scalar("x")?, scalar("y")?, scalar("z")?];
     let face = h
-        .elements
-        .iter()
-        .find(|e| e.name == "face")
+        .element("face")
         .ok_or_else(|| bad("no faces: the header declares no `face` element".into()))?;
     let (indices, indices_name) = face
         .properties

@@ -9,7 +9,7 @@ mod supershape;
 pub use supershape::{supershape, supershape_grid, Superformula, Supershape};
 
 use super::{GeometryError, Instance, Mesh, Scene, Similarity};
-use glam::{Quat, Vec3};
+use glam::{DVec3, Quat, Vec3};
 use std::sync::Arc;
 
 /// The receiver of the 2008 paper (Gaitatzes, Chrysanthou, Papaioannou, "Presampled Visibility
@@ -100,17 +100,7 @@ pub fn cube_with_hole(size: f32, hole: f32) -> Result<Mesh, GeometryError> {
 pub fn uv_sphere(radius: f32, stacks: usize, slices: usize) -> Result<Mesh, GeometryError> {
     let name = format!("uv_sphere({radius}, {stacks}, {slices})");
     check_positive(&name, "radius", radius)?;
-    if stacks < 2 || slices < 3 {
-        return Err(GeometryError::invalid(
-            &name,
-            format!("need stacks >= 2 and slices >= 3, got {stacks} and {slices}"),
-        ));
-    }
-    let r = f64::from(radius);
-    latlong(&name, slices, stacks, |theta, phi| {
-        (r * glam::DVec3::new(phi.cos() * theta.cos(), phi.sin(), phi.cos() * theta.sin()))
-            .as_vec3()
-    })
+    scaled_sphere(&name, DVec3::splat(f64::from(radius)), stacks, slices)
 }
 
 /// A closed lat-long ellipsoid about the origin with semi-axes `radii` (x, y, z), tessellated as
@@ -129,16 +119,25 @@ pub fn ellipsoid(radii: Vec3, stacks: usize, slices: usize) -> Result<Mesh, Geom
     ] {
         check_positive(&name, field, r)?;
     }
+    scaled_sphere(&name, radii.as_dvec3(), stacks, slices)
+}
+
+/// The unit sphere's lat-long grid ([`latlong`]) scaled by `r` per axis, after checking
+/// `stacks ≥ 2` and `slices ≥ 3`: [`uv_sphere`] and [`ellipsoid`].
+fn scaled_sphere(
+    name: &str,
+    r: DVec3,
+    stacks: usize,
+    slices: usize,
+) -> Result<Mesh, GeometryError> {
     if stacks < 2 || slices < 3 {
         return Err(GeometryError::invalid(
-            &name,
+            name,
             format!("need stacks >= 2 and slices >= 3, got {stacks} and {slices}"),
         ));
     }
-    let r = radii.as_dvec3();
-    latlong(&name, slices, stacks, |theta, phi| {
-        (r * glam::DVec3::new(phi.cos() * theta.cos(), phi.sin(), phi.cos() * theta.sin()))
-            .as_vec3()
+    latlong(name, slices, stacks, |theta, phi| {
+        (r * DVec3::new(phi.cos() * theta.cos(), phi.sin(), phi.cos() * theta.sin())).as_vec3()
     })
 }
 

@@ -37,6 +37,12 @@ pub struct Placement {
     pub offset: DVec3,
 }
 
+impl From<Similarity> for Placement {
+    fn from(s: Similarity) -> Placement {
+        Placement::new(s.rotation, s.translation.as_dvec3(), s.scale)
+    }
+}
+
 impl Placement {
     /// world = translation + scale · (rotation · local), no offset yet.
     pub fn new(rotation: Quat, translation: DVec3, scale: f32) -> Placement {
@@ -47,15 +53,7 @@ impl Placement {
             offset: DVec3::ZERO,
         }
     }
-}
 
-impl From<Similarity> for Placement {
-    fn from(s: Similarity) -> Placement {
-        Placement::new(s.rotation, s.translation.as_dvec3(), s.scale)
-    }
-}
-
-impl Placement {
     /// `self ∘ inner` (applies `inner` first): the rotated inner translation, an f32 vector of
     /// the inner placement's size whose scaled value is exact in f64, joins the offset; the
     /// large translation is left as it is until the placement is rebased.

@@ -260,6 +260,15 @@ impl<'a> Shared<'a> {
         }
     }
 
+    /// `row(scratch, f, j)` for every row j of cells of every face f of a g × g-per-face grid,
+    /// in that order, rows in parallel (each thread with its own scratch).
+    fn rows<T: Send>(&self, g: u32, row: impl Fn(&mut Scratch, usize, u32) -> T + Sync) -> Vec<T> {
+        (0..6 * g)
+            .into_par_iter()
+            .map_init(|| self.scratch(), |s, r| row(s, (r / g) as usize, r % g))
+            .collect()
+    }
+
     /// Triangles whose bounding cap meets `cap` into `s.found`, by breadth-first search through
     /// shared edges from the triangles around point `seed` (which must lie in `cap`), under a
     /// fresh stamp.
@@ -381,20 +390,13 @@ impl CubeGrid {
         nearest: impl Fn(Vec3) -> usize + Sync,
     ) -> CubeGrid {
         let shared = Shared::new(points, tris);
-        let rows: Vec<RowLists> = (0..6 * g)
-            .into_par_iter()
-            .map_init(
-                || shared.scratch(),
-                |s, r| {
-                    let (f, j) = ((r / g) as usize, r % g);
-                    let mut row = RowLists::default();
-                    for i in 0..g {
-                        shared.cell_lists((f, i, j, g), &nearest, s, &mut row);
-                    }
-                    row
-                },
-            )
-            .collect();
+        let rows = shared.rows(g, |s, f, j| {
+            let mut row = RowLists::default();
+            for i in 0..g {
+                shared.cell_lists((f, i, j, g), &nearest, s, &mut row);
+            }
+            row
+        });
         let prefix = |lens: &mut dyn Iterator<Item = u32>| {
             let mut start = vec![0u32];
             for n in lens {
@@ -496,7 +498,8 @@ impl CubeGrid {
         let slot = self.slots[c];
         let dd = d.as_dvec3();
         if slot[0] == OVERFLOW {
-            return Self::best_of(points, dd, self.points_of(c));
+            let cand = self.points_of(c).iter().map(|&i| i as usize);
+            return first_nearest(points, dd, cand);
         }
         // Branch-free scan of the four slots (padding repeats the first, which never wins a
         // strict comparison).
@@ -509,18 +512,6 @@ impl CubeGrid {
             best_dot = if better { x } else { best_dot };
         }
         best as usize
-    }
-
-    /// The first largest f64 dot product with `dd` among `cand`.
-    fn best_of(points: &[Vec3], dd: DVec3, cand: &[u32]) -> usize {
-        let mut best = (0usize, f64::NEG_INFINITY);
-        for &i in cand {
-            let dot = dd.dot(points[i as usize].as_dvec3());
-            if dot > best.1 {
-                best = (i as usize, dot);
-            }
-        }
-        best.0
     }
 
     /// The first candidate triangle of `d`'s cell containing `d` (the acceptance test of the
@@ -554,6 +545,24 @@ impl CubeGrid {
         };
         (stats(&self.point_start), stats(&self.tri_start))
     }
+}
+
+/// The first of `cand` with the largest f64 dot product with `dd` (0 when there is none): the
+/// brute-force search's answer among them, exact ties to the first.
+#[inline]
+pub(super) fn first_nearest(
+    points: &[Vec3],
+    dd: DVec3,
+    cand: impl IntoIterator<Item = usize>,
+) -> usize {
+    let mut best = (0usize, f64::NEG_INFINITY);
+    for i in cand {
+        let dot = dd.dot(points[i].as_dvec3());
+        if dot > best.1 {
+            best = (i, dot);
+        }
+    }
+    best.0
 }
 
 /// The cell of direction `d` in a g × g-per-face grid (`half_g` = g/2): [`CubeGrid::cell`], for
@@ -606,26 +615,18 @@ pub(super) fn few_candidates(
     nearest: impl Fn(Vec3) -> usize + Sync,
 ) -> Vec<Few> {
     let shared = Shared::new(points, tris);
-    let rows: Vec<Vec<Few>> = (0..6 * g)
-        .into_par_iter()
-        .map_init(
-            || shared.scratch(),
-            |s, r| {
-                let (f, j) = ((r / g) as usize, r % g);
-                (0..g)
-                    .map(|i| {
-                        let cell = CubeGrid::geometry(f, i, j, g);
-                        shared.undominated(&cell, &nearest, s);
-                        match *s.kept.as_slice() {
-                            [only] => Few::One(only),
-                            [p, q] => Few::Two(p, q),
-                            _ => Few::Many,
-                        }
-                    })
-                    .collect()
-            },
-        )
-        .collect();
+    let rows = shared.rows(g, |s, f, j| {
+        (0..g)
+            .map(|i| {
+                shared.undominated(&CubeGrid::geometry(f, i, j, g), &nearest, s);
+                match *s.kept.as_slice() {
+                    [only] => Few::One(only),
+                    [p, q] => Few::Two(p, q),
+                    _ => Few::Many,
+                }
+            })
+            .collect::<Vec<Few>>()
+    });
     rows.into_iter().flatten().collect()
 }
 

@@ -21,6 +21,7 @@
 //! Every bound carries a small additive margin for f32 rounding of the stored points.
 
 use super::approx::{atan2_approx, ceil_i64, floor_i64, log2_approx, ATAN2_MAX_ERROR};
+use super::cube_grid::first_nearest;
 use glam::{DVec3, Vec3};
 use std::f64::consts::{PI, TAU};
 
@@ -116,23 +117,21 @@ impl FibonacciIndex {
     /// (off by at most one zone) costs speed at worst, never exactness.
     fn zone(&self, z: f64) -> &Zone {
         const INV_LOG2_PHI2: f64 = 0.720_210_045_206_065_5; // 1 / log₂(Φ²)
-        let t = self.n as f64 * PI * 5f64.sqrt() * (1.0 - z * z);
-        let k = if t > 1.0 {
+        self.zone_by(z, |t| {
             floor_i64(log2_approx(t) * INV_LOG2_PHI2).max(0) as usize
-        } else {
-            0
-        };
-        &self.zones[k.clamp(2, MAX_ZONE)]
+        })
     }
 
     /// The zone as published, with an exact logarithm (for [`Self::nearest_keinert`]).
     fn zone_exact(&self, z: f64) -> &Zone {
+        self.zone_by(z, |t| (t.ln() / (PHI * PHI).ln()).floor().max(0.0) as usize)
+    }
+
+    /// The zone at height `z`, `k` giving ⌊log_{Φ²} t⌋ for t = n π √5 (1 − z²) > 1.
+    #[inline]
+    fn zone_by(&self, z: f64, k: impl Fn(f64) -> usize) -> &Zone {
         let t = self.n as f64 * PI * 5f64.sqrt() * (1.0 - z * z);
-        let k = if t > 1.0 {
-            (t.ln() / (PHI * PHI).ln()).floor().max(0.0) as usize
-        } else {
-            0
-        };
+        let k = if t > 1.0 { k(t) } else { 0 };
         &self.zones[k.clamp(2, MAX_ZONE)]
     }
 
@@ -168,14 +167,7 @@ impl FibonacciIndex {
             return 0;
         };
         let phi = u.y.atan2(u.x);
-        let mut best = (0usize, f64::NEG_INFINITY);
-        for i in self.corners(u, phi, self.zone_exact(u.z)) {
-            let dot = dd.dot(points[i].as_dvec3());
-            if dot > best.1 {
-                best = (i, dot);
-            }
-        }
-        best.0
+        first_nearest(points, dd, self.corners(u, phi, self.zone_exact(u.z)))
     }
 
     /// Exact nearest point: Keinert's four corners, then the certificate of the module doc.

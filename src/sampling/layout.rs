@@ -77,10 +77,7 @@ impl HemisphereLayout {
     /// # Panics
     /// If `res` is 0 or above [`MAX_LAYOUT_RES`]; use [`Self::try_new`] for user input.
     pub fn new(kind: LayoutKind, res: u32) -> Self {
-        match Self::try_new(kind, res) {
-            Ok(l) => l,
-            Err(e) => panic!("{e}"),
-        }
+        Self::try_new(kind, res).unwrap_or_else(|e| panic!("{e}"))
     }
 
     pub fn try_new(kind: LayoutKind, res: u32) -> Result<Self, SamplingError> {
@@ -160,12 +157,18 @@ impl HemisphereLayout {
     /// polynomial atan ([`super::layout_fast`]) within 4e-6 of [`Self::to_square_libm`].
     #[inline]
     pub fn to_square(&self, d: Vec3) -> Vec2 {
-        let fast = match self.kind {
+        self.fast_square(d)
+            .unwrap_or_else(|| self.to_square_libm(d))
+    }
+
+    /// The polynomial-atan square coordinates of [`super::layout_fast`] (polar and concentric).
+    #[inline]
+    fn fast_square(&self, d: Vec3) -> Option<Vec2> {
+        match self.kind {
             LayoutKind::Polar => layout_fast::polar_square(d),
             LayoutKind::Rejection => None,
             LayoutKind::Concentric => layout_fast::concentric_square(d),
-        };
-        fast.unwrap_or_else(|| self.to_square_libm(d))
+        }
     }
 
     /// [`Self::to_square`] through the libm inverses of [`super::warp`] (the reference that
@@ -200,13 +203,9 @@ impl HemisphereLayout {
     /// ([`super::layout_fast::certified_cell`]), so the answer is always the libm one.
     #[inline]
     pub fn to_cell(&self, d: Vec3) -> u32 {
-        let fast = match self.kind {
-            LayoutKind::Polar => layout_fast::polar_square(d),
-            LayoutKind::Rejection => None,
-            LayoutKind::Concentric => layout_fast::concentric_square(d),
-        };
-        if let Some((c, r)) =
-            fast.and_then(|q| layout_fast::certified_cell(q * self.res as f32, self.res))
+        if let Some((c, r)) = self
+            .fast_square(d)
+            .and_then(|q| layout_fast::certified_cell(q * self.res as f32, self.res))
         {
             return r * self.res + c;
         }
@@ -273,23 +272,15 @@ impl HemisphereLayout {
     /// rejection layout the unused texels' share is [`Self::rim_solid_angle`].
     pub fn solid_angle(&self, t: u32) -> f64 {
         let (u0, u1, v0, v1) = self.cell(t);
+        // The cell in disk units, for the Malley layouts.
+        let [x0, x1, y0, y1] = [u0, u1, v0, v1].map(|u| 2.0 * u - 1.0);
         match self.kind {
             LayoutKind::Polar => {
                 let (t0, t1) = (v0 * FRAC_PI_2, v1 * FRAC_PI_2);
                 (u1 - u0) * TAU * (t0.cos() - t1.cos())
             }
-            LayoutKind::Rejection => malley_rect_solid_angle(
-                2.0 * u0 - 1.0,
-                2.0 * u1 - 1.0,
-                2.0 * v0 - 1.0,
-                2.0 * v1 - 1.0,
-            ),
-            LayoutKind::Concentric => concentric_rect_solid_angle(
-                2.0 * u0 - 1.0,
-                2.0 * u1 - 1.0,
-                2.0 * v0 - 1.0,
-                2.0 * v1 - 1.0,
-            ),
+            LayoutKind::Rejection => malley_rect_solid_angle(x0, x1, y0, y1),
+            LayoutKind::Concentric => concentric_rect_solid_angle(x0, x1, y0, y1),
         }
     }
 
@@ -298,17 +289,14 @@ impl HemisphereLayout {
     /// it is the cell's disk area: π/res² for every concentric texel.
     pub fn projected_solid_angle(&self, t: u32) -> f64 {
         let (u0, u1, v0, v1) = self.cell(t);
+        // The cell in disk units, for the Malley layouts.
+        let [x0, x1, y0, y1] = [u0, u1, v0, v1].map(|u| 2.0 * u - 1.0);
         match self.kind {
             LayoutKind::Polar => {
                 let (s0, s1) = ((v0 * FRAC_PI_2).sin(), (v1 * FRAC_PI_2).sin());
                 (u1 - u0) * TAU * 0.5 * (s1 * s1 - s0 * s0)
             }
-            LayoutKind::Rejection => disk_rect_area(
-                2.0 * u0 - 1.0,
-                2.0 * u1 - 1.0,
-                2.0 * v0 - 1.0,
-                2.0 * v1 - 1.0,
-            ),
+            LayoutKind::Rejection => disk_rect_area(x0, x1, y0, y1),
             LayoutKind::Concentric => PI / self.texel_count() as f64,
         }
     }

@@ -59,21 +59,13 @@ fn unused_mask_follows_the_disk() {
             "res {res}: {unused}"
         );
     }
-    // Smallest case by hand: res 2 has all four centres at (±½, ±½), inside the disk.
-    assert_eq!(
-        HemisphereLayout::new(LayoutKind::Rejection, 2).used_count(),
-        4
-    );
-    // res 3: the corner centres (±⅔, ±⅔) have r² = 8/9 < 1, so all nine are used; at res 4 the
-    // corner centres (±¾, ±¾) have r² = 9/8 > 1: 12 of 16 used.
-    assert_eq!(
-        HemisphereLayout::new(LayoutKind::Rejection, 3).used_count(),
-        9
-    );
-    assert_eq!(
-        HemisphereLayout::new(LayoutKind::Rejection, 4).used_count(),
-        12
-    );
+    // Smallest cases by hand: res 2 has all four centres at (±½, ±½), inside the disk; res 3:
+    // the corner centres (±⅔, ±⅔) have r² = 8/9 < 1, so all nine are used; at res 4 the corner
+    // centres (±¾, ±¾) have r² = 9/8 > 1: 12 of 16 used.
+    for (res, used) in [(2, 4), (3, 9), (4, 12)] {
+        let layout = HemisphereLayout::new(LayoutKind::Rejection, res);
+        assert_eq!(layout.used_count(), used, "res {res}");
+    }
 }
 
 #[test]

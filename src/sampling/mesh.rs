@@ -177,16 +177,19 @@ impl SphereMesh {
     /// Height of the apex of the triangle across edge `e` of `t` above the plane of `t`,
     /// along its unit outward normal: > 0 means that apex lies inside t's circumcircle.
     fn opposite_height(&self, points: &[Vec3], t: usize, e: usize) -> f64 {
+        let [a, b, c] = self.tris[t].map(|v| p64(points, v));
+        let n = (b - a).cross(c - a).normalize();
+        (p64(points, self.apex(t, e)) - a).dot(n)
+    }
+
+    /// The vertex of the triangle across edge `e` of `t` that is not on that edge.
+    fn apex(&self, t: usize, e: usize) -> u32 {
         let tri = self.tris[t];
-        let u = self.adj[t][e] as usize;
         let (x, y) = (tri[(e + 1) % 3], tri[(e + 2) % 3]);
-        let apex = self.tris[u]
+        self.tris[self.adj[t][e] as usize]
             .into_iter()
             .find(|&v| v != x && v != y)
-            .expect("a triangle has a vertex off its edge");
-        let [a, b, c] = tri.map(|v| p64(points, v));
-        let n = (b - a).cross(c - a).normalize();
-        (p64(points, apex) - a).dot(n)
+            .expect("a triangle has a vertex off its edge")
     }
 
     #[cfg(test)]
@@ -217,10 +220,7 @@ impl SphereMesh {
                     }
                     let tri = mesh.tris[t];
                     let (c, x, y) = (tri[e], tri[(e + 1) % 3], tri[(e + 2) % 3]);
-                    let apex = mesh.tris[u]
-                        .into_iter()
-                        .find(|&v| v != x && v != y)
-                        .expect("a triangle has a vertex off its edge");
+                    let apex = mesh.apex(t, e);
                     // (c, x, y) and (apex, y, x) become (x, apex, c) and (y, c, apex).
                     mesh.tris[t] = [x, apex, c];
                     mesh.tris[u] = [y, c, apex];

@@ -115,35 +115,30 @@ impl RingSet {
             };
             (s, if k == 0 { 1 } else { 4 * k })
         };
-        let mut rings = Vec::with_capacity(2 * n as usize + 2);
         let mut first = 0u32;
-        for k in 0..=n {
-            let (s, count) = ring(k);
-            rings.push(Ring {
-                z: 1.0 - s,
-                sin_theta: (s * (2.0 - s)).sqrt(),
-                count,
-                phase: 0.0,
-                first,
-            });
-            first += count;
-        }
-        for k in (0..=n).rev() {
-            let (s, count) = ring(k);
-            rings.push(Ring {
-                z: -(1.0 - s),
-                sin_theta: (s * (2.0 - s)).sqrt(),
-                count,
-                // A turn of π / 4n is k / 2n steps of ring k (spacing 2π / 4k).
-                phase: if k == 0 {
-                    0.0
-                } else {
-                    k as f64 / (2.0 * n as f64)
-                },
-                first,
-            });
-            first += count;
-        }
+        // The upper hemisphere's rings from the north pole, then the lower's up to the south.
+        let lower = (0..=n).rev().map(|k| (k, true));
+        let rings = (0..=n)
+            .map(|k| (k, false))
+            .chain(lower)
+            .map(|(k, lower)| {
+                let (s, count) = ring(k);
+                let ring = Ring {
+                    z: if lower { -(1.0 - s) } else { 1.0 - s },
+                    sin_theta: (s * (2.0 - s)).sqrt(),
+                    count,
+                    // Lower rings: a turn of π / 4n is k / 2n steps of ring k (spacing 2π / 4k).
+                    phase: if lower && k != 0 {
+                        k as f64 / (2.0 * n as f64)
+                    } else {
+                        0.0
+                    },
+                    first,
+                };
+                first += count;
+                ring
+            })
+            .collect();
         RingSet {
             rings,
             bracket: Bracket::Slater { n, h },

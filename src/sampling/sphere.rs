@@ -1,6 +1,6 @@
 //! Point sets on the unit sphere: where a field's positional samples (maps) sit.
 
-use super::cube_grid::CubeGrid;
+use super::cube_grid::{first_nearest, CubeGrid};
 use super::fibonacci::{self, FibonacciIndex};
 use super::mesh::SphereMesh;
 use super::owner_grid::{OwnerGrid, OWNER_CELLS_PER_POINT};
@@ -141,11 +141,7 @@ impl SpherePoints {
             }
         };
         let (points, tris) = match &index {
-            Index::Rings(r) => {
-                let p = r.points();
-                let t = r.triangles();
-                (p, t)
-            }
+            Index::Rings(r) => (r.points(), r.triangles()),
             Index::Fibonacci(f) => {
                 let p = f.points();
                 let t = fibonacci::triangulate(&p).map_err(SamplingError::Invalid)?;
@@ -206,11 +202,7 @@ impl SpherePoints {
             SphereKind::LatLong => (2..=MAX_LAT_LONG_ROWS).any(|r| r * (r + 1) == count as u64),
             SphereKind::Fibonacci => (MIN_FIBONACCI..=MAX_FIBONACCI).contains(&count),
         };
-        if ok {
-            Ok(())
-        } else {
-            Err(invalid_count(kind, count))
-        }
+        ok.then_some(()).ok_or_else(|| invalid_count(kind, count))
     }
 
     pub fn len(&self) -> usize {
@@ -246,10 +238,9 @@ impl SpherePoints {
     /// [`Self::prefetch_nearest`]`(d)`).
     #[inline]
     pub fn nearest_at(&self, cell: OwnerCell, d: Vec3) -> usize {
-        match self.owners.owner_at(cell.0, &self.points, d) {
-            Some(p) => p,
-            None => self.nearest_searched(d),
-        }
+        self.owners
+            .owner_at(cell.0, &self.points, d)
+            .unwrap_or_else(|| self.nearest_searched(d))
     }
 
     /// The owner table's cells per cube-face edge g and g/2, the terms of its cell computation
@@ -324,15 +315,7 @@ impl SpherePoints {
 
     /// Brute-force nearest point by f64 dot products (O(N); the reference for tests).
     pub fn nearest_brute_force(&self, d: Vec3) -> usize {
-        let dd = d.as_dvec3();
-        let mut best = (0, f64::NEG_INFINITY);
-        for (i, p) in self.points.iter().enumerate() {
-            let dot = dd.dot(p.as_dvec3());
-            if dot > best.1 {
-                best = (i, dot);
-            }
-        }
-        best.0
+        first_nearest(&self.points, d.as_dvec3(), 0..self.points.len())
     }
 
     /// How many of `dirs` get a [`Self::nearest`] answer worse than brute force by more than

@@ -52,35 +52,36 @@ fn check_nearest(kind: SphereKind, count: usize, random: usize) {
     let set = SpherePoints::new(kind, count).unwrap();
     assert_eq!(set.len(), count);
     let dirs = seeded(random, 0x5eed ^ count as u64);
-    let bad = set.nearest_mismatches(&dirs);
-    assert_eq!(
-        bad,
-        0,
-        "{} {count}: {bad} of {random} random directions",
-        kind.name()
-    );
     // The analytic query (the grid's construction oracle) stays exact on its own.
     let some = &dirs[..dirs.len().min(100_000)];
-    let bad = set.nearest_analytic_mismatches(some);
-    assert_eq!(bad, 0, "{} {count}: analytic, {bad} random", kind.name());
     // ~10⁸ brute-force dot products per set at most.
     let adv = adversarial_subset(&set, (100_000_000 / count).min(50_000));
-    let bad = set.nearest_mismatches(&adv);
-    assert_eq!(
-        bad,
-        0,
-        "{} {count}: {bad} of {} adversarial directions",
-        kind.name(),
-        adv.len()
-    );
-    let bad = set.nearest_analytic_mismatches(&adv);
-    assert_eq!(
-        bad,
-        0,
-        "{} {count}: analytic, {bad} adversarial",
-        kind.name()
-    );
+    for (what, all, analytic) in [
+        ("random", &dirs[..], some),
+        ("adversarial", &adv[..], &adv[..]),
+    ] {
+        let bad = set.nearest_mismatches(all);
+        let name = kind.name();
+        assert_eq!(
+            bad,
+            0,
+            "{name} {count}: {bad} of {} {what} directions",
+            all.len()
+        );
+        let bad = set.nearest_analytic_mismatches(analytic);
+        assert_eq!(bad, 0, "{name} {count}: analytic, {bad} {what}");
+    }
 }
+
+/// The papers' counts, with how many random directions each is checked on: 10⁶ for the small
+/// sets, fewer for the large ones (the brute force costs N per direction); the report runs 10⁶
+/// for every set.
+const PAPER_COUNTS: [(usize, usize); 4] = [
+    (290, 1_000_000),
+    (1090, 1_000_000),
+    (4226, 200_000),
+    (16642, 20_000),
+];
 
 #[test]
 fn slater_counts_are_the_papers() {
@@ -116,12 +117,9 @@ fn impossible_counts_list_valid_ones() {
 
 #[test]
 fn slater_nearest_equals_brute_force() {
-    // 10⁶ random directions for the small sets, fewer for the large ones (the brute force costs
-    // N per direction); the report runs 10⁶ for every set.
-    check_nearest(SphereKind::Slater, 290, 1_000_000);
-    check_nearest(SphereKind::Slater, 1090, 1_000_000);
-    check_nearest(SphereKind::Slater, 4226, 200_000);
-    check_nearest(SphereKind::Slater, 16642, 20_000);
+    for (count, random) in PAPER_COUNTS {
+        check_nearest(SphereKind::Slater, count, random);
+    }
     for n in 1..=6u64 {
         check_nearest(
             SphereKind::Slater,
@@ -141,10 +139,9 @@ fn lat_long_nearest_equals_brute_force() {
 
 #[test]
 fn fibonacci_nearest_equals_brute_force() {
-    check_nearest(SphereKind::Fibonacci, 290, 1_000_000);
-    check_nearest(SphereKind::Fibonacci, 1090, 1_000_000);
-    check_nearest(SphereKind::Fibonacci, 4226, 200_000);
-    check_nearest(SphereKind::Fibonacci, 16642, 20_000);
+    for (count, random) in PAPER_COUNTS {
+        check_nearest(SphereKind::Fibonacci, count, random);
+    }
     for n in [4usize, 5, 13, 21, 100, 1000, 1122] {
         check_nearest(SphereKind::Fibonacci, n, 20_000);
     }

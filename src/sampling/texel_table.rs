@@ -150,10 +150,8 @@ impl TexelTable {
             self.cell(d),
             "texel_at: the cell of another direction"
         );
-        match self.certified_in(cell.0) {
-            Some(t) => t,
-            None => self.layout.to_texel(d),
-        }
+        self.certified_in(cell.0)
+            .unwrap_or_else(|| self.layout.to_texel(d))
     }
 
     /// The table's texel of `d`, `None` when `d` is not in a certified cell.

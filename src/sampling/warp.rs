@@ -93,12 +93,22 @@ pub fn square_to_polar_hemisphere(u: Vec2) -> Vec3 {
 #[inline]
 pub fn polar_hemisphere_to_square(d: Vec3) -> Vec2 {
     let theta = d.z.clamp(-1.0, 1.0).acos().min(FRAC_PI_2);
+    Vec2::new(azimuth_fraction(d), theta / FRAC_PI_2)
+}
+
+/// φ / 2π of `d`'s azimuth, wrapped into [0, 1).
+#[inline]
+fn azimuth_fraction(d: Vec3) -> f32 {
     let mut phi = d.y.atan2(d.x);
     if phi < 0.0 {
         phi += 2.0 * PI;
     }
     let x = phi / (2.0 * PI);
-    Vec2::new(if x >= 1.0 { 0.0 } else { x }, theta / FRAC_PI_2)
+    if x >= 1.0 {
+        0.0
+    } else {
+        x
+    }
 }
 
 /// Square → uniform sphere (Archimedes' hat-box: z uniform in [−1, 1], φ = 2π u.x).
@@ -113,12 +123,7 @@ pub fn square_to_uniform_sphere(u: Vec2) -> Vec3 {
 /// Exact inverse of [`square_to_uniform_sphere`] (φ wrapped into [0, 2π)).
 #[inline]
 pub fn uniform_sphere_to_square(d: Vec3) -> Vec2 {
-    let mut phi = d.y.atan2(d.x);
-    if phi < 0.0 {
-        phi += 2.0 * PI;
-    }
-    let x = phi / (2.0 * PI);
-    Vec2::new(if x >= 1.0 { 0.0 } else { x }, (1.0 - d.z) * 0.5)
+    Vec2::new(azimuth_fraction(d), (1.0 - d.z) * 0.5)
 }
 
 /// Square → uniform hemisphere `z >= 0` (z uniform in [0, 1], φ = 2π u.x).
@@ -150,16 +155,25 @@ mod tests {
         })
     }
 
+    /// The mean of `f` over `grid(n)`.
+    fn grid_mean(n: u32, f: impl Fn(Vec2) -> f64) -> f64 {
+        grid(n).map(f).sum::<f64>() / (n * n) as f64
+    }
+
+    /// `back`, what `u` came back as through `via`, is within `tol` of it.
+    fn round_trip(u: Vec2, via: String, back: Vec2, tol: f32) {
+        assert!(
+            (u - back).abs().max_element() < tol,
+            "u {u} -> {via} -> u' {back}"
+        );
+    }
+
     #[test]
     fn concentric_round_trip_on_a_dense_grid() {
         for u in grid(257) {
             let p = square_to_concentric_disk(u);
             assert!(p.length() <= 1.0 + 1e-6);
-            let u2 = concentric_disk_to_square(p);
-            assert!(
-                (u - u2).abs().max_element() < 2e-6,
-                "u {u} -> p {p} -> u' {u2}"
-            );
+            round_trip(u, format!("p {p}"), concentric_disk_to_square(p), 2e-6);
         }
     }
 
@@ -168,11 +182,7 @@ mod tests {
         for u in grid(128) {
             let d = square_to_cosine_hemisphere(u);
             assert!((d.length() - 1.0).abs() < 1e-5 && d.z >= 0.0);
-            let u2 = cosine_hemisphere_to_square(d);
-            assert!(
-                (u - u2).abs().max_element() < 1e-5,
-                "u {u} -> d {d} -> u' {u2}"
-            );
+            round_trip(u, format!("d {d}"), cosine_hemisphere_to_square(d), 1e-5);
         }
     }
 
@@ -180,33 +190,23 @@ mod tests {
     fn polar_round_trip() {
         for u in grid(128) {
             let d = square_to_polar_hemisphere(u);
-            let u2 = polar_hemisphere_to_square(d);
-            assert!(
-                (u - u2).abs().max_element() < 1e-5,
-                "u {u} -> d {d} -> u' {u2}"
-            );
+            round_trip(u, format!("d {d}"), polar_hemisphere_to_square(d), 1e-5);
         }
     }
 
     #[test]
     fn concentric_is_area_preserving() {
         // The mean of r² over uniform square samples equals ∫ r² dA / π = 1/2 on the unit disk.
-        let n = 512;
-        let mean: f64 = grid(n)
-            .map(|u| square_to_concentric_disk(u).length_squared() as f64)
-            .sum::<f64>()
-            / (n * n) as f64;
+        let mean = grid_mean(512, |u| {
+            square_to_concentric_disk(u).length_squared() as f64
+        });
         assert!((mean - 0.5).abs() < 1e-4, "mean r² = {mean}");
     }
 
     #[test]
     fn cosine_hemisphere_integrates_cos_correctly() {
         // E[cos θ] under the cosine density is ∫ cos² θ dω / π = 2/3.
-        let n = 512;
-        let mean: f64 = grid(n)
-            .map(|u| square_to_cosine_hemisphere(u).z as f64)
-            .sum::<f64>()
-            / (n * n) as f64;
+        let mean = grid_mean(512, |u| square_to_cosine_hemisphere(u).z as f64);
         assert!((mean - 2.0 / 3.0).abs() < 1e-4, "mean cos = {mean}");
     }
 
@@ -224,18 +224,10 @@ mod tests {
         for u in grid(128) {
             let d = square_to_uniform_sphere(u);
             assert!((d.length() - 1.0).abs() < 1e-5);
-            let u2 = uniform_sphere_to_square(d);
-            assert!(
-                (u - u2).abs().max_element() < 1e-5,
-                "u {u} -> d {d} -> u' {u2}"
-            );
+            round_trip(u, format!("d {d}"), uniform_sphere_to_square(d), 1e-5);
             let h = square_to_uniform_hemisphere(u);
             assert!(h.z >= 0.0 && (h.length() - 1.0).abs() < 1e-5);
-            let u3 = uniform_hemisphere_to_square(h);
-            assert!(
-                (u - u3).abs().max_element() < 1e-5,
-                "u {u} -> h {h} -> u' {u3}"
-            );
+            round_trip(u, format!("h {h}"), uniform_hemisphere_to_square(h), 1e-5);
         }
     }
 

@@ -266,11 +266,7 @@ fn read_body(
     let mut positions = Vec::new();
     let mut triangles = Vec::new();
     let mut values = Values::new();
-    let vertex_count = h
-        .elements
-        .iter()
-        .find(|e| e.name == "vertex")
-        .map_or(0, |e| e.count);
+    let vertex_count = h.element("vertex").map_or(0, |e| e.count);
     for e in &h.elements {
         let is_vertex = e.name == "vertex";
         let is_face = e.name == "face";

@@ -2,6 +2,8 @@
 
 use super::latlong;
 use crate::geometry::{GeometryError, Mesh};
+use std::cmp::Reverse;
+use std::f64::consts::{FRAC_PI_2, PI};
 
 /// One superformula (Gielis, "A generic geometric transformation that unifies a wide range of
 /// natural and abstract shapes", American Journal of Botany 90(3), 2003):
@@ -90,38 +92,27 @@ impl Supershape {
 /// the 512 × 256 grid.
 pub fn supershape_grid(target: usize) -> (usize, usize) {
     let target = target.max(6);
-    let mut best: Option<(usize, usize, usize, bool)> = None; // (count, u, k, in aspect range)
+    // Grids ranked by (in the aspect range, fewer triangles, closer to u = 2k, more slices).
+    type Rank = (bool, Reverse<usize>, Reverse<usize>, usize);
+    let mut best: Option<(Rank, usize)> = None; // (rank, k)
     let mut k = 1;
     loop {
         let u = target.div_ceil(2 * k).max(3);
         if u < k {
             break;
         }
-        let count = 2 * u * k;
-        let in_range = u <= 4 * k;
-        let better = match best {
-            None => true,
-            Some((bc, bu, bk, br)) => {
-                let dev = |u: usize, k: usize| u.abs_diff(2 * k);
-                (
-                    in_range,
-                    std::cmp::Reverse(count),
-                    std::cmp::Reverse(dev(u, k)),
-                    u,
-                ) > (
-                    br,
-                    std::cmp::Reverse(bc),
-                    std::cmp::Reverse(dev(bu, bk)),
-                    bu,
-                )
-            }
-        };
-        if better {
-            best = Some((count, u, k, in_range));
+        let rank = (
+            u <= 4 * k,
+            Reverse(2 * u * k),
+            Reverse(u.abs_diff(2 * k)),
+            u,
+        );
+        if best.is_none_or(|(b, _)| rank > b) {
+            best = Some((rank, k));
         }
         k += 1;
     }
-    let (_, u, k, _) = best.expect("k = 1 always yields a grid");
+    let ((_, _, _, u), k) = best.expect("k = 1 always yields a grid");
     (u, k + 1)
 }
 
@@ -134,18 +125,8 @@ pub fn supershape(params: &Supershape, target_triangles: usize) -> Result<Mesh, 
     let (slices, stacks) = supershape_grid(target_triangles);
     let name = format!("supershape({slices}x{stacks})");
     for (label, f, lo, hi) in [
-        (
-            "longitude",
-            &params.longitude,
-            -std::f64::consts::PI,
-            std::f64::consts::PI,
-        ),
-        (
-            "latitude",
-            &params.latitude,
-            -std::f64::consts::FRAC_PI_2,
-            std::f64::consts::FRAC_PI_2,
-        ),
+        ("longitude", &params.longitude, -PI, PI),
+        ("latitude", &params.latitude, -FRAC_PI_2, FRAC_PI_2),
     ] {
         let n = 4096;
         for i in 0..=n {
