@@ -70,7 +70,12 @@ pub fn cull(
         // SAFETY: the CPU has AVX2 (`Isa::runs_avx2`).
         return unsafe { avx2::cull(meet, dirs, tmin, skip, idx) };
     }
-    cull_scalar(meet, dirs, tmin, skip, idx)
+    let mut n = 0;
+    for (i, (&d, &s)) in dirs.iter().zip(skip).enumerate() {
+        idx[n] = i as u32;
+        n += (!s && meet.test(d, tmin)) as usize;
+    }
+    n
 }
 
 /// Rays culled and crossed per window of [`for_each_crossing`].
@@ -147,30 +152,9 @@ pub fn rotate_normalize(isa: Isa, q: Quat, dirs: &mut [Vec3]) {
         // SAFETY: the CPU has AVX2 (`Isa::runs_avx2`).
         return unsafe { avx2::rotate_normalize(q, dirs) };
     }
-    rotate_normalize_scalar(q, dirs)
-}
-
-/// [`rotate_normalize`] one direction at a time.
-fn rotate_normalize_scalar(q: Quat, dirs: &mut [Vec3]) {
     for d in dirs {
         *d = (q * *d).normalize();
     }
-}
-
-/// [`cull`] one ray at a time.
-fn cull_scalar(
-    meet: &MayMeetFrom,
-    dirs: &[Vec3],
-    tmin: f32,
-    skip: &[bool],
-    idx: &mut [u32],
-) -> usize {
-    let mut n = 0;
-    for (i, (&d, &s)) in dirs.iter().zip(skip).enumerate() {
-        idx[n] = i as u32;
-        n += (!s && meet.test(d, tmin)) as usize;
-    }
-    n
 }
 
 /// `out[k] = from.crossing(dirs[k])` for every `k`, bit for bit.
@@ -189,11 +173,6 @@ pub fn crossings(isa: Isa, from: &SphereOrigin, dirs: &[Vec3], out: &mut [Option
         // SAFETY: the CPU has AVX2 (`Isa::runs_avx2`); `out` as long as `dirs` (asserted).
         return unsafe { avx2::crossings(from, dirs, out) };
     }
-    crossings_scalar(from, dirs, out)
-}
-
-/// [`crossings`] one ray at a time.
-fn crossings_scalar(from: &SphereOrigin, dirs: &[Vec3], out: &mut [Option<SphereCrossing>]) {
     for (o, &d) in out.iter_mut().zip(dirs) {
         *o = from.crossing(d);
     }

@@ -3,10 +3,6 @@
 use super::*;
 use crate::sampling::rays::seeded_sphere_direction;
 
-fn isas() -> Vec<Isa> {
-    Isa::all_available()
-}
-
 /// Directions from the origin that graze, enter and miss a sphere, with lengths off unit
 /// by f32 rounding and far from it (both normalisation branches), and a non-direction.
 fn directions(origin: Vec3, center: Vec3, radius: f32) -> Vec<Vec3> {
@@ -46,7 +42,7 @@ fn the_culls_are_the_per_ray_test() {
                 .collect();
             assert!(!want.is_empty() || tmin > 1.0);
             assert!(want.len() < dirs.len() - dirs.len() / 7);
-            for isa in isas() {
+            for isa in Isa::all_available() {
                 for n in [0, 1, 7, 8, 9, 64, dirs.len()] {
                     let mut got = vec![u32::MAX; n];
                     let kept = cull(isa, &meet, &dirs[..n], tmin, &skip[..n], &mut got);
@@ -69,7 +65,7 @@ fn the_rotations_are_the_per_ray_rotation_bit_for_bit() {
         Quat::from_axis_angle(Vec3::new(1.0, 2.0, -3.0).normalize(), 1e-4),
     ] {
         let want: Vec<Vec3> = dirs.iter().map(|&d| (q * d).normalize()).collect();
-        for isa in isas() {
+        for isa in Isa::all_available() {
             for n in [0, 5, 8, 13, dirs.len()] {
                 let mut got = dirs[..n].to_vec();
                 rotate_normalize(isa, q, &mut got);
@@ -198,7 +194,7 @@ fn the_staged_reads_are_the_per_ray_reads() {
         } else {
             assert_eq!(certified, 0);
         }
-        for isa in isas() {
+        for isa in Isa::all_available() {
             for n in [0, 1, 7, 8, 9, 15, 16, 17, 40, at.len()] {
                 let mut got = vec![NearestRead::default(); n];
                 nearest_reads(isa, &field, &at[..n], &mut got);
@@ -206,6 +202,19 @@ fn the_staged_reads_are_the_per_ray_reads() {
             }
         }
     }
+}
+
+/// A crossing's fields by their bits (NaN-free, so bit for bit is equality).
+fn crossing_bits(c: Option<SphereCrossing>) -> Option<[u64; 5]> {
+    c.map(|c| {
+        [
+            c.t0.to_bits() as u64,
+            c.t1.to_bits() as u64,
+            c.entry.x.to_bits(),
+            c.entry.y.to_bits(),
+            c.entry.z.to_bits(),
+        ]
+    })
 }
 
 #[test]
@@ -220,26 +229,14 @@ fn the_crossings_are_the_per_ray_crossing_bit_for_bit() {
         let want: Vec<_> = dirs.iter().map(|&d| from.crossing(d)).collect();
         let hits = want.iter().filter(|c| c.is_some()).count();
         assert!(hits > 150 && hits < dirs.len(), "{hits} of {}", dirs.len());
-        for isa in isas() {
+        for isa in Isa::all_available() {
             for n in [0, 3, 8, 13, dirs.len()] {
                 let mut got = vec![None; n];
                 crossings(isa, &from, &dirs[..n], &mut got);
-                // Bit for bit, NaN-free fields compared by their bits.
-                let bits = |c: &Option<SphereCrossing>| {
-                    c.map(|c| {
-                        [
-                            c.t0.to_bits() as u64,
-                            c.t1.to_bits() as u64,
-                            c.entry.x.to_bits(),
-                            c.entry.y.to_bits(),
-                            c.entry.z.to_bits(),
-                        ]
-                    })
-                };
                 for k in 0..n {
                     assert_eq!(
-                        bits(&got[k]),
-                        bits(&want[k]),
+                        crossing_bits(got[k]),
+                        crossing_bits(want[k]),
                         "{isa:?}, ray {k}: {:?}",
                         dirs[k]
                     );
@@ -264,17 +261,6 @@ fn short_runs_are_the_per_ray_steps_bit_for_bit() {
     let q = Quat::from_euler(glam::EulerRot::YXZ, 0.7, -0.3, 1.1);
     let skip: Vec<bool> = (0..dirs.len()).map(|i| i % 5 == 2).collect();
     let bits = |v: Vec3| v.to_array().map(f32::to_bits);
-    let crossing_bits = |c: Option<SphereCrossing>| {
-        c.map(|c| {
-            [
-                c.t0.to_bits() as u64,
-                c.t1.to_bits() as u64,
-                c.entry.x.to_bits(),
-                c.entry.y.to_bits(),
-                c.entry.z.to_bits(),
-            ]
-        })
-    };
     let mut met = 0;
     for start in (0..dirs.len() - 9).step_by(7) {
         for n in 1..=9 {
@@ -283,7 +269,7 @@ fn short_runs_are_the_per_ray_steps_bit_for_bit() {
                 .filter(|&i| !s[i as usize] && meet.test(d[i as usize], 0.0))
                 .collect();
             met += want.len();
-            for isa in isas() {
+            for isa in Isa::all_available() {
                 let mut got = vec![u32::MAX; n];
                 let kept = cull(isa, &meet, d, 0.0, s, &mut got);
                 assert_eq!(&got[..kept], &want[..], "{isa:?}, rays {start}..+{n}");

@@ -37,7 +37,7 @@ const WINDOW: usize = 64;
 /// One node: a box holding its instances' may-meet balls (with their rounding margins and the
 /// node's own pad); a leaf holds `count` instances from `first` in [`SphereBvh::order`], an inner
 /// node its two children (`first`, `first + 1`).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default)]
 struct Node {
     lo: Vec3,
     hi: Vec3,
@@ -128,6 +128,25 @@ struct Window {
     inv_y: [f32; WINDOW],
     inv_z: [f32; WINDOW],
     far: [f32; WINDOW],
+}
+
+impl Window {
+    /// A window whose ray `k` goes along `dirs[k]` to `far(k)`.
+    #[inline]
+    fn new(dirs: impl IntoIterator<Item = Vec3>, far: impl Fn(usize) -> f32) -> Window {
+        let mut w = Window {
+            inv_x: [0.0; WINDOW],
+            inv_y: [0.0; WINDOW],
+            inv_z: [0.0; WINDOW],
+            far: [0.0; WINDOW],
+        };
+        for (k, d) in dirs.into_iter().enumerate() {
+            let inv = d.recip();
+            (w.inv_x[k], w.inv_y[k], w.inv_z[k]) = (inv.x, inv.y, inv.z);
+            w.far[k] = far(k);
+        }
+        w
+    }
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -222,12 +241,7 @@ impl SphereBvh {
             order: (0..spheres.len() as u32).collect(),
         };
         if !spheres.is_empty() {
-            tree.nodes.push(Node {
-                lo: Vec3::ZERO,
-                hi: Vec3::ZERO,
-                first: 0,
-                count: 0,
-            });
+            tree.nodes.push(Node::default());
             tree.build(0, 0, spheres.len(), &spheres);
         }
         tree
@@ -265,14 +279,7 @@ impl SphereBvh {
             spheres[a as usize].0[axis].total_cmp(&spheres[b as usize].0[axis])
         });
         let first = self.nodes.len();
-        for _ in 0..2 {
-            self.nodes.push(Node {
-                lo: Vec3::ZERO,
-                hi: Vec3::ZERO,
-                first: 0,
-                count: 0,
-            });
-        }
+        self.nodes.extend([Node::default(); 2]);
         self.nodes[node] = Node {
             lo,
             hi,
@@ -430,17 +437,7 @@ impl SphereBvhScene {
     ) {
         let n = dirs.len();
         debug_assert!(n <= WINDOW);
-        let mut w = Window {
-            inv_x: [0.0; WINDOW],
-            inv_y: [0.0; WINDOW],
-            inv_z: [0.0; WINDOW],
-            far: [0.0; WINDOW],
-        };
-        for (k, d) in dirs.iter().enumerate() {
-            let inv = d.recip();
-            (w.inv_x[k], w.inv_y[k], w.inv_z[k]) = (inv.x, inv.y, inv.z);
-            w.far[k] = tmax(k);
-        }
+        let w = Window::new(dirs.iter().copied(), tmax);
         // Rays not yet occluded.
         let mut alive: u64 = if n == WINDOW { !0 } else { (1u64 << n) - 1 };
         let nodes = &self.bvh.nodes;
@@ -582,29 +579,23 @@ mod tests {
                 lo: c - h,
                 hi: c + h,
             };
-            let mut w = Window {
-                inv_x: [0.0; WINDOW],
-                inv_y: [0.0; WINDOW],
-                inv_z: [0.0; WINDOW],
-                far: [0.0; WINDOW],
-            };
-            for k in 0..WINDOW {
-                let mut d = seeded_sphere_direction(b * 64 + k as u64, 3);
+            let dirs = (0..WINDOW).map(|k| {
+                let d = seeded_sphere_direction(b * 64 + k as u64, 3);
                 // Axis-aligned and in-plane rays: zero components, infinite reciprocals.
                 match k % 8 {
-                    0 => d = Vec3::new(0.0, d.y, d.z).normalize(),
-                    1 => d = Vec3::new(-0.0, 0.0, 1.0),
-                    2 => d = Vec3::X,
-                    _ => {}
+                    0 => Vec3::new(0.0, d.y, d.z).normalize(),
+                    1 => Vec3::new(-0.0, 0.0, 1.0),
+                    2 => Vec3::X,
+                    _ => d,
                 }
-                let inv = d.recip();
-                (w.inv_x[k], w.inv_y[k], w.inv_z[k]) = (inv.x, inv.y, inv.z);
-                w.far[k] = if k % 5 == 0 {
+            });
+            let w = Window::new(dirs, |k| {
+                if k.is_multiple_of(5) {
                     f32::INFINITY
                 } else {
                     0.5 * k as f32
-                };
-            }
+                }
+            });
             // A box face through the origin: 0 · ∞ in the slab.
             let bx = if b % 7 == 0 {
                 BoxFrom {

@@ -18,7 +18,6 @@ use crate::sampling::rays::{PreparedRaySet, RaySet};
 use crate::sampling::Frame;
 use crate::visibility::Visibility;
 use glam::Vec3;
-use rayon::prelude::*;
 
 /// The ray-origin offset for a scene of bounding radius `scene_radius`: `1e-4 · radius`.
 ///
@@ -161,23 +160,13 @@ pub fn ao_at_points<V: Visibility + ?Sized>(
     rays: &RaySet,
     opts: &AoOptions,
 ) -> Vec<f32> {
-    assert_eq!(
-        points.len(),
-        normals.len(),
-        "ao_at_points: {} points but {} normals",
-        points.len(),
-        normals.len()
-    );
     let prepared = rays.prepare();
-    points
-        .par_iter()
-        .zip(normals)
-        .enumerate()
-        .map_init(
-            || Vec::with_capacity(rays.len()),
-            |scratch, (i, (&p, &n))| ao_at_point(vis, i as u32, p, n, &prepared, opts, scratch),
-        )
-        .collect()
+    super::per_point(
+        "ao_at_points",
+        points,
+        normals,
+        |scratch: &mut Vec<Vec3>, i, p, n| ao_at_point(vis, i, p, n, &prepared, opts, scratch),
+    )
 }
 
 #[cfg(test)]

@@ -19,7 +19,7 @@
 use super::ao::{ao_at_points, AoOptions};
 use super::reflect::ReflectOptions;
 use super::shadow::ShadowOptions;
-use super::truth::{converged_ao, Truth, TruthOptions};
+use super::truth::{converged_ao, converged_channels, Truth, TruthOptions};
 use crate::sampling::rays::RaySet;
 use crate::visibility::Visibility;
 use glam::Vec3;
@@ -117,9 +117,13 @@ pub trait Estimator: Sync {
     /// inputs give the same bits on any thread count.
     fn estimate(&self, vis: &dyn Visibility, at: Points, rays: &RaySet) -> Vec<f32>;
 
-    /// The converged estimate (see [`super::truth`]; [`super::truth::converged_channels`] for
-    /// more than one channel).
-    fn converged(&self, vis: &dyn Visibility, at: Points, t: &TruthOptions) -> Truth;
+    /// The converged estimate (see [`super::truth`]): by default [`Self::estimate`] over
+    /// jittered batches, [`Self::channels`] values per point ([`converged_channels`]).
+    fn converged(&self, vis: &dyn Visibility, at: Points, t: &TruthOptions) -> Truth {
+        converged_channels(at.len(), self.channels(), t, |rays| {
+            self.estimate(vis, at, rays)
+        })
+    }
 
     /// Everything beside the points, the casters and the rays that determines the values, as
     /// JSON object entries (part of the converged reference's cache key).

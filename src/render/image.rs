@@ -29,13 +29,7 @@ impl GrayImage {
 
     /// PNG bytes (8-bit grey).
     pub fn png_bytes(&self) -> Vec<u8> {
-        let buf: Vec<u8> = self.data.iter().map(|&v| Self::to_u8(v)).collect();
-        let img = image::GrayImage::from_raw(self.width, self.height, buf)
-            .expect("buffer matches dimensions");
-        let mut out = std::io::Cursor::new(Vec::new());
-        img.write_to(&mut out, image::ImageFormat::Png)
-            .expect("PNG encoding to memory cannot fail");
-        out.into_inner()
+        png_bytes::<image::Luma<u8>>(self.width, self.height, &self.data)
     }
 
     /// Writes an 8-bit PNG atomically.
@@ -53,14 +47,7 @@ impl GrayImage {
             .with_channel("Y")
             .with_pixel_fn(|pos: Vec2<usize>| (data[pos.y() * w + pos.x()],));
         let image = exr::prelude::Image::from_channels((w, self.height as usize), channel);
-        let mut cursor = std::io::Cursor::new(Vec::new());
-        // One thread: the parallel writer stores the compressed blocks in the order they finish,
-        // so the same image gave different bytes from run to run.
-        exr::prelude::WritableImage::write(&image)
-            .non_parallel()
-            .to_buffered(&mut cursor)
-            .map_err(|e| std::io::Error::other(e.to_string()))?;
-        crate::io::write_atomic(path, &cursor.into_inner())
+        save_exr(path, &image)
     }
 
     /// |a − b| × `gain`, the papers' exaggerated difference image (×5 in 2008 Figure 5).
@@ -178,13 +165,7 @@ impl Image {
         if self.channels == 1 {
             return self.plane(0).png_bytes();
         }
-        let buf: Vec<u8> = self.data.iter().map(|&v| GrayImage::to_u8(v)).collect();
-        let img = image::RgbImage::from_raw(self.width, self.height, buf)
-            .expect("buffer matches dimensions");
-        let mut out = std::io::Cursor::new(Vec::new());
-        img.write_to(&mut out, image::ImageFormat::Png)
-            .expect("PNG encoding to memory cannot fail");
-        out.into_inner()
+        png_bytes::<image::Rgb<u8>>(self.width, self.height, &self.data)
     }
 
     /// Writes an 8-bit PNG atomically.
@@ -207,14 +188,10 @@ impl Image {
             (data[i], data[i + 1], data[i + 2])
         };
         let channels = SpecificChannels::rgb(px);
-        let image = exr::prelude::Image::from_channels((w, self.height as usize), channels);
-        let mut cursor = std::io::Cursor::new(Vec::new());
-        // One thread, as [`GrayImage::save_exr`].
-        exr::prelude::WritableImage::write(&image)
-            .non_parallel()
-            .to_buffered(&mut cursor)
-            .map_err(|e| std::io::Error::other(e.to_string()))?;
-        crate::io::write_atomic(path, &cursor.into_inner())
+        save_exr(
+            path,
+            &exr::prelude::Image::from_channels((w, self.height as usize), channels),
+        )
     }
 
     /// |a − b| × `gain` per channel, clamped to 1 (see [`GrayImage::difference`]).
@@ -233,6 +210,35 @@ impl Image {
             ..self.clone()
         }
     }
+}
+
+/// The 8-bit PNG of `data` ([`GrayImage::to_u8`] of each value), pixels of type `P`.
+fn png_bytes<P>(width: u32, height: u32, data: &[f32]) -> Vec<u8>
+where
+    P: image::PixelWithColorType<Subpixel = u8>,
+{
+    let buf: Vec<u8> = data.iter().map(|&v| GrayImage::to_u8(v)).collect();
+    let img = image::ImageBuffer::<P, _>::from_raw(width, height, buf)
+        .expect("buffer matches dimensions");
+    let mut out = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut out, image::ImageFormat::Png)
+        .expect("PNG encoding to memory cannot fail");
+    out.into_inner()
+}
+
+/// Writes the 32-bit float EXR `image` atomically.
+fn save_exr<'a, L>(path: &Path, image: &'a exr::prelude::Image<L>) -> std::io::Result<()>
+where
+    L: exr::image::write::layers::WritableLayers<'a>,
+{
+    let mut cursor = std::io::Cursor::new(Vec::new());
+    // One thread: the parallel writer stores the compressed blocks in the order they finish,
+    // so the same image gave different bytes from run to run.
+    exr::prelude::WritableImage::write(image)
+        .non_parallel()
+        .to_buffered(&mut cursor)
+        .map_err(|e| std::io::Error::other(e.to_string()))?;
+    crate::io::write_atomic(path, &cursor.into_inner())
 }
 
 #[cfg(test)]

@@ -143,9 +143,7 @@ pub fn cone_rays(
 pub fn cone_direction(cone: &LightCone, cos: f32, sin: f32, r2: f32, (s, c): (f32, f32)) -> Vec3 {
     let t = r2 * cone.one_minus_cos;
     let st = (t * (2.0 - t)).max(0.0).sqrt();
-    let l = Vec3::new(cos * st, sin * st, 1.0 - t);
-    let l = Vec3::new(c * l.x - s * l.y, s * l.x + c * l.y, l.z);
-    cone.frame.to_world(l).normalize()
+    lobe_direction(Vec3::new(cos * st, sin * st, 1.0 - t), (s, c), &cone.frame)
 }
 
 /// Appends to `dirs` the reflection rays of the lobe directions `base` (in the lobe's frame,
@@ -177,8 +175,8 @@ pub fn lobe_rays(
     }
 }
 
-/// One lobe direction `l` turned by (sin `s`, cos `c`) about +z, taken to the world and
-/// renormalised.
+/// One lobe (or cone) direction `l` turned by (sin `s`, cos `c`) about +z, taken to the world
+/// by `frame` and renormalised.
 #[inline]
 pub fn lobe_direction(l: Vec3, (s, c): (f32, f32), frame: &Frame) -> Vec3 {
     let l = Vec3::new(c * l.x - s * l.y, s * l.x + c * l.y, l.z);

@@ -5,7 +5,7 @@ use super::*;
 use crate::render::reflect::{
     reflection_rays, reflection_rays_in, square_to_phong, Gloss, ReflectOptions, ReflectScratch,
 };
-use crate::render::shadow::{shadow_rays_on, ShadowOptions, ShadowScratch, SphereLight};
+use crate::render::shadow::{shadow_rays, ShadowOptions, ShadowScratch, SphereLight};
 use crate::sampling::rays::{seeded_sphere_direction, uniform, RaySet};
 
 /// The shadow rays of one point as `render::shadow` made them one ray at a time through
@@ -111,7 +111,7 @@ fn shadow_rays_are_the_one_ray_code_bit_for_bit() {
                     lights: lights(i as u64 % 7),
                 };
                 let (o, dirs, tmaxs, weights) = shadow_reference(i, p, n, &rays, &opts);
-                let got = shadow_rays_on(isa, i, p, n, &rays, &opts, &mut sc);
+                let got = shadow_rays(isa, i, p, n, &rays, &opts, &mut sc);
                 let r = sc.rays();
                 let what = format!("k {k} jitter {jitter} point {i} {isa:?}");
                 assert_eq!(got, o, "{what}");

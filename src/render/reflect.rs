@@ -32,7 +32,6 @@ use super::estimator::{Estimates, Estimator, Points};
 use super::per_point;
 use super::ray_lanes::{self, Isa};
 use super::shadow::SphereLight;
-use super::truth::{converged, Truth, TruthOptions};
 use crate::sampling::rays::RaySet;
 use crate::sampling::Frame;
 use crate::visibility::{SurfaceHit, Visibility};
@@ -305,12 +304,6 @@ impl Estimator for ReflectionEstimator {
 
     fn estimates(&self) -> Estimates<'_> {
         Estimates::Reflection(&self.opts)
-    }
-
-    fn converged(&self, vis: &dyn Visibility, at: Points, t: &TruthOptions) -> Truth {
-        converged(at.len(), t, |rays| {
-            reflect_at_points(vis, at.points, at.normals, rays, &self.opts)
-        })
     }
 
     fn key(&self) -> serde_json::Map<String, serde_json::Value> {

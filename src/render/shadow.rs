@@ -38,7 +38,6 @@
 use super::estimator::{Estimates, Estimator, Points};
 use super::per_point;
 use super::ray_lanes::{self, DiskSamples, Isa, ShadowRays};
-use super::truth::{converged, Truth, TruthOptions};
 use crate::sampling::rays::RaySet;
 use crate::sampling::warp::square_to_concentric_disk;
 use crate::sampling::Frame;
@@ -162,8 +161,7 @@ impl LightCone {
             return self.axis;
         }
         let l = square_to_cone(u, self.one_minus_cos);
-        let l = Vec3::new(c * l.x - s * l.y, s * l.x + c * l.y, l.z);
-        self.frame.to_world(l).normalize()
+        ray_lanes::lobe_direction(l, (s, c), &self.frame)
     }
 
     /// The near side of the light along `dir` (a direction of this cone), without
@@ -203,22 +201,10 @@ impl ShadowScratch {
 
 /// The shadow rays of one point into `sc.rays` (directions, far ends, weights), every light's,
 /// in light order; returns the ray origin. The disk points of the stratified squares are made
-/// once per ray set (per point when jittered) and each light's rays eight at a time
-/// ([`ray_lanes::cone_rays`]): the rays of [`LightCone::direction`] and
-/// [`LightCone::far_end`] of each square, bit for bit.
-fn shadow_rays(
-    point_index: u32,
-    point: Vec3,
-    normal: Vec3,
-    rays: &RaySet,
-    opts: &ShadowOptions,
-    sc: &mut ShadowScratch,
-) -> Vec3 {
-    shadow_rays_on(Isa::detect(), point_index, point, normal, rays, opts, sc)
-}
-
-/// [`shadow_rays`] on the instruction set `isa` (tests compare them).
-pub(super) fn shadow_rays_on(
+/// once per ray set (per point when jittered) and each light's rays eight at a time on the
+/// instruction set `isa` ([`ray_lanes::cone_rays`]; tests compare them): the rays of
+/// [`LightCone::direction`] and [`LightCone::far_end`] of each square, bit for bit.
+pub(super) fn shadow_rays(
     isa: Isa,
     point_index: u32,
     point: Vec3,
@@ -268,7 +254,7 @@ pub fn light_fraction<V: Visibility + ?Sized>(
     scratch: &mut ShadowScratch,
 ) -> f32 {
     let sc = scratch;
-    let origin = shadow_rays(point_index, point, normal, rays, opts, sc);
+    let origin = shadow_rays(Isa::detect(), point_index, point, normal, rays, opts, sc);
     let r = &sc.rays;
     if r.dirs.is_empty() {
         return 1.0;
@@ -327,7 +313,7 @@ pub fn unshadowed_light(
         points,
         normals,
         |sc: &mut ShadowScratch, i, p, n| {
-            shadow_rays(i, p, n, rays, opts, sc);
+            shadow_rays(Isa::detect(), i, p, n, rays, opts, sc);
             sc.rays.weights.iter().sum()
         },
     )
@@ -369,12 +355,6 @@ impl Estimator for ShadowEstimator {
 
     fn estimates(&self) -> Estimates<'_> {
         Estimates::Shadow(&self.opts)
-    }
-
-    fn converged(&self, vis: &dyn Visibility, at: Points, t: &TruthOptions) -> Truth {
-        converged(at.len(), t, |rays| {
-            shadow_at_points(vis, at.points, at.normals, rays, &self.opts)
-        })
     }
 
     fn key(&self) -> serde_json::Map<String, serde_json::Value> {

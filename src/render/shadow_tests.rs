@@ -6,6 +6,7 @@ use crate::field::lookup::LookupOptions;
 use crate::field::scene::{FieldInstance, FieldScene};
 use crate::field::{FieldParams, Precision};
 use crate::geometry::{procedural, Similarity};
+use crate::render::truth::TruthOptions;
 use crate::sampling::{LayoutKind, SphereKind};
 use crate::trace::test_scenes::icosphere;
 use crate::trace::Tracer;

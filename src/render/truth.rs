@@ -241,6 +241,15 @@ mod tests {
     use crate::trace::test_scenes::square;
     use crate::trace::Tracer;
 
+    /// Binary visibility within an AO radius of 1, origins offset by 1e-5.
+    fn step_within_one() -> AoOptions {
+        AoOptions {
+            max_distance: Some(1.0),
+            offset: 1e-5,
+            falloff: Falloff::Step,
+        }
+    }
+
     #[test]
     fn ceiling_within_the_ao_radius_has_closed_form_ao_and_honest_error_bars() {
         // A point facing +z under a plane at height h, AO radius d: a ray at polar angle θ hits
@@ -252,11 +261,7 @@ mod tests {
             .map(|i| Vec3::new(0.01 * i as f32, -0.005 * i as f32, 0.0))
             .collect();
         let normals = vec![Vec3::Z; n];
-        let opts = AoOptions {
-            max_distance: Some(1.0),
-            offset: 1e-5,
-            falloff: Falloff::Step,
-        };
+        let opts = step_within_one();
         let t = TruthOptions {
             target_stderr_255: 0.25,
             max_rays: 4096,
@@ -315,11 +320,7 @@ mod tests {
         let points: Vec<Vec3> = (0..20)
             .map(|i| Vec3::new(0.1 * i as f32, 0.0, 0.0))
             .collect();
-        let opts = AoOptions {
-            max_distance: Some(1.0),
-            offset: 1e-5,
-            falloff: Falloff::Step,
-        };
+        let opts = step_within_one();
         let t = TruthOptions {
             target_stderr_255: 0.0,
             max_rays: 5000,
@@ -343,11 +344,7 @@ mod tests {
             .map(|i| Vec3::new(0.05 * i as f32, 0.0, 0.0))
             .collect();
         let normals = vec![Vec3::Z; n];
-        let opts = AoOptions {
-            max_distance: Some(1.0),
-            offset: 1e-5,
-            falloff: Falloff::Step,
-        };
+        let opts = step_within_one();
         let t = TruthOptions {
             target_stderr_255: 0.0,
             max_rays: 1100,

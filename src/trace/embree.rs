@@ -26,7 +26,7 @@
 
 use super::embree_sys as sys;
 use super::Hit;
-use crate::visibility::{SurfaceHit, Visibility};
+use crate::visibility::{check_batch, check_batch_to, SurfaceHit, Visibility};
 use glam::{Vec3, Vec3A};
 use std::ffi::c_uint;
 
@@ -408,40 +408,6 @@ impl Committed {
         ray.tfar == f32::NEG_INFINITY
     }
 
-    /// [`Visibility::occluded_many`] cast as `rays` says.
-    ///
-    /// # Panics
-    /// If `dirs` and `out` differ in length.
-    pub fn occluded_many(
-        &self,
-        rays: EmbreeRays,
-        origin: Vec3,
-        dirs: &[Vec3],
-        tmin: f32,
-        tmax: f32,
-        out: &mut [bool],
-    ) {
-        crate::visibility::check_batch("occluded_many", dirs.len(), out.len());
-        self.any_hits(rays, origin, dirs, tmin, |_| tmax, out);
-    }
-
-    /// [`Visibility::occluded_many_to`] cast as `rays` says.
-    ///
-    /// # Panics
-    /// If `dirs`, `tmaxs` and `out` differ in length.
-    pub fn occluded_many_to(
-        &self,
-        rays: EmbreeRays,
-        origin: Vec3,
-        dirs: &[Vec3],
-        tmin: f32,
-        tmaxs: &[f32],
-        out: &mut [bool],
-    ) {
-        crate::visibility::check_batch_to(dirs.len(), tmaxs.len(), out.len());
-        self.any_hits(rays, origin, dirs, tmin, |i| tmaxs[i], out);
-    }
-
     /// The closest hit of each ray from `origin` along `dirs[i]` within [tmin, tmax]:
     /// `found(i, t, primID)`, one `rtcIntersect1` per ray or through 8-wide `rtcIntersect8`
     /// packets as `rays` says; rays without a hit are not reported.
@@ -515,7 +481,7 @@ impl Committed {
 
     /// `out[i] = any_hit(origin, dirs[i], tmin, tmax(i))`, one call per ray or through 8-wide
     /// packets as `rays` says.
-    fn any_hits(
+    pub fn any_hits(
         &self,
         rays: EmbreeRays,
         origin: Vec3,
@@ -524,25 +490,12 @@ impl Committed {
         tmax: impl Fn(usize) -> f32,
         out: &mut [bool],
     ) {
-        match rays {
-            EmbreeRays::Single => {
-                for (i, (o, &d)) in out.iter_mut().zip(dirs).enumerate() {
-                    *o = self.any_hit(origin, d, tmin, tmax(i));
-                }
+        if rays == EmbreeRays::Single {
+            for (i, (o, &d)) in out.iter_mut().zip(dirs).enumerate() {
+                *o = self.any_hit(origin, d, tmin, tmax(i));
             }
-            EmbreeRays::Packet8 => self.any_hits8(origin, dirs, tmin, tmax, out),
+            return;
         }
-    }
-
-    /// `out[i] = any_hit(origin, dirs[i], tmin, tmax(i))` through 8-wide packets.
-    fn any_hits8(
-        &self,
-        origin: Vec3,
-        dirs: &[Vec3],
-        tmin: f32,
-        tmax: impl Fn(usize) -> f32,
-        out: &mut [bool],
-    ) {
         for (c, (dirs, out)) in dirs.chunks(8).zip(out.chunks_mut(8)).enumerate() {
             let (mut packet, valid) = self.packet8(origin, dirs, tmin, |j| tmax(8 * c + j));
             if valid.0.iter().any(|&v| v != 0) {
@@ -582,8 +535,9 @@ impl Visibility for EmbreeTracer {
     }
 
     fn occluded_many(&self, origin: Vec3, dirs: &[Vec3], tmin: f32, tmax: f32, out: &mut [bool]) {
+        check_batch("occluded_many", dirs.len(), out.len());
         self.q()
-            .occluded_many(self.rays, origin, dirs, tmin, tmax, out);
+            .any_hits(self.rays, origin, dirs, tmin, |_| tmax, out);
     }
 
     /// Reflection rays: 8-wide `rtcIntersect8` packets in packet mode, the hit triangle's
@@ -596,7 +550,7 @@ impl Visibility for EmbreeTracer {
         tmax: f32,
         out: &mut [Option<SurfaceHit>],
     ) {
-        crate::visibility::check_batch("surface_hit_many", dirs.len(), out.len());
+        check_batch("surface_hit_many", dirs.len(), out.len());
         out.fill(None);
         self.q()
             .closest_hits(self.rays, origin, dirs, tmin, tmax, |i, t, triangle| {
@@ -615,7 +569,8 @@ impl Visibility for EmbreeTracer {
         tmaxs: &[f32],
         out: &mut [bool],
     ) {
+        check_batch_to(dirs.len(), tmaxs.len(), out.len());
         self.q()
-            .occluded_many_to(self.rays, origin, dirs, tmin, tmaxs, out);
+            .any_hits(self.rays, origin, dirs, tmin, |i| tmaxs[i], out);
     }
 }

@@ -17,7 +17,7 @@ use super::embree::{
 };
 use super::embree_sys as sys;
 use crate::geometry::Similarity;
-use crate::visibility::{SurfaceHit, Visibility};
+use crate::visibility::{check_batch, check_batch_to, SurfaceHit, Visibility};
 use glam::Vec3;
 
 /// Meshes, each a committed Embree scene, instanced by rigid transforms under a top scene.
@@ -213,8 +213,9 @@ impl Visibility for EmbreeInstances {
     }
 
     fn occluded_many(&self, origin: Vec3, dirs: &[Vec3], tmin: f32, tmax: f32, out: &mut [bool]) {
+        check_batch("occluded_many", dirs.len(), out.len());
         self.q()
-            .occluded_many(self.rays, origin, dirs, tmin, tmax, out);
+            .any_hits(self.rays, origin, dirs, tmin, |_| tmax, out);
     }
 
     fn occluded_many_to(
@@ -225,7 +226,8 @@ impl Visibility for EmbreeInstances {
         tmaxs: &[f32],
         out: &mut [bool],
     ) {
+        check_batch_to(dirs.len(), tmaxs.len(), out.len());
         self.q()
-            .occluded_many_to(self.rays, origin, dirs, tmin, tmaxs, out);
+            .any_hits(self.rays, origin, dirs, tmin, |i| tmaxs[i], out);
     }
 }
