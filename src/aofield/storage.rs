@@ -8,6 +8,7 @@
 //! the bytes. f16 rounds to nearest even (IEEE binary16, the `half` crate).
 
 use half::f16;
+use serde::{Deserialize, Serialize};
 
 /// The channels of a texel: `a, b, c` of `q(s)`, `r₀` (the hull's distance), `C` (x, y, z);
 /// lengths in bounding radii.
@@ -16,8 +17,35 @@ pub const CHANNELS: usize = 7;
 /// One texel's channels.
 pub type Texel = [f32; CHANNELS];
 
-/// How the channels are stored: as a distance volume's samples.
-pub use crate::sdf::Precision;
+/// How the channels are stored.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Precision {
+    #[default]
+    F32,
+    F16,
+    U8,
+}
+
+impl Precision {
+    /// Its name in specs and tables.
+    pub fn name(self) -> &'static str {
+        match self {
+            Precision::F32 => "f32",
+            Precision::F16 => "f16",
+            Precision::U8 => "u8",
+        }
+    }
+
+    /// Bytes per stored channel value.
+    pub fn bytes_per_value(self) -> u64 {
+        match self {
+            Precision::F32 => 4,
+            Precision::F16 => 2,
+            Precision::U8 => 1,
+        }
+    }
+}
 
 /// The stored channels of every texel.
 #[derive(Clone, Debug)]
@@ -116,7 +144,7 @@ impl Stored {
 
     /// [`Self::bytes`] of `texels` texels stored at `precision`, before any is encoded.
     pub fn bytes_for(texels: usize, precision: Precision) -> u64 {
-        let values = (texels * CHANNELS) as u64 * precision.bytes_per_sample() as u64;
+        let values = (texels * CHANNELS) as u64 * precision.bytes_per_value();
         match precision {
             Precision::U8 => values + 2 * CHANNELS as u64 * 4,
             _ => values,

@@ -40,11 +40,10 @@
 use half::f16;
 use serde::{Deserialize, Serialize};
 
-/// A volume's storage precision (an AO field's too, [`crate::aofield::storage`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+/// A volume's storage precision.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Precision {
-    #[default]
     F32,
     F16,
     U8,
@@ -68,7 +67,7 @@ impl Precision {
         Precision::ALL.into_iter().find(|p| p.name() == s)
     }
 
-    /// Bytes of one sample (of one channel value of an AO field).
+    /// Bytes of one sample.
     pub fn bytes_per_sample(self) -> usize {
         match self {
             Precision::F32 => 4,
