@@ -13,7 +13,7 @@
 //! centre (R its bounding radius: s is scale-free), the texel stores
 //! `Ω̃(s) = 1 / (a s² + b s + c)` and `Υ̃(s) = normalize(C − s ω)`: seven channels `a, b, c`,
 //! `C` and the hull's distance `r₀` ([`storage`]), fitted by least squares to Ω and Υ sampled
-//! at `radial_samples` distances by our ray caster ([`bake`], [`fit`]).
+//! at `radial_samples` distances by our ray caster ([`bake`](mod@bake), [`fit`]).
 //!
 //! **Inside the hull** (inside the convex hull). The functions are fitted only outside the occluder's convex hull
 //! ([`hull`]). Within it (s < s₀), the occlusion evaluated at the hull, `Ã(s₀)`, is blended
@@ -37,7 +37,7 @@
 //!   ([`hull`]);
 //! - Ω and Υ are sampled by ray casting in the bounding sphere's cone instead of rasterising a
 //!   cube, at sample distances of our choosing, and the cube map is not low-pass filtered
-//!   ([`bake`]);
+//!   ([`bake`](mod@bake));
 //! - the fits are Levenberg–Marquardt from linearised starts, the solid-angle fit kept at
 //!   Ω̃ ≤ 2π beyond the hull and C within two bounding radii of the centre ([`fit`]);
 //! - no fade to zero between `r_near` and `r_far`: the paper's shader fades the occlusion out

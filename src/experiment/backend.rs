@@ -183,7 +183,7 @@ impl ComputeBackend for CpuBackend {
 /// The GPU kernels of one estimator's quantity, supplied by its render kind
 /// (in `kinds::Setup::gpu`): field lookup on the kernel of the quantity, and the
 /// quantity's integrand (src/gpu/integrand.rs) on any GPU visibility (the casters' CWBVH
-/// [`GpuTracer`] here), both on the CPU path's rays.
+/// [`GpuTracer`](crate::gpu::GpuTracer) here), both on the CPU path's rays.
 pub trait GpuQuantity: Send + Sync {
     /// Packs and uploads `fields` for this quantity's field kernel (`opts`: how they are bound).
     fn fields<'s>(

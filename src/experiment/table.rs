@@ -4,7 +4,7 @@
 //! the cell ([`CellColumns`]: its axes, scene, points), the field ([`FieldColumns`]: bytes and
 //! bakes), the times ([`TimeColumns`]) and the kind's metrics ([`ErrorColumns`]: against the
 //! same-ray reference and the converged one). Every column is defined once, in the list of
-//! [`table_columns!`] below: its name, the names tables written before it used (read back as
+//! `table_columns!` below: its name, the names tables written before it used (read back as
 //! aliases), its type as readers read it, what it holds, its value from the parts, and for an
 //! error column its place in `methods.csv`. That one list gives the header order
 //! ([`TABLE_COLUMNS`]), the typed reader's view ([`Row`], serde by header name, so `experiment
@@ -76,7 +76,7 @@ pub struct FieldColumns {
 
 /// A row's errors (0–255): against the same-ray reference (the kind's metric columns) and
 /// against the converged reference. Their columns are the `(errors N)` ones of
-/// [`table_columns!`]; `methods.csv` writes the same ([`ErrorColumns::push_to`]).
+/// `table_columns!`; `methods.csv` writes the same ([`ErrorColumns::push_to`]).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ErrorColumns {
     pub seeds: u32,

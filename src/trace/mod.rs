@@ -22,7 +22,7 @@ use glam::Vec3;
 
 /// A closest-hit ray caster over world triangles: what a field bake traces with
 /// ([`crate::field::bake::bake_with`]). [`Tracer`] is the reference; with the `embree` feature,
-/// [`embree::EmbreeTracer`] is the second.
+/// `embree::EmbreeTracer` is the second.
 pub trait ClosestHit: Sync {
     /// The closest hit with `tmin <= t <= tmax`, its triangle's index and unit normal.
     fn closest_hit(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<Hit>;

@@ -5,8 +5,8 @@
 //! saying why ([`Method::unavailable`]); `--require-embree` makes that an error.
 //!
 //! Every use of Embree in the harness goes through this file: the still method's scene, its
-//! two per-frame forms in a moving scene ([`EmbreeRebuild`], `embree_rebuild`: the scene over
-//! the moved triangles built and committed every frame; [`EmbreeInstanced`],
+//! two per-frame forms in a moving scene (`EmbreeRebuild`, `embree_rebuild`: the scene over
+//! the moved triangles built and committed every frame; `EmbreeInstanced`,
 //! `embree_instances`: one scene per mesh built once, the instances' transforms set and the top
 //! scene committed every frame), and `experiment performance`'s caster ([`world`]).
 

@@ -393,7 +393,7 @@ pub struct Setting {
 }
 
 impl Setting {
-    /// The setting's id ([`Method::id`]; the `setting` column, the same on every backend).
+    /// The setting's id (`dyn Method`'s `id`; the `setting` column, the same on every backend).
     pub fn id(&self) -> String {
         self.method.id()
     }

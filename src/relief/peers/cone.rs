@@ -22,9 +22,9 @@
 //! **Relaxed** ratios ([`ConeMaps::relaxed`], Policarpo and Oliveira): the widest cone such that
 //! a viewing ray from the top of the prism down to the texel's surface point, within the cone,
 //! enters the solid at most once (once in, it stays in up to the apex). A relaxed step may
-//! land below the surface; it then crossed it exactly once, and [`RelaxedCone`]
-//! (super::Peer::RelaxedCone) bisects the last step `bisections` times, keeping the sign
-//! change, and answers its lower end's successor below the surface: within
+//! land below the surface; it then crossed it exactly once, and
+//! [`RelaxedCone`](super::Peer::RelaxedCone) bisects the last step `bisections` times, keeping
+//! the sign change, and answers its lower end's successor below the surface: within
 //! `step / 2^bisections` after a crossing. As in the paper the property is sampled, not
 //! guaranteed: the height profile under [`RELAXED_AZIMUTHS`] azimuths from the texel centre,
 //! every half texel up to [`RELAXED_RINGS`] texels, gives in one pass per azimuth the nearest
