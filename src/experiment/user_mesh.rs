@@ -13,8 +13,6 @@ use super::spec::{MeshSource, Spec, SpecError};
 use crate::field::ByteSize;
 use crate::geometry::{Mesh, MeshFormat};
 use serde::Serialize;
-use sha2::{Digest, Sha256};
-use std::io::Read;
 use std::path::{Path, PathBuf};
 
 /// What a run records of a mesh file (`run.json` `meshes`).
@@ -131,23 +129,4 @@ pub fn load(spec_file: &Path, f: &MeshFile) -> super::Result<(Mesh, FileRecord)>
 }
 
 /// sha256 (lowercase hex) and length of a file's bytes, streamed.
-pub fn sha256_file(path: &Path) -> std::io::Result<(String, u64)> {
-    let mut file = std::fs::File::open(path)?;
-    let mut hasher = Sha256::new();
-    let mut buf = vec![0u8; 1 << 20];
-    let mut total = 0u64;
-    loop {
-        let n = file.read(&mut buf)?;
-        if n == 0 {
-            break;
-        }
-        hasher.update(&buf[..n]);
-        total += n as u64;
-    }
-    let hex = hasher
-        .finalize()
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect();
-    Ok((hex, total))
-}
+pub use crate::io::sha256_file;

@@ -28,7 +28,6 @@
 //! its file once.
 
 use super::{GeometryError, Mesh};
-use sha2::Digest;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, OnceLock};
@@ -375,10 +374,7 @@ pub fn sha256_file_cached(path: &Path) -> Result<String, ModelError> {
     if let Some(h) = cache.lock().unwrap_or_else(|p| p.into_inner()).get(&key) {
         return Ok(h.clone());
     }
-    let mut file = std::fs::File::open(path).map_err(io)?;
-    let mut hasher = sha2::Sha256::new();
-    std::io::copy(&mut file, &mut hasher).map_err(io)?;
-    let hex = crate::io::hex(&hasher.finalize());
+    let (hex, _) = crate::io::sha256_file(path).map_err(io)?;
     cache
         .lock()
         .unwrap_or_else(|p| p.into_inner())
