@@ -37,13 +37,19 @@ impl GeometryError {
 
 /// Problems found by [`Mesh::from_parts`], kept structured so that a loader can add the source
 /// line of a bad vertex before turning it into a [`GeometryError`].
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 pub(crate) enum PartsError {
+    #[error("vertex {vertex} has a non-finite coordinate {position}")]
     NonFinite { vertex: usize, position: Vec3 },
+    #[error("triangle {triangle} has vertex index {index} out of range")]
     IndexOutOfRange { triangle: usize, index: u32 },
+    #[error("no triangles left ({given} given, {dropped} dropped as zero-area)")]
     NoTriangles { given: usize, dropped: usize },
+    #[error("vertex {vertex} at {position} is outside ±{MAX_COORDINATE:e} (rescale the model)")]
     OutOfBounds { vertex: usize, position: Vec3 },
+    #[error("every vertex is the same point {position}: the bounding sphere has radius 0")]
     SinglePoint { position: Vec3 },
+    #[error("the vertices span {extent:e}, below {MIN_EXTENT:e} (rescale the model)")]
     TooSmall { extent: f64 },
 }
 
@@ -54,38 +60,6 @@ pub const MAX_COORDINATE: f32 = 1e15;
 /// Smallest extent (bounding-box diagonal) a mesh may have: squared distances stay normal f32
 /// numbers (1e-30 ≫ 1.2e-38), so ray offsets and normalisations do not underflow.
 pub const MIN_EXTENT: f64 = 1e-15;
-
-impl std::fmt::Display for PartsError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            PartsError::NonFinite { vertex, position } => {
-                write!(f, "vertex {vertex} has a non-finite coordinate {position}")
-            }
-            PartsError::IndexOutOfRange { triangle, index } => {
-                write!(
-                    f,
-                    "triangle {triangle} has vertex index {index} out of range"
-                )
-            }
-            PartsError::NoTriangles { given, dropped } => write!(
-                f,
-                "no triangles left ({given} given, {dropped} dropped as zero-area)"
-            ),
-            PartsError::OutOfBounds { vertex, position } => write!(
-                f,
-                "vertex {vertex} at {position} is outside ±{MAX_COORDINATE:e} (rescale the model)"
-            ),
-            PartsError::SinglePoint { position } => write!(
-                f,
-                "every vertex is the same point {position}: the bounding sphere has radius 0"
-            ),
-            PartsError::TooSmall { extent } => write!(
-                f,
-                "the vertices span {extent:e}, below {MIN_EXTENT:e} (rescale the model)"
-            ),
-        }
-    }
-}
 
 /// An indexed triangle mesh in model space.
 ///
