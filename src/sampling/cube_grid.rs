@@ -36,6 +36,7 @@
 //! breadth-first search from one such triangle through shared edges, expanding only triangles
 //! that pass the test, reaches all of them. Each point within the cap belongs to one of them.
 
+use super::mesh::{det, INSIDE_TOL};
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
@@ -48,15 +49,6 @@ const TAU: f64 = 1e-9;
 const SLOTS: usize = 4;
 /// Marks a cell with more than [`SLOTS`] candidates.
 const OVERFLOW: u32 = u32::MAX;
-/// Relative tolerance of the point-in-triangle test, the same as
-/// [`super::mesh::SphereMesh::try_locate`]'s.
-const INSIDE_TOL: f64 = 1e-14;
-
-#[inline]
-fn det(a: DVec3, b: DVec3, c: DVec3) -> f64 {
-    a.dot(b.cross(c))
-}
-
 /// Angle between unit vectors, accurate for small and large angles.
 #[inline]
 fn angle(a: DVec3, b: DVec3) -> f64 {

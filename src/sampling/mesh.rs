@@ -20,8 +20,12 @@ fn p64(points: &[Vec3], i: u32) -> DVec3 {
     points[i as usize].as_dvec3()
 }
 
+/// Relative tolerance of the point-in-triangle test ([`SphereMesh::try_locate`] and the cube
+/// grid's `locate`): `d` on an edge gives a numerator that is zero up to rounding.
+pub(super) const INSIDE_TOL: f64 = 1e-14;
+
 #[inline]
-fn det(a: DVec3, b: DVec3, c: DVec3) -> f64 {
+pub(super) fn det(a: DVec3, b: DVec3, c: DVec3) -> f64 {
     a.dot(b.cross(c))
 }
 
@@ -105,8 +109,7 @@ impl SphereMesh {
                     (imin, wmin) = (i, wi);
                 }
             }
-            // Tolerance: d on an edge gives a numerator that is zero up to rounding.
-            if wmin >= -1e-14 * scale {
+            if wmin >= -INSIDE_TOL * scale {
                 let w = w.map(|x| x.max(0.0));
                 let sum = w[0] + w[1] + w[2];
                 if sum > 0.0 {
