@@ -236,15 +236,8 @@ impl RunArgs {
             .map(|v| super::shard::Shard::parse(v, "--shard"))
             .transpose()?;
         o.supply = FieldSupply {
-            cache: if self.no_cache {
-                None
-            } else {
-                Some(
-                    self.cache
-                        .clone()
-                        .unwrap_or_else(super::fields::default_cache_dir),
-                )
-            },
+            cache: (!self.no_cache)
+                .then(|| (self.cache.clone()).unwrap_or_else(super::fields::default_cache_dir)),
             cache_limit: mib_to_bytes(self.cache_limit_mib, "--cache-limit-mib")?,
             memory_limit: match self.max_memory_mib {
                 Some(m) => mib_to_bytes(m, "--max-memory-mib")?,
@@ -551,11 +544,7 @@ fn check(
                             format!(" and the committed {}", committed.display())
                         }
                         Err(e) => {
-                            failed.push(format!(
-                                "{name}: no committed run to compare with ({e}); regenerate it \
-                                 with `experiment {name}{}` and commit it",
-                                if args.quick { " --quick" } else { "" }
-                            ));
+                            failed.push(no_committed_run(&name, args.quick, e));
                             String::new()
                         }
                     }
@@ -629,13 +618,7 @@ fn check_dynamic(args: &RunArgs, parent: &Path, committed_root: &Path) -> Result
     let committed = outputs::table_path(&committed_root.join("dynamic"), outputs::SWEEP_FRAMES_CSV);
     let theirs = match read_csv(&committed) {
         Ok(rows) => rows,
-        Err(e) => {
-            return Ok(vec![format!(
-                "dynamic: no committed run to compare with ({e}); regenerate it with \
-                 `experiment dynamic{}` and commit it",
-                if args.quick { " --quick" } else { "" }
-            )])
-        }
+        Err(e) => return Ok(vec![no_committed_run("dynamic", args.quick, e)]),
     };
     let ours = read_csv(&o.out.join(outputs::SWEEP_FRAMES_CSV))?;
     let (f, left) = check_committed(&check::DYNAMIC, &ours, &theirs);
@@ -653,6 +636,15 @@ fn check_dynamic(args: &RunArgs, parent: &Path, committed_root: &Path) -> Result
         t.elapsed().as_secs_f64()
     );
     Ok(f.into_iter().map(|f| format!("dynamic: {f}")).collect())
+}
+
+/// The failure of `name`, a command or a spec whose committed run could not be read (`e`).
+fn no_committed_run(name: &str, quick: bool, e: Error) -> String {
+    format!(
+        "{name}: no committed run to compare with ({e}); regenerate it with `experiment \
+         {name}{}` and commit it",
+        if quick { " --quick" } else { "" }
+    )
 }
 
 /// An animated run's `frames.csv` (in `out`) against the committed one

@@ -147,21 +147,12 @@ impl FieldSupply {
         }
         let (field, stats) =
             self.with_progress(&label, params.count, |opts| bake(&mesh.mesh, params, opts))?;
-        let seconds = stats.seconds + stats.bvh_seconds;
-        eprintln!(
-            "  {label:<40} {seconds:>9.3} s  ({:.2} Mrays/s)",
-            stats.mrays_per_second()
-        );
+        let supplied = baked(&label, field, &stats, stats.seconds + stats.bvh_seconds);
         if let Some((path, key)) = &entry {
-            save(path, key, &field, &stats)
+            save(path, key, &supplied.field, &stats)
                 .unwrap_or_else(|e| eprintln!("  warning: not cached: {e}"));
         }
-        Ok(Supplied {
-            field: Arc::new(field),
-            bake_s: Some(seconds),
-            rays: stats.rays,
-            cached: false,
-        })
+        Ok(supplied)
     }
 }
 
@@ -198,17 +189,22 @@ impl FieldSupply {
             })
             .collect();
         let seconds = stats.seconds + stats.bvh_seconds + t.elapsed().as_secs_f64();
-        eprintln!(
-            "  {label:<40} {seconds:>9.3} s  ({:.2} Mrays/s)",
-            stats.mrays_per_second()
-        );
-        let supplied = Supplied {
-            field: Arc::new(field),
-            bake_s: Some(seconds),
-            rays: stats.rays,
-            cached: false,
-        };
-        Ok((supplied, normals))
+        Ok((baked(&label, field, &stats, seconds), normals))
+    }
+}
+
+/// A field baked in `seconds` (`stats` its bake's), logged under `label` with its rays per
+/// second.
+fn baked(label: &str, field: VisibilityField, stats: &BakeStats, seconds: f64) -> Supplied {
+    eprintln!(
+        "  {label:<40} {seconds:>9.3} s  ({:.2} Mrays/s)",
+        stats.mrays_per_second()
+    );
+    Supplied {
+        field: Arc::new(field),
+        bake_s: Some(seconds),
+        rays: stats.rays,
+        cached: false,
     }
 }
 

@@ -107,6 +107,35 @@ pub enum Step {
     },
 }
 
+impl Step {
+    /// The rays the step casts (a primary visibility: its pixels; none to derive or release).
+    fn rays(&self) -> u64 {
+        match *self {
+            Step::Primary { pixels: rays, .. }
+            | Step::Truth { rays, .. }
+            | Step::Reference { rays, .. }
+            | Step::Sweep { rays, .. }
+            | Step::Raycast { rays, .. }
+            | Step::Bake { rays, .. }
+            | Step::Precompute { rays, .. }
+            | Step::Method { rays, .. }
+            | Step::Lookup { rays, .. } => rays,
+            Step::Derive { .. } | Step::Release { .. } => 0,
+        }
+    }
+
+    /// The bytes of the fields or the precompute the step makes or drops (none for the others).
+    fn bytes(&self) -> Option<u64> {
+        match *self {
+            Step::Bake { bytes, .. }
+            | Step::Derive { bytes, .. }
+            | Step::Precompute { bytes, .. }
+            | Step::Release { bytes, .. } => Some(bytes),
+            _ => None,
+        }
+    }
+}
+
 /// Everything a run will do.
 #[derive(Clone, Debug)]
 pub struct Plan {
@@ -205,119 +234,73 @@ impl Plan {
         })
     }
 
-    /// One line of [`Self::describe`]: what the step does, its rays and its bytes.
-    fn step_line(&self, step: &Step, scenes: &Scenes) -> (String, u64, Option<u64>) {
+    /// What a step does, as a line of [`Self::describe`] names it.
+    fn step_what(&self, step: &Step, scenes: &Scenes) -> String {
         let sc = |s: usize| scenes.scenes[s].name.as_str();
         match step {
-            Step::Primary { scene, pixels } => {
-                (format!("primary visibility {}", sc(*scene)), *pixels, None)
-            }
+            Step::Primary { scene, .. } => format!("primary visibility {}", sc(*scene)),
             Step::Truth {
-                scene,
-                max_rays,
-                rays,
-            } => (
-                format!(
-                    "converged reference {}, at most {max_rays} rays/point",
-                    sc(*scene)
-                ),
-                *rays,
-                None,
+                scene, max_rays, ..
+            } => format!(
+                "converged reference {}, at most {max_rays} rays/point",
+                sc(*scene)
             ),
-            Step::Reference { scene, k, rays } => (
-                format!("ray-cast reference {}, {} rays/point", sc(*scene), k * k),
-                *rays,
-                None,
-            ),
-            Step::Sweep { scene, k, rays } => (
-                format!("ray cast {}, {} rays/point (cpu)", sc(*scene), k * k),
-                *rays,
-                None,
-            ),
+            Step::Reference { scene, k, .. } => {
+                format!("ray-cast reference {}, {} rays/point", sc(*scene), k * k)
+            }
+            Step::Sweep { scene, k, .. } => {
+                format!("ray cast {}, {} rays/point (cpu)", sc(*scene), k * k)
+            }
             Step::Raycast {
-                scene,
-                backend,
-                k,
-                rays,
-            } => (
-                format!(
-                    "ray cast {}, {} rays/point ({})",
-                    sc(*scene),
-                    k * k,
-                    backend.name()
-                ),
-                *rays,
-                None,
+                scene, backend, k, ..
+            } => format!(
+                "ray cast {}, {} rays/point ({})",
+                sc(*scene),
+                k * k,
+                backend.name()
             ),
             Step::Bake {
                 mesh,
                 params,
-                rays,
-                bytes,
                 normals,
-            } => (
-                format!(
-                    "bake {} {} {} × {}² {} {}{}",
-                    scenes.meshes[*mesh].label,
-                    params.sphere.name(),
-                    params.count,
-                    params.res,
-                    params.layout.name(),
-                    params.precision.name(),
-                    if *normals { " + normal field" } else { "" },
-                ),
-                *rays,
-                Some(*bytes),
+                ..
+            } => format!(
+                "bake {} {} {} × {}² {} {}{}",
+                scenes.meshes[*mesh].label,
+                params.sphere.name(),
+                params.count,
+                params.res,
+                params.layout.name(),
+                params.precision.name(),
+                if *normals { " + normal field" } else { "" },
             ),
             Step::Derive {
-                mesh,
-                geometry,
-                to,
-                bytes,
-            } => (
-                format!(
-                    "derive {} {} × {}² f32 -> {}",
-                    scenes.meshes[*mesh].label,
-                    geometry.count,
-                    geometry.res,
-                    to.name()
-                ),
-                0,
-                Some(*bytes),
+                mesh, geometry, to, ..
+            } => format!(
+                "derive {} {} × {}² f32 -> {}",
+                scenes.meshes[*mesh].label,
+                geometry.count,
+                geometry.res,
+                to.name()
             ),
             Step::Precompute {
                 scene,
                 setting,
                 what,
-                rays,
-                bytes,
-            } => (
-                format!(
-                    "precompute {} on {}: {what}",
-                    self.methods[*setting],
-                    sc(*scene)
-                ),
-                *rays,
-                Some(*bytes),
+                ..
+            } => format!(
+                "precompute {} on {}: {what}",
+                self.methods[*setting],
+                sc(*scene)
             ),
-            Step::Method {
-                scene,
-                setting,
-                rays,
-            } => (
-                format!("method {} on {}", self.methods[*setting], sc(*scene)),
-                *rays,
-                None,
-            ),
-            Step::Lookup { cell, rays } => {
-                let c = &self.cells[*cell];
-                (format!("lookup {}", c.id(sc(c.scene))), *rays, None)
+            Step::Method { scene, setting, .. } => {
+                format!("method {} on {}", self.methods[*setting], sc(*scene))
             }
-            Step::Release { fields, bytes } => (
-                format!("release {} field(s)", fields.len()),
-                0,
-                Some(*bytes),
-            ),
+            Step::Lookup { cell, .. } => {
+                let c = &self.cells[*cell];
+                format!("lookup {}", c.id(sc(c.scene)))
+            }
+            Step::Release { fields, .. } => format!("release {} field(s)", fields.len()),
         }
     }
 
@@ -371,12 +354,14 @@ impl Plan {
                 Step::Precompute { rays: 1.., .. } => "bake, or the method's cache",
                 _ => "",
             };
-            let (what, rays, bytes) = self.step_line(step, scenes);
-            if let Step::Bake { rays, .. } | Step::Precompute { rays, .. } = step {
+            let (what, rays) = (self.step_what(step, scenes), step.rays());
+            if let Step::Bake { .. } | Step::Precompute { .. } = step {
                 bake_rays += rays;
             }
             total_rays += rays;
-            let bytes = bytes.map_or("-".to_string(), |b| ByteSize(b).to_string());
+            let bytes = step
+                .bytes()
+                .map_or("-".to_string(), |b| ByteSize(b).to_string());
             let rays = if rays == 0 {
                 "-".into()
             } else {

@@ -48,7 +48,7 @@ pub mod animation;
 pub mod crowd;
 
 use super::fields::FieldSupply;
-use super::plot::{xy_plot, Axes, Series};
+use super::plot::{distinct, sorted_distinct, xy_plot, Axes, Series};
 use super::staging;
 use super::{Error, Result};
 use std::path::Path;
@@ -128,86 +128,63 @@ fn write(
 
 /// The approach: each method's error against the gap, on the same rays and against the truth.
 fn plot_approach(path: &Path, rows: &[FrameRow]) -> Result<()> {
-    let approach: Vec<&FrameRow> = rows.iter().filter(|r| r.scene == "approach").collect();
-    let mut series = Vec::new();
-    {
-        let m = "field";
-        let pick = |f: fn(&FrameRow) -> f64| -> Vec<(f64, f64)> {
-            approach
-                .iter()
-                .filter(|r| r.method == m)
-                .map(|r| (r.gap_radii.unwrap_or(f64::NAN), f(r)))
-                .collect()
-        };
-        series.push(Series {
-            label: format!("{m}: RMS against ray casting, same rays"),
-            points: pick(|r| r.rms_vs_raycast),
-            line: true,
-        });
-        series.push(Series {
-            label: format!("{m}: RMS against the converged reference"),
-            points: pick(|r| r.rms_vs_truth),
-            line: true,
-        });
-    }
-    series.push(Series {
-        label: "ray casting: RMS against the converged reference".into(),
-        points: approach
-            .iter()
-            .filter(|r| r.method == "world_rebuild")
-            .map(|r| (r.gap_radii.unwrap_or(f64::NAN), r.rms_vs_truth))
-            .collect(),
-        line: true,
-    });
-    let axes = Axes {
-        title: "a caster lowered onto the receiver: error against the gap".into(),
-        x_label: "gap between the caster's bounding sphere and the plane (sphere radii)".into(),
-        y_label: "RMS (0-255)".into(),
-        log_x: false,
-        log_y: false,
+    // One method's column against the gap.
+    let pick = |m: &str, f: fn(&FrameRow) -> f64| -> Vec<(f64, f64)> {
+        (rows.iter())
+            .filter(|r| r.scene == "approach" && r.method == m)
+            .map(|r| (r.gap_radii.unwrap_or(f64::NAN), f(r)))
+            .collect()
     };
+    let series = [
+        Series::line(
+            "field: RMS against ray casting, same rays",
+            pick("field", |r| r.rms_vs_raycast),
+        ),
+        Series::line(
+            "field: RMS against the converged reference",
+            pick("field", |r| r.rms_vs_truth),
+        ),
+        Series::line(
+            "ray casting: RMS against the converged reference",
+            pick("world_rebuild", |r| r.rms_vs_truth),
+        ),
+    ];
+    let axes = Axes::new(
+        "a caster lowered onto the receiver: error against the gap",
+        "gap between the caster's bounding sphere and the plane (sphere radii)",
+        "RMS (0-255)",
+    );
     xy_plot(path, &axes, &series, &[])
 }
 
 /// Mean flicker over the frame pairs against the caster count, one line per method
 /// (`world_rebuild`'s is the same-ray ray cast's).
 fn plot_flicker(path: &Path, rows: &[FrameRow]) -> Result<()> {
-    let mut methods: Vec<&str> = Vec::new();
-    for r in rows {
-        if !methods.contains(&r.method.as_str()) {
-            methods.push(&r.method);
-        }
-    }
+    let methods = distinct(rows.iter().map(|r| r.method.as_str()));
     let series = mean_against_count(rows, &methods, |r| r.flicker);
     if series.is_empty() {
         return Ok(());
     }
-    let axes = Axes {
-        title:
-            "moving casters: flicker (change minus the converged reference's) against their count"
-                .into(),
-        x_label: "casters".into(),
-        y_label: "flicker: RMS (0-255), mean over frame pairs".into(),
-        log_x: true,
-        log_y: false,
-    };
+    let axes = Axes::new(
+        "moving casters: flicker (change minus the converged reference's) against their count",
+        "casters",
+        "flicker: RMS (0-255), mean over frame pairs",
+    )
+    .log_x();
     xy_plot(path, &axes, &series, &[])
 }
 
 /// Mean frame time against the caster count, one line per method.
 fn plot_frame_time(path: &Path, rows: &[FrameRow]) -> Result<()> {
-    let mut methods: Vec<&str> = rows.iter().map(|r| r.method.as_str()).collect();
-    methods.dedup();
-    methods.sort_unstable();
-    methods.dedup();
+    let methods = sorted_distinct(rows.iter().map(|r| r.method.as_str()));
     let series = mean_against_count(rows, &methods, |r| Some(r.frame_s));
-    let axes = Axes {
-        title: "moving casters: frame time (update + vertex AO) against their count".into(),
-        x_label: "casters".into(),
-        y_label: "frame time (s), mean over frames".into(),
-        log_x: true,
-        log_y: true,
-    };
+    let axes = Axes::new(
+        "moving casters: frame time (update + vertex AO) against their count",
+        "casters",
+        "frame time (s), mean over frames",
+    )
+    .log_x()
+    .log_y();
     xy_plot(path, &axes, &series, &[])
 }
 
@@ -240,11 +217,7 @@ fn mean_against_count(
                     (!v.is_empty()).then(|| (n as f64, v.iter().sum::<f64>() / v.len() as f64))
                 })
                 .collect();
-            Series {
-                label: m.to_string(),
-                points,
-                line: true,
-            }
+            Series::line(m, points)
         })
         .filter(|s: &Series| !s.points.is_empty())
         .collect()

@@ -15,7 +15,7 @@ use super::facet::{front, one_or_pack, pack, viridis, Family, Group};
 use super::labels::Devices;
 use super::{key_suffix, MethodRow, Metric, RunData};
 use crate::experiment::outputs::SweepRow;
-use crate::experiment::plot::{distinct, sorted_distinct, Axes, Figure, HLine, Marker, Panel};
+use crate::experiment::plot::{distinct, sorted_distinct, Figure, HLine, Marker, Panel};
 use crate::experiment::plot::{Series, Style, Styled};
 use crate::experiment::spec::Backend;
 use crate::experiment::table::Row;
@@ -141,13 +141,10 @@ pub fn pareto(run: &RunData) -> Figure {
         );
     }
     Figure {
-        axes: Axes {
-            title: format!("{}: error against the {q} estimate's time", run.title),
-            x_label: format!("{q} estimate time, s (log)"),
-            y_label: metric.label().into(),
-            log_x: true,
-            log_y: metric.log(),
-        },
+        axes: metric.axes(
+            format!("{}: error against the {q} estimate's time", run.title),
+            format!("{q} estimate time, s (log)"),
+        ),
         panels,
         notes,
     }
@@ -244,13 +241,10 @@ pub fn bytes(run: &RunData) -> Figure {
     }
     add_floor(&mut panels, run, metric);
     Figure {
-        axes: Axes {
-            title: format!("{}: error against stored bytes", run.title),
-            x_label: "stored MB (10⁶ bytes; log): fields, BVH, distance volumes, AO fields".into(),
-            y_label: metric.label().into(),
-            log_x: true,
-            log_y: metric.log(),
-        },
+        axes: metric.axes(
+            format!("{}: error against stored bytes", run.title),
+            "stored MB (10⁶ bytes; log): fields, BVH, distance volumes, AO fields",
+        ),
         panels,
         notes,
     }

@@ -205,18 +205,19 @@ impl Metric {
         self.pick((m.rms_vs_truth, m.rms_image, m.rms_vertex))
     }
 
-    pub fn label(self) -> &'static str {
-        match self {
+    /// Axes titled `title` with `x_label` on a log x axis and the metric on y: a log axis
+    /// where errors against the converged reference are never 0; against the same-ray ray
+    /// cast, ray casting's own is.
+    pub fn axes(self, title: String, x_label: impl Into<String>) -> Axes {
+        let y_label = match self {
             Metric::Truth => "RMS per point vs converged reference (0–255; log)",
             Metric::Image => "RMS per image pixel vs same-ray ray cast (0–255)",
             Metric::Vertex => "RMS per vertex vs same-ray ray cast (0–255)",
+        };
+        Axes {
+            log_y: self == Metric::Truth,
+            ..Axes::new(title, x_label, y_label).log_x()
         }
-    }
-
-    /// A log axis: errors against the converged reference are never 0; against the same-ray
-    /// ray cast, ray casting's own is.
-    pub fn log(self) -> bool {
-        self == Metric::Truth
     }
 }
 
@@ -339,13 +340,13 @@ fn times(run: &RunData) -> Option<Figure> {
         ));
     }
     Some(Figure {
-        axes: Axes {
-            title: format!("{}: cost against caster triangles", run.title),
-            x_label: "caster triangles (log; each a scene's model)".into(),
-            y_label: "seconds (log)".into(),
-            log_x: true,
-            log_y: true,
-        },
+        axes: Axes::new(
+            format!("{}: cost against caster triangles", run.title),
+            "caster triangles (log; each a scene's model)",
+            "seconds (log)",
+        )
+        .log_x()
+        .log_y(),
         panels: vec![Panel::new("", s)],
         notes: vec![format!(
             "scenes: {}",

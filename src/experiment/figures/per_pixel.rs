@@ -84,13 +84,12 @@ pub fn time_vs_rays(run: &RunData) -> Option<Figure> {
     }
     let q = run.quantity();
     Some(Figure {
-        axes: Axes {
-            title: format!("{}: {q} estimate time against rays per point", run.title),
-            x_label: "rays per point".into(),
-            y_label: format!("{q} estimate time, ms (log)"),
-            log_x: false,
-            log_y: true,
-        },
+        axes: Axes::new(
+            format!("{}: {q} estimate time against rays per point", run.title),
+            "rays per point",
+            format!("{q} estimate time, ms (log)"),
+        )
+        .log_y(),
         panels,
         notes: Vec::new(),
     })
@@ -139,16 +138,15 @@ pub fn grain_vs_positional(run: &RunData) -> Option<Figure> {
         Vec::new()
     };
     Some(Figure {
-        axes: Axes {
-            title: format!(
+        axes: Axes::new(
+            format!(
                 "{}: graininess of the error against positional samples",
                 run.title
             ),
-            x_label: "positional samples (maps; log)".into(),
-            y_label: "grain: RMS of the error's 3×3 high-pass (0–255)".into(),
-            log_x: true,
-            log_y: false,
-        },
+            "positional samples (maps; log)",
+            "grain: RMS of the error's 3×3 high-pass (0–255)",
+        )
+        .log_x(),
         panels,
         notes,
     })

@@ -125,13 +125,12 @@ pub fn figure(run: &RunData) -> Figure {
         );
     }
     Figure {
-        axes: Axes {
-            title: format!("{}: error against positional samples", run.title),
-            x_label: "positional samples (maps; log)".into(),
-            y_label: m_label.into(),
-            log_x: true,
-            log_y: false,
-        },
+        axes: Axes::new(
+            format!("{}: error against positional samples", run.title),
+            "positional samples (maps; log)",
+            m_label,
+        )
+        .log_x(),
         panels,
         notes,
     }

@@ -348,28 +348,13 @@ impl Method for AoFieldMethod {
             ));
         }
         // One field per mesh, shared by its instances.
-        let mut fields: Vec<(usize, Arc<AoField>)> = Vec::new();
-        let mut instances = Vec::new();
-        let mut cached = true;
-        for (i, inst) in scene.scene.casters() {
-            let mesh = scene.mesh_of[i];
-            let field = match fields.iter().find(|(m, _)| *m == mesh) {
-                Some((_, f)) => f.clone(),
-                None => {
-                    let (f, hit) = (self.field(&inst.mesh, ctx.cache.as_deref()))
-                        .map_err(|e| Error::invalid(what(), e))?;
-                    cached &= hit;
-                    fields.push((mesh, f.clone()));
-                    f
-                }
-            };
-            instances.push(AoFieldInstance {
-                field,
-                transform: inst.transform,
-            });
-        }
+        let fields = super::per_caster_mesh(scene, |mesh| self.field(mesh, ctx.cache.as_deref()))
+            .map_err(|e| Error::invalid(what(), e))?;
+        let cached = fields.cached;
         let fields = AoFieldScene {
-            instances,
+            instances: (fields.casters.into_iter())
+                .map(|(field, transform)| AoFieldInstance { field, transform })
+                .collect(),
             inside: self.inside,
         };
         Ok(Prepared {

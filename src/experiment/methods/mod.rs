@@ -50,6 +50,7 @@ use crate::render::estimator::Estimator;
 use crate::visibility::Visibility;
 use glam::Vec3;
 use std::path::PathBuf;
+use std::sync::Arc;
 
 /// What a method precomputes from and answers through, on one scene.
 pub struct MethodContext<'a> {
@@ -110,6 +111,46 @@ pub fn caster_instances(scene: &BuiltScene) -> (ModelTriangles, Vec<(usize, Simi
         instances.push((m, inst.transform));
     }
     (model, instances)
+}
+
+/// A value per distinct caster mesh of a scene (a method's bake of it), shared by the mesh's
+/// instances ([`per_caster_mesh`]).
+pub struct PerMesh<T> {
+    /// Every caster as (its mesh's value, its transform).
+    pub casters: Vec<(Arc<T>, Similarity)>,
+    /// The values, one per mesh.
+    pub meshes: Vec<Arc<T>>,
+    /// Whether the cache held every one.
+    pub cached: bool,
+}
+
+/// `load` of each distinct caster mesh of `scene` (its value, and whether its cache held it),
+/// called once per mesh in the order of its first instance.
+pub fn per_caster_mesh<T, E>(
+    scene: &BuiltScene,
+    mut load: impl FnMut(&crate::geometry::Mesh) -> std::result::Result<(Arc<T>, bool), E>,
+) -> std::result::Result<PerMesh<T>, E> {
+    let mut loaded: Vec<(usize, Arc<T>)> = Vec::new();
+    let mut instances = Vec::new();
+    let mut cached = true;
+    for (i, inst) in scene.scene.casters() {
+        let mesh = scene.mesh_of[i];
+        let value = match loaded.iter().find(|(m, _)| *m == mesh) {
+            Some((_, v)) => v.clone(),
+            None => {
+                let (v, hit) = load(&inst.mesh)?;
+                cached &= hit;
+                loaded.push((mesh, v.clone()));
+                v
+            }
+        };
+        instances.push((value, inst.transform));
+    }
+    Ok(PerMesh {
+        casters: instances,
+        meshes: loaded.into_iter().map(|(_, v)| v).collect(),
+        cached,
+    })
 }
 
 /// A method prepared on one scene.

@@ -105,11 +105,8 @@ fn figures_of(
 ) -> Vec<(String, Figure)> {
     let named = |base: &str| format!("{prefix}{base}");
     let axes = |title: String, x: &str, log_x: bool| Axes {
-        title,
-        x_label: x.to_string(),
-        y_label: "Mrays/s (same rays, all threads; log)".to_string(),
         log_x,
-        log_y: true,
+        ..Axes::new(title, x, "Mrays/s (same rays, all threads; log)").log_y()
     };
     let mut out = Vec::new();
     // A figure of one panel, where any of its series has points.

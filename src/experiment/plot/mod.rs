@@ -89,6 +89,31 @@ pub struct Axes {
     pub log_y: bool,
 }
 
+impl Axes {
+    /// Linear axes with this title and these labels.
+    pub fn new(title: impl Into<String>, x: impl Into<String>, y: impl Into<String>) -> Axes {
+        Axes {
+            title: title.into(),
+            x_label: x.into(),
+            y_label: y.into(),
+            log_x: false,
+            log_y: false,
+        }
+    }
+
+    /// The x axis logarithmic.
+    pub fn log_x(mut self) -> Axes {
+        self.log_x = true;
+        self
+    }
+
+    /// The y axis logarithmic.
+    pub fn log_y(mut self) -> Axes {
+        self.log_y = true;
+        self
+    }
+}
+
 /// The shape of a series' points.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Marker {
@@ -777,11 +802,9 @@ mod tests {
 
     fn axes(log_x: bool, log_y: bool) -> Axes {
         Axes {
-            title: "error against time".into(),
-            x_label: "estimate time, s".into(),
-            y_label: "RMS (0-255)".into(),
             log_x,
             log_y,
+            ..Axes::new("error against time", "estimate time, s", "RMS (0-255)")
         }
     }
 

@@ -15,13 +15,7 @@ const DIFFERENCE_GAIN: f32 = 4.0;
 
 /// Draws `series` against the viewing angle to `path`, titled `title`, `y` on the y axis.
 fn angle_plot(path: &Path, title: &str, y: &str, series: &[Series]) -> Result<()> {
-    let axes = Axes {
-        title: title.into(),
-        x_label: "viewing angle from the normal (degrees)".into(),
-        y_label: y.into(),
-        log_x: false,
-        log_y: false,
-    };
+    let axes = Axes::new(title, "viewing angle from the normal (degrees)", y);
     xy_plot(path, &axes, series, &[])
 }
 
@@ -103,15 +97,12 @@ pub fn plots(out: &Path, rows: &[ReliefRow], size: u32) -> Result<()> {
     }
     xy_plot(
         &out.join("missed_vs_rate.png"),
-        &Axes {
-            title: format!(
-                "Surface pixels missed or > 2 texels off at {QUALITY_ANGLE}° (2 bisections)"
-            ),
-            x_label: "samples per unit length".into(),
-            y_label: "share of surface pixels".into(),
-            log_x: true,
-            log_y: false,
-        },
+        &Axes::new(
+            format!("Surface pixels missed or > 2 texels off at {QUALITY_ANGLE}° (2 bisections)"),
+            "samples per unit length",
+            "share of surface pixels",
+        )
+        .log_x(),
         &missed,
         &[],
     )?;
@@ -128,13 +119,12 @@ pub fn plots(out: &Path, rows: &[ReliefRow], size: u32) -> Result<()> {
         .collect();
     xy_plot(
         &out.join("pareto.png"),
-        &Axes {
-            title: "Error against time (Table 3's settings; RMS vs the exact intersection)".into(),
-            x_label: "seconds per frame".into(),
-            y_label: "RMS (0–255)".into(),
-            log_x: true,
-            log_y: false,
-        },
+        &Axes::new(
+            "Error against time (Table 3's settings; RMS vs the exact intersection)",
+            "seconds per frame",
+            "RMS (0–255)",
+        )
+        .log_x(),
         &pareto,
         &[],
     )?;
@@ -167,14 +157,13 @@ fn methods_plots(out: &Path, rows: &[ReliefRow]) -> Result<()> {
             .map(|&n| Series::scatter(n.clone(), points(n)))
             .collect()
     };
-    let axes = |x: &str| Axes {
-        title:
-            "Every method on every map at 45°, 60° and 75° (75 samples/unit for the paper's search)"
-                .into(),
-        x_label: x.into(),
-        y_label: "RMS vs the exact intersection (0–255)".into(),
-        log_x: true,
-        log_y: false,
+    let axes = |x: &str| {
+        Axes::new(
+            "Every method on every map at 45°, 60° and 75° (75 samples/unit for the paper's search)",
+            x,
+            "RMS vs the exact intersection (0–255)",
+        )
+        .log_x()
     };
     if names.is_empty() {
         return Ok(());

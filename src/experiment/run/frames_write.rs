@@ -52,11 +52,8 @@ fn plot_frame_time(path: &Path, rows: &[FrameRow], scene: &str, kind: &str) -> R
 /// Axes against the frame.
 fn frame_axes(title: String, y_label: &str, log_y: bool) -> Axes {
     Axes {
-        title,
-        x_label: "frame".into(),
-        y_label: y_label.into(),
-        log_x: false,
         log_y,
+        ..Axes::new(title, "frame", y_label)
     }
 }
 
@@ -65,23 +62,16 @@ fn frame_axes(title: String, y_label: &str, log_y: bool) -> Axes {
 fn plot_error(path: &Path, rows: &[FrameRow], scene: &str) -> Result<()> {
     let mut series = Vec::new();
     for (label, rs) in series_of(rows, scene) {
-        series.push(Series {
-            label: format!("{label}: against the converged reference"),
-            points: rs
-                .iter()
-                .map(|r| (r.frame as f64, r.rms_vs_truth))
-                .collect(),
-            line: true,
-        });
+        let against = |f: fn(&FrameRow) -> f64| rs.iter().map(|r| (r.frame as f64, f(r))).collect();
+        series.push(Series::line(
+            format!("{label}: against the converged reference"),
+            against(|r| r.rms_vs_truth),
+        ));
         if !rs[0].cell.is_empty() {
-            series.push(Series {
-                label: format!("{label}: against ray casting, same rays"),
-                points: rs
-                    .iter()
-                    .map(|r| (r.frame as f64, r.rms_vs_raycast))
-                    .collect(),
-                line: true,
-            });
+            series.push(Series::line(
+                format!("{label}: against ray casting, same rays"),
+                against(|r| r.rms_vs_raycast),
+            ));
         }
     }
     let title = format!("{scene}: error per frame");
@@ -97,13 +87,9 @@ fn per_method(
 ) -> Vec<Series> {
     series_of(rows, scene)
         .into_iter()
-        .map(|(label, rs)| Series {
-            label,
-            points: rs
-                .iter()
-                .filter_map(|r| of(r).map(|y| (r.frame as f64, y)))
-                .collect(),
-            line: true,
+        .map(|(label, rs)| {
+            let points = rs.iter().filter_map(|r| of(r).map(|y| (r.frame as f64, y)));
+            Series::line(label, points.collect())
         })
         .filter(|s| !s.points.is_empty())
         .collect()
@@ -144,11 +130,7 @@ fn plot_flip(path: &Path, change_path: &Path, rows: &[FrameRow], scene: &str) ->
         .filter_map(|r| r.truth_flip_frame_change.map(|y| (r.frame as f64, y)))
         .collect();
     if !truth.is_empty() {
-        series.push(Series {
-            label: "converged reference".into(),
-            points: truth,
-            line: true,
-        });
+        series.push(Series::line("converged reference", truth));
     }
     if series.is_empty() {
         return Ok(());

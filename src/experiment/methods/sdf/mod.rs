@@ -269,35 +269,18 @@ impl Sdf {
     /// One volume per distinct caster mesh (from the cache where the run has one) and the
     /// instances; whether no bake ran.
     fn volumes(&self, ctx: &MethodContext, label: &str) -> Result<(SdfScene, u64, bool)> {
-        let scene = ctx.scene;
-        let invalid = |e: crate::sdf::SdfError| Error::invalid(label.to_string(), e.to_string());
-        let mut volumes: Vec<(usize, Arc<DistanceVolume>)> = Vec::new();
-        let mut instances = Vec::new();
-        let mut cached = true;
-        for (i, inst) in scene.scene.casters() {
-            let mesh = scene.mesh_of[i];
-            let volume = match volumes.iter().find(|(m, _)| *m == mesh) {
-                Some((_, v)) => v.clone(),
-                None => {
-                    let (v, hit) = self
-                        .volume(&inst.mesh, ctx.cache.as_deref())
-                        .map_err(invalid)?;
-                    cached &= hit;
-                    volumes.push((mesh, v.clone()));
-                    v
-                }
-            };
-            instances.push(SdfInstance {
-                volume,
-                transform: inst.transform,
-            });
-        }
-        let bytes = volumes.iter().map(|(_, v)| v.bytes()).sum();
+        let volumes =
+            super::per_caster_mesh(ctx.scene, |mesh| self.volume(mesh, ctx.cache.as_deref()))
+                .map_err(|e| Error::invalid(label.to_string(), e.to_string()))?;
+        let bytes = volumes.meshes.iter().map(|v| v.bytes()).sum();
+        let cached = volumes.cached && !volumes.meshes.is_empty();
         let scene = SdfScene {
-            instances,
+            instances: (volumes.casters.into_iter())
+                .map(|(volume, transform)| SdfInstance { volume, transform })
+                .collect(),
             trace: self.trace,
         };
-        Ok((scene, bytes, cached && !volumes.is_empty()))
+        Ok((scene, bytes, cached))
     }
 }
 
