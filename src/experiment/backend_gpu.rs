@@ -125,6 +125,17 @@ pub struct TraceEval<'a, V> {
     pub setup: Duration,
 }
 
+impl<'a, V: GpuVisibility + 'a> TraceEval<'a, V> {
+    /// `vis`, built and uploaded in `setup`, running `quantity`, as the run's evaluation.
+    pub fn boxed(setup: Duration, vis: V, quantity: &'a dyn GpuQuantity) -> Box<dyn Eval + 'a> {
+        Box::new(TraceEval {
+            vis,
+            quantity,
+            setup,
+        })
+    }
+}
+
 impl<V: GpuVisibility> Eval for TraceEval<'_, V> {
     fn estimate(&self, at: Points, rays: &RaySet) -> Result<Estimate> {
         self.quantity.trace(&self.vis, at, rays)
@@ -179,12 +190,7 @@ impl ComputeBackend for GpuBackend {
     ) -> Result<Box<dyn Eval + 's>> {
         let quantity = quantity(q)?;
         let vis = GpuTracer::new(&self.ctx, casters.triangles)?;
-        let setup = vis.setup_time();
-        Ok(Box::new(TraceEval {
-            vis,
-            quantity,
-            setup,
-        }))
+        Ok(TraceEval::boxed(vis.setup_time(), vis, quantity))
     }
 }
 
