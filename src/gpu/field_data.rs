@@ -2,6 +2,7 @@
 //! means), the sphere triangulations for the interpolated selection, and the
 //! stored words of every distinct field.
 
+use super::texture::map_bytes;
 use super::GpuError;
 use crate::field::scene::FieldInstance;
 use crate::field::{Storage, VisibilityField};
@@ -345,13 +346,7 @@ pub(crate) fn field_words(fields: &[Arc<VisibilityField>]) -> (Vec<u32>, Vec<u32
     let mut bases = Vec::with_capacity(fields.len());
     for f in fields {
         bases.push(words.len() as u32);
-        let bytes: &[u8] = match &f.storage {
-            Storage::F32 { data, .. } => bytemuck::cast_slice(data),
-            Storage::U16 { data, .. } => bytemuck::cast_slice(data),
-            Storage::U8 { data, .. } => data,
-            Storage::Bit1 { bits, .. } => bytemuck::cast_slice(bits),
-        };
-        push_words(&mut words, bytes);
+        push_words(&mut words, map_bytes(&f.storage).1);
     }
     (words, bases)
 }
