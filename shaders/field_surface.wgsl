@@ -1,4 +1,4 @@
-// The field visibility's closest hit (src/gpu/field_visibility.rs; Gaitatzes, Andreadis,
+// The field visibility's closest hit (src/gpu/field_kernel.rs; Gaitatzes, Andreadis,
 // Papaioannou, Chrysanthou, WSCG 2010, §4.2: a ray answered by the visibility field with a hit
 // point, and by the normal field with the normal there), compiled where the normal fields are
 // bound: the hit of each instance (the lookup of `instance_occludes`, keeping the map and
