@@ -154,9 +154,12 @@ fn field_sample(inst: Instance, u: vec3<f32>, dir: vec3<f32>, selection: u32) ->
 
 // Instance `inst`'s part of the world segment origin + t dir, t in [tmin, tmax], where every
 // query of one instance starts (`instance_occludes`; `instance_surface_hit` in
-// shaders/field_surface.wgsl): the segment in model space (`o`, `d`, `lmin`, `lmax`) and where
-// it crosses the model sphere (`t0`, `t1`); `met` is false where the world sphere test, the
-// model sphere or the segment's span leaves the instance out before any lookup.
+// shaders/field_surface.wgsl): the segment in model space (`o`, `d`, `lmin`, `lmax`), where
+// it crosses the model sphere (`t0`, `t1`) and where the lookup reads (`u` on the unit sphere,
+// direction `read`): outside, the inter-object lookup at the entry point along `d`; `inside`
+// (t0 < 0), the intra-object test from the exit point back towards the origin, along `-d`.
+// `met` is false where the world sphere test, the model sphere, the segment's span or (outside)
+// the entry point leaves the instance out before any lookup.
 struct InstanceRay {
     met: bool,
     o: vec3<f32>,
@@ -165,6 +168,9 @@ struct InstanceRay {
     lmax: f32,
     t0: f32,
     t1: f32,
+    inside: bool,
+    u: vec3<f32>,
+    read: vec3<f32>,
 }
 
 fn instance_ray(inst: Instance, origin: vec3<f32>, dir: vec3<f32>, tmin: f32, tmax: f32) -> InstanceRay {
@@ -189,8 +195,64 @@ fn instance_ray(inst: Instance, origin: vec3<f32>, dir: vec3<f32>, tmin: f32, tm
     if ir.t1 < ir.lmin {
         return ir;
     }
+    let c = inst.model_center;
+    let r = inst.model_radius;
+    ir.inside = ir.t0 < 0.0;
+    ir.u = vec3<f32>(0.0);
+    ir.read = ir.d;
+    if !ir.inside {
+        // Outside: inter-object lookup at the entry point.
+        if ir.t0 > ir.lmax {
+            return ir;
+        }
+        let f = ir.o - c;
+        let l = f - dot(f, ir.d) * ir.d;
+        let ll = length(l);
+        let disc = (r - ll) * (r + ll);
+        if disc < 0.0 {
+            return ir;
+        }
+        ir.u = (l - sqrt(disc) * ir.d) / r;
+    } else {
+        // Inside: intra-object test from the exit point back towards the origin.
+        let p1 = (ir.o - c) + ir.t1 * ir.d;
+        let len = sqrt(dot(p1, p1));
+        if len > 0.0 {
+            ir.u = p1 * (1.0 / len);
+        }
+        ir.read = -ir.d;
+    }
     ir.met = true;
     return ir;
+}
+
+// A stored distance `dd` read at `ir` as a hit: its model distance from the entry point, or
+// back from the exit point inside, and whether it lies in the segment (inside, beyond the
+// intra-object tolerance). No hit where `dd` is 1 or more.
+struct SegmentHit {
+    hit: bool,
+    t: f32,
+}
+
+fn segment_hit(inst: Instance, ir: InstanceRay, dd: f32, intra_bias: f32, intra_auto: bool) -> SegmentHit {
+    var res = SegmentHit(false, 0.0);
+    if dd >= 1.0 {
+        return res;
+    }
+    let diameter = 2.0 * inst.model_radius;
+    if !ir.inside {
+        res.t = ir.t0 + diameter * dd;
+        res.hit = res.t >= ir.lmin && res.t <= ir.lmax;
+        return res;
+    }
+    res.t = ir.t1 - diameter * dd;
+    // `IntraBias::model_units` (src/field/lookup.rs): Auto scales the field's own tolerance.
+    var tol = intra_bias * diameter;
+    if intra_auto {
+        tol = intra_bias * (inst.intra_positional + inst.intra_directional * ir.t1);
+    }
+    res.hit = res.t > ir.lmin + tol && res.t <= ir.lmax;
+    return res;
 }
 
 // Whether instance `inst` blocks the world segment origin + t dir, t in [tmin, tmax].
@@ -200,45 +262,6 @@ fn instance_occludes(inst: Instance, origin: vec3<f32>, dir: vec3<f32>, tmin: f3
     if !ir.met {
         return false;
     }
-    let c = inst.model_center;
-    let r = inst.model_radius;
-    let diameter = 2.0 * r;
-    if ir.t0 >= 0.0 {
-        // Outside: inter-object lookup at the entry point.
-        if ir.t0 > ir.lmax {
-            return false;
-        }
-        let f = ir.o - c;
-        let l = f - dot(f, ir.d) * ir.d;
-        let ll = length(l);
-        let disc = (r - ll) * (r + ll);
-        if disc < 0.0 {
-            return false;
-        }
-        let u = (l - sqrt(disc) * ir.d) / r;
-        let dd = field_sample(inst, u, ir.d, selection);
-        if dd >= 1.0 {
-            return false;
-        }
-        let t = ir.t0 + diameter * dd;
-        return t >= ir.lmin && t <= ir.lmax;
-    }
-    // Inside: intra-object test from the exit point back towards the origin.
-    let p1 = (ir.o - c) + ir.t1 * ir.d;
-    let len = sqrt(dot(p1, p1));
-    var u = vec3<f32>(0.0);
-    if len > 0.0 {
-        u = p1 * (1.0 / len);
-    }
-    let dd = field_sample(inst, u, -ir.d, selection);
-    if dd >= 1.0 {
-        return false;
-    }
-    let t = ir.t1 - diameter * dd;
-    // `IntraBias::model_units` (src/field/lookup.rs): Auto scales the field's own tolerance.
-    var tol = intra_bias * diameter;
-    if intra_auto {
-        tol = intra_bias * (inst.intra_positional + inst.intra_directional * ir.t1);
-    }
-    return t > ir.lmin + tol && t <= ir.lmax;
+    let dd = field_sample(inst, ir.u, ir.read, selection);
+    return segment_hit(inst, ir, dd, intra_bias, intra_auto).hit;
 }

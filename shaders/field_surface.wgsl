@@ -1,4 +1,4 @@
-// The field visibility's closest hit (src/gpu/field_visibility.rs; Gaitatzes, Andreadis,
+// The field visibility's closest hit (src/gpu/field_kernel.rs; Gaitatzes, Andreadis,
 // Papaioannou, Chrysanthou, WSCG 2010, §4.2: a ray answered by the visibility field with a hit
 // point, and by the normal field with the normal there), compiled where the normal fields are
 // bound: the hit of each instance (the lookup of `instance_occludes`, keeping the map and
@@ -18,8 +18,8 @@ struct FieldHit {
     texel: u32,
 }
 
-// `VisibilityField::surface_hit` (src/field/normals.rs) of instance `inst`: from the same
-// `instance_ray`, the lookup of `instance_occludes` (shaders/field_lookup.wgsl) line for line,
+// `VisibilityField::surface_hit` (src/field/normals.rs) of instance `inst`: the lookup of
+// `instance_occludes` (shaders/field_lookup.wgsl: the same `instance_ray` and `segment_hit`),
 // keeping the distance and the map and texel of the nearest selection at the point and
 // direction read.
 fn instance_surface_hit(inst: Instance, origin: vec3<f32>, dir: vec3<f32>, tmin: f32, tmax: f32,
@@ -30,64 +30,21 @@ fn instance_surface_hit(inst: Instance, origin: vec3<f32>, dir: vec3<f32>, tmin:
     if !ir.met {
         return res;
     }
-    let c = inst.model_center;
-    let r = inst.model_radius;
-    let diameter = 2.0 * r;
-    let inside = ir.t0 < 0.0;
-    var u = vec3<f32>(0.0);
-    var dread = ir.d;
-    if !inside {
-        // Outside: inter-object lookup at the entry point.
-        if ir.t0 > ir.lmax {
-            return res;
-        }
-        let f = ir.o - c;
-        let l = f - dot(f, ir.d) * ir.d;
-        let ll = length(l);
-        let disc = (r - ll) * (r + ll);
-        if disc < 0.0 {
-            return res;
-        }
-        u = (l - sqrt(disc) * ir.d) / r;
-    } else {
-        // Inside: intra-object test from the exit point back towards the origin.
-        let p1 = (ir.o - c) + ir.t1 * ir.d;
-        let len = sqrt(dot(p1, p1));
-        if len > 0.0 {
-            u = p1 * (1.0 / len);
-        }
-        dread = -ir.d;
-    }
     let pbase = inst.point_base;
-    let m = lookup_nearest(inst, u);
-    let texel = lookup_texel(inst, frame_to_local(frame_from_normal(-sphere_point(pbase, m)), dread));
+    let m = lookup_nearest(inst, ir.u);
+    let texel = lookup_texel(inst, frame_to_local(frame_from_normal(-sphere_point(pbase, m)), ir.read));
     var dd = 1.0;
     if selection == SELECT_NEAREST {
         dd = load_distance(inst, m, texel);
     } else {
-        dd = field_sample(inst, u, dread, SELECT_INTERPOLATED);
+        dd = field_sample(inst, ir.u, ir.read, SELECT_INTERPOLATED);
     }
-    if dd >= 1.0 {
+    let s = segment_hit(inst, ir, dd, intra_bias, intra_auto);
+    if !s.hit {
         return res;
     }
-    var t = 0.0;
-    if !inside {
-        t = ir.t0 + diameter * dd;
-        if !(t >= ir.lmin && t <= ir.lmax) {
-            return res;
-        }
-    } else {
-        t = ir.t1 - diameter * dd;
-        var tol = intra_bias * diameter;
-        if intra_auto {
-            tol = intra_bias * (inst.intra_positional + inst.intra_directional * ir.t1);
-        }
-        if !(t > ir.lmin + tol && t <= ir.lmax) {
-            return res;
-        }
-    }
     res.hit = true;
-    res.t = t;
+    res.t = s.t;
     res.map = m;
     res.texel = texel;
     return res;

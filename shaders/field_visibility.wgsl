@@ -1,4 +1,4 @@
-// The field visibility (src/gpu/field_visibility.rs; Gaitatzes et al., WSCG 2008 / WSCG 2010):
+// The field visibility (src/gpu/field_kernel.rs; Gaitatzes et al., WSCG 2008 / WSCG 2010):
 // its header and `occluded`, over the field group's instances (src/gpu/field_binding.rs) with
 // the lookup of shaders/field_lookup.wgsl. `SELECTION` is a pipeline constant the host sets
 // from the lookup options (so that the compiler drops the other selection's code, which
@@ -6,7 +6,7 @@
 // compiled where the normal fields are bound; `occluded` and `surface_hit` are these loops over
 // every instance or the walks of the instances' own top level (shaders/field_top_level.wgsl).
 
-// Mirrors `FieldParamsGpu` (src/gpu/field_visibility.rs), 16 bytes.
+// Mirrors `FieldParamsGpu` (src/gpu/field_kernel.rs), 16 bytes.
 struct FieldParams {
     // Field instances.
     instance_count: u32,

@@ -56,13 +56,6 @@ impl GpuBackend {
     }
 }
 
-fn out(values: Vec<f32>, t: GpuTiming) -> Estimate {
-    Estimate {
-        values,
-        kernel_s: t.kernel.map(|d| d.as_secs_f64()),
-    }
-}
-
 /// A field kernel prepared for one quantity: the kernel, the quantity's options and the
 /// kernel's entry (each kind's [`GpuQuantity::fields`] builds one).
 pub struct KernelEval<K, O> {
@@ -82,8 +75,7 @@ pub type KernelEntry<K, O> =
 
 impl<K, O> Eval for KernelEval<K, O> {
     fn estimate(&self, at: Points, rays: &RaySet) -> Result<Estimate> {
-        let (values, t) = (self.run)(&self.kernel, at, rays, &self.opts)?;
-        Ok(out(values, t))
+        traced((self.run)(&self.kernel, at, rays, &self.opts))
     }
 
     fn setup_s(&self) -> Option<f64> {
@@ -95,10 +87,13 @@ impl<K, O> Eval for KernelEval<K, O> {
     }
 }
 
-/// [`GpuQuantity::trace`] from an integrand's result.
+/// [`GpuQuantity::trace`] (and a field kernel's estimate) from an integrand's result.
 pub fn traced(r: std::result::Result<(Vec<f32>, GpuTiming), GpuError>) -> Result<Estimate> {
     let (values, t) = r?;
-    Ok(out(values, t))
+    Ok(Estimate {
+        values,
+        kernel_s: t.kernel.map(|d| d.as_secs_f64()),
+    })
 }
 
 /// The GPU quantity of an estimator, or the refusal naming it: one without kernels, or one
@@ -123,6 +118,17 @@ pub struct TraceEval<'a, V> {
     pub vis: V,
     pub quantity: &'a dyn GpuQuantity,
     pub setup: Duration,
+}
+
+impl<'a, V: GpuVisibility + 'a> TraceEval<'a, V> {
+    /// `vis`, built and uploaded in `setup`, running `quantity`, as the run's evaluation.
+    pub fn boxed(setup: Duration, vis: V, quantity: &'a dyn GpuQuantity) -> Box<dyn Eval + 'a> {
+        Box::new(TraceEval {
+            vis,
+            quantity,
+            setup,
+        })
+    }
 }
 
 impl<V: GpuVisibility> Eval for TraceEval<'_, V> {
@@ -179,12 +185,7 @@ impl ComputeBackend for GpuBackend {
     ) -> Result<Box<dyn Eval + 's>> {
         let quantity = quantity(q)?;
         let vis = GpuTracer::new(&self.ctx, casters.triangles)?;
-        let setup = vis.setup_time();
-        Ok(Box::new(TraceEval {
-            vis,
-            quantity,
-            setup,
-        }))
+        Ok(TraceEval::boxed(vis.setup_time(), vis, quantity))
     }
 }
 

@@ -32,6 +32,7 @@
 //! field's u8 `lo` and `step` follow its texels.
 
 use super::context::GpuContext;
+use super::field_data::push_words;
 use super::integrand::{timing, IntegrandParamsGpu, KernelGroup, HEADER_WGSL, RECEIVER_WGSL};
 use super::loop_budget::CUT_SHORT;
 use super::rays::unrotated_receivers;
@@ -116,21 +117,16 @@ fn pack_field(f: &AoField, words: &mut Vec<u32>) -> AoFieldGpu {
             words.extend(texels.iter().flatten().map(|c| c.to_bits()));
             STORED_F32
         }
+        // Each texel from a new word.
         Stored::F16(texels) => {
             for t in texels {
-                words.extend(t.chunks(2).map(|h| {
-                    h[0].to_bits() as u32 | (h.get(1).map_or(0, |x| x.to_bits()) as u32) << 16
-                }));
+                push_words(words, bytemuck::cast_slice(&t.map(|h| h.to_bits())));
             }
             STORED_F16
         }
         Stored::U8 { codes, lo, step } => {
             for c in codes {
-                words.extend(c.chunks(4).map(|b| {
-                    b.iter()
-                        .enumerate()
-                        .fold(0u32, |w, (k, &e)| w | (e as u32) << (8 * k))
-                }));
+                push_words(words, c);
             }
             decode = words.len() as u32;
             words.extend(lo.iter().chain(step).map(|x| x.to_bits()));

@@ -255,6 +255,31 @@ impl GpuContext {
         self.buffer(label, size.max(16), usage)
     }
 
+    /// A bind-group layout of `entries`.
+    pub(crate) fn group_layout(
+        &self,
+        label: &str,
+        entries: &[wgpu::BindGroupLayoutEntry],
+    ) -> wgpu::BindGroupLayout {
+        let label = Some(label);
+        (self.device).create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label, entries })
+    }
+
+    /// A bind group of `layout` holding `entries`.
+    pub(crate) fn bind_group(
+        &self,
+        label: &str,
+        layout: &wgpu::BindGroupLayout,
+        entries: &[wgpu::BindGroupEntry],
+    ) -> wgpu::BindGroup {
+        let label = Some(label);
+        (self.device).create_bind_group(&wgpu::BindGroupDescriptor {
+            label,
+            layout,
+            entries,
+        })
+    }
+
     /// An unmapped buffer of `size` bytes.
     fn buffer(&self, label: &str, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
         self.device.create_buffer(&wgpu::BufferDescriptor {

@@ -227,7 +227,6 @@ impl FieldResources {
 /// documentation).
 pub(crate) struct FieldBinding {
     resources: FieldResources,
-    instance_count: u32,
     /// Group declarations and the layout's element loader (generated).
     prelude: String,
     /// The layout's `load_distance` (shaders/field_storage.wgsl or field_texture.wgsl).
@@ -278,18 +277,12 @@ impl FieldBinding {
         };
         let (prelude, layout_source) = resources.prelude();
         let prelude = kinds_prelude(&packed.instances) + &prelude;
-        let group_layout = ctx
-            .device
-            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("field group"),
-                entries: &resources.layout_entries(),
-            });
+        let group_layout = ctx.group_layout("field group", &resources.layout_entries());
         let instance_fields = instances.iter().map(|i| i.field.clone()).collect();
         Ok(FieldBinding {
             records: packed.instances.clone(),
             instance_fields,
             resources,
-            instance_count: packed.instances.len() as u32,
             prelude,
             layout_source,
             field_bytes,
@@ -343,11 +336,8 @@ impl FieldBinding {
     /// Group [`FIELD_GROUP`] with `header` as the visibility's header.
     pub fn bind_group(&self, ctx: &GpuContext, header: &[u8]) -> wgpu::BindGroup {
         let header = ctx.uniform_buffer("field params", header);
-        ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("field group"),
-            layout: &self.group_layout,
-            entries: &self.resources.entries(&header),
-        })
+        let entries = self.resources.entries(&header);
+        ctx.bind_group("field group", &self.group_layout, &entries)
     }
 
     /// Moves the bound instances to `instances`' transforms (the same fields, instance by
@@ -392,7 +382,7 @@ impl FieldBinding {
 
     /// Field instances bound.
     pub fn instance_count(&self) -> u32 {
-        self.instance_count
+        self.records.len() as u32
     }
 
     /// Bytes of stored distances on the device.

@@ -2,6 +2,7 @@
 //! means), the sphere triangulations for the interpolated selection, and the
 //! stored words of every distinct field.
 
+use super::texture::map_bytes;
 use super::GpuError;
 use crate::field::scene::FieldInstance;
 use crate::field::{Storage, VisibilityField};
@@ -345,18 +346,17 @@ pub(crate) fn field_words(fields: &[Arc<VisibilityField>]) -> (Vec<u32>, Vec<u32
     let mut bases = Vec::with_capacity(fields.len());
     for f in fields {
         bases.push(words.len() as u32);
-        let bytes: &[u8] = match &f.storage {
-            Storage::F32 { data, .. } => bytemuck::cast_slice(data),
-            Storage::U16 { data, .. } => bytemuck::cast_slice(data),
-            Storage::U8 { data, .. } => data,
-            Storage::Bit1 { bits, .. } => bytemuck::cast_slice(bits),
-        };
-        let start = words.len();
-        words.resize(start + bytes.len().div_ceil(4), 0);
-        bytemuck::cast_slice_mut::<u32, u8>(&mut words[start..])[..bytes.len()]
-            .copy_from_slice(bytes);
+        push_words(&mut words, map_bytes(&f.storage).1);
     }
     (words, bases)
+}
+
+/// Appends `bytes` to `words` as the WGSL reads them back: four bytes a word, the first in the
+/// low bits (two 16-bit halves a word, the first low), the last word padded with zeros.
+pub(crate) fn push_words(words: &mut Vec<u32>, bytes: &[u8]) {
+    let start = words.len();
+    words.resize(start + bytes.len().div_ceil(4), 0);
+    bytemuck::cast_slice_mut::<u32, u8>(&mut words[start..])[..bytes.len()].copy_from_slice(bytes);
 }
 
 #[cfg(test)]

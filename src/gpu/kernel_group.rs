@@ -90,12 +90,7 @@ impl KernelGroup {
             storage_layout_entry(OUT_BINDING, false),
         ];
         entries.extend((0..own).map(|i| storage_layout_entry(FIRST_OWN_BINDING + i, true)));
-        let layout = ctx
-            .device
-            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some(label),
-                entries: &entries,
-            });
+        let layout = ctx.group_layout(label, &entries);
         KernelGroup { layout, label }
     }
 
@@ -155,11 +150,7 @@ impl KernelGroup {
                         .zip(FIRST_OWN_BINDING..)
                         .map(|(b, i)| entry(i, b.as_entire_binding())),
                 );
-                ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some(self.label),
-                    layout: &self.layout,
-                    entries: &entries,
-                })
+                ctx.bind_group(self.label, &self.layout, &entries)
             },
         )
     }

@@ -24,6 +24,7 @@
 //! [`RayQueryScene::new`] refuses with [`GpuError::Unsupported`], saying why.
 
 use super::context::GpuContext;
+use super::shadow_rays::check_binding;
 use super::tracer::{
     any_hits, closest_hits, ray_queries, triangle_records, CasterHeaderGpu, RayQueries,
     CASTER_HEADER_WGSL, RAY_QUERIES_WGSL,
@@ -44,8 +45,6 @@ const QUERIES: RayQueries = ray_queries(&[
 
 /// Words a closest-hit query writes per ray (shaders/ray_query_queries.wgsl).
 const CLOSEST_WORDS: u32 = 6;
-/// Bytes of one triangle in the shared buffer: three `vec4<f32>`.
-const TRIANGLE_BYTES: u64 = 48;
 /// The largest instance id a TLAS instance's custom data holds (24 bits).
 const MAX_CUSTOM_DATA: usize = (1 << 24) - 1;
 
@@ -70,34 +69,32 @@ pub struct RayQueryScene<'a> {
     /// The header, then the TLAS, the triangles and the instances' first triangles, bound at
     /// each call.
     group: VisibilityGroup,
-    /// Per mesh: its BLAS (none for a mesh without triangles) and its first triangle in
-    /// `triangles`.
-    blas: Vec<Option<wgpu::Blas>>,
-    first_triangle: Vec<u32>,
+    placement: Placement,
     /// Every mesh's triangles, sorted, three vec4 each.
     triangles: wgpu::Buffer,
     tlas: wgpu::Tlas,
-    /// Per instance (by id): its mesh's first triangle.
-    instance_first: wgpu::Buffer,
     instance_count: u32,
     kernels: Kernels,
     setup: Duration,
 }
 
 /// What placing instances reads of a [`RayQueryScene`].
-struct Placement<'s> {
-    ctx: &'s GpuContext,
-    blas: &'s [Option<wgpu::Blas>],
-    first_triangle: &'s [u32],
-    instance_first: &'s wgpu::Buffer,
+struct Placement {
+    /// Per mesh: its BLAS (none for a mesh without triangles) and its first triangle in
+    /// `triangles`.
+    blas: Vec<Option<wgpu::Blas>>,
+    first_triangle: Vec<u32>,
+    /// Per instance (by id): its mesh's first triangle.
+    instance_first: wgpu::Buffer,
 }
 
-impl Placement<'_> {
+impl Placement {
     /// Fills the TLAS's slots with `instances` (empty meshes left out; the custom data the
     /// instance's id), writes each instance's first triangle, builds `blas` and the TLAS in
     /// one submission and waits for it; the instances placed.
     fn build(
         &self,
+        ctx: &GpuContext,
         tlas: &mut wgpu::Tlas,
         blas: &[wgpu::BlasBuildEntry],
         instances: &[(usize, Mat4)],
@@ -123,14 +120,13 @@ impl Placement<'_> {
             tlas[s] = None;
         }
         if !firsts.is_empty() {
-            (self.ctx.queue).write_buffer(self.instance_first, 0, bytemuck::cast_slice(&firsts));
+            (ctx.queue).write_buffer(&self.instance_first, 0, bytemuck::cast_slice(&firsts));
         }
-        let mut encoder = (self.ctx.device)
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+        let mut encoder =
+            (ctx.device).create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
         encoder.build_acceleration_structures(blas, [&*tlas]);
-        self.ctx.queue.submit([encoder.finish()]);
-        self.ctx
-            .wait("waiting for the acceleration structures' build")?;
+        ctx.queue.submit([encoder.finish()]);
+        ctx.wait("waiting for the acceleration structures' build")?;
         Ok(instances.len() as u32)
     }
 }
@@ -221,15 +217,7 @@ impl<'a> RayQueryScene<'a> {
         }
         check_instances(instances, meshes.len())?;
         let total: usize = meshes.iter().map(Vec::len).sum();
-        let need = total as u64 * TRIANGLE_BYTES;
-        if need > ctx.max_binding() {
-            return Err(GpuError::TooLarge {
-                what: format!("{total} triangles of the meshes"),
-                need,
-                limit: ctx.max_binding(),
-                limit_name: "max_storage_buffer_binding_size",
-            });
-        }
+        check_binding::<[[f32; 4]; 3]>(ctx, "triangles of the meshes", total)?;
         let max_instances = instances.len().max(1);
         if max_instances > MAX_CUSTOM_DATA
             || max_instances as u64 > limits.max_tlas_instance_count as u64
@@ -286,7 +274,7 @@ impl<'a> RayQueryScene<'a> {
                 })
             })
             .collect();
-        let tlas = device.create_tlas(&wgpu::CreateTlasDescriptor {
+        let mut tlas = device.create_tlas(&wgpu::CreateTlasDescriptor {
             label: Some("ray query instances"),
             max_instances: max_instances as u32,
             flags: wgpu::AccelerationStructureFlags::PREFER_FAST_TRACE,
@@ -310,11 +298,15 @@ impl<'a> RayQueryScene<'a> {
                 READ_ONLY_STORAGE,
             ],
         );
+        let placement = Placement {
+            blas,
+            first_triangle,
+            instance_first,
+        };
         // The BLASes are built with the first TLAS, in one submission (a BLAS built without
         // the TLAS that references it is refused at submit by wgpu 30).
-        let mut tlas = tlas;
-        let entries: Vec<wgpu::BlasBuildEntry> = (blas.iter().zip(&sizes))
-            .zip(&first_triangle)
+        let entries: Vec<wgpu::BlasBuildEntry> = (placement.blas.iter().zip(&sizes))
+            .zip(&placement.first_triangle)
             .filter_map(|((b, size), &first)| {
                 Some(wgpu::BlasBuildEntry {
                     blas: b.as_ref()?,
@@ -333,22 +325,14 @@ impl<'a> RayQueryScene<'a> {
                 })
             })
             .collect();
-        let placed = Placement {
-            ctx,
-            blas: &blas,
-            first_triangle: &first_triangle,
-            instance_first: &instance_first,
-        };
-        let instance_count = placed.build(&mut tlas, &entries, instances)?;
+        let instance_count = placement.build(ctx, &mut tlas, &entries, instances)?;
         drop(entries);
         let scene = RayQueryScene {
             ctx,
             group,
-            blas,
-            first_triangle,
+            placement,
             triangles,
             tlas,
-            instance_first,
             instance_count,
             kernels: Kernels::new(super::loop_budget::DEFAULT_RAYS_PER_INVOCATION),
             setup: Duration::ZERO,
@@ -374,13 +358,8 @@ impl<'a> RayQueryScene<'a> {
     /// model-to-world transform; at most [`Self::max_instances`]), waiting until the device
     /// has built it, so that the time of this call is the frame's update.
     pub fn place(&mut self, instances: &[(usize, Mat4)]) -> Result<(), GpuError> {
-        let placed = Placement {
-            ctx: self.ctx,
-            blas: &self.blas,
-            first_triangle: &self.first_triangle,
-            instance_first: &self.instance_first,
-        };
-        self.instance_count = placed.build(&mut self.tlas, &[], instances)?;
+        let placed = &self.placement;
+        self.instance_count = placed.build(self.ctx, &mut self.tlas, &[], instances)?;
         Ok(())
     }
 
@@ -445,7 +424,7 @@ impl GpuVisibility for RayQueryScene<'_> {
             &[
                 wgpu::BindingResource::AccelerationStructure(&self.tlas),
                 self.triangles.as_entire_binding(),
-                self.instance_first.as_entire_binding(),
+                self.placement.instance_first.as_entire_binding(),
             ],
         )
     }

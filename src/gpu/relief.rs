@@ -216,11 +216,7 @@ pub(super) fn cast_segments<P: bytemuck::Pod>(
             entry(4, rays.as_entire_binding()),
             entry(5, out.as_entire_binding()),
         ]);
-        ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some(label),
-            layout,
-            entries: &entries,
-        })
+        ctx.bind_group(label, layout, &entries)
     };
     let (words, kernel, upload) =
         ctx.run_batched(pipeline, &[], &data, "relief segment", (1, 2), bind)?;

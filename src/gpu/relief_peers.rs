@@ -109,12 +109,7 @@ impl<'a> ReliefPeersKernel<'a> {
             storage_layout_entry(4, true),
             storage_layout_entry(5, false),
         ];
-        let group = ctx
-            .device
-            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("relief peers"),
-                entries: &entries,
-            });
+        let group = ctx.group_layout("relief peers", &entries);
         let layout = ctx
             .device
             .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {

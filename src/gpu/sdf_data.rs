@@ -6,6 +6,7 @@
 //! the voxel; u8 through a table of the 256 codes' distances computed on the host with
 //! [`crate::sdf::storage::decode_u8`] (its division by 255 is then the host's, not the driver's).
 
+use super::field_data::push_words;
 use super::GpuError;
 use crate::sdf::{DistanceVolume, Samples, SdfScene};
 use std::sync::Arc;
@@ -139,18 +140,11 @@ fn pack_volume(
             PRECISION_F32
         }
         Samples::F16 { bits, .. } => {
-            words.extend(
-                bits.chunks(2)
-                    .map(|c| c[0] as u32 | (c.get(1).copied().unwrap_or(0) as u32) << 16),
-            );
+            push_words(words, bytemuck::cast_slice(bits));
             PRECISION_F16
         }
         Samples::U8 { codes, band } => {
-            words.extend(codes.chunks(4).map(|c| {
-                c.iter()
-                    .enumerate()
-                    .fold(0u32, |w, (k, &e)| w | (e as u32) << (8 * k))
-            }));
+            push_words(words, codes);
             decode = words.len() as u32;
             words.extend((0..=255u8).map(|e| crate::sdf::storage::decode_u8(e, *band).to_bits()));
             PRECISION_U8

@@ -41,7 +41,7 @@ use super::integrand::{self, dispatcher, timing, Integrand, IntegrandParamsGpu, 
 use super::loop_budget::ray_words;
 use super::rays::unrotated_receivers;
 use super::sdf_data::pack;
-use super::shadow_rays::check_binding;
+use super::shadow_rays::{check_binding, check_bytes};
 use super::visibility::{GpuVisibility, Kernels, VisibilityGroup};
 use super::{GpuError, GpuTiming};
 use crate::render::ao::{AoOptions, Falloff};
@@ -109,16 +109,8 @@ impl<'a> SdfKernel<'a> {
     pub fn new(ctx: &'a GpuContext, scene: &SdfScene) -> Result<Self, GpuError> {
         let start = Instant::now();
         let packed = pack(scene)?;
-        let max_binding = ctx.max_binding();
-        let word_bytes = packed.words.len() as u64 * 4;
-        if word_bytes > max_binding {
-            return Err(GpuError::TooLarge {
-                what: format!("{} distance volumes' samples", packed.volumes.len()),
-                need: word_bytes,
-                limit: max_binding,
-                limit_name: "max_storage_buffer_binding_size",
-            });
-        }
+        let what = format!("{} distance volumes' samples", packed.volumes.len());
+        check_bytes(ctx, what, packed.words.len() as u64 * 4)?;
         let kernel = SdfKernel {
             ctx,
             group: VisibilityGroup::new(

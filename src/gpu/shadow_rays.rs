@@ -101,10 +101,15 @@ pub(crate) fn cone_samples(rays: &RaySet) -> Result<Vec<ConeSampleGpu>, GpuError
 /// [`GpuError::TooLarge`] unless `count` records of `T` fit one storage binding.
 pub(crate) fn check_binding<T>(ctx: &GpuContext, what: &str, count: usize) -> Result<(), GpuError> {
     let need = (count * std::mem::size_of::<T>()) as u64;
+    check_bytes(ctx, format!("{count} {what}"), need)
+}
+
+/// [`GpuError::TooLarge`] unless `need` bytes (`what`) fit one storage binding.
+pub(crate) fn check_bytes(ctx: &GpuContext, what: String, need: u64) -> Result<(), GpuError> {
     let limit = ctx.max_binding();
     if need > limit {
         return Err(GpuError::TooLarge {
-            what: format!("{count} {what}"),
+            what,
             need,
             limit,
             limit_name: "max_storage_buffer_binding_size",

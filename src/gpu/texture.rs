@@ -265,8 +265,9 @@ impl FieldTexture {
 }
 
 /// (bytes per map, all bytes) of a storage as the texture elements take them: texels for
-/// f32 / u16 / u8, 32-bit words for 1-bit maps.
-fn map_bytes(s: &Storage) -> (usize, &[u8]) {
+/// f32 / u16 / u8, 32-bit words for 1-bit maps (the storage windows take the bytes as they
+/// are: [`super::field_data::field_words`]).
+pub(super) fn map_bytes(s: &Storage) -> (usize, &[u8]) {
     match s {
         Storage::F32 { texels, data } => (texels * 4, bytemuck::cast_slice(data)),
         Storage::U16 { texels, data } => (texels * 2, bytemuck::cast_slice(data)),

@@ -141,12 +141,7 @@ impl VisibilityGroup {
                 .zip(more)
                 .map(|(b, &ty)| layout_entry(b, ty)),
         );
-        let layout = ctx
-            .device
-            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some(label),
-                entries: &entries,
-            });
+        let layout = ctx.group_layout(label, &entries);
         let buffers = data.iter().map(|d| ctx.storage_buffer(label, d)).collect();
         VisibilityGroup {
             layout,
@@ -183,10 +178,6 @@ impl VisibilityGroup {
                 .zip(1..)
                 .map(|(r, i)| entry(i, r)),
         );
-        ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some(self.label),
-            layout: &self.layout,
-            entries: &entries,
-        })
+        ctx.bind_group(self.label, &self.layout, &entries)
     }
 }

@@ -115,12 +115,7 @@ impl GpuMethod for RayQueryGpu {
     ) -> Result<Box<dyn Eval + 'a>> {
         let quantity = integrand_of(ENTRY.name, quantity)?;
         let vis = RayQueryScene::new(ctx, &self.meshes, &self.instances)?;
-        let setup = vis.setup_time();
-        Ok(Box::new(TraceEval {
-            vis,
-            quantity,
-            setup,
-        }))
+        Ok(TraceEval::boxed(vis.setup_time(), vis, quantity))
     }
 }
 

@@ -126,12 +126,7 @@ impl GpuMethod for TwoLevelGpu {
         let quantity = integrand_of(ENTRY.name, quantity)?;
         let mut vis = GpuTwoLevel::new(ctx, &self.model)?;
         vis.update(&self.instances)?;
-        let setup = vis.setup_time();
-        Ok(Box::new(TraceEval {
-            vis,
-            quantity,
-            setup,
-        }))
+        Ok(TraceEval::boxed(vis.setup_time(), vis, quantity))
     }
 }
 
