@@ -1,7 +1,7 @@
 //! Reading a spec file: its JSON as the spec's plain data (the kind and method registries
 //! reading `render` and each `methods` entry as serde meets them, `kinds::RenderVisitor`,
 //! `methods::MethodSpec`'s `Deserialize`), then both profiles validated: the full one, and the
-//! quick one with the paths of the parts it replaces prefixed by `quick.` ([`Paths`]). The
+//! quick one with the paths of the parts it replaces prefixed by `quick.` (`Paths`). The
 //! checks of a spec's parts are [`Validator`]'s; here the ones that ask the render kind, the
 //! methods and the cells: each kind's and method's own options, whether every setting answers
 //! the kind, whether every threshold matches a cell.

@@ -102,7 +102,7 @@ pub fn spec_text(mesh: &str, label: &str, kind: TryKind) -> String {
 }
 
 /// Runs `try` on `mesh` into `opts.out`; prints and returns the verdicts with the report. A
-/// refusal of the mesh names the mesh file ([`about_the_mesh`]).
+/// refusal of the mesh names the mesh file (`about_the_mesh`).
 pub fn run(mesh: &Path, kind: TryKind, opts: &RunOptions) -> Result<(RunReport, Vec<String>)> {
     MeshFormat::of(mesh).map_err(Error::geometry("experiment try"))?;
     let mesh_abs = mesh.canonicalize().map_err(Error::io(mesh))?;

@@ -246,7 +246,7 @@ impl Reads for NearestRead {
 
     /// The lookups' memory reads in stages: the owner-table cells of every crossing are
     /// found and requested before any is read, then the frames of the maps found, then the
-    /// texel-table cells, then the stored texels, [`STAGE`] crossings at a time. Each stage's
+    /// texel-table cells, then the stored texels, `STAGE` crossings at a time. Each stage's
     /// cache misses overlap instead of queueing behind each other (a lookup's owner cell,
     /// frame and texel-table cell are dependent reads); the answers are those of
     /// [`Reads::of`]. Where the CPU has AVX2 the owner cells, the rotation into each map's

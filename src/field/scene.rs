@@ -109,7 +109,7 @@ impl FieldInstance {
     /// A cheap f32 world-space test that is `false` only when [`Self::hit_distance`] is
     /// certainly `None` for a unit `dir`: the ray's line passes farther than the sphere's radius
     /// from its centre, or the whole sphere lies before `tmin`. Both are decided with a margin
-    /// of [`MAY_MEET_SLACK`] times the coordinates' magnitude, far above the rounding that
+    /// of `MAY_MEET_SLACK` times the coordinates' magnitude, far above the rounding that
     /// separates this test from the f64 model-space one, so a ray near the sphere's outline
     /// always takes the exact path.
     #[inline]

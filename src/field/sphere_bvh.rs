@@ -293,7 +293,7 @@ impl SphereBvh {
     /// The tree as the GPU walks it (src/gpu/field_binding.rs, shaders/field_top_level.wgsl):
     /// its nodes in order, the root first, each with its box (the may-meet balls and the pad, as
     /// the CPU's test reads it) and, for a leaf, its instance, for an inner node its first child
-    /// (the second follows it). A leaf holds one instance ([`LEAF`]).
+    /// (the second follows it). A leaf holds one instance (`LEAF`).
     pub fn flat_nodes(&self) -> Vec<FlatNode> {
         const _: () = assert!(LEAF == 1);
         (self.nodes.iter())

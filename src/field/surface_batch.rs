@@ -179,7 +179,7 @@ thread_local! {
 impl FieldScene {
     /// [`crate::visibility::Visibility::surface_hit_many`] with the eight-lane steps of `isa`
     /// ([`lanes`]): the same bits on every instruction set, and those of
-    /// [`crate::visibility::Visibility::surface_hit`] ray by ray ([module docs](self)).
+    /// [`crate::visibility::Visibility::surface_hit`] ray by ray (the module's docs).
     ///
     /// # Panics
     /// If `dirs` and `out` differ in length; when an instance a ray reaches has no normal

@@ -82,7 +82,7 @@ pub struct Mesh {
     /// Zero-area triangles dropped during validation.
     pub dropped_degenerate: usize,
     /// Faces of a mesh file dropped as exact duplicates of another (the same corners in the
-    /// same cyclic order: [`Mesh::from_file_parts`]); 0 for meshes built otherwise.
+    /// same cyclic order: `Mesh::from_file_parts`); 0 for meshes built otherwise.
     pub dropped_duplicate: usize,
     /// Where the positions were moved from: the model's own coordinates are `origin +
     /// position` (in f64). Zero unless the mesh was centred ([`super::rebase::centred_mesh`],
@@ -94,8 +94,8 @@ impl Mesh {
     /// Validates and builds a mesh; computes area-weighted vertex normals.
     ///
     /// Errors (naming the mesh): a non-finite coordinate (with the vertex index), a coordinate
-    /// beyond ±[`MAX_COORDINATE`], every vertex at one point (a zero-radius bounding sphere),
-    /// vertices spanning less than [`MIN_EXTENT`], an index out of range (with the triangle
+    /// beyond ±`MAX_COORDINATE`, every vertex at one point (a zero-radius bounding sphere),
+    /// vertices spanning less than `MIN_EXTENT`, an index out of range (with the triangle
     /// index), or no triangle left after dropping zero-area ones. A
     /// triangle is zero-area when `|e1 × e2| <= 1e-12 · (|e1|² + |e2|²)` (computed in f64), which
     /// also catches repeated indices and collinear corners.

@@ -413,7 +413,7 @@ impl Motion {
     /// times strictly increasing, a period non-zero, a speed and a radius at least 0, and
     /// every point and reach within ±`max` (the spec coordinates' range); a motion names at
     /// least one path, a pivot goes with keyframes, and an orbit about the instance's own
-    /// centre needs a radius. Keyframes any distance apart are accepted ([`key_fraction`]).
+    /// centre needs a radius. Keyframes any distance apart are accepted (`key_fraction`).
     pub fn problem(&self, frames: u32, dt: f64, max: f64) -> Option<(String, String)> {
         let bad = |field: &str, message: String| Some((field.to_string(), message));
         let point = |field: &str, p: DVec3| {

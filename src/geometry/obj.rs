@@ -17,10 +17,10 @@ impl Mesh {
     ///   are ignored (normals are recomputed, area-weighted, see [`Mesh`]); `mtllib` files are
     ///   never opened.
     /// - Positions are read in f64 and rebased next to their origin before they are rounded to
-    ///   f32 ([`Mesh::from_file_parts`]), then welded across objects/groups by exact coordinate
+    ///   f32 (`Mesh::from_file_parts`), then welded across objects/groups by exact coordinate
     ///   equality, so vertices shared between groups stay shared; vertices used by no face and
     ///   exact duplicate faces are not kept.
-    /// - A line longer than [`MAX_OBJ_LINE`] is an error naming it, before it is held whole.
+    /// - A line longer than `MAX_OBJ_LINE` is an error naming it, before it is held whole.
     /// - The mesh is named by the file name.
     ///
     /// Errors name the file: an unreadable file (I/O error), a parse error with the line where

@@ -209,10 +209,8 @@ pub fn centred_mesh(mut mesh: Mesh) -> (Mesh, DVec3) {
 /// A mesh file's positions, read in f64, in the frame of [`rebase_origin`] of their bounding
 /// box, each rounded once to f32, and that origin: a model whose coordinates lie far from its
 /// file's origin keeps its shape (read as f32 first, a unit tetrahedron at x = 1e9 collapses
-/// to two triangles). Positions that are not finite or lie past ±[`MAX_COORDINATE`] keep origin
+/// to two triangles). Positions that are not finite or lie past ±`MAX_COORDINATE` keep origin
 /// zero, so that validation refuses them as it would their file coordinates.
-///
-/// [`MAX_COORDINATE`]: super::mesh::MAX_COORDINATE
 pub fn centred_positions(positions: &[DVec3]) -> (Vec<Vec3>, DVec3) {
     let limit = super::mesh::MAX_COORDINATE as f64;
     let (lo, hi) = positions

@@ -41,7 +41,7 @@ pub struct FieldInstanceGpu {
     /// Precision (0 f32, 1 u16, 2 u8, 3 bit1).
     pub storage_precision: u32,
     /// First data word (storage layout) or first texture slice (texture layout); set by the
-    /// layout ([`PackedFields::set_data_base`]).
+    /// layout (`PackedFields::set_data_base`).
     pub data_base: u32,
     /// First 1-bit mean entry in the tables (four means an entry).
     pub mean_base: u32,

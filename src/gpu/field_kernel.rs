@@ -298,7 +298,7 @@ impl<Q: Sync> GpuVisibility for FieldKernel<'_, Q> {
         &self.kernels
     }
 
-    /// The selection code ([`selection_code`]).
+    /// The selection code (`selection_code`).
     fn variant(&self) -> u32 {
         selection_code(self.lookup.selection)
     }

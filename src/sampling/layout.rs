@@ -75,7 +75,7 @@ pub struct HemisphereLayout {
 
 impl HemisphereLayout {
     /// # Panics
-    /// If `res` is 0 or above [`MAX_LAYOUT_RES`]; use [`Self::try_new`] for user input.
+    /// If `res` is 0 or above `MAX_LAYOUT_RES`; use [`Self::try_new`] for user input.
     pub fn new(kind: LayoutKind, res: u32) -> Self {
         Self::try_new(kind, res).unwrap_or_else(|e| panic!("{e}"))
     }
@@ -154,7 +154,7 @@ impl HemisphereLayout {
 
     /// The square coordinates [0, 1]² of local direction `d` (unit; z < 0 clamped to the
     /// horizon): the inverse of the layout's square → hemisphere map. Polar and concentric use a
-    /// polynomial atan ([`super::layout_fast`]) within 4e-6 of [`Self::to_square_libm`].
+    /// polynomial atan (`super::layout_fast`) within 4e-6 of [`Self::to_square_libm`].
     #[inline]
     pub fn to_square(&self, d: Vec3) -> Vec2 {
         self.fast_square(d)
@@ -200,7 +200,7 @@ impl HemisphereLayout {
     /// The texel whose cell contains `d`'s square point through the libm inverse (for the
     /// rejection layout this may be an unused texel near the rim; see [`Self::to_texel`]). The
     /// fast coordinates decide it whenever they lie clearly inside a cell
-    /// ([`super::layout_fast::certified_cell`]), so the answer is always the libm one.
+    /// (`super::layout_fast::certified_cell`), so the answer is always the libm one.
     #[inline]
     pub fn to_cell(&self, d: Vec3) -> u32 {
         if let Some((c, r)) = self

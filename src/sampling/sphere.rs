@@ -225,9 +225,9 @@ impl SpherePoints {
 
     /// Index of the point nearest to unit direction `d` (largest dot product). Exact and
     /// constant-time; `d` need not be normalised. Answered from a cube-map grid of candidate
-    /// lists ([`super::cube_grid`]): the first largest f64 dot product, the same index as
+    /// lists (`super::cube_grid`): the first largest f64 dot product, the same index as
     /// [`Self::nearest_brute_force`]. Most directions are answered by one read of a finer
-    /// table of cells with a single owner ([`super::owner_grid`]), the rest by the candidate
+    /// table of cells with a single owner (`super::owner_grid`), the rest by the candidate
     /// search ([`Self::nearest_searched`]).
     #[inline]
     pub fn nearest(&self, d: Vec3) -> usize {

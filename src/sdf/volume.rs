@@ -223,7 +223,7 @@ impl DistanceVolume {
     }
 
     /// The read distance at `p`: the trilinear interpolation of the decoded samples, clamped to
-    /// the grid, plus the distance to the grid's box outside it (see [`Self::trilinear`]).
+    /// the grid, plus the distance to the grid's box outside it (see `Self::trilinear`).
     pub fn sample(&self, p: Vec3) -> f32 {
         match &self.samples {
             Samples::F32(v) => self.trilinear(p, |i| v[i]),

@@ -11,7 +11,7 @@
 //! triangles scaled about one centroid (costs rise along the order), a disk fan or a triangle
 //! turned in small steps about one corner (boxes that all hold one point). 5,000 of the first
 //! four took 1.3–2.9 s to build, 20,000 copies 18 s, a 20,000-slice fan 1.2–2.2 s, 20,000 turns
-//! of 10⁻⁵ rad 19–29 s (2 shared cores). [`ploc_stalls`] predicts this in linear time by running
+//! of 10⁻⁵ rad 19–29 s (2 shared cores). `ploc_stalls` predicts this in linear time by running
 //! PLOC's clustering rule without building anything; such inputs get the median-split tree,
 //! O(n log n) on any input, and every other input the PLOC build exactly as before. The check
 //! adds about a sixth to a PLOC build (1 M random triangles: 0.45 s beside 2.7 s).
@@ -36,7 +36,7 @@ const MIN_STALL_COUNT: usize = 256;
 const STALL_WORK: usize = 32;
 
 /// The CWBVH over `boxes` (a primitive per box, in order): PLOC with obvhs's `medium_build`
-/// preset where [`ploc_stalls`] says it is near-linear, else the median-split tree. Leaves hold
+/// preset where `ploc_stalls` says it is near-linear, else the median-split tree. Leaves hold
 /// at most 3 primitives either way.
 pub fn build(boxes: &[Aabb]) -> CwBvh {
     if boxes.is_empty() {

@@ -58,7 +58,7 @@ pub use super::frame_row::FrameRow;
 
 /// Runs the crowd sweep into `out` (`sweep_frames.csv`, `run.json`, `frame_time.png`, …), written in
 /// a staging folder beside it and published only when whole, as a spec's run is
-/// ([`super::staging`]): a file at `out`, or a folder that holds files no run wrote, is
+/// (`super::staging`): a file at `out`, or a folder that holds files no run wrote, is
 /// refused before any work unless `allow_nonempty_out` (the folder's files are then kept).
 pub fn run(
     out: &Path,

@@ -13,7 +13,7 @@
 //! - `times.png` (scenes of several caster sizes): ray-cast, bake and estimate time against
 //!   caster triangles (2008 Figure 8), as points (each scene its own model);
 //! - `time_vs_rays.png` and `grain_vs_positional.png`: the 2010 per-pixel figures' plots (see
-//!   [`per_pixel`]).
+//!   `per_pixel`).
 //!
 //! Every plot names devices as [`labels`] does (lavapipe as "lavapipe (CPU)"), the quantity as
 //! the run's kind (AO, shadow, reflection), holds at most

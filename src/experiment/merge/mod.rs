@@ -2,15 +2,15 @@
 //! ([`super::shard`]) into the folder one run of the whole spec writes.
 //!
 //! Refused, naming the folder, before anything is written: an `OUT` that is a file (left as it
-//! is) or a folder no run wrote ([`staging::check_ownership`]), an `OUT` that is one of the
+//! is) or a folder no run wrote (`staging::check_ownership`), an `OUT` that is one of the
 //! shard folders or lies inside one (or holds one), a folder given twice, a folder that is no
 //! shard (no `run.json` `shard`), shards of different `N`, a shard missing or given twice, a
 //! commit or a `spec.json` (or profile) that differs from the first shard's. Then the rows
-//! ([`cells`]): every shard's `table.csv` present, each row's cell one of that shard's cells
+//! (`cells`): every shard's `table.csv` present, each row's cell one of that shard's cells
 //! (those [`super::shard::cells`] gives it for the spec as run), no cell twice, and every cell
 //! of the spec given; refused otherwise naming the shard's file and the line or the cell. An
 //! empty shard (no cells: more shards than field groups) holds a header-only `table.csv`.
-//! Then, into a staging folder published only when whole ([`super::run::staging`]):
+//! Then, into a staging folder published only when whole (`super::run::staging`):
 //!
 //! - a CSV with a `cell` column (`table.csv`, `field_sweep.csv`): the shards' rows in the
 //!   single run's plan order (the spec profile's cells, [`super::plan::cells_of`]; a cell's
@@ -21,7 +21,7 @@
 //! - a per-point CSV (`values_SCENE.csv`; `ao_SCENE.csv` in runs written before): rows matched
 //!   by their `point`, the columns that are no cell's (the points, the references) from the
 //!   first shard holding it, then every cell's columns in plan order, each from its own shard
-//!   ([`join`]);
+//!   (`join`);
 //! - any other CSV (`raycast_sweep.csv`: per scene): a scene's rows from the first shard that
 //!   ran it (the scene steps of shards sharing a scene compute the same values; only times
 //!   differ);

@@ -284,14 +284,14 @@ fn named(names: &[&str], backend: Backend, on: &MoverInputs) -> Vec<(FrameForm, 
         .collect()
 }
 
-/// The CPU forms among `names` over `on` ([`Method::mover`]; see [`named`]).
+/// The CPU forms among `names` over `on` ([`Method::mover`]; see `named`).
 pub fn movers(names: &[&str], on: &MoverInputs) -> Result<Vec<Box<dyn Mover>>> {
     (named(names, Backend::Cpu, on).iter())
         .map(|(f, m)| m.mover(f.name, on))
         .collect()
 }
 
-/// The GPU forms among `names` over `on` ([`Method::gpu_mover`]; see [`named`]), each named.
+/// The GPU forms among `names` over `on` ([`Method::gpu_mover`]; see `named`), each named.
 pub fn gpu_movers<'a>(
     names: &[&str],
     on: &MoverInputs,

@@ -20,7 +20,7 @@
 //! rebuilt and uploaded each frame; the two levels' top level; hardware ray queries with their
 //! TLAS rebuilt each frame, skipped with the reason on an adapter without them; each "gpu"
 //! field cell's fields uploaded once and its instances moved on the device each frame).
-//! [`super::frames_write`] writes the outputs.
+//! `super::frames_write` writes the outputs.
 
 use super::{LoadedSpec, RunOptions};
 use crate::experiment::backend::ComputeBackend;

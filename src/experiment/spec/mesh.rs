@@ -4,7 +4,7 @@
 //!
 //! [`MeshSource`] derives its one-key form with `#[serde(remote = "Self")]`; the impls here read
 //! the first key and either parse the file form or hand the key and its value to the derived
-//! code through [`Keyed`], so that a parse error inside a procedural mesh keeps its path
+//! code through `Keyed`, so that a parse error inside a procedural mesh keeps its path
 //! (`scenes[0].instances[1].mesh.corner.n`).
 
 use super::MeshSource;

@@ -35,7 +35,7 @@ fn outputs() -> Vec<(&'static str, Vec<u8>)> {
     ]
 }
 
-/// Runs [`outputs`] on pools of 1 and 2 threads and counts differing bytes per output.
+/// Runs `outputs` on pools of 1 and 2 threads and counts differing bytes per output.
 pub fn threads() -> Vec<StabilityRow> {
     let on = |n: usize| {
         rayon::ThreadPoolBuilder::new()

@@ -242,7 +242,7 @@ fn distance_to_cell(layout: &HemisphereLayout, q: DVec2, t: u32) -> f64 {
     dx.max(gap(q.y, r as f64))
 }
 
-/// Every layout at res 1, 2, 3, 8, 32, 255, 256 over [`singular_directions`].
+/// Every layout at res 1, 2, 3, 8, 32, 255, 256 over `singular_directions`.
 pub fn texels() -> Vec<StabilityRow> {
     let case = "layout_singular_directions";
     let mut rows = Vec::new();
