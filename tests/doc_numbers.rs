@@ -1,10 +1,10 @@
-//! A sample of the numbers README.md, docs/results.md and docs/performance.md quote, recomputed
-//! from the committed CSV files under results/ and looked for in the documents, so that a rerun
-//! which moves a number fails here until the text follows it. Each claim is the text as the
-//! document writes it (whitespace runs compared as one space), formatted from the files it
-//! names. With `VISFIELD_DUMP_CLAIMS=FILE` every claim is appended to FILE (document, tab,
-//! text): run once before and once after a rerun to get the old and the new text of each quoted
-//! number.
+//! A sample of the numbers README.md, docs/results.md, docs/performance.md and docs/own_mesh.md
+//! quote, recomputed from the committed CSV files under results/ and looked for in the documents,
+//! so that a rerun which moves a number fails here until the text follows it. Each claim is the
+//! text as the document writes it (whitespace runs compared as one space), formatted from the
+//! files it names. With `VISFIELD_DUMP_CLAIMS=FILE` every claim is appended to FILE (document,
+//! tab, text): run once before and once after a rerun to get the old and the new text of each
+//! quoted number.
 
 mod common;
 #[path = "doc_numbers/flip.rs"]
@@ -99,10 +99,15 @@ struct Claims {
 
 impl Claims {
     fn new() -> Claims {
-        let docs = ["README.md", "docs/results.md", "docs/performance.md"]
-            .into_iter()
-            .map(|d| (d, squash(&std::fs::read_to_string(root().join(d)).unwrap())))
-            .collect();
+        let docs = [
+            "README.md",
+            "docs/results.md",
+            "docs/performance.md",
+            "docs/own_mesh.md",
+        ]
+        .into_iter()
+        .map(|d| (d, squash(&std::fs::read_to_string(root().join(d)).unwrap())))
+        .collect();
         Claims {
             docs,
             missing: Vec::new(),
@@ -1891,6 +1896,41 @@ fn flip_rankings(c: &mut Claims) {
     c.quotes("docs/results.md", &text, from);
 }
 
+/// `experiment try` on the small bunny (docs/own_mesh.md): the 4226 × 32² field's verdict line
+/// as the command prints it (RMS against ray casting on the same rays, speed against ray casting
+/// and Embree, bytes), and the range of RMS and speed over the four field sizes.
+fn try_mesh(c: &mut Claims) {
+    let from = "results/try_bunny_npm/table.csv and methods.csv";
+    let rows: Vec<Row> = read("results/try_bunny_npm/table.csv")
+        .into_iter()
+        .filter(|r| r["backend"] == "cpu")
+        .collect();
+    assert_eq!(rows.len(), 4, "{from}: the four field sizes");
+    let embree = read("results/try_bunny_npm/methods.csv")
+        .into_iter()
+        .find(|r| r["method"] == "embree")
+        .expect("an Embree row");
+    let speed = |r: &Row| f(r, "raycast_s") / f(r, "estimate_s");
+    let r = rows
+        .iter()
+        .find(|r| r["positional_samples"] == "4226" && r["directional_res"] == "32")
+        .expect("a 4226 × 32² row");
+    let text = format!(
+        "4226 × 32² u8: RMS {:.1} of 255, {:.1}× faster than ray casting, {:.1}× faster than \
+         Embree, {:.1} MiB",
+        f(r, "rms_image"),
+        speed(r),
+        f(&embree, "estimate_s") / f(r, "estimate_s"),
+        f(r, "field_bytes") / (1u64 << 20) as f64
+    );
+    c.quotes("docs/own_mesh.md", &text, from);
+    let (rms_lo, rms_hi) = min_max(rows.iter().map(|r| f(r, "rms_image")));
+    let (s_lo, s_hi) = min_max(rows.iter().map(speed));
+    let text =
+        format!("RMS {rms_hi:.1} to {rms_lo:.1} at {s_lo:.1}–{s_hi:.1}× ray casting's speed");
+    c.quotes("docs/own_mesh.md", &text, from);
+}
+
 #[test]
 fn quoted_numbers_match_the_committed_csvs() {
     let mut c = Claims::new();
@@ -1923,6 +1963,7 @@ fn quoted_numbers_match_the_committed_csvs() {
     performance_prose(&mut c);
     secondary_rays(&mut c);
     gpu_and_figure8_lookups(&mut c);
+    try_mesh(&mut c);
     assert!(
         c.missing.is_empty(),
         "{} of {} quoted numbers differ from results/:\n{}",
